@@ -1,0 +1,288 @@
+//! The command line (clap), progress display (indicatif) and the terminal convergence table.
+//!
+//! Exit codes: 0 success; 1 a run-time failure (solver, file system); 2 bad usage or bad input
+//! (arguments, scene file, crack off the mesh, non-finite data); 3 the run finished and wrote its
+//! results but at least one case did not converge.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::output::{write_run, ResultsDir};
+use crate::scene::{MultiplierSpace, Scene, USpace};
+use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
+
+/// sdcrack: smooth-domain finite elements for cracks with unilateral contact.
+#[derive(Parser, Debug)]
+#[command(name = "sdcrack", version, about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Sub-commands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Solve every case of a scene (default: the embedded `mixed` scene) and write results.
+    Run {
+        /// Scene file (TOML); omit for the embedded default scene.
+        scene: Option<PathBuf>,
+        /// Folder under which the results folder `<scene name>/` is created.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+        /// Only this refinement level (need not be listed in the scene).
+        #[arg(long)]
+        level: Option<u32>,
+        /// Only this u space.
+        #[arg(long, value_parser = parse_u_space)]
+        u_space: Option<USpace>,
+        /// Only this multiplier space.
+        #[arg(long, value_parser = parse_multiplier)]
+        multiplier: Option<MultiplierSpace>,
+        /// Only this δ (≥ 0).
+        #[arg(long, value_parser = parse_delta)]
+        delta: Option<f64>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate a scene file (and its crack on every level's mesh) without solving.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
+}
+
+fn parse_u_space(s: &str) -> Result<USpace, String> {
+    USpace::from_name(s)
+        .ok_or_else(|| format!("unknown u space '{s}' (expected continuous or broken)"))
+}
+
+fn parse_multiplier(s: &str) -> Result<MultiplierSpace, String> {
+    MultiplierSpace::from_name(s)
+        .ok_or_else(|| format!("unknown multiplier space '{s}' (expected M0, M1 or M1star)"))
+}
+
+fn parse_delta(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(d) if d.is_finite() && d >= 0.0 => Ok(d),
+        _ => Err(format!("δ must be a finite number ≥ 0, got '{s}'")),
+    }
+}
+
+/// A failure with its exit code.
+#[derive(Debug)]
+pub struct Failure {
+    /// Process exit code.
+    pub code: i32,
+    /// One-line message.
+    pub message: String,
+}
+
+fn usage(e: impl std::fmt::Display) -> Failure {
+    Failure {
+        code: 2,
+        message: e.to_string(),
+    }
+}
+
+fn runtime(e: impl std::fmt::Display) -> Failure {
+    Failure {
+        code: 1,
+        message: e.to_string(),
+    }
+}
+
+/// Parses `std::env::args`, runs, prints errors as one line, returns the exit code.
+pub fn main() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return code;
+        }
+    };
+    match execute(cli) {
+        Ok(code) => code,
+        Err(f) => {
+            eprintln!("sdcrack: error: {}", f.message.replace('\n', " "));
+            f.code
+        }
+    }
+}
+
+/// Runs a parsed command; `Ok(code)` is 0, or 3 when some case did not converge.
+pub fn execute(cli: Cli) -> Result<i32, Failure> {
+    match cli.command {
+        Command::Check { scene } => {
+            let s = Scene::from_file(&scene).map_err(usage)?;
+            check_meshes(&s)?;
+            println!(
+                "{}: valid scene '{}' ({} cases)",
+                scene.display(),
+                s.name,
+                s.case_count()
+            );
+            Ok(0)
+        }
+        Command::Run {
+            scene,
+            out,
+            level,
+            u_space,
+            multiplier,
+            delta,
+            quiet,
+        } => {
+            let scene = match scene {
+                Some(p) => Scene::from_file(&p).map_err(usage)?,
+                None => Scene::default_scene(),
+            };
+            let filter = CaseFilter {
+                level,
+                u_space,
+                multiplier,
+                delta,
+            };
+            run(&scene, &filter, &out, quiet)
+        }
+    }
+}
+
+/// Checks the crack against the level-0 mesh (the same check every level makes).
+fn check_meshes(scene: &Scene) -> Result<(), Failure> {
+    crate::mesh::Mesh::structured(scene.domain, scene.cells, scene.crack, 0).map_err(usage)?;
+    Ok(())
+}
+
+struct Progress {
+    bar: ProgressBar,
+}
+
+impl Observer for Progress {
+    fn phase(&mut self, message: &str) {
+        self.bar.set_message(message.to_string());
+    }
+    fn case_done(&mut self, case: &CaseResult) {
+        if !case.converged {
+            self.bar.println(format!(
+                "warning: level {} {} {} δ={:e} did not converge ({})",
+                case.level,
+                case.u_space,
+                case.multiplier,
+                case.delta,
+                case.status.name()
+            ));
+        }
+        self.bar.inc(1);
+    }
+}
+
+fn run(scene: &Scene, filter: &CaseFilter, out: &Path, quiet: bool) -> Result<i32, Failure> {
+    check_meshes(scene)?;
+    let plan = CasePlan::new(scene, filter);
+    let results = ResultsDir::create(out, &scene.name).map_err(usage)?;
+    let start = Instant::now();
+    let bar = if quiet || !std::io::stderr().is_terminal() {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(plan.len() as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} cases [{elapsed_precise}] {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut progress = Progress { bar };
+    let study = run_study(scene, &plan, &mut progress).map_err(|e| match e {
+        StudyError::Linalg(_) => runtime(e),
+        _ => usage(e),
+    })?;
+    progress.bar.finish_and_clear();
+    let wall = start.elapsed().as_secs_f64();
+    write_run(results.work_path(), scene, &study, wall).map_err(runtime)?;
+    let path = results.commit().map_err(runtime)?;
+    print_table(scene, &study.cases);
+    let failed = study.cases.iter().filter(|c| !c.converged).count();
+    println!(
+        "{} cases in {:.1} s; results in {}",
+        study.cases.len(),
+        wall,
+        path.display()
+    );
+    if failed > 0 {
+        eprintln!("sdcrack: {failed} case(s) did not converge; see summary.json");
+        return Ok(3);
+    }
+    Ok(0)
+}
+
+/// log2 rate between two (h, e) pairs.
+fn rate(prev: Option<(f64, f64)>, h: f64, e: f64) -> String {
+    match prev {
+        Some((h0, e0)) if e > 0.0 && e0 > 0.0 => format!("{:5.2}", (e0 / e).ln() / (h0 / h).ln()),
+        _ => "    -".to_string(),
+    }
+}
+
+/// Prints, per u space and multiplier, the convergence table at the smallest δ solved.
+pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
+    let Some(delta) = cases.iter().map(|c| c.delta).min_by(f64::total_cmp) else {
+        return;
+    };
+    println!("scene '{}': δ = {delta:e}", scene.name);
+    let mut keys: Vec<(USpace, MultiplierSpace)> =
+        cases.iter().map(|c| (c.u_space, c.multiplier)).collect();
+    keys.sort();
+    keys.dedup();
+    for (u_space, multiplier) in keys {
+        println!("\n{u_space} u, {multiplier}");
+        if scene.exact.is_some() {
+            println!(
+                "level        h  unknowns  iter     e_u  rate     e_p  rate     e_λ  rate   kkt"
+            );
+        } else {
+            println!("level        h  unknowns  iter  active     kkt");
+        }
+        let mut prev: Option<(f64, f64, f64, f64)> = None;
+        for c in cases
+            .iter()
+            .filter(|c| c.u_space == u_space && c.multiplier == multiplier && c.delta == delta)
+        {
+            let flag = if c.converged { "" } else { "  NOT CONVERGED" };
+            match c.errors {
+                Some(e) => {
+                    println!(
+                        "{:5} {:8.5} {:9} {:5} {:7.2e} {} {:7.2e} {} {:7.2e} {} {:7.1e}{flag}",
+                        c.level,
+                        c.h,
+                        c.unknowns,
+                        c.iterations,
+                        e.u_l2,
+                        rate(prev.map(|p| (p.0, p.1)), c.h, e.u_l2),
+                        e.p_l2,
+                        rate(prev.map(|p| (p.0, p.2)), c.h, e.p_l2),
+                        e.lambda_l2,
+                        rate(prev.map(|p| (p.0, p.3)), c.h, e.lambda_l2),
+                        c.kkt.max()
+                    );
+                    prev = Some((c.h, e.u_l2, e.p_l2, e.lambda_l2));
+                }
+                None => println!(
+                    "{:5} {:8.5} {:9} {:5} {:7} {:7.1e}{flag}",
+                    c.level,
+                    c.h,
+                    c.unknowns,
+                    c.iterations,
+                    format!("{}/{}", c.active, c.multipliers),
+                    c.kkt.max()
+                ),
+            }
+        }
+    }
+    println!();
+}

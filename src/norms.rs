@@ -1,0 +1,231 @@
+//! Error norms against an exact solution (BRIEF §4), with quadrature graded toward the crack tips.
+//!
+//! e_u = ‖u_h − u‖_{L²(Ω)}, e_p = ‖p_h − ∇u‖_{L²(Ω_c)} (p_h with its bubbles), e_λ = ‖λ_h − [u]‖_{L²(Γc)}.
+//! Each triangle lies on one side of the crack, so u and ∇u are smooth on it except at a tip vertex,
+//! where u ~ r^{1/2}. Triangles having a tip as a vertex are split recursively toward the tip
+//! (`tip_depth` times: the corner child is split again, giving geometric grading); crack segments
+//! at a tip likewise. Every piece gets the collapsed Gauss rule of degree `degree`, whose points are
+//! interior, so data are never evaluated on Γc. On Γc the exact jump is the scene's `jump`
+//! expression or u⁺ − u⁻ evaluated with the signed-zero side convention of [`crate::scene::eval_on_face`].
+
+use crate::fe::mini::mini_value;
+use crate::fe::p1::TriangleGeometry;
+use crate::fe::quadrature::{gauss_legendre, triangle_rule, TriangleRule};
+use crate::mesh::{Mesh, UTopology};
+use crate::scene::{eval_on_face, Exact};
+
+/// The three error norms of a case.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct ErrorNorms {
+    /// ‖u_h − u‖_{L²(Ω)}.
+    pub u_l2: f64,
+    /// ‖p_h − ∇u‖_{L²(Ω_c)}.
+    pub p_l2: f64,
+    /// ‖λ_h − [u]‖_{L²(Γc)}.
+    pub lambda_l2: f64,
+}
+
+/// A discrete multiplier on the crack.
+#[derive(Clone, Debug)]
+pub enum CrackField {
+    /// One value per segment (M0).
+    PerSegment(Vec<f64>),
+    /// Nodal values of a continuous P1 function (M1, M1star).
+    PerNode(Vec<f64>),
+}
+
+/// Quadrature used by the norms.
+#[derive(Clone, Copy, Debug)]
+pub struct NormQuadrature {
+    /// Total degree of the rule on each (sub)triangle.
+    pub degree: usize,
+    /// Recursive splits toward each tip.
+    pub tip_depth: usize,
+}
+
+impl Default for NormQuadrature {
+    fn default() -> Self {
+        NormQuadrature {
+            degree: 10,
+            tip_depth: 16,
+        }
+    }
+}
+
+/// The discrete solution needed for norms.
+pub struct DiscreteSolution<'a> {
+    /// u dofs.
+    pub u: &'a [f64],
+    /// p at the vertices.
+    pub p: &'a [[f64; 2]],
+    /// Bubble coefficients of p per triangle.
+    pub bubbles: &'a [[f64; 2]],
+    /// λ_h.
+    pub lambda: &'a CrackField,
+}
+
+/// Sub-triangles (in reference coordinates of the parent) graded toward the local vertex `corner`.
+fn graded_pieces(corner: Option<usize>, depth: usize) -> Vec<[[f64; 2]; 3]> {
+    let full = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    let Some(c) = corner else {
+        return vec![full];
+    };
+    let mut pieces = Vec::new();
+    let mut current = full;
+    // keep the corner vertex first
+    current.rotate_left(c);
+    for _ in 0..depth {
+        let [a, b, d] = current;
+        let mid = |p: [f64; 2], q: [f64; 2]| [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
+        let (ab, bd, ad) = (mid(a, b), mid(b, d), mid(a, d));
+        pieces.push([ab, b, bd]);
+        pieces.push([ad, bd, d]);
+        pieces.push([ab, bd, ad]);
+        current = [a, ab, ad];
+    }
+    pieces.push(current);
+    pieces
+}
+
+fn piece_points(piece: &[[f64; 2]; 3], rule: &TriangleRule) -> Vec<([f64; 2], f64)> {
+    let [a, b, c] = *piece;
+    let det = ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs();
+    rule.points
+        .iter()
+        .zip(&rule.weights)
+        .map(|(xi, w)| {
+            (
+                [
+                    a[0] + xi[0] * (b[0] - a[0]) + xi[1] * (c[0] - a[0]),
+                    a[1] + xi[0] * (b[1] - a[1]) + xi[1] * (c[1] - a[1]),
+                ],
+                w * det,
+            )
+        })
+        .collect()
+}
+
+/// Computes e_u, e_p, e_λ of `sol` against `exact`.
+pub fn error_norms(
+    mesh: &Mesh,
+    topo: &UTopology,
+    exact: &Exact,
+    sol: &DiscreteSolution,
+    quad: NormQuadrature,
+) -> ErrorNorms {
+    use rayon::prelude::*;
+    let rule = triangle_rule(quad.degree);
+    let tips = [
+        mesh.crack.nodes[0],
+        *mesh.crack.nodes.last().expect("crack has nodes"),
+    ];
+    let plain = graded_pieces(None, 0);
+    let (eu, ep) = mesh
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(ti, t)| {
+            let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
+            let corner = (0..3).find(|&k| tips.contains(&t[k]));
+            let graded;
+            let pieces = match corner {
+                Some(_) => {
+                    graded = graded_pieces(corner, quad.tip_depth);
+                    &graded
+                }
+                None => &plain,
+            };
+            let dofs = topo.triangle_dofs[ti];
+            let pv = t.map(|v| sol.p[v]);
+            let (mut su, mut sp) = (0.0, 0.0);
+            for piece in pieces {
+                for (xi, w) in piece_points(piece, &rule) {
+                    let l = TriangleGeometry::barycentric(xi);
+                    let x = geo.map(xi);
+                    let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
+                    let ph = mini_value(&pv, sol.bubbles[ti], l);
+                    let du = uh - exact.u.eval(x[0], x[1]);
+                    let dpx = ph[0] - exact.px.eval(x[0], x[1]);
+                    let dpy = ph[1] - exact.py.eval(x[0], x[1]);
+                    su += w * geo.area * du * du;
+                    sp += w * geo.area * (dpx * dpx + dpy * dpy);
+                }
+            }
+            (su, sp)
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+    let el = lambda_error(mesh, exact, sol.lambda, quad);
+    ErrorNorms {
+        u_l2: eu.sqrt(),
+        p_l2: ep.sqrt(),
+        lambda_l2: el,
+    }
+}
+
+/// The exact jump [u] at a crack point.
+pub fn exact_jump(exact: &Exact, p: [f64; 2], normal: [f64; 2]) -> f64 {
+    match &exact.jump {
+        Some(j) => j.eval(p[0], p[1]),
+        None => eval_on_face(&exact.u, p, normal, 1.0) - eval_on_face(&exact.u, p, normal, -1.0),
+    }
+}
+
+/// ‖λ_h − [u]‖_{L²(Γc)} with segments graded toward the two tips.
+fn lambda_error(mesh: &Mesh, exact: &Exact, lambda: &CrackField, quad: NormQuadrature) -> f64 {
+    let g = gauss_legendre(quad.degree / 2 + 1);
+    let nodes = &mesh.crack.nodes;
+    let last = nodes.len() - 2;
+    let mut total = 0.0;
+    for k in 0..nodes.len() - 1 {
+        let (a, b) = (mesh.vertices[nodes[k]], mesh.vertices[nodes[k + 1]]);
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        // sub-intervals of [0, 1] in the local coordinate s (0 at a), graded toward tip ends
+        let mut cuts = vec![0.0, 1.0];
+        if k == 0 {
+            cuts.extend((1..=quad.tip_depth).map(|i| 0.5f64.powi(i as i32)));
+        }
+        if k == last {
+            cuts.extend((1..=quad.tip_depth).map(|i| 1.0 - 0.5f64.powi(i as i32)));
+        }
+        cuts.sort_by(f64::total_cmp);
+        cuts.dedup();
+        for w2 in cuts.windows(2) {
+            let (s0, s1) = (w2[0], w2[1]);
+            for (&t, &w) in g.points.iter().zip(&g.weights) {
+                let s = s0 + t * (s1 - s0);
+                let p = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
+                let lh = match lambda {
+                    CrackField::PerSegment(v) => v[k],
+                    CrackField::PerNode(v) => (1.0 - s) * v[k] + s * v[k + 1],
+                };
+                let d = lh - exact_jump(exact, p, mesh.crack.normal);
+                total += w * (s1 - s0) * len * d * d;
+            }
+        }
+    }
+    total.sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn graded_pieces_tile_the_triangle() {
+        for corner in [None, Some(0), Some(1), Some(2)] {
+            let pieces = graded_pieces(corner, 7);
+            let area: f64 = pieces
+                .iter()
+                .map(|[a, b, c]| {
+                    0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
+                })
+                .sum();
+            assert!((area - 0.5).abs() < 1e-15);
+            if let Some(c) = corner {
+                let v = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]][c];
+                let smallest = pieces.last().unwrap();
+                assert_eq!(smallest[0], v, "last piece sits at the corner");
+            }
+        }
+    }
+}

@@ -1,0 +1,240 @@
+//! Result files: the results folder of a run, `summary.json`, and the HDF5/XDMF fields.
+//!
+//! A run writes into a fresh hidden folder `OUT/.NAME.partial-PID` and renames it to `OUT/NAME`
+//! only when everything is written, so an interrupted run leaves no folder under the final name
+//! and an existing `OUT/NAME` is never touched: a run refuses to start when it exists. Single files
+//! are written under a temporary name, flushed and renamed ([`atomic_write`]).
+
+pub mod summary;
+pub mod xdmf;
+
+use std::fs;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Errors of the results folder.
+#[derive(Debug, thiserror::Error)]
+pub enum ResultsError {
+    /// The final folder exists already.
+    #[error("results folder {0} already exists; remove it or choose another --out (earlier results are never overwritten)")]
+    Exists(PathBuf),
+    /// The output location cannot be created or written.
+    #[error("cannot write results under {path}: {reason}")]
+    Unwritable {
+        /// Folder concerned.
+        path: PathBuf,
+        /// Operating-system reason.
+        reason: String,
+    },
+}
+
+/// A results folder being written.
+#[derive(Debug)]
+pub struct ResultsDir {
+    final_path: PathBuf,
+    work_path: PathBuf,
+    committed: bool,
+}
+
+impl ResultsDir {
+    /// Prepares `out/name`: fails if it exists or `out` cannot be written.
+    pub fn create(out: &Path, name: &str) -> Result<ResultsDir, ResultsError> {
+        let unwritable = |path: &Path, e: std::io::Error| ResultsError::Unwritable {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        };
+        fs::create_dir_all(out).map_err(|e| unwritable(out, e))?;
+        let final_path = out.join(name);
+        if final_path.exists() {
+            return Err(ResultsError::Exists(final_path));
+        }
+        let work_path = out.join(format!(".{name}.partial-{}", std::process::id()));
+        if work_path.exists() {
+            fs::remove_dir_all(&work_path).map_err(|e| unwritable(&work_path, e))?;
+        }
+        fs::create_dir(&work_path).map_err(|e| unwritable(&work_path, e))?;
+        Ok(ResultsDir {
+            final_path,
+            work_path,
+            committed: false,
+        })
+    }
+
+    /// Folder to write files into until [`ResultsDir::commit`].
+    pub fn work_path(&self) -> &Path {
+        &self.work_path
+    }
+
+    /// The folder the results will have.
+    pub fn final_path(&self) -> &Path {
+        &self.final_path
+    }
+
+    /// Moves the finished folder to its final name.
+    pub fn commit(mut self) -> Result<PathBuf, ResultsError> {
+        if self.final_path.exists() {
+            return Err(ResultsError::Exists(self.final_path.clone()));
+        }
+        fs::rename(&self.work_path, &self.final_path).map_err(|e| ResultsError::Unwritable {
+            path: self.final_path.clone(),
+            reason: e.to_string(),
+        })?;
+        self.committed = true;
+        Ok(self.final_path.clone())
+    }
+}
+
+impl Drop for ResultsDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = fs::remove_dir_all(&self.work_path);
+        }
+    }
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed, renamed.
+pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn results_dir_refuses_existing_and_cleans_up() {
+        let root = tempfile::tempdir().unwrap();
+        let d = ResultsDir::create(root.path(), "s").unwrap();
+        atomic_write(&d.work_path().join("a.txt"), b"x").unwrap();
+        let final_path = d.commit().unwrap();
+        assert_eq!(fs::read(final_path.join("a.txt")).unwrap(), b"x");
+        let e = ResultsDir::create(root.path(), "s").unwrap_err();
+        assert!(e.to_string().contains("already exists"));
+        {
+            let d = ResultsDir::create(root.path(), "t").unwrap();
+            atomic_write(&d.work_path().join("b.txt"), b"y").unwrap();
+            // dropped without commit: nothing left
+        }
+        let names: Vec<_> = fs::read_dir(root.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("s")]);
+    }
+}
+
+/// Errors while writing a run's files.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// summary.json could not be written.
+    #[error("cannot write {path}: {reason}")]
+    Io {
+        /// File concerned.
+        path: PathBuf,
+        /// Reason.
+        reason: String,
+    },
+    /// The field files could not be written.
+    #[error("cannot write field files: {0}")]
+    Fields(#[from] xdmf::OutputError),
+}
+
+/// Writes `summary.json` and, when the scene asks for fields, `fields.h5` + `fields.xdmf` into `dir`.
+pub fn write_run(
+    dir: &Path,
+    scene: &crate::scene::Scene,
+    study: &crate::study::StudyResult,
+    wall_s: f64,
+) -> Result<(), WriteError> {
+    let with_fields = !scene.fields.is_empty();
+    if with_fields {
+        write_fields(dir, scene, study)?;
+    }
+    let summary = summary::Summary {
+        scene: scene.name.clone(),
+        description: scene.description.clone(),
+        sdcrack_version: env!("CARGO_PKG_VERSION"),
+        kkt_tolerance: crate::study::KKT_TOLERANCE,
+        shared_timings: ["assembly", "symbolic", "factorization", "crack_reduction"],
+        all_converged: study.cases.iter().all(|c| c.converged),
+        wall_s,
+        cases: study
+            .cases
+            .iter()
+            .map(|c| summary::CaseSummary::from_case(c, with_fields))
+            .collect(),
+    };
+    let path = dir.join("summary.json");
+    let text = serde_json::to_string_pretty(&summary).map_err(|e| WriteError::Io {
+        path: path.clone(),
+        reason: e.to_string(),
+    })?;
+    atomic_write(&path, text.as_bytes()).map_err(|e| WriteError::Io {
+        path,
+        reason: e.to_string(),
+    })
+}
+
+fn mesh_key(level: u32, u_space: crate::scene::USpace) -> String {
+    format!("level{level}-{u_space}")
+}
+
+fn write_fields(
+    dir: &Path,
+    scene: &crate::scene::Scene,
+    study: &crate::study::StudyResult,
+) -> Result<(), WriteError> {
+    use crate::norms::CrackField;
+    let meshes: Vec<xdmf::MeshData> = study
+        .meshes
+        .iter()
+        .map(|m| xdmf::MeshData {
+            key: mesh_key(m.level, m.u_space),
+            points: m.points.clone(),
+            triangles: m.triangles.clone(),
+        })
+        .collect();
+    let crack_points = |level: u32| {
+        study
+            .meshes
+            .iter()
+            .find(|m| m.level == level)
+            .map(|m| m.crack_points.clone())
+            .unwrap_or_default()
+    };
+    let cases: Vec<xdmf::CaseFields> = study
+        .cases
+        .iter()
+        .filter_map(|c| {
+            let f = c.fields.as_ref()?;
+            Some(xdmf::CaseFields {
+                name: summary::case_name(c),
+                mesh_key: mesh_key(c.level, c.u_space),
+                u: scene.fields.u.then(|| f.u.clone()),
+                p: scene.fields.p.then(|| f.p.clone()),
+                crack_points: crack_points(c.level),
+                lambda: scene.fields.lambda.then(|| match &f.lambda {
+                    CrackField::PerSegment(v) => (xdmf::Centering::Cell, v.clone()),
+                    CrackField::PerNode(v) => (xdmf::Centering::Node, v.clone()),
+                }),
+            })
+        })
+        .collect();
+    xdmf::write_fields(dir, "fields", &meshes, &cases)?;
+    Ok(())
+}

@@ -1,0 +1,110 @@
+//! `summary.json`: one entry per case with the keys of BRIEF §5 (level, h, u_space, multiplier,
+//! delta, unknowns, iterations, kkt, timings_s, errors when the scene has `[exact]`) plus the LCP
+//! status, the active-set size and the factorisation's regularised pivots.
+
+use serde::Serialize;
+
+use crate::contact::KktResiduals;
+use crate::norms::ErrorNorms;
+use crate::study::{CaseResult, Timings, KKT_TOLERANCE};
+
+/// The whole summary file.
+#[derive(Serialize, Debug)]
+pub struct Summary {
+    /// Scene name.
+    pub scene: String,
+    /// Scene description.
+    pub description: String,
+    /// Version of sdcrack that wrote it.
+    pub sdcrack_version: &'static str,
+    /// The KKT tolerance a case must meet to count as converged.
+    pub kkt_tolerance: f64,
+    /// Timing phases shared by several cases (reported with each of them).
+    pub shared_timings: [&'static str; 4],
+    /// True when every case converged.
+    pub all_converged: bool,
+    /// Wall-clock seconds of the whole run.
+    pub wall_s: f64,
+    /// The cases.
+    pub cases: Vec<CaseSummary>,
+}
+
+/// One case of the summary.
+#[derive(Serialize, Debug)]
+pub struct CaseSummary {
+    /// Level ℓ.
+    pub level: u32,
+    /// Mesh size (triangle diameter).
+    pub h: f64,
+    /// `continuous` or `broken`.
+    pub u_space: String,
+    /// `M0`, `M1` or `M1star`.
+    pub multiplier: String,
+    /// δ.
+    pub delta: f64,
+    /// Unknowns (p vertex values, u dofs, multipliers).
+    pub unknowns: usize,
+    /// Number of multipliers.
+    pub multipliers: usize,
+    /// LCP iterations.
+    pub iterations: usize,
+    /// LCP outcome in words.
+    pub status: String,
+    /// True when the case met the KKT tolerance.
+    pub converged: bool,
+    /// KKT residuals (relative).
+    pub kkt: KktResiduals,
+    /// Multipliers with μ > 0.
+    pub active_multipliers: usize,
+    /// Pivots regularised in the LDLᵀ of K(δ).
+    pub regularized_pivots: usize,
+    /// Seconds per phase.
+    pub timings_s: Timings,
+    /// Errors against `[exact]`, when the scene has it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub errors: Option<ErrorNorms>,
+    /// Name of the case's grid in `fields.xdmf`, when fields are written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fields_grid: Option<String>,
+}
+
+/// Grid name of a case in the field files.
+pub fn case_name(c: &CaseResult) -> String {
+    format!(
+        "level{}-{}-{}-delta{:e}",
+        c.level, c.u_space, c.multiplier, c.delta
+    )
+}
+
+impl CaseSummary {
+    /// The summary entry of a solved case.
+    pub fn from_case(c: &CaseResult, with_fields: bool) -> CaseSummary {
+        CaseSummary {
+            level: c.level,
+            h: c.h,
+            u_space: c.u_space.name().to_string(),
+            multiplier: c.multiplier.name().to_string(),
+            delta: c.delta,
+            unknowns: c.unknowns,
+            multipliers: c.multipliers,
+            iterations: c.iterations,
+            status: if c.converged {
+                c.status.name().to_string()
+            } else if c.status.converged() {
+                format!(
+                    "not converged: KKT residual {:.2e} above {KKT_TOLERANCE:e}",
+                    c.kkt.max()
+                )
+            } else {
+                c.status.name().to_string()
+            },
+            converged: c.converged,
+            kkt: c.kkt,
+            active_multipliers: c.active,
+            regularized_pivots: c.regularized_pivots,
+            timings_s: c.timings,
+            errors: c.errors,
+            fields_grid: with_fields.then(|| case_name(c)),
+        }
+    }
+}

@@ -1,0 +1,483 @@
+//! The driver: the study of one scene, read like the algorithm.
+//!
+//! for each level → mesh → for each u space → assemble, analyse the pattern → for each δ (largest
+//! first) → factor K(δ), reduce to the crack (x₀ = K⁻¹b, H_N = N K⁻¹ Nᵀ) → for each multiplier →
+//! solve the LCP (warm-started from the previous δ), recover x, refine, measure the KKT residuals,
+//! the errors against `[exact]` and the fields → record the case.
+//!
+//! One numeric factorisation per (level, u space, δ) serves the three multipliers; the symbolic
+//! factorisation is shared by every δ. Phase timings are recorded per case; phases shared by
+//! several cases (assembly, factorisation, crack reduction) are reported with each of them and
+//! flagged as shared in the summary.
+
+use std::time::Instant;
+
+use crate::assembly::{assemble, AssemblyError, CrackOperators, System};
+use crate::contact::{KktResiduals, Lcp, LcpOptions, LcpStatus};
+use crate::fe::mini::bubble_coefficients;
+use crate::fe::p1::TriangleGeometry;
+use crate::linalg::{Ldlt, LinalgError, SymbolicLdlt};
+use crate::mesh::{Mesh, MeshError, UTopology};
+use crate::norms::{error_norms, CrackField, DiscreteSolution, ErrorNorms, NormQuadrature};
+use crate::scene::{MultiplierSpace, Scene, USpace};
+
+/// Relative KKT residual under which a case counts as solved.
+pub const KKT_TOLERANCE: f64 = 1e-10;
+
+/// Errors that stop a study.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    /// The crack does not fit the mesh.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// Data could not be integrated.
+    #[error(transparent)]
+    Assembly(#[from] AssemblyError),
+    /// The sparse solver failed.
+    #[error("linear solver: {0}")]
+    Linalg(#[from] LinalgError),
+}
+
+/// Restricts a study to some cases (each `Some` replaces the scene's list by one value).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CaseFilter {
+    /// Only this level.
+    pub level: Option<u32>,
+    /// Only this u space.
+    pub u_space: Option<USpace>,
+    /// Only this multiplier space.
+    pub multiplier: Option<MultiplierSpace>,
+    /// Only this δ.
+    pub delta: Option<f64>,
+}
+
+/// The cases a scene asks for after a filter.
+#[derive(Clone, Debug)]
+pub struct CasePlan {
+    /// Levels, increasing.
+    pub levels: Vec<u32>,
+    /// u spaces.
+    pub u_spaces: Vec<USpace>,
+    /// Multiplier spaces.
+    pub multipliers: Vec<MultiplierSpace>,
+    /// δ values, decreasing.
+    pub deltas: Vec<f64>,
+}
+
+impl CasePlan {
+    /// The plan of `scene` restricted by `filter`.
+    pub fn new(scene: &Scene, filter: &CaseFilter) -> CasePlan {
+        CasePlan {
+            levels: filter
+                .level
+                .map_or_else(|| scene.levels.clone(), |l| vec![l]),
+            u_spaces: filter
+                .u_space
+                .map_or_else(|| scene.u_spaces.clone(), |s| vec![s]),
+            multipliers: filter
+                .multiplier
+                .map_or_else(|| scene.multipliers.clone(), |m| vec![m]),
+            deltas: filter
+                .delta
+                .map_or_else(|| scene.deltas.clone(), |d| vec![d]),
+        }
+    }
+
+    /// Number of cases.
+    pub fn len(&self) -> usize {
+        self.levels.len() * self.u_spaces.len() * self.multipliers.len() * self.deltas.len()
+    }
+
+    /// True when the plan has no case.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Wall-clock seconds per phase of one case.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Timings {
+    /// Mesh and assembly of K and b (shared by every δ and multiplier of a level and u space).
+    pub assembly: f64,
+    /// Symbolic analysis (shared like `assembly`).
+    pub symbolic: f64,
+    /// Numeric LDLᵀ of K(δ) (shared by the multipliers of a δ).
+    pub factorization: f64,
+    /// x₀ and H_N = N K⁻¹ Nᵀ (shared by the multipliers of a δ).
+    pub crack_reduction: f64,
+    /// LCP, recovery of x with refinement, KKT residuals.
+    pub contact: f64,
+    /// Error norms against `[exact]`.
+    pub norms: f64,
+    /// Preparing field arrays.
+    pub fields: f64,
+}
+
+/// Field arrays of one case, at the u dofs (the cracked mesh for `broken`).
+#[derive(Clone, Debug)]
+pub struct CaseFieldData {
+    /// u at each dof.
+    pub u: Vec<f64>,
+    /// p at each dof's vertex.
+    pub p: Vec<[f64; 2]>,
+    /// λ_h on the crack.
+    pub lambda: CrackField,
+}
+
+/// One solved case.
+#[derive(Clone, Debug)]
+pub struct CaseResult {
+    /// Level ℓ.
+    pub level: u32,
+    /// Mesh size (triangle diameter).
+    pub h: f64,
+    /// u space.
+    pub u_space: USpace,
+    /// Multiplier space.
+    pub multiplier: MultiplierSpace,
+    /// δ.
+    pub delta: f64,
+    /// Unknowns of the condensed system (p vertex values + u dofs) plus multipliers.
+    pub unknowns: usize,
+    /// Number of multipliers.
+    pub multipliers: usize,
+    /// LCP iterations (linear solves on the crack).
+    pub iterations: usize,
+    /// LCP outcome.
+    pub status: LcpStatus,
+    /// True when the LCP converged and every KKT residual is ≤ [`KKT_TOLERANCE`].
+    pub converged: bool,
+    /// KKT residuals.
+    pub kkt: KktResiduals,
+    /// Multipliers in the final active set (μ > 0: open part of the crack).
+    pub active: usize,
+    /// Regularised pivots in the factorisation of K(δ).
+    pub regularized_pivots: usize,
+    /// Phase timings.
+    pub timings: Timings,
+    /// Errors against `[exact]`.
+    pub errors: Option<ErrorNorms>,
+    /// Fields, when the scene asks for any.
+    pub fields: Option<CaseFieldData>,
+}
+
+/// Mesh data of a (level, u space) pair, for field output.
+#[derive(Clone, Debug)]
+pub struct MeshRecord {
+    /// Level.
+    pub level: u32,
+    /// u space.
+    pub u_space: USpace,
+    /// Points of the u dofs.
+    pub points: Vec<[f64; 2]>,
+    /// Triangles in u-dof numbering.
+    pub triangles: Vec<[usize; 3]>,
+    /// Crack node coordinates.
+    pub crack_points: Vec<[f64; 2]>,
+}
+
+/// Everything a study produced.
+#[derive(Clone, Debug, Default)]
+pub struct StudyResult {
+    /// Cases in the order solved.
+    pub cases: Vec<CaseResult>,
+    /// Meshes used, when fields are wanted.
+    pub meshes: Vec<MeshRecord>,
+}
+
+/// Progress callbacks of a study.
+pub trait Observer {
+    /// A phase shared by several cases starts (for progress messages).
+    fn phase(&mut self, _message: &str) {}
+    /// A case is done.
+    fn case_done(&mut self, _case: &CaseResult) {}
+}
+
+/// An observer that ignores everything.
+pub struct Silent;
+impl Observer for Silent {}
+
+/// Runs every case of `plan` for `scene`.
+pub fn run_study(
+    scene: &Scene,
+    plan: &CasePlan,
+    observer: &mut dyn Observer,
+) -> Result<StudyResult, StudyError> {
+    let mut result = StudyResult::default();
+    for &level in &plan.levels {
+        let t0 = Instant::now();
+        let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, level)?;
+        let ops = CrackOperators::new(&mesh);
+        let mesh_time = t0.elapsed().as_secs_f64();
+        for &u_space in &plan.u_spaces {
+            observer.phase(&format!("level {level}, {u_space}: assembling"));
+            let t1 = Instant::now();
+            let topo = mesh.u_topology(u_space);
+            let system = assemble(&mesh, &topo, &scene.f, &scene.g)?;
+            let assembly = mesh_time + t1.elapsed().as_secs_f64();
+            let t2 = Instant::now();
+            let symbolic = SymbolicLdlt::analyze(&system.base)?;
+            let symbolic_time = t2.elapsed().as_secs_f64();
+            if !scene.fields.is_empty() {
+                result.meshes.push(MeshRecord {
+                    level,
+                    u_space,
+                    points: topo.dof_vertex.iter().map(|&v| mesh.vertices[v]).collect(),
+                    triangles: topo.triangle_dofs.clone(),
+                    crack_points: ops.points.clone(),
+                });
+            }
+            let ctx = LevelContext {
+                scene,
+                mesh: &mesh,
+                topo: &topo,
+                ops: &ops,
+                system: &system,
+                symbolic: &symbolic,
+                base_timings: Timings {
+                    assembly,
+                    symbolic: symbolic_time,
+                    ..Timings::default()
+                },
+            };
+            ctx.run_deltas(plan, observer, &mut result.cases)?;
+        }
+    }
+    Ok(result)
+}
+
+/// What the δ loop of one (level, u space) needs.
+struct LevelContext<'a> {
+    scene: &'a Scene,
+    mesh: &'a Mesh,
+    topo: &'a UTopology,
+    ops: &'a CrackOperators,
+    system: &'a System,
+    symbolic: &'a SymbolicLdlt,
+    base_timings: Timings,
+}
+
+/// The factorised system at one δ reduced to the crack.
+struct Reduced {
+    ldlt: Ldlt,
+    matrix: crate::linalg::SymCsc,
+    /// H_N, row-major (I+1)².
+    h_n: Vec<f64>,
+    /// q_N = N P₀.
+    q_n: Vec<f64>,
+}
+
+impl LevelContext<'_> {
+    fn run_deltas(
+        &self,
+        plan: &CasePlan,
+        observer: &mut dyn Observer,
+        out: &mut Vec<CaseResult>,
+    ) -> Result<(), StudyError> {
+        let mut warm: Vec<Option<Vec<bool>>> = vec![None; plan.multipliers.len()];
+        for &delta in &plan.deltas {
+            observer.phase(&format!(
+                "level {}, {}, δ = {delta:e}: factorising",
+                self.mesh.level, self.topo.space
+            ));
+            let mut timings = self.base_timings;
+            let t0 = Instant::now();
+            let matrix = self.system.matrix(delta);
+            let ldlt = Ldlt::factor(self.symbolic, &matrix, &self.system.signs)?;
+            timings.factorization = t0.elapsed().as_secs_f64();
+            let t1 = Instant::now();
+            let reduced = self.reduce(ldlt, matrix);
+            timings.crack_reduction = t1.elapsed().as_secs_f64();
+            for (mi, &multiplier) in plan.multipliers.iter().enumerate() {
+                let case = self.solve_case(&reduced, multiplier, delta, timings, &mut warm[mi]);
+                observer.case_done(&case);
+                out.push(case);
+            }
+        }
+        Ok(())
+    }
+
+    /// x₀ = K⁻¹ b and H_N = N K⁻¹ Nᵀ from one block solve.
+    fn reduce(&self, ldlt: Ldlt, matrix: crate::linalg::SymCsc) -> Reduced {
+        let n = self.system.n();
+        let n_p = self.system.n_p;
+        let m = self.ops.nodes();
+        let mut x0 = vec![0.0; n];
+        ldlt.solve_refined(&matrix, &self.system.rhs, &mut x0, 2, 1e-15);
+        let mut z = vec![0.0; n * m];
+        for j in 0..m {
+            let mut e = vec![0.0; m];
+            e[j] = 1.0;
+            self.ops.add_nt(&e, &mut z[j * n..j * n + n_p]);
+        }
+        ldlt.solve_many_in_place(&mut z, m);
+        let mut h_n = vec![0.0; m * m];
+        for j in 0..m {
+            let col = self.ops.apply_n(&z[j * n..j * n + n_p]);
+            for i in 0..m {
+                h_n[i * m + j] = col[i];
+            }
+        }
+        let q_n = self.ops.apply_n(&x0[..n_p]);
+        Reduced {
+            ldlt,
+            matrix,
+            h_n,
+            q_n,
+        }
+    }
+
+    fn solve_case(
+        &self,
+        reduced: &Reduced,
+        multiplier: MultiplierSpace,
+        delta: f64,
+        mut timings: Timings,
+        warm: &mut Option<Vec<bool>>,
+    ) -> CaseResult {
+        let t0 = Instant::now();
+        let s = self.ops.constraint_map(multiplier);
+        let lcp = Lcp::reduce(&s, &reduced.h_n, &reduced.q_n);
+        let sol = lcp.solve(warm.as_deref(), LcpOptions::default());
+        *warm = Some(sol.active.clone());
+        // Sᵀ μ, then x = K⁻¹ (b − Nᵀ Sᵀ μ) with iterative refinement against the exact K(δ).
+        let m = self.ops.nodes();
+        let st_mu: Vec<f64> = (0..m)
+            .map(|j| s.iter().zip(&sol.mu).map(|(row, mu)| row[j] * mu).sum())
+            .collect();
+        let n_p = self.system.n_p;
+        let mut rhs = self.system.rhs.clone();
+        let neg: Vec<f64> = st_mu.iter().map(|v| -v).collect();
+        self.ops.add_nt(&neg, &mut rhs[..n_p]);
+        let mut x = vec![0.0; self.system.n()];
+        reduced
+            .ldlt
+            .solve_refined(&reduced.matrix, &rhs, &mut x, 3, 1e-15);
+        let kkt = self.kkt(reduced, &s, &sol.mu, &st_mu, &rhs, &x);
+        timings.contact = t0.elapsed().as_secs_f64();
+        let lambda = self.lambda_field(multiplier, &sol.mu);
+        let (p, u) = x.split_at(n_p);
+        let p_vertex: Vec<[f64; 2]> = p.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+        let t1 = Instant::now();
+        let errors = self.scene.exact.as_ref().map(|exact| {
+            let bubbles = self.bubbles(&p_vertex, u);
+            error_norms(
+                self.mesh,
+                self.topo,
+                exact,
+                &DiscreteSolution {
+                    u,
+                    p: &p_vertex,
+                    bubbles: &bubbles,
+                    lambda: &lambda,
+                },
+                NormQuadrature::default(),
+            )
+        });
+        timings.norms = t1.elapsed().as_secs_f64();
+        let t2 = Instant::now();
+        let fields = (!self.scene.fields.is_empty()).then(|| CaseFieldData {
+            u: u.to_vec(),
+            p: self.topo.dof_vertex.iter().map(|&v| p_vertex[v]).collect(),
+            lambda: lambda.clone(),
+        });
+        timings.fields = t2.elapsed().as_secs_f64();
+        let converged = sol.status.converged() && kkt.max() <= KKT_TOLERANCE;
+        CaseResult {
+            level: self.mesh.level,
+            h: self.mesh.h(),
+            u_space: self.topo.space,
+            multiplier,
+            delta,
+            unknowns: self.system.n() + s.len(),
+            multipliers: s.len(),
+            iterations: sol.iterations,
+            status: sol.status,
+            converged,
+            kkt,
+            active: sol.mu.iter().filter(|&&v| v > 0.0).count(),
+            regularized_pivots: reduced.ldlt.stats().regularized_pivots,
+            timings,
+            errors,
+            fields,
+        }
+    }
+
+    fn kkt(
+        &self,
+        reduced: &Reduced,
+        s: &[Vec<f64>],
+        mu: &[f64],
+        st_mu: &[f64],
+        rhs_mu: &[f64],
+        x: &[f64],
+    ) -> KktResiduals {
+        let n = self.system.n();
+        let mut kx = vec![0.0; n];
+        reduced.matrix.mul_vec(x, &mut kx);
+        let inf = |v: &[f64]| v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+        let eq = kx
+            .iter()
+            .zip(rhs_mu)
+            .fold(0.0f64, |a, (k, r)| a.max((k - r).abs()));
+        let mut dt_mu = vec![0.0; self.system.n_p];
+        self.ops.add_nt(st_mu, &mut dt_mu);
+        let eq_scale = inf(&self.system.rhs).max(inf(&dt_mu));
+        let np = self.ops.apply_n(&x[..self.system.n_p]);
+        let y: Vec<f64> = s
+            .iter()
+            .map(|row| row.iter().zip(&np).map(|(a, b)| a * b).sum())
+            .collect();
+        let s_norm = s
+            .iter()
+            .map(|row| row.iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        // y = D P is measured against the size of p, not of p·ν on Γc (≈ 0 where the crack is open).
+        let mut k = KktResiduals::constraint_part(mu, &y, s_norm * inf(&x[..self.system.n_p]));
+        k.equations = if eq_scale > 0.0 { eq / eq_scale } else { eq };
+        k
+    }
+
+    /// λ_h from the LCP unknowns: Λ for M0/M1, M_c⁻¹ Λ̃ for M1star (BRIEF §2).
+    fn lambda_field(&self, multiplier: MultiplierSpace, mu: &[f64]) -> CrackField {
+        match multiplier {
+            MultiplierSpace::M0 => CrackField::PerSegment(mu.to_vec()),
+            MultiplierSpace::M1 => CrackField::PerNode(mu.to_vec()),
+            MultiplierSpace::M1Star => {
+                let mc = self.ops.crack_mass();
+                CrackField::PerNode(solve_tridiagonal(&mc, mu))
+            }
+        }
+    }
+
+    fn bubbles(&self, p_vertex: &[[f64; 2]], u: &[f64]) -> Vec<[f64; 2]> {
+        self.mesh
+            .triangles
+            .iter()
+            .zip(&self.topo.triangle_dofs)
+            .map(|(t, dofs)| {
+                let geo = TriangleGeometry::new(t.map(|v| self.mesh.vertices[v]));
+                bubble_coefficients(&geo, &t.map(|v| p_vertex[v]), &dofs.map(|d| u[d]))
+            })
+            .collect()
+    }
+}
+
+/// Solves a tridiagonal system given as a dense matrix (Thomas algorithm; M_c is SPD).
+fn solve_tridiagonal(a: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
+    let n = b.len();
+    let mut c = vec![0.0; n];
+    let mut d = vec![0.0; n];
+    for i in 0..n {
+        let lower = if i > 0 { a[i][i - 1] } else { 0.0 };
+        let upper = if i + 1 < n { a[i][i + 1] } else { 0.0 };
+        let denom = a[i][i] - if i > 0 { lower * c[i - 1] } else { 0.0 };
+        c[i] = upper / denom;
+        d[i] = (b[i] - if i > 0 { lower * d[i - 1] } else { 0.0 }) / denom;
+    }
+    let mut x = vec![0.0; n];
+    for i in (0..n).rev() {
+        x[i] = d[i] - if i + 1 < n { c[i] * x[i + 1] } else { 0.0 };
+    }
+    x
+}

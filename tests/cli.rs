@@ -1,0 +1,185 @@
+//! The binary as users call it: results layout, summary keys, outputs asked for and no more, and
+//! one-line errors with the documented exit codes on bad input.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn sdcrack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn write_scene(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+const SMALL: &str = r#"
+name = "small"
+[geometry]
+domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
+crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
+[data]
+f = "20*sin(2*pi*x)*sign(y)"
+g = "0"
+[discretization]
+cells = [4, 4]
+levels = [0, 1]
+u_spaces = ["continuous", "broken"]
+multipliers = ["M0", "M1", "M1star"]
+deltas = [1e-2, 0.0]
+[outputs]
+fields = ["u", "p", "lambda"]
+references = []
+"#;
+
+#[test]
+fn run_writes_summary_and_fields_and_never_overwrites() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "small.toml", SMALL);
+    let out = dir.path().join("res");
+    let o = sdcrack(&["run", &scene, "--out", out.to_str().unwrap(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let folder = out.join("small");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["scene"], "small");
+    let cases = summary["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 2 * 2 * 3 * 2);
+    for c in cases {
+        for key in [
+            "level",
+            "h",
+            "u_space",
+            "multiplier",
+            "delta",
+            "unknowns",
+            "iterations",
+            "kkt",
+            "timings_s",
+        ] {
+            assert!(c.get(key).is_some(), "case lacks {key}: {c}");
+        }
+        assert!(c.get("errors").is_none(), "no [exact] → no errors");
+        assert_eq!(c["converged"], true, "{c}");
+    }
+    assert!(folder.join("fields.h5").is_file() && folder.join("fields.xdmf").is_file());
+    // no partial folders left
+    let names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["small".to_string()]);
+    // a second run refuses and leaves the first untouched
+    let before = std::fs::read(folder.join("summary.json")).unwrap();
+    let o = sdcrack(&["run", &scene, "--out", out.to_str().unwrap(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("already exists"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(folder.join("summary.json")).unwrap(), before);
+}
+
+#[test]
+fn no_fields_asked_no_field_files_and_filters_select_one_case() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = SMALL.replace(r#"fields = ["u", "p", "lambda"]"#, "fields = []");
+    let scene = write_scene(dir.path(), "small.toml", &text);
+    let out = dir.path().join("res");
+    let o = sdcrack(&[
+        "run",
+        &scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--level",
+        "1",
+        "--u-space",
+        "broken",
+        "--multiplier",
+        "M1star",
+        "--delta",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let folder = out.join("small");
+    assert!(!folder.join("fields.h5").exists() && !folder.join("fields.xdmf").exists());
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    let cases = summary["cases"].as_array().unwrap();
+    assert_eq!(cases.len(), 1);
+    assert_eq!(cases[0]["multiplier"], "M1star");
+    assert_eq!(cases[0]["u_space"], "broken");
+    assert_eq!(cases[0]["level"], 1);
+}
+
+#[test]
+fn bad_inputs_give_one_line_and_exit_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("res");
+    let cases: Vec<(&str, String, &str)> = vec![
+        ("missing file", "".into(), "cannot read scene file"),
+        (
+            "unknown key",
+            SMALL.replace("cells =", "cels ="),
+            "did you mean `cells`",
+        ),
+        (
+            "off mesh",
+            SMALL.replace("[-0.5, 0.0], [0.5, 0.0]", "[-0.4, 0.0], [0.5, 0.0]"),
+            "not a vertex of the level-0 mesh",
+        ),
+        (
+            "touches boundary",
+            SMALL.replace("[-0.5, 0.0], [0.5, 0.0]", "[-1.0, 0.0], [0.5, 0.0]"),
+            "touches the boundary",
+        ),
+        (
+            "bad expression",
+            SMALL.replace("20*sin(2*pi*x)", "20*sinn(2*pi*x)"),
+            "data.f",
+        ),
+        (
+            "NaN data",
+            SMALL.replace(r#"g = "0""#, r#"g = "log(x - 2)""#),
+            "evaluates to NaN",
+        ),
+        (
+            "negative delta",
+            SMALL.replace("deltas = [1e-2, 0.0]", "deltas = [-1.0]"),
+            "not a finite number ≥ 0",
+        ),
+        (
+            "unknown multiplier",
+            SMALL.replace(r#""M1star"]"#, r#""M2"]"#),
+            "unknown value \"M2\"",
+        ),
+    ];
+    for (what, text, needle) in cases {
+        let scene = if text.is_empty() {
+            dir.path().join("nope.toml").display().to_string()
+        } else {
+            write_scene(dir.path(), "bad.toml", &text)
+        };
+        let o = sdcrack(&["run", &scene, "--out", out.to_str().unwrap(), "--quiet"]);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{what}: {err}");
+        assert!(
+            err.contains(needle),
+            "{what}: expected '{needle}' in: {err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{what}: one line: {err}");
+        assert!(!out.join("small").exists(), "{what}: no results folder");
+    }
+    let o = sdcrack(&["run", "--delta", "nan"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = sdcrack(&["check", &common::scene_path("mixed").display().to_string()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
