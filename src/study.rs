@@ -62,6 +62,8 @@ pub struct CasePlan {
     pub multipliers: Vec<MultiplierSpace>,
     /// δ values, decreasing.
     pub deltas: Vec<f64>,
+    /// Quadrature of the error norms.
+    pub norm_quadrature: NormQuadrature,
 }
 
 impl CasePlan {
@@ -80,6 +82,7 @@ impl CasePlan {
             deltas: filter
                 .delta
                 .map_or_else(|| scene.deltas.clone(), |d| vec![d]),
+            norm_quadrature: NormQuadrature::default(),
         }
     }
 
@@ -289,7 +292,14 @@ impl LevelContext<'_> {
             let reduced = self.reduce(ldlt, matrix);
             timings.crack_reduction = t1.elapsed().as_secs_f64();
             for (mi, &multiplier) in plan.multipliers.iter().enumerate() {
-                let case = self.solve_case(&reduced, multiplier, delta, timings, &mut warm[mi]);
+                let case = self.solve_case(
+                    &reduced,
+                    multiplier,
+                    delta,
+                    timings,
+                    &mut warm[mi],
+                    plan.norm_quadrature,
+                );
                 observer.case_done(&case);
                 out.push(case);
             }
@@ -334,6 +344,7 @@ impl LevelContext<'_> {
         delta: f64,
         mut timings: Timings,
         warm: &mut Option<Vec<bool>>,
+        quadrature: NormQuadrature,
     ) -> CaseResult {
         let t0 = Instant::now();
         let s = self.ops.constraint_map(multiplier);
@@ -371,7 +382,7 @@ impl LevelContext<'_> {
                     bubbles: &bubbles,
                     lambda: &lambda,
                 },
-                NormQuadrature::default(),
+                quadrature,
             )
         });
         timings.norms = t1.elapsed().as_secs_f64();

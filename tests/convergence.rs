@@ -1,0 +1,176 @@
+//! Observed orders of accuracy at δ = 0 against the exact solutions (BRIEF §4), every case's KKT
+//! residuals, and the quadrature of the error norms.
+//!
+//! Measured on levels 2, 3, 4 of the 8×8 scenes (h = 0.0884, 0.0442, 0.0221), rates log2 between
+//! levels 3 and 4 (this commit, 2 cores):
+//!
+//! | scene  | u space    | mult.  | e_u (lvl 4) | rate u | e_p (lvl 4) | rate p | e_λ (lvl 4) | rate λ |
+//! |--------|------------|--------|-------------|--------|-------------|--------|-------------|--------|
+//! | closed | both       | all    | 2.30e-4     | 2.00   | 4.82e-2     | 1.00   | 0           | –      |
+//! | open   | broken     | M0     | 7.06e-4     | 1.36   | 1.21e-1     | 0.47   | 2.19e-2     | 0.74   |
+//! | open   | broken     | M1     | 7.04e-4     | 1.35   | 1.21e-1     | 0.46   | 7.27e-3     | 0.95   |
+//! | open   | broken     | M1star | 7.04e-4     | 1.35   | 1.21e-1     | 0.46   | 7.27e-3     | 0.95   |
+//! | open   | continuous | all    | 1.90e-1     | −0.01  | 6.57e-1     | −0.00  | 8.11e-1     | −0.01  |
+//!
+//! The open crack has r^{1/2} tip singularities (u ∈ H^{3/2−ε}), which bounds the rates of u and p;
+//! the `continuous` u space cannot carry the jump and does not converge at all (λ_h → 0, so
+//! e_λ → ‖[u]‖ = 0.816): recorded here as a characterisation, not hidden.
+
+mod common;
+
+use sdcrack::norms::NormQuadrature;
+use sdcrack::scene::{MultiplierSpace, Scene, USpace};
+use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
+
+fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
+    let mut s = common::load(name);
+    s.levels = levels.to_vec();
+    s.deltas = vec![0.0];
+    s.fields = Default::default();
+    s
+}
+
+/// (h, e_u, e_p, e_λ) per level for one variant.
+fn series(cases: &[CaseResult], u: USpace, m: MultiplierSpace) -> Vec<(f64, f64, f64, f64)> {
+    cases
+        .iter()
+        .filter(|c| c.u_space == u && c.multiplier == m)
+        .map(|c| {
+            let e = c.errors.expect("exact scene has errors");
+            (c.h, e.u_l2, e.p_l2, e.lambda_l2)
+        })
+        .collect()
+}
+
+fn last_rates(s: &[(f64, f64, f64, f64)]) -> (f64, f64, f64) {
+    let (a, b) = (s[s.len() - 2], s[s.len() - 1]);
+    (
+        common::rate(a.0, a.1, b.0, b.1),
+        common::rate(a.0, a.2, b.0, b.2),
+        common::rate(a.0, a.3, b.0, b.3),
+    )
+}
+
+fn assert_kkt(cases: &[CaseResult]) {
+    for c in cases {
+        assert!(
+            c.converged,
+            "level {} {} {}: {:?}",
+            c.level, c.u_space, c.multiplier, c.status
+        );
+        assert!(
+            c.kkt.max() <= 1e-10,
+            "level {} {} {}: KKT {:?}",
+            c.level,
+            c.u_space,
+            c.multiplier,
+            c.kkt
+        );
+    }
+}
+
+#[test]
+fn closed_crack_converges_optimally_for_every_variant() {
+    let scene = scene_at_levels("closed-exact", &[2, 3, 4]);
+    let cases = common::solve(&scene, CaseFilter::default());
+    assert_eq!(cases.len(), 3 * 6);
+    assert_kkt(&cases);
+    for u in [USpace::Continuous, USpace::Broken] {
+        for m in MultiplierSpace::ALL {
+            let s = series(&cases, u, m);
+            let (ru, rp, _) = last_rates(&s);
+            let finest = s[s.len() - 1];
+            assert!(ru >= 1.85, "{u} {m}: u rate {ru}");
+            assert!(rp >= 0.9, "{u} {m}: p rate {rp}");
+            assert!(finest.1 < 2.5e-4, "{u} {m}: e_u = {}", finest.1);
+            assert!(finest.2 < 5.0e-2, "{u} {m}: e_p = {}", finest.2);
+            // closed crack: λ_h = 0 = [u] exactly
+            assert!(finest.3 < 1e-12, "{u} {m}: e_λ = {}", finest.3);
+        }
+    }
+}
+
+#[test]
+fn open_crack_broken_converges_continuous_does_not() {
+    let scene = scene_at_levels("open-exact", &[2, 3, 4]);
+    let cases = common::solve(&scene, CaseFilter::default());
+    assert_kkt(&cases);
+    for m in MultiplierSpace::ALL {
+        let s = series(&cases, USpace::Broken, m);
+        let (ru, rp, rl) = last_rates(&s);
+        // observed 1.35-1.36, 0.46-0.47, 0.74 (M0) / 0.95 (M1, M1star)
+        assert!(ru >= 1.3, "broken {m}: u rate {ru}");
+        assert!(rp >= 0.42, "broken {m}: p rate {rp}");
+        let rl_min = if m == MultiplierSpace::M0 { 0.68 } else { 0.9 };
+        assert!(rl >= rl_min, "broken {m}: λ rate {rl}");
+        let finest = s[2];
+        assert!(finest.1 < 8e-4 && finest.2 < 0.13, "broken {m}: {finest:?}");
+        // the paper's rates (Thm 4.3: h^1/2 for M0 and M1, h^3/4 for M1star) are met or exceeded
+        let paper = if m == MultiplierSpace::M1Star {
+            0.75
+        } else {
+            0.5
+        };
+        assert!(
+            rl >= paper,
+            "broken {m}: λ rate {rl} below the paper's {paper}"
+        );
+    }
+    // Characterisation of the continuous u space on an open crack (BRIEF §2): the errors stall.
+    // Recorded at level 4: e_u = 1.90e-1, e_p = 6.57e-1, e_λ = 8.11e-1 (λ_h → 0).
+    for m in MultiplierSpace::ALL {
+        let s = series(&cases, USpace::Continuous, m);
+        let (ru, rp, rl) = last_rates(&s);
+        assert!(
+            ru < 0.05 && rp < 0.05 && rl < 0.05,
+            "continuous {m} must not converge: {ru} {rp} {rl}"
+        );
+        let finest = s[2];
+        assert!(
+            (finest.1 - 0.190).abs() < 0.005,
+            "continuous {m}: e_u = {}",
+            finest.1
+        );
+        assert!(
+            (finest.2 - 0.657).abs() < 0.005,
+            "continuous {m}: e_p = {}",
+            finest.2
+        );
+        assert!(
+            (finest.3 - 0.811).abs() < 0.005,
+            "continuous {m}: e_λ = {}",
+            finest.3
+        );
+    }
+}
+
+#[test]
+fn doubling_the_norm_quadrature_changes_norms_by_less_than_1e3() {
+    let scene = scene_at_levels("open-exact", &[2]);
+    let filter = CaseFilter {
+        u_space: Some(USpace::Broken),
+        ..CaseFilter::default()
+    };
+    let mut plan = CasePlan::new(&scene, &filter);
+    let base = run_study(&scene, &plan, &mut Silent).unwrap().cases;
+    let q = NormQuadrature::default();
+    plan.norm_quadrature = NormQuadrature {
+        degree: 2 * q.degree,
+        tip_depth: 2 * q.tip_depth,
+    };
+    let fine = run_study(&scene, &plan, &mut Silent).unwrap().cases;
+    for (a, b) in base.iter().zip(&fine) {
+        let (ea, eb) = (a.errors.unwrap(), b.errors.unwrap());
+        for (x, y, what) in [
+            (ea.u_l2, eb.u_l2, "u"),
+            (ea.p_l2, eb.p_l2, "p"),
+            (ea.lambda_l2, eb.lambda_l2, "λ"),
+        ] {
+            assert!(
+                (x - y).abs() < 1e-3 * y,
+                "{} {what}: {x} vs {y}",
+                a.multiplier
+            );
+        }
+    }
+}
