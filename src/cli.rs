@@ -50,6 +50,17 @@ pub enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// Export the meshes of a scene's levels for the reference solvers (see docs/design.md).
+    Mesh {
+        /// Scene file (TOML); omit for the embedded default scene.
+        scene: Option<PathBuf>,
+        /// Folder to create (must not exist).
+        #[arg(long)]
+        out: PathBuf,
+        /// Only this level.
+        #[arg(long)]
+        level: Option<u32>,
+    },
     /// Validate a scene file (and its crack on every level's mesh) without solving.
     Check {
         /// Scene file (TOML).
@@ -128,6 +139,18 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                 s.name,
                 s.case_count()
             );
+            Ok(0)
+        }
+        Command::Mesh { scene, out, level } => {
+            let scene = match scene {
+                Some(p) => Scene::from_file(&p).map_err(usage)?,
+                None => Scene::default_scene(),
+            };
+            check_meshes(&scene)?;
+            let levels = level.map_or_else(|| scene.levels.clone(), |l| vec![l]);
+            let path =
+                crate::output::mesh_export::export_meshes(&scene, &levels, &out).map_err(usage)?;
+            println!("meshes of levels {levels:?} written to {}", path.display());
             Ok(0)
         }
         Command::Run {

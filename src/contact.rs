@@ -338,6 +338,35 @@ mod tests {
     }
 
     #[test]
+    fn iteration_limit_is_reported_not_hidden() {
+        // Started from the empty active set, one iteration cannot reach the fixed point.
+        let m = 6;
+        let mut h = vec![0.0; m * m];
+        for i in 0..m {
+            h[i * m + i] = 2.0;
+            if i > 0 {
+                h[i * m + i - 1] = -1.0;
+                h[(i - 1) * m + i] = -1.0;
+            }
+        }
+        let q = vec![1.0, -1.0, 1.0, -1.0, 1.0, -1.0];
+        let lcp = Lcp { m, h, q };
+        let empty = vec![false; m];
+        let full = lcp.solve(Some(&empty), LcpOptions::default());
+        assert!(full.status.converged());
+        assert!(full.iterations > 1, "needs more than one iteration");
+        let short = lcp.solve(
+            Some(&empty),
+            LcpOptions {
+                max_iterations: 1,
+                ..LcpOptions::default()
+            },
+        );
+        assert_eq!(short.status, LcpStatus::MaxIterations);
+        assert!(!short.status.converged());
+    }
+
+    #[test]
     fn reduce_matches_dense_products() {
         let s = vec![vec![1.0, 2.0, 0.0], vec![0.0, 1.0, 1.0]];
         let h_n = vec![2.0, 1.0, 0.0, 1.0, 3.0, 1.0, 0.0, 1.0, 4.0];

@@ -21,6 +21,9 @@ use crate::mesh::{Mesh, MeshError, UTopology};
 use crate::norms::{error_norms, CrackField, DiscreteSolution, ErrorNorms, NormQuadrature};
 use crate::scene::{MultiplierSpace, Scene, USpace};
 
+/// Right-hand sides solved together when reducing K⁻¹ to the crack (bounds memory to 32 n values).
+const REDUCTION_BLOCK: usize = 32;
+
 /// Relative KKT residual under which a case counts as solved.
 pub const KKT_TOLERANCE: f64 = 1e-10;
 
@@ -314,18 +317,25 @@ impl LevelContext<'_> {
         let m = self.ops.nodes();
         let mut x0 = vec![0.0; n];
         ldlt.solve_refined(&matrix, &self.system.rhs, &mut x0, 2, 1e-15);
-        let mut z = vec![0.0; n * m];
-        for j in 0..m {
-            let mut e = vec![0.0; m];
-            e[j] = 1.0;
-            self.ops.add_nt(&e, &mut z[j * n..j * n + n_p]);
-        }
-        ldlt.solve_many_in_place(&mut z, m);
+        // H_N column by column in blocks, so the right-hand sides never hold more than
+        // REDUCTION_BLOCK vectors of length n at once.
         let mut h_n = vec![0.0; m * m];
-        for j in 0..m {
-            let col = self.ops.apply_n(&z[j * n..j * n + n_p]);
-            for i in 0..m {
-                h_n[i * m + j] = col[i];
+        let mut z = vec![0.0; n * REDUCTION_BLOCK.min(m)];
+        for start in (0..m).step_by(REDUCTION_BLOCK) {
+            let cols = REDUCTION_BLOCK.min(m - start);
+            let z = &mut z[..n * cols];
+            z.fill(0.0);
+            for c in 0..cols {
+                let mut e = vec![0.0; m];
+                e[start + c] = 1.0;
+                self.ops.add_nt(&e, &mut z[c * n..c * n + n_p]);
+            }
+            ldlt.solve_many_in_place(z, cols);
+            for c in 0..cols {
+                let col = self.ops.apply_n(&z[c * n..c * n + n_p]);
+                for i in 0..m {
+                    h_n[i * m + start + c] = col[i];
+                }
             }
         }
         let q_n = self.ops.apply_n(&x0[..n_p]);

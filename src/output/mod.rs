@@ -5,6 +5,7 @@
 //! and an existing `OUT/NAME` is never touched: a run refuses to start when it exists. Single files
 //! are written under a temporary name, flushed and renamed ([`atomic_write`]).
 
+pub mod mesh_export;
 pub mod summary;
 pub mod xdmf;
 
@@ -162,9 +163,11 @@ pub fn write_run(
     wall_s: f64,
 ) -> Result<(), WriteError> {
     let with_fields = !scene.fields.is_empty();
+    let t0 = std::time::Instant::now();
     if with_fields {
         write_fields(dir, scene, study)?;
     }
+    let fields_write_s = t0.elapsed().as_secs_f64();
     let summary = summary::Summary {
         scene: scene.name.clone(),
         description: scene.description.clone(),
@@ -173,6 +176,7 @@ pub fn write_run(
         shared_timings: ["assembly", "symbolic", "factorization", "crack_reduction"],
         all_converged: study.cases.iter().all(|c| c.converged),
         wall_s,
+        fields_write_s,
         cases: study
             .cases
             .iter()

@@ -23,8 +23,10 @@ pub struct Summary {
     pub shared_timings: [&'static str; 4],
     /// True when every case converged.
     pub all_converged: bool,
-    /// Wall-clock seconds of the whole run.
+    /// Wall-clock seconds of the solves (all cases, before writing files).
     pub wall_s: f64,
+    /// Seconds spent writing `fields.h5`/`fields.xdmf` (all cases together; 0 without fields).
+    pub fields_write_s: f64,
     /// The cases.
     pub cases: Vec<CaseSummary>,
 }
