@@ -208,6 +208,9 @@ impl Observer for Progress {
 
 fn run(scene: &Scene, filter: &CaseFilter, out: &Path, quiet: bool) -> Result<i32, Failure> {
     check_meshes(scene)?;
+    for tool in &scene.references {
+        crate::references::check_available(tool).map_err(usage)?;
+    }
     let plan = CasePlan::new(scene, filter);
     let results = ResultsDir::create(out, &scene.name).map_err(usage)?;
     let start = Instant::now();
@@ -228,6 +231,7 @@ fn run(scene: &Scene, filter: &CaseFilter, out: &Path, quiet: bool) -> Result<i3
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     write_run(results.work_path(), scene, &study, wall).map_err(runtime)?;
+    run_references(scene, &plan, results.work_path(), quiet)?;
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);
     let failed = study.cases.iter().filter(|c| !c.converged).count();
@@ -242,6 +246,34 @@ fn run(scene: &Scene, filter: &CaseFilter, out: &Path, quiet: bool) -> Result<i3
         return Ok(3);
     }
     Ok(0)
+}
+
+/// Exports the plan's meshes and runs every reference the scene lists, into `dir/<tool>/`.
+fn run_references(scene: &Scene, plan: &CasePlan, dir: &Path, quiet: bool) -> Result<(), Failure> {
+    if scene.references.is_empty() {
+        return Ok(());
+    }
+    let mesh_dir = dir.join("mesh");
+    crate::output::mesh_export::export_meshes(scene, &plan.levels, &mesh_dir).map_err(runtime)?;
+    for tool in &scene.references {
+        let spinner = if quiet || !std::io::stderr().is_terminal() {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::new_spinner()
+        };
+        spinner.set_message(format!("reference {tool}: levels {:?}", plan.levels));
+        spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+        let seconds = crate::references::run_reference(
+            tool,
+            &mesh_dir,
+            &dir.join(tool),
+            !scene.fields.is_empty(),
+        )
+        .map_err(runtime)?;
+        spinner.finish_and_clear();
+        println!("reference {tool}: {seconds:.1} s");
+    }
+    Ok(())
 }
 
 /// log2 rate between two (h, e) pairs.

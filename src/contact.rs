@@ -277,10 +277,8 @@ impl KktResiduals {
 mod tests {
     use super::*;
 
-    /// A 1D Laplacian-like SPD H and a q with mixed signs: check the KKT conditions.
-    #[test]
-    fn solves_spd_lcp() {
-        let m = 40;
+    /// The m × m matrix tridiag(−1, 2, −1), row-major (an M-matrix).
+    fn laplacian_1d(m: usize) -> Vec<f64> {
         let mut h = vec![0.0; m * m];
         for i in 0..m {
             h[i * m + i] = 2.0;
@@ -289,6 +287,14 @@ mod tests {
                 h[(i - 1) * m + i] = -1.0;
             }
         }
+        h
+    }
+
+    /// A 1D Laplacian-like SPD H and a q with mixed signs: check the KKT conditions.
+    #[test]
+    fn solves_spd_lcp() {
+        let m = 40;
+        let h = laplacian_1d(m);
         let q: Vec<f64> = (0..m).map(|i| (i as f64 * 0.7).sin()).collect();
         let lcp = Lcp { m, h, q };
         let sol = lcp.solve(None, LcpOptions::default());
@@ -341,14 +347,7 @@ mod tests {
     fn iteration_limit_is_reported_not_hidden() {
         // Started from the empty active set, one iteration cannot reach the fixed point.
         let m = 6;
-        let mut h = vec![0.0; m * m];
-        for i in 0..m {
-            h[i * m + i] = 2.0;
-            if i > 0 {
-                h[i * m + i - 1] = -1.0;
-                h[(i - 1) * m + i] = -1.0;
-            }
-        }
+        let h = laplacian_1d(m);
         let q = vec![1.0, -1.0, 1.0, -1.0, 1.0, -1.0];
         let lcp = Lcp { m, h, q };
         let empty = vec![false; m];

@@ -8,8 +8,8 @@
 //! 4. [`linalg`] + [`contact`]: sparse LDLᵀ of K(δ), the crack LCP of M0 | M1 | M1star;
 //! 5. [`norms`] + [`output`]: errors against exact solutions, `summary.json`, HDF5/XDMF fields.
 //!
-//! [`study`] drives the stages over levels, u spaces, δ and multipliers; [`cli`] is the binary's
-//! command line.
+//! [`study`] drives the stages over levels, u spaces, δ and multipliers; [`references`] runs the
+//! dolfinx and FreeFEM reference solvers the scene asks for; [`cli`] is the binary's command line.
 
 // Element loops index local matrices by (i, j, k) exactly as the formulas do.
 #![allow(clippy::needless_range_loop)]
@@ -22,5 +22,6 @@ pub mod linalg;
 pub mod mesh;
 pub mod norms;
 pub mod output;
+pub mod references;
 pub mod scene;
 pub mod study;

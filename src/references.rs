@@ -1,0 +1,148 @@
+//! Runs the reference solvers (BRIEF §3) that a scene lists in `[outputs] references`.
+//!
+//! Each reference is an independent program under `references/<tool>/solve.py`, run with Debian's
+//! `/usr/bin/python3` as `solve.py MESH_EXPORT --out RESULTS/<tool> [--fields]`. It reads the mesh
+//! export written by [`crate::output::mesh_export`] (the same vertices and triangles as the solver)
+//! and writes `summary.json` (and fields) into its own subfolder of the results. Before anything is
+//! solved, every requested tool is checked to be installed; a missing one is reported in one line
+//! with the command that installs it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// The Python interpreter that has Debian's dolfinx, numpy, h5py and meshio.
+pub const PYTHON: &str = "/usr/bin/python3";
+
+/// Errors of a reference run.
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceError {
+    /// A tool is not installed.
+    #[error("reference '{tool}' is not available: {what}; install it with `{install}` (or run ci/setup)")]
+    Missing {
+        /// Tool name.
+        tool: String,
+        /// What was not found.
+        what: String,
+        /// Install command.
+        install: &'static str,
+    },
+    /// The scripts folder is missing.
+    #[error("reference scripts not found at {0}; set SDCRACK_REFERENCES to the repository's references/ folder")]
+    NoScripts(PathBuf),
+    /// The tool ran and failed.
+    #[error("reference '{tool}' failed (exit {code}): {message}")]
+    Failed {
+        /// Tool name.
+        tool: String,
+        /// Exit code (-1 when killed by a signal).
+        code: i32,
+        /// Last line of its stderr.
+        message: String,
+    },
+    /// It could not be started.
+    #[error("cannot start reference '{tool}': {reason}")]
+    Spawn {
+        /// Tool name.
+        tool: String,
+        /// Reason.
+        reason: String,
+    },
+}
+
+/// Folder holding `dolfinx/solve.py` and `freefem/solve.py`: `$SDCRACK_REFERENCES`, else the
+/// repository's `references/` (this crate's source folder).
+pub fn scripts_dir() -> PathBuf {
+    std::env::var_os("SDCRACK_REFERENCES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("references"))
+}
+
+/// True when the command runs and exits 0.
+fn succeeds(cmd: &mut Command) -> bool {
+    cmd.stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false)
+}
+
+/// Checks that `tool` can run here.
+pub fn check_available(tool: &str) -> Result<(), ReferenceError> {
+    let dir = scripts_dir();
+    let script = dir.join(tool).join("solve.py");
+    if !script.is_file() {
+        return Err(ReferenceError::NoScripts(dir));
+    }
+    let missing = |what: &str, install| ReferenceError::Missing {
+        tool: tool.to_string(),
+        what: what.to_string(),
+        install,
+    };
+    let python_ok =
+        |module: &str| succeeds(Command::new(PYTHON).args(["-c", &format!("import {module}")]));
+    if tool == "dolfinx" && !python_ok("dolfinx") {
+        return Err(missing(
+            "python module dolfinx under /usr/bin/python3",
+            "apt-get install python3-dolfinx",
+        ));
+    }
+    if tool == "freefem" && which("FreeFem++").is_none() {
+        return Err(missing(
+            "the FreeFem++ binary",
+            "apt-get install freefem++ libfreefem++",
+        ));
+    }
+    if !python_ok("numpy") {
+        return Err(missing(
+            "numpy under /usr/bin/python3",
+            "apt-get install python3-numpy",
+        ));
+    }
+    Ok(())
+}
+
+fn which(bin: &str) -> Option<PathBuf> {
+    std::env::var_os("PATH").and_then(|paths| {
+        std::env::split_paths(&paths)
+            .map(|p| p.join(bin))
+            .find(|p| p.is_file())
+    })
+}
+
+/// Runs `tool` on the mesh export `mesh_dir`, writing into `out`; returns the wall time in seconds.
+pub fn run_reference(
+    tool: &str,
+    mesh_dir: &Path,
+    out: &Path,
+    fields: bool,
+) -> Result<f64, ReferenceError> {
+    let script = scripts_dir().join(tool).join("solve.py");
+    let start = Instant::now();
+    let mut cmd = Command::new(PYTHON);
+    cmd.arg(&script).arg(mesh_dir).arg("--out").arg(out);
+    if fields {
+        cmd.arg("--fields");
+    }
+    cmd.env("FF_LOADPATH", "/usr/lib/freefem++");
+    let output = cmd.output().map_err(|e| ReferenceError::Spawn {
+        tool: tool.to_string(),
+        reason: e.to_string(),
+    })?;
+    if !output.status.success() {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let message = stderr
+            .lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("no message")
+            .trim()
+            .to_string();
+        return Err(ReferenceError::Failed {
+            tool: tool.to_string(),
+            code: output.status.code().unwrap_or(-1),
+            message,
+        });
+    }
+    Ok(start.elapsed().as_secs_f64())
+}
