@@ -119,8 +119,13 @@ pub fn run_reference(
 ) -> Result<f64, ReferenceError> {
     let script = scripts_dir().join(tool).join("solve.py");
     let start = Instant::now();
+    // Absolute paths: a tool may change its working directory.
+    let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
     let mut cmd = Command::new(PYTHON);
-    cmd.arg(&script).arg(mesh_dir).arg("--out").arg(out);
+    cmd.arg(&script)
+        .arg(absolute(mesh_dir))
+        .arg("--out")
+        .arg(absolute(out));
     if fields {
         cmd.arg("--fields");
     }

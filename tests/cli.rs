@@ -178,6 +178,21 @@ fn bad_inputs_give_one_line_and_exit_2() {
         assert_eq!(err.trim_end().lines().count(), 1, "{what}: one line: {err}");
         assert!(!out.join("small").exists(), "{what}: no results folder");
     }
+    // a reference that cannot be run is reported before anything is solved
+    let text = SMALL.replace("references = []", r#"references = ["dolfinx"]"#);
+    let scene = write_scene(dir.path(), "refs.toml", &text);
+    let o = Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+        .args(["run", &scene, "--out", out.to_str().unwrap(), "--quiet"])
+        .env("SDCRACK_REFERENCES", dir.path().join("no-such-folder"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("reference scripts not found"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!out.join("small").exists());
     let o = sdcrack(&["run", "--delta", "nan"]);
     assert_eq!(o.status.code(), Some(2));
     let o = sdcrack(&["check", &common::scene_path("mixed").display().to_string()]);

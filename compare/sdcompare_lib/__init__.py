@@ -1,0 +1,1 @@
+"""sdcompare: convergence / agreement report for one sdcrack results folder."""

@@ -1,0 +1,97 @@
+"""PNG plots (matplotlib, Agg backend). Each function returns the file name written or None."""
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+QLABEL = {"u_l2": "‖u−u_ex‖_L²", "p_l2": "‖p−∇u_ex‖_L²", "lambda_l2": "‖λ−[u]‖_L²(Γc)"}
+STYLE = {"broken": "-", "continuous": "--"}
+MARK = {"M0": "o", "M1": "s", "M1star": "^"}
+
+
+def _save(fig, folder, name):
+    path = os.path.join(folder, name)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return name
+
+
+def rate_plot(folder, scene, rate_entries):
+    ents = [r for r in rate_entries if any(e > 0 for e in r["errors"])]
+    if not ents:
+        return None
+    qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
+    fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
+    for ax, q in zip(axes[0], qs):
+        for r in (r for r in ents if r["quantity"] == q):
+            pts = [(h, e) for h, e in zip(r["h"], r["errors"]) if e > 0]
+            if not pts:
+                continue
+            ax.loglog(*zip(*pts), STYLE.get(r["u_space"], ":"), marker=MARK.get(r["multiplier"], "x"),
+                      label=f"{r['u_space']}/{r['multiplier']}" + ("" if r["converges"] else " (no conv.)"))
+        h = [x for r in ents for x in r["h"]]
+        if h:
+            h0, h1 = max(h), min(h)
+            ref = [e for r in ents if r["quantity"] == q for e in r["errors"] if e > 0]
+            if ref:
+                e0 = min(ref)
+                for p in (0.5, 1.0, 2.0):
+                    ax.loglog([h0, h1], [e0 * 4, e0 * 4 * (h1 / h0) ** p], "k:", lw=0.7)
+                    ax.annotate(f"h^{p:g}", (h1, e0 * 4 * (h1 / h0) ** p), fontsize=7)
+        ax.set_xlabel("h")
+        ax.set_title(f"{scene}: {QLABEL[q]}")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    return _save(fig, folder, f"rates-{scene}.png")
+
+
+def delta_plot(folder, scene, delta_entries):
+    if not delta_entries:
+        return None
+    levels = sorted({d["level"] for d in delta_entries})
+    lvl = levels[-1]
+    qs = [q for q in ("u_l2", "p_l2", "lambda_l2") if any(d["quantity"] == q for d in delta_entries)]
+    fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
+    for ax, q in zip(axes[0], qs):
+        for d in delta_entries:
+            if d["quantity"] != q or d["level"] != lvl:
+                continue
+            pts = [(x, y) for x, y in zip(d["deltas"], d["diffs"]) if x > 0 and y > 0]
+            if pts:
+                s = d["slope"]
+                ax.loglog(*zip(*pts), STYLE.get(d["u_space"], ":"), marker=MARK.get(d["multiplier"], "x"),
+                          label=f"{d['u_space']}/{d['multiplier']} slope "
+                                + ("–" if s is None else f"{s:.2f}"))
+        ax.set_xlabel("δ")
+        ax.set_title(f"{scene} level {lvl}: ‖{q.split('_')[0]}_δ − {q.split('_')[0]}_0‖")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    return _save(fig, folder, f"delta-{scene}.png")
+
+
+def work_precision_plot(folder, scene, timing_rows, ref_rows):
+    pts = [t for t in timing_rows if t["u_l2"] is not None and t["u_l2"] > 0 and t["total_s"] > 0]
+    rpts = [r for r in ref_rows if (r.get("errors") or {}).get("u_l2") and r.get("total_s")]
+    if not pts and not rpts:
+        return None
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    variants = sorted({(t["u_space"], t["multiplier"]) for t in pts})
+    for u, m in variants:
+        sel = sorted((t for t in pts if t["u_space"] == u and t["multiplier"] == m
+                      and t["delta"] == min(x["delta"] for x in pts)), key=lambda t: t["level"])
+        if sel:
+            ax.loglog([t["total_s"] for t in sel], [t["u_l2"] for t in sel], STYLE.get(u, ":"),
+                      marker=MARK.get(m, "x"), label=f"{u}/{m}")
+    for tool in sorted({r["tool"] for r in rpts}):
+        sel = sorted((r for r in rpts if r["tool"] == tool), key=lambda r: r["level"])
+        ax.loglog([r["total_s"] for r in sel], [r["errors"]["u_l2"] for r in sel], "k-.",
+                  marker="*", label=f"reference {tool}")
+    ax.set_xlabel("total time per case [s] (sum of timings_s)")
+    ax.set_ylabel("‖u − u_ex‖_L²")
+    ax.set_title(f"{scene}: work–precision")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, folder, f"work-precision-{scene}.png")

@@ -1,0 +1,107 @@
+"""Reading an sdcrack results folder (OUT/<scene>/) and its optional reference subfolders."""
+import json
+import os
+
+import numpy as np
+
+REFERENCE_TOOLS = ("dolfinx", "freefem")
+
+
+class InputError(Exception):
+    """Missing or malformed input (exit code 2)."""
+
+
+def _load_json(path):
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return json.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"missing file: {path}")
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"malformed JSON in {path}: {exc}")
+
+
+def case_key(c):
+    return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), float(c["delta"]))
+
+
+def total_time(c):
+    return float(sum(float(v) for v in (c.get("timings_s") or {}).values() if v is not None))
+
+
+class Fields:
+    """Lazy access to fields.h5."""
+
+    def __init__(self, path):
+        import h5py
+
+        self.path = path
+        try:
+            self.h5 = h5py.File(path, "r")
+        except OSError as exc:
+            raise InputError(f"cannot read {path}: {exc}")
+        self._mesh_cache = {}
+
+    def close(self):
+        self.h5.close()
+
+    def has_case(self, grid):
+        return grid is not None and f"cases/{grid}" in self.h5
+
+    def mesh_by_key(self, key):
+        if key not in self._mesh_cache:
+            g = self.h5[f"meshes/{key}"]
+            self._mesh_cache[key] = (np.asarray(g["points"][()], dtype=float),
+                                     np.asarray(g["triangles"][()], dtype=np.int64))
+        return self._mesh_cache[key]
+
+    def has_mesh(self, key):
+        return f"meshes/{key}" in self.h5
+
+    def case(self, grid):
+        """dict(points, tris, u, p, crack_points, lam); missing datasets are None."""
+        g = self.h5[f"cases/{grid}"]
+        mesh = g["mesh"]
+        pts = np.asarray(mesh["points"][()], dtype=float)
+        tris = np.asarray(mesh["triangles"][()], dtype=np.int64)
+
+        def get(name):
+            return np.asarray(g[name][()], dtype=float) if name in g else None
+
+        return {"points": pts, "tris": tris, "u": get("u"), "p": get("p"),
+                "crack_points": get("crack/points"), "lam": get("crack/lambda")}
+
+
+def load_reference(folder):
+    s = _load_json(os.path.join(folder, "summary.json"))
+    u = {}
+    for c in s.get("cases", []):
+        lvl = int(c["level"])
+        path = os.path.join(folder, f"u_level{lvl}.txt")
+        if os.path.exists(path):
+            try:
+                u[lvl] = np.loadtxt(path, dtype=float, ndmin=1)
+            except ValueError as exc:
+                raise InputError(f"malformed {path}: {exc}")
+    return {"summary": s, "u": u, "tool": s.get("tool", os.path.basename(folder))}
+
+
+def load_results(folder):
+    if not os.path.isdir(folder):
+        raise InputError(f"not a results folder: {folder}")
+    summary = _load_json(os.path.join(folder, "summary.json"))
+    if "cases" not in summary or not isinstance(summary["cases"], list):
+        raise InputError(f"{folder}/summary.json has no 'cases' list")
+    for i, c in enumerate(summary["cases"]):
+        for k in ("level", "h", "u_space", "multiplier", "delta", "kkt"):
+            if k not in c:
+                raise InputError(f"{folder}/summary.json: case {i} lacks '{k}'")
+    fpath = os.path.join(folder, "fields.h5")
+    fields = Fields(fpath) if os.path.exists(fpath) else None
+    refs = {}
+    for tool in REFERENCE_TOOLS:
+        sub = os.path.join(folder, tool)
+        if os.path.exists(os.path.join(sub, "summary.json")):
+            refs[tool] = load_reference(sub)
+    return {"folder": folder, "summary": summary, "scene": summary.get("scene", os.path.basename(
+        os.path.normpath(folder))), "fields": fields, "refs": refs}

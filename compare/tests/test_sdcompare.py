@@ -1,0 +1,335 @@
+"""Tests of compare/sdcompare. Run: /usr/bin/python3 -m pytest compare/tests"""
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+COMPARE = os.path.dirname(HERE)
+SCRIPT = os.path.join(COMPARE, "sdcompare")
+sys.path.insert(0, COMPARE)
+
+from sdcompare_lib import norms, rates, verdict  # noqa: E402
+
+
+# ------------------------------------------------------------------ exact P1 L² norms
+def grid_mesh(n, x0=0.0, x1=1.0):
+    xs = np.linspace(x0, x1, n + 1)
+    pts = np.array([[x, y, 0.0] for y in xs for x in xs])
+    tris = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            b, c, d = a + 1, a + n + 2, a + n + 1
+            tris += [[a, b, c], [a, c, d]]
+    return pts, np.array(tris, dtype=np.int64)
+
+
+def fine_quadrature_sq(pts, tris, vals, m=40):
+    """Σ_T ∫_T (Σ v_i φ_i)² by the centroid rule on m² sub-triangles (converges O(1/m²))."""
+    total = 0.0
+    area = norms.triangle_areas(pts, tris)
+    for t, A in zip(tris, area):
+        v = vals[t]
+        acc = 0.0
+        for i in range(m):
+            for j in range(m - i):
+                for up in (0, 1):
+                    if up and i + j + 1 >= m:
+                        continue
+                    if up:
+                        l1, l2 = (i + 2 / 3) / m, (j + 2 / 3) / m
+                    else:
+                        l1, l2 = (i + 1 / 3) / m, (j + 1 / 3) / m
+                    l0 = 1 - l1 - l2
+                    acc += (v[0] * l0 + v[1] * l1 + v[2] * l2) ** 2
+        total += A * acc / m ** 2
+    return total
+
+
+def test_p1_l2_diff_matches_fine_quadrature():
+    rng = np.random.default_rng(1)
+    pts, tris = grid_mesh(2)
+    pts[:, :2] += 0.05 * rng.standard_normal((pts.shape[0], 2))  # non-uniform triangles
+    a, b = rng.standard_normal(pts.shape[0]), rng.standard_normal(pts.shape[0])
+    exact = norms.p1_l2_diff(pts, tris, a, b)
+    quad = math.sqrt(fine_quadrature_sq(pts, tris, a - b))
+    assert abs(exact - quad) <= 1e-3 * quad
+    # exactness on a known integral: ∫_{[0,1]²} x² = 1/3 (x is P1)
+    p2, t2 = grid_mesh(3)
+    assert norms.p1_l2_norm(p2, t2, p2[:, 0]) == pytest.approx(math.sqrt(1 / 3), rel=1e-14)
+    # vector field: components add
+    vec = np.stack([a, b, 0 * a], axis=1)
+    assert norms.p1_l2_norm(pts, tris, vec) ** 2 == pytest.approx(
+        norms.p1_l2_norm(pts, tris, a) ** 2 + norms.p1_l2_norm(pts, tris, b) ** 2)
+
+
+def test_p1_l2_diff_two_meshes_with_duplicated_vertex():
+    pts, tris = grid_mesh(2)  # vertex 4 = (0.5, 0.5) is the centre
+    # cracked copy: duplicate the centre vertex for the triangles above y = 0.5
+    cpts = np.vstack([pts, pts[4]])
+    ctris = tris.copy()
+    cent = pts[tris].mean(axis=1)
+    for k in range(len(tris)):
+        if cent[k, 1] > 0.5:
+            ctris[k][ctris[k] == 4] = 9
+    u = pts[:, 0] + 2 * pts[:, 1]
+    uc = np.append(u, u[4])
+    assert norms.p1_l2_diff_two_meshes(pts, tris, u, cpts, ctris, uc) == pytest.approx(0, abs=1e-15)
+    uc[9] += 1.0  # the + copy differs: only the upper triangles touching it see it
+    up = [k for k in range(len(tris)) if cent[k, 1] > 0.5 and 4 in tris[k]]
+    expect = math.sqrt(sum(norms.triangle_areas(pts, tris[[k]])[0] / 12 * 2 for k in up))
+    assert norms.p1_l2_diff_two_meshes(pts, tris, u, cpts, ctris, uc) == pytest.approx(expect)
+    with pytest.raises(norms.NormError):
+        norms.p1_l2_diff_two_meshes(pts, tris, u, cpts * 2, ctris, uc)
+
+
+def test_crack_norms_p0_p1():
+    cp = np.array([[0, 0, 0], [0.5, 0, 0], [1.5, 0, 0]], dtype=float)
+    assert norms.crack_l2_norm(cp, [2.0, 1.0]) == pytest.approx(math.sqrt(0.5 * 4 + 1.0))
+    # P1 λ = x on [0, 1.5]: ∫ x² = 1.125
+    assert norms.crack_l2_norm(cp, [0.0, 0.5, 1.5]) == pytest.approx(math.sqrt(1.125))
+    assert norms.crack_integral(cp, [0.0, 0.5, 1.5]) == pytest.approx(1.125)
+    assert norms.crack_integral(cp, [2.0, 1.0]) == pytest.approx(2.0)
+
+
+# ------------------------------------------------------------------ rates, rule, GCI
+def test_rates_and_slope():
+    h = [0.4, 0.2, 0.1, 0.05]
+    e = [3.0 * x ** 1.5 for x in h]
+    assert all(r == pytest.approx(1.5) for r in rates.successive_rates(h, e))
+    assert rates.fit_slope(h, e) == pytest.approx(1.5)
+    assert rates.fit_slope([1e-2, 1e-4, 1e-6], [2e-3, 2e-5, 2e-7]) == pytest.approx(1.0)
+    assert rates.rate(0.2, 0.0, 0.1, 0.0) is None
+
+
+def test_convergence_rule():
+    h = [0.4, 0.2, 0.1, 0.05, 0.025]
+    assert rates.converges(h, [x ** 0.5 for x in h]) is True
+    # open crack, continuous u space: stalls (and even grows slightly)
+    assert rates.converges(h, [0.178, 0.183, 0.187, 0.189, 0.190]) is False
+    assert rates.converges(h, [0.656, 0.654, 0.655, 0.656, 0.657]) is False
+    # decreasing but far too slowly: rate ~0.07 < 0.25
+    assert rates.converges(h, [1.0, 0.95, 0.9, 0.86, 0.82]) is False
+    # non-monotone in the last three levels
+    assert rates.converges(h, [1.0, 0.5, 0.25, 0.3, 0.1]) is False
+    # early non-monotonicity outside the last three levels is tolerated
+    assert rates.converges(h, [1.0, 2.0, 0.5, 0.25, 0.125]) is True
+    assert rates.converges(h, [0.0] * 5) is True  # exact (closed crack λ)
+    assert rates.converges([0.1], [0.3]) is None
+    assert rates.converges([0.2, 0.1], [0.4, 0.1]) is True
+
+
+def test_gci_manufactured():
+    C, p, f_exact = 0.7, 2.0, 3.0
+    h = [0.4, 0.2, 0.1]
+    f = [f_exact + C * x ** p for x in h]
+    g = rates.gci(h, f)
+    assert g["p"] == pytest.approx(p)
+    assert g["f_ext"] == pytest.approx(f_exact)
+    ea = abs((f[2] - f[1]) / f[2])
+    assert g["gci_fine"] == pytest.approx(1.25 * ea / (2 ** p - 1))
+    # pure error sequence e = C h^p (f_exact = 0): GCI is 1.25 × relative error of the fine level
+    e = [C * x ** 1.5 for x in h]
+    g = rates.gci(h, e)
+    assert g["p"] == pytest.approx(1.5)
+    assert g["f_ext"] == pytest.approx(0.0, abs=1e-14)
+    assert g["gci_fine"] == pytest.approx(1.25)
+    # non-constant ratio r: Celik's iteration still recovers p
+    h2 = [0.3, 0.2, 0.1]
+    g = rates.gci(h2, [1 + C * x ** 2 for x in h2])
+    assert g["p"] == pytest.approx(2.0, rel=1e-6)
+
+
+# ------------------------------------------------------------------ end to end
+def write_synthetic(folder, bad_case=False, scale=1.0):
+    """2 levels × {broken, continuous} × M1 × δ ∈ {1e-2, 0}; broken converges (rate 2), continuous
+    stalls. Fields: u_δ = u_0 + δ w, so ‖u_δ − u_0‖ = O(δ)."""
+    import h5py
+
+    os.makedirs(folder)
+    cases = []
+    with h5py.File(os.path.join(folder, "fields.h5"), "w") as f:
+        for lvl in (0, 1):
+            n = 2 * 2 ** lvl
+            pts, tris = grid_mesh(n, -1, 1)
+            cp = np.array([[x, 0.0, 0.0] for x in np.linspace(-0.5, 0.5, n // 2 + 1)])
+            for u_space in ("broken", "continuous"):
+                key = f"level{lvl}-{u_space}"
+                f[f"meshes/{key}/points"] = pts
+                f[f"meshes/{key}/triangles"] = tris
+                h = 2.0 / n * math.sqrt(2)
+                for delta in (1e-2, 0.0):
+                    grid = f"{key}-M1-delta{delta:g}"
+                    g = f.create_group(f"cases/{grid}")
+                    g["mesh"] = h5py.SoftLink(f"/meshes/{key}")
+                    u0 = np.sin(pts[:, 0]) * scale
+                    g["u"] = u0 + delta * np.cos(pts[:, 1])
+                    g["p"] = np.stack([np.cos(pts[:, 0]) * (1 + delta), 0 * u0, 0 * u0], axis=1)
+                    g["crack/points"] = cp
+                    g["crack/lambda"] = np.ones(cp.shape[0]) * (1 + 3 * delta)
+                    eu = 0.1 * h ** 2 if u_space == "broken" else 0.19
+                    conv = not (bad_case and lvl == 1 and u_space == "broken" and delta == 0.0)
+                    cases.append({
+                        "level": lvl, "h": h, "u_space": u_space, "multiplier": "M1",
+                        "delta": delta, "unknowns": 3 * pts.shape[0], "multipliers": cp.shape[0],
+                        "iterations": 2, "status": "converged" if conv else "max_iterations",
+                        "converged": conv,
+                        "kkt": {"equations": 1e-15, "primal": 0.0, "dual": 0.0,
+                                "complementarity": 1e-16 if conv else 1e-3},
+                        "active_multipliers": 1, "regularized_pivots": 0,
+                        "timings_s": {"assembly": 0.01 * (lvl + 1), "factorization": 0.02},
+                        "errors": {"u_l2": eu, "p_l2": eu ** 0.5 if u_space == "broken" else 0.66,
+                                   "lambda_l2": eu if u_space == "broken" else 0.81},
+                        "fields_grid": grid})
+    with open(os.path.join(folder, "summary.json"), "w") as fh:
+        json.dump({"scene": "synthetic", "description": "test", "kkt_tolerance": 1e-10,
+                   "all_converged": not bad_case, "cases": cases}, fh)
+
+
+def run_cli(*args):
+    p = subprocess.run([sys.executable, SCRIPT, *args], capture_output=True, text=True)
+    return p.returncode, p.stdout, p.stderr
+
+
+@pytest.fixture
+def empty_exps(tmp_path):
+    p = tmp_path / "exps.toml"
+    p.write_text("")
+    return str(p)
+
+
+def test_end_to_end_pass_and_report(tmp_path, empty_exps):
+    d = str(tmp_path / "synthetic")
+    write_synthetic(d)
+    rc, out, err = run_cli(d, "--expectations", empty_exps)
+    assert rc == 0, out + err
+    assert "synthetic: PASS" in out
+    rep = os.path.join(d, "report")
+    for name in ("index.html", "report.md", "report.json"):
+        assert os.path.getsize(os.path.join(rep, name)) > 0
+    assert any(n.endswith(".png") for n in os.listdir(rep))
+    r = json.load(open(os.path.join(rep, "report.json")))
+    for k in ("verdict", "rates", "delta_limit", "agreement", "kkt", "timings", "expectations"):
+        assert k in r
+    assert r["verdict"] == "PASS"
+    conv = {(e["u_space"], e["quantity"]): e["converges"] for e in r["rates"]}
+    assert conv[("broken", "u_l2")] is True
+    assert conv[("continuous", "u_l2")] is False  # stalling variant
+    assert conv[("continuous", "lambda_l2")] is False
+    br = [e for e in r["rates"] if e["u_space"] == "broken" and e["quantity"] == "u_l2"][0]
+    assert br["rates"][0] == pytest.approx(2.0)
+    dl = [e for e in r["delta_limit"] if e["quantity"] == "u_l2"]
+    assert len(dl) == 4  # 2 levels × 2 u spaces
+    # u_δ − u_0 = δ I_h cos(y) exactly (P1 interpolant on the level-0 2×2 grid)
+    pts, tris = grid_mesh(2, -1, 1)
+    assert dl[0]["level"] == 0 and dl[0]["deltas"] == [1e-2]
+    assert dl[0]["diffs"][0] == pytest.approx(1e-2 * norms.p1_l2_norm(pts, tris, np.cos(pts[:, 1])))
+    assert "no reference run" in open(os.path.join(rep, "report.md")).read()
+    html = open(os.path.join(rep, "index.html")).read()
+    assert "data:image/png;base64," in html and "**" not in html
+    assert "NO" in html
+    # refuses to overwrite, replaces with --replace
+    rc, _, err = run_cli(d, "--expectations", empty_exps)
+    assert rc == 2 and "exists" in err and err.count("\n") == 1
+    rc, _, _ = run_cli(d, "--expectations", empty_exps, "--replace")
+    assert rc == 0
+    assert not [n for n in os.listdir(d) if n.startswith(".report")]
+
+
+def test_end_to_end_kkt_failure_makes_fail(tmp_path, empty_exps):
+    d = str(tmp_path / "synthetic")
+    write_synthetic(d, bad_case=True)
+    rc, out, _ = run_cli(d, "--expectations", empty_exps)
+    assert rc == 1 and "FAIL" in out
+    r = json.load(open(os.path.join(d, "report", "report.json")))
+    assert r["verdict"] == "FAIL"
+    assert r["kkt"][0]["converged"] is False  # non-converged cases listed first
+
+
+def test_expectation_violation_and_baseline(tmp_path):
+    d = str(tmp_path / "synthetic")
+    write_synthetic(d)
+    exps = tmp_path / "e.toml"
+    exps.write_text('[[expectation]]\nscene = "synthetic"\nu_space = "continuous"\n'
+                    'multiplier = "*"\nquantity = "u_l2"\nconverges = true\n')
+    rc, out, _ = run_cli(d, "--expectations", str(exps))
+    assert rc == 1 and "expectation violated" in out
+    # baseline: same results except error norms scaled -> flags, verdict unchanged
+    old = str(tmp_path / "old")
+    write_synthetic(old)
+    s = json.load(open(os.path.join(old, "summary.json")))
+    for c in s["cases"]:
+        c["errors"]["u_l2"] *= 1.001
+        c["timings_s"]["assembly"] *= 0.1
+    json.dump(s, open(os.path.join(old, "summary.json"), "w"))
+    exps.write_text("")
+    rc, out, _ = run_cli(d, "--expectations", str(exps), "--baseline", old, "--replace")
+    assert rc == 0
+    r = json.load(open(os.path.join(d, "report", "report.json")))
+    kinds = {f["kind"] for f in r["baseline"]}
+    assert "error" in kinds and "timing" in kinds
+
+
+def test_bad_usage_exit_2(tmp_path):
+    rc, _, err = run_cli(str(tmp_path / "nope"))
+    assert rc == 2 and err.startswith("sdcompare: error:") and err.count("\n") == 1
+    rc, _, err = run_cli()
+    assert rc == 2 and err.count("\n") == 1
+    os.makedirs(tmp_path / "x")
+    (tmp_path / "x" / "summary.json").write_text("{not json")
+    rc, _, err = run_cli(str(tmp_path / "x"))
+    assert rc == 2 and "malformed" in err
+
+
+def test_references_agreement(tmp_path, empty_exps):
+    d = str(tmp_path / "synthetic")
+    write_synthetic(d)
+    import h5py
+
+    with h5py.File(os.path.join(d, "fields.h5"), "r") as f:
+        u1 = f["cases/level1-broken-M1-delta0/u"][()]
+    for tool, shift in (("dolfinx", 0.0), ("freefem", 1e-9)):
+        os.makedirs(os.path.join(d, tool))
+        json.dump({"scene": "synthetic", "tool": tool, "cases": [
+            {"level": 1, "h": 0.7, "unknowns": 25, "iterations": 3, "kkt": {},
+             "timings_s": {"total": 0.5}, "errors": {"u_l2": 0.02, "p_l2": 0.1, "lambda_l2": 0.02}}]},
+            open(os.path.join(d, tool, "summary.json"), "w"))
+        np.savetxt(os.path.join(d, tool, "u_level1.txt"), u1 + shift)
+    rc, out, err = run_cli(d, "--expectations", empty_exps)
+    assert rc == 0, out + err
+    r = json.load(open(os.path.join(d, "report", "report.json")))
+    rr = [a for a in r["agreement"] if a["kind"] == "reference_vs_reference"]
+    assert rr and rr[0]["max_vertex_diff"] == pytest.approx(1e-9, rel=1e-3)
+    sv = [a for a in r["agreement"] if a["kind"] == "solver_vs_reference"
+          and a["reference"] == "dolfinx" and a["delta"] == 0.0]
+    assert {a["u_space"] for a in sv} == {"broken", "continuous"}
+    assert all(a["e_u"] == pytest.approx(0.0, abs=1e-14) for a in sv)
+
+
+# ------------------------------------------------------------------ real folders (optional)
+REAL = [("/tmp/cmp1/open-exact", "open-exact"), ("/tmp/cmp2/mixed", "mixed"),
+        ("/tmp/cmp3/closed-exact", "closed-exact")]
+
+
+@pytest.mark.parametrize("folder,scene", REAL)
+def test_real_results(tmp_path, folder, scene):
+    if not os.path.exists(os.path.join(folder, "summary.json")):
+        pytest.skip(f"{folder} not present")
+    d = str(tmp_path / scene)
+    shutil.copytree(folder, d, ignore=shutil.ignore_patterns("report", ".report*"))
+    rc, out, err = run_cli(d)
+    r = json.load(open(os.path.join(d, "report", "report.json")))
+    assert rc == (0 if r["verdict"] == "PASS" else 1), out + err
+    assert r["verdict"] == "PASS", r["reasons"]
+    if scene == "open-exact":
+        for e in r["rates"]:
+            assert e["converges"] is (e["u_space"] == "broken"), e
+    if scene == "mixed":
+        assert r["delta_limit"] and all(0.9 < e["slope"] < 1.1 for e in r["delta_limit"])
+        assert r["gci"]

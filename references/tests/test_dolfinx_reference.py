@@ -1,0 +1,173 @@
+"""Tests of references/dolfinx/solve.py on fake mesh exports (tests/fake_export.py).
+
+Run: /usr/bin/python3 -m pytest references/tests/test_dolfinx_reference.py
+Skipped when dolfinx is not installed.
+"""
+
+import importlib.util
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("dolfinx")
+pytest.importorskip("scipy")
+np = pytest.importorskip("numpy")
+
+HERE = Path(__file__).resolve().parent
+SOLVE = HERE.parent / "dolfinx" / "solve.py"
+sys.path.insert(0, str(HERE))
+from fake_export import write_fake_export  # noqa: E402
+
+_spec = importlib.util.spec_from_file_location("dolfinx_solve", SOLVE)
+solve = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(solve)
+
+OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
+OPEN_JUMP = "2*sqrt(0.25 - x^2)"
+CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
+CLOSED_F = "2*pi^2*sin(pi*x)*cos(pi*y)"
+
+
+def rates(cases, key):
+    e = [c["errors"][key] for c in cases]
+    h = [c["h"] for c in cases]
+    return [math.log(e[i] / e[i + 1]) / math.log(h[i] / h[i + 1]) for i in range(len(e) - 1)]
+
+
+def assert_kkt(case, tol=1e-10):
+    k = case["kkt"]
+    assert k["equations"] < tol and k["primal"] < tol and k["dual"] < tol and k["complementarity"] < tol, k
+
+
+@pytest.fixture(scope="module")
+def open_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("open")
+    exp = write_fake_export(d / "export", "open", "0", OPEN_U, exact={"u": OPEN_U, "jump": OPEN_JUMP})
+    return exp, solve.run(exp, d / "out", fields=True), d / "out"
+
+
+@pytest.fixture(scope="module")
+def closed_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("closed")
+    exp = write_fake_export(d / "export", "closed", CLOSED_F, CLOSED_U, exact={"u": CLOSED_U})
+    return exp, solve.run(exp, d / "out"), d / "out"
+
+
+def test_open_crack_converges(open_run):
+    _, s, _ = open_run
+    cases = s["cases"]
+    assert s["tool"] == "dolfinx" and s["scene"] == "open" and [c["level"] for c in cases] == [0, 1, 2]
+    for c in cases:
+        assert c["active"] == 0  # the exact jump is positive everywhere: the crack is open
+        assert_kkt(c)
+        assert set(c["timings_s"]) == {"assembly", "solve", "total"}
+    # measured (n0 = 8, levels 0..2): u 0.98, 0.99; p 0.49, 0.50; jump 0.92, 0.91
+    assert min(rates(cases, "u_l2")) >= 0.9
+    assert min(rates(cases, "p_l2")) >= 0.45
+    assert min(rates(cases, "lambda_l2")) >= 0.85
+
+
+def test_closed_crack_converges(closed_run):
+    exp, s, _ = closed_run
+    cases = s["cases"]
+    for c in cases:
+        n_crack = len(np.loadtxt(exp / f"level{c['level']}" / "crack.txt"))
+        assert c["active"] == n_crack - 2  # every interior crack node closed
+        assert c["errors"]["lambda_l2"] < 1e-12
+        assert_kkt(c)
+    # measured: u 1.89, 1.97; p 0.96, 0.99
+    assert min(rates(cases, "u_l2")) >= 1.8
+    assert min(rates(cases, "p_l2")) >= 0.9
+
+
+def test_jump_from_signed_zero_matches_given_jump(tmp_path, open_run):
+    """Without exact.jump, [u] is taken from u at y = +0.0 / -0.0 (numpy back-end)."""
+    _, s, _ = open_run
+    exp = write_fake_export(tmp_path / "e", "open", "0", OPEN_U, exact={"u": OPEN_U}, levels=(0, 1))
+    s2 = solve.run(exp, tmp_path / "o")
+    for a, b in zip(s["cases"], s2["cases"]):
+        assert b["errors"]["lambda_l2"] == pytest.approx(a["errors"]["lambda_l2"], rel=1e-9)
+
+
+def test_mixed_crack_kkt(tmp_path):
+    """Partly open, partly closed: the active set has both kinds and the KKT system holds."""
+    exp = write_fake_export(tmp_path / "e", "mixed", "20*sin(2*pi*x)*sign(y)", "0", levels=(0, 1, 2))
+    s = solve.run(exp, tmp_path / "o")
+    for c in s["cases"]:
+        n_int = len(np.loadtxt(exp / f"level{c['level']}" / "crack.txt")) - 2
+        assert 0 < c["active"] < n_int
+        assert "errors" not in c
+        assert_kkt(c, 1e-9)
+        assert c["iterations"] >= 2
+
+
+def test_vertex_renumbering_is_handled(tmp_path, closed_run):
+    """Permute the export's vertex numbering: the solution must follow the permutation."""
+    exp, _, out = closed_run
+    new = tmp_path / "perm"
+    new.mkdir()
+    (new / "scene.json").write_text((exp / "scene.json").read_text())
+    rng = np.random.default_rng(3)
+    perms = {}
+    for L in (0, 1, 2):
+        src, dst = exp / f"level{L}", new / f"level{L}"
+        dst.mkdir()
+        xy = np.loadtxt(src / "vertices.txt")
+        perm = rng.permutation(len(xy))  # new index of old vertex i is inv[i]
+        inv = np.empty_like(perm)
+        inv[perm] = np.arange(len(perm))
+        np.savetxt(dst / "vertices.txt", xy[perm], fmt="%.17g")
+        for name in ("triangles", "crack", "boundary"):
+            a = np.loadtxt(src / f"{name}.txt", dtype=np.int64)
+            np.savetxt(dst / f"{name}.txt", inv[a], fmt="%d")
+        (dst / "sides.txt").write_text((src / "sides.txt").read_text())
+        (dst / "mesh.json").write_text((src / "mesh.json").read_text())
+        perms[L] = perm
+    s = solve.run(new, tmp_path / "o")
+    for L, perm in perms.items():
+        u_old = np.loadtxt(out / f"u_level{L}.txt")
+        u_new = np.loadtxt(tmp_path / "o" / f"u_level{L}.txt")
+        np.testing.assert_allclose(u_new, u_old[perm], atol=1e-12)
+    assert [c["active"] for c in s["cases"]] == [3, 7, 15]
+
+
+def test_fields_readable_by_meshio(open_run):
+    meshio = pytest.importorskip("meshio")
+    _, s, out = open_run
+    assert (out / "fields.xdmf").exists() and (out / "fields.h5").exists()
+    for c in s["cases"]:
+        L = c["level"]
+        m = meshio.read(out / "fields" / f"level{L}.xdmf")
+        u = np.loadtxt(out / f"u_level{L}.txt")
+        np.testing.assert_array_equal(m.point_data["u"], u)
+        assert len(m.points) == c["unknowns"]
+        # interpolated exact solution: + copies positive, - copies negative on the crack
+        cr = meshio.read(out / "fields" / f"level{L}.crack.xdmf")
+        jump = cr.point_data["jump"]
+        assert jump[0] == 0 and jump[-1] == 0 and (jump[1:-1] > 0).all()
+        ue = m.point_data["u_exact"]
+        crack = np.loadtxt(out.parent / "export" / f"level{L}" / "crack.txt", dtype=np.int64)
+        assert (ue[crack[1:-1, 0]] > 0).all() and (ue[crack[1:-1, 1]] < 0).all()
+
+
+def test_cli_errors_and_atomicity(tmp_path, closed_run):
+    exp, _, out = closed_run
+    py = sys.executable
+    r = subprocess.run([py, str(SOLVE), str(exp), "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode != 0
+    assert r.stderr.strip().count("\n") == 0 and "exists" in r.stderr
+    r = subprocess.run([py, str(SOLVE), str(tmp_path / "nope"), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and r.stderr.strip().count("\n") == 0 and not (tmp_path / "o").exists()
+    bad = write_fake_export(tmp_path / "bad", "bad", "sin(x", "0", levels=(0,))
+    r = subprocess.run([py, str(SOLVE), str(bad), "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    assert r.returncode != 0 and "column 4" in r.stderr and r.stderr.strip().count("\n") == 0
+    r = subprocess.run([py, str(SOLVE), str(exp), "--out", str(tmp_path / "ok"), "--fields"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert json.loads((tmp_path / "ok" / "summary.json").read_text())["tool"] == "dolfinx"
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temporaries left

@@ -1,0 +1,153 @@
+"""Tests of references/freefem/solve.py on a fake `sdcrack mesh` export (skipped without FreeFem++).
+
+Run: /usr/bin/python3 -m pytest references/tests/test_freefem_reference.py -q
+"""
+
+import json
+import math
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+HERE = Path(__file__).resolve().parent
+SOLVE = HERE.parent / "freefem" / "solve.py"
+sys.path.insert(0, str(HERE))
+from fake_export import write_fake_export  # noqa: E402
+
+pytestmark = pytest.mark.skipif(shutil.which("FreeFem++") is None,
+                                reason="FreeFem++ not installed (apt-get install -y freefem++ libfreefem++)")
+
+OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
+CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
+
+
+def run_solve(export, out, *extra):
+    return subprocess.run([sys.executable, str(SOLVE), str(export), "--out", str(out), *extra],
+                          capture_output=True, text=True)
+
+
+def solved(tmp_path, name, f, g, exact, levels=(0, 1, 2)):
+    export = write_fake_export(tmp_path / f"{name}-export", name, f, g, exact, levels=levels)
+    out = tmp_path / f"{name}-out"
+    p = run_solve(export, out)
+    assert p.returncode == 0, p.stderr
+    return export, out, json.loads((out / "summary.json").read_text())
+
+
+def rates(values):
+    return [math.log2(a / b) for a, b in zip(values, values[1:])]
+
+
+def assert_kkt(case, tol=1e-12):
+    for k, v in case["kkt"].items():
+        assert 0.0 <= v < tol, (k, v)
+
+
+def n_pairs(export, level):
+    cr = np.loadtxt(Path(export) / f"level{level}" / "crack.txt", dtype=int, ndmin=2)
+    return int(np.sum(cr[:, 0] != cr[:, 1]))
+
+
+def test_open_crack_exact(tmp_path):
+    export, out, s = solved(tmp_path, "open-exact", "0", OPEN_U,
+                            {"u": OPEN_U, "jump": "2*sqrt(0.25 - x^2)"})
+    assert s["scene"] == "open-exact" and s["tool"] == "freefem"
+    cases = s["cases"]
+    assert [c["level"] for c in cases] == [0, 1, 2]
+    for c in cases:
+        assert_kkt(c)
+        assert c["active"] == 0                      # open everywhere
+        assert set(c["errors"]) == {"u_l2", "p_l2", "lambda_l2"}
+        assert c["timings_s"]["total"] > 0
+        u = np.loadtxt(out / f"u_level{c['level']}.txt")
+        assert u.shape == (c["unknowns"],)
+    eu = [c["errors"]["u_l2"] for c in cases]
+    ep = [c["errors"]["p_l2"] for c in cases]
+    el = [c["errors"]["lambda_l2"] for c in cases]
+    # measured: u 0.98, 1.00; p 0.49, 0.50; jump 0.92, 0.91 (tip singularity r^{1/2})
+    assert min(rates(eu)) > 0.9 and eu[-1] < 0.025
+    assert min(rates(ep)) > 0.45 and ep[-1] < 0.3
+    assert min(rates(el)) > 0.85 and el[-1] < 0.08
+
+
+def test_closed_crack_exact(tmp_path):
+    f = "2*pi^2*sin(pi*x)*cos(pi*y)"
+    export, out, s = solved(tmp_path, "closed-exact", f, CLOSED_U, {"u": CLOSED_U})
+    cases = s["cases"]
+    for c in cases:
+        assert_kkt(c)
+        assert c["active"] == n_pairs(export, c["level"])  # ∂u/∂ν = -1 < 0: closed everywhere
+        assert c["errors"]["lambda_l2"] < 1e-12             # [u_h] = 0 = [u]
+    eu = [c["errors"]["u_l2"] for c in cases]
+    ep = [c["errors"]["p_l2"] for c in cases]
+    # measured: u 1.89, 1.97; p 0.96, 0.99
+    assert min(rates(eu)) >= 1.8 and eu[-1] < 0.012
+    assert min(rates(ep)) > 0.9
+
+
+def test_mixed_crack_partially_active(tmp_path):
+    export, out, s = solved(tmp_path, "mixed", "20*sin(2*pi*x)*sign(y)", "0", None, levels=(2,))
+    (c,) = s["cases"]
+    assert "errors" not in c
+    assert_kkt(c)
+    assert 0 < c["active"] < n_pairs(export, 2) and c["iterations"] >= 2
+    u = np.loadtxt(out / "u_level2.txt")
+    cr = np.loadtxt(Path(export) / "level2" / "crack.txt", dtype=int)
+    assert np.all(u[cr[:, 0]] - u[cr[:, 1]] >= -1e-13)
+
+
+def test_errors_are_one_line(tmp_path):
+    export = write_fake_export(tmp_path / "e", "closed", "0", "0", None, levels=(0,))
+    p = run_solve(export, tmp_path / "o", "--freefem", "no-such-FreeFem++")
+    assert p.returncode != 0 and "apt-get install -y freefem++" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
+    assert run_solve(export, tmp_path / "o").returncode == 0
+    p = run_solve(export, tmp_path / "o")                 # never silently overwrite
+    assert p.returncode != 0 and "exists" in p.stderr and len(p.stderr.strip().splitlines()) == 1
+    p = run_solve(tmp_path / "missing", tmp_path / "o2")
+    assert p.returncode != 0 and len(p.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "o2").exists()
+    assert not list(tmp_path.glob(".o2.tmp-*"))           # temp folder cleaned up
+
+
+def test_closed_equals_uncut_fem(tmp_path):
+    """All constraints active ⇒ u⁺ = u⁻: the QP solution is the standard P1 solution on the uncut mesh,
+    computed here by FreeFEM's own `solve` (independent of the algebraic cracked assembly)."""
+    f = "2*pi^2*sin(pi*x)*cos(pi*y)"
+    export = write_fake_export(tmp_path / "e", "closed", f, CLOSED_U, None, levels=(1,))
+    out = tmp_path / "o"
+    p = run_solve(export, out, "--keep-work")
+    assert p.returncode == 0, p.stderr
+    work = out / "work_level1"
+    script = (f'mesh Th = readmesh("{work}/uncut.msh"); fespace Vh(Th, P1); Vh u, v;\n'
+              f'func f = 2*pi^2*sin(pi*x)*cos(pi*y); func g = sin(pi*x)*cos(pi*y) - y;\n'
+              'solve P(u, v) = int2d(Th, qft = qf9pT)(dx(u)*dx(v) + dy(u)*dy(v))\n'
+              '  - int2d(Th, qft = qf9pT)(f*v) + on(1, u = g);\n'
+              f'{{ ofstream o("{tmp_path}/uncut_u.txt"); o.precision(17);\n'
+              '  for (int i = 0; i < Vh.ndof; i++) o << u[][i] << endl; }\n')
+    (tmp_path / "uncut.edp").write_text(script)
+    subprocess.run(["FreeFem++", "-nw", "-ns", "-v", "0", str(tmp_path / "uncut.edp")], check=True,
+                   capture_output=True)
+    ref = np.loadtxt(tmp_path / "uncut_u.txt")
+    u = np.loadtxt(out / "u_level1.txt")
+    assert np.abs(u[: len(ref)] - ref).max() < 1e-10
+    cr = np.loadtxt(Path(export) / "level1" / "crack.txt", dtype=int)
+    assert np.abs(u[cr[:, 0]] - u[cr[:, 1]]).max() < 1e-12
+
+
+def test_fields_written(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    export = write_fake_export(tmp_path / "e", "mixed", "20*sin(2*pi*x)*sign(y)", "0", None, levels=(0, 1))
+    p = run_solve(export, tmp_path / "o", "--fields")
+    assert p.returncode == 0, p.stderr
+    xdmf = (tmp_path / "o" / "fields.xdmf").read_text()
+    assert 'Name="level1/crack"' in xdmf and 'Version="3.0"' in xdmf
+    with h5py.File(tmp_path / "o" / "fields.h5") as f:
+        u = f["cases/level1/u"][:]
+        assert np.array_equal(u, np.loadtxt(tmp_path / "o" / "u_level1.txt"))
+        lam = f["cases/level1/lambda"][:]
+        assert lam[0] == 0 and lam[-1] == 0 and lam.min() >= 0 and lam.max() > 0
