@@ -43,6 +43,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
 import sdexpr  # noqa: E402
+import sdfields  # noqa: E402
 
 ACTIVITY_TOL = 1e-12
 MAX_ITER = 100
@@ -347,9 +348,14 @@ def run(export, out, fields=False, overwrite=False):
             cases.append(case)
             np.savetxt(tmp / f"u_level{case['level']}.txt", u, fmt="%.17g")
             if fields:
-                field_sets.append((case["level"], fs))
+                point = {"u": fs["u"]}
+                if "u_exact" in fs:
+                    point["u_exact"] = fs["u_exact"]
+                field_sets.append((case["level"], {
+                    "xy": fs["xy"], "tri": fs["tri"], "crack": fs["crack"], "point": point,
+                    "crack_fields": {"jump": fs["jump"], "multiplier": fs["multiplier"]}}))
         if fields:
-            write_fields(tmp, field_sets)
+            sdfields.write_fields(tmp, field_sets)
         summary = {"scene": scene["name"], "tool": "dolfinx", "cases": cases}
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         if out.exists():
@@ -359,92 +365,6 @@ def run(export, out, fields=False, overwrite=False):
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return summary
-
-
-def _xdmf_grid(h5name, name, n_pts, n_tri, attrs, indent):
-    """One uniform triangle grid; attrs: [(name, h5path, n)] scalar nodal attributes."""
-    i = indent
-    out = [f'{i}<Grid Name="{name}" GridType="Uniform">',
-           f'{i}  <Topology TopologyType="Triangle" NumberOfElements="{n_tri}">',
-           f'{i}    <DataItem Dimensions="{n_tri} 3" NumberType="Int" Precision="8" Format="HDF">'
-           f'{h5name}:/meshes/{name}/triangles</DataItem>',
-           f'{i}  </Topology>',
-           f'{i}  <Geometry GeometryType="XYZ">',
-           f'{i}    <DataItem Dimensions="{n_pts} 3" NumberType="Float" Precision="8" Format="HDF">'
-           f'{h5name}:/meshes/{name}/points</DataItem>',
-           f'{i}  </Geometry>']
-    for aname, path in attrs:
-        out += [f'{i}  <Attribute Name="{aname}" AttributeType="Scalar" Center="Node">',
-                f'{i}    <DataItem Dimensions="{n_pts}" NumberType="Float" Precision="8" Format="HDF">'
-                f'{h5name}:{path}</DataItem>',
-                f'{i}  </Attribute>']
-    out.append(f"{i}</Grid>")
-    return "\n".join(out)
-
-
-def _xdmf_crack(h5name, name, n_nodes, attrs, indent):
-    i = indent
-    out = [f'{i}<Grid Name="{name}/crack" GridType="Uniform">',
-           f'{i}  <Topology TopologyType="Polyline" NodesPerElement="2" NumberOfElements="{n_nodes - 1}">',
-           f'{i}    <DataItem Dimensions="{n_nodes - 1} 2" NumberType="Int" Precision="8" Format="HDF">'
-           f'{h5name}:/cases/{name}/crack/segments</DataItem>',
-           f'{i}  </Topology>',
-           f'{i}  <Geometry GeometryType="XYZ">',
-           f'{i}    <DataItem Dimensions="{n_nodes} 3" NumberType="Float" Precision="8" Format="HDF">'
-           f'{h5name}:/cases/{name}/crack/points</DataItem>',
-           f'{i}  </Geometry>']
-    for aname in attrs:
-        out += [f'{i}  <Attribute Name="{aname}" AttributeType="Scalar" Center="Node">',
-                f'{i}    <DataItem Dimensions="{n_nodes}" NumberType="Float" Precision="8" Format="HDF">'
-                f'{h5name}:/cases/{name}/crack/{aname}</DataItem>',
-                f'{i}  </Attribute>']
-    out.append(f"{i}</Grid>")
-    return "\n".join(out)
-
-
-def write_fields(folder, field_sets):
-    """fields.h5 + fields.xdmf (XDMF 3, a spatial collection with one grid "level{L}" per level and a
-    polyline grid "level{L}/crack"), plus fields/level{L}.xdmf and fields/level{L}.crack.xdmf each
-    holding one grid (meshio.read accepts only one grid per file).  Same layout as the Rust writer
-    (src/output/xdmf.rs): /meshes/level{L}/{points,triangles}, /cases/level{L}/{u,u_exact},
-    /cases/level{L}/crack/{points,segments,jump,multiplier}.  The mesh is the cracked mesh in the
-    export's vertex numbering (crack copies are separate nodes)."""
-    import h5py
-
-    head = '<?xml version="1.0"?>\n<Xdmf Version="3.0" xmlns:xi="http://www.w3.org/2001/XInclude">\n  <Domain>\n'
-    tail = "  </Domain>\n</Xdmf>\n"
-    (folder / "fields").mkdir()
-    grids = []
-    with h5py.File(folder / "fields.h5", "w") as h5:
-        for level, fs in field_sets:
-            name = f"level{level}"
-            xy, tri, crack = fs["xy"], fs["tri"], fs["crack"]
-            n = len(xy)
-            pts = np.column_stack([xy, np.zeros(n)])
-            h5[f"/meshes/{name}/points"] = pts
-            h5[f"/meshes/{name}/triangles"] = tri.astype(np.int64)
-            attrs = []
-            for key in ("u", "u_exact"):
-                if key in fs:
-                    h5[f"/cases/{name}/{key}"] = fs[key]
-                    attrs.append((key, f"/cases/{name}/{key}"))
-            cp = pts[crack[:, 0]]
-            h5[f"/cases/{name}/crack/points"] = cp
-            h5[f"/cases/{name}/crack/segments"] = np.column_stack(
-                [np.arange(len(crack) - 1), np.arange(1, len(crack))]).astype(np.int64)
-            h5[f"/cases/{name}/crack/jump"] = fs["jump"]
-            h5[f"/cases/{name}/crack/multiplier"] = fs["multiplier"]
-            cattrs = ["jump", "multiplier"]
-            g = _xdmf_grid("fields.h5", name, n, len(tri), attrs, "      ")
-            c = _xdmf_crack("fields.h5", name, len(crack), cattrs, "      ")
-            grids += [g, c]
-            (folder / "fields" / f"{name}.xdmf").write_text(
-                head + _xdmf_grid("../fields.h5", name, n, len(tri), attrs, "    ") + "\n" + tail)
-            (folder / "fields" / f"{name}.crack.xdmf").write_text(
-                head + _xdmf_crack("../fields.h5", name, len(crack), cattrs, "    ") + "\n" + tail)
-    (folder / "fields.xdmf").write_text(
-        head + '    <Grid Name="fields" GridType="Collection" CollectionType="Spatial">\n'
-        + "\n".join(grids) + "\n    </Grid>\n" + tail)
 
 
 def main(argv=None):

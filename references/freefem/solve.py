@@ -309,53 +309,6 @@ def vertex_gradient(xy, tri, u):
     return acc / np.maximum(wsum, 1e-300)[:, None]
 
 
-def write_fields(folder, levels_data):
-    """levels_data: [(level, lv, u, lam_nodes)]; one Triangle grid + one Polyline crack grid per level."""
-    try:
-        import h5py
-    except ImportError:
-        raise SolveError("--fields needs h5py: apt-get install -y python3-h5py")
-
-    def item(dims, ty, path):
-        d = " ".join(str(v) for v in dims)
-        return (f'<DataItem Dimensions="{d}" DataType="{ty}" Precision="8" Format="HDF">'
-                f"fields.h5:{path}</DataItem>")
-    grids = []
-    with h5py.File(folder / "fields.h5", "w") as h5:
-        for level, lv, u, lam in levels_data:
-            name = f"level{level}"
-            xy, tri, cr = lv["xy"], lv["tri"], lv["crack"]
-            g = h5.create_group(f"cases/{name}")
-            g["geometry"] = np.column_stack([xy, np.zeros(len(xy))])
-            g["topology"] = tri.astype(np.int64)
-            g["u"] = u
-            g["p"] = np.column_stack([vertex_gradient(xy, tri, u), np.zeros(len(xy))])
-            cxy = xy[cr[:, 0]]
-            g["crack_geometry"] = np.column_stack([cxy, np.zeros(len(cxy))])
-            g["crack_topology"] = np.column_stack([np.arange(len(cr) - 1), np.arange(1, len(cr))]).astype(np.int64)
-            g["lambda"] = lam
-            b = f"/cases/{name}"
-            nv, nt, nc = len(xy), len(tri), len(cr)
-            grids.append(
-                f'      <Grid Name="{name}" GridType="Uniform">\n'
-                f'        <Topology TopologyType="Triangle" NumberOfElements="{nt}" NodesPerElement="3">'
-                f'{item((nt, 3), "Int", b + "/topology")}</Topology>\n'
-                f'        <Geometry GeometryType="XYZ">{item((nv, 3), "Float", b + "/geometry")}</Geometry>\n'
-                f'        <Attribute Name="u" AttributeType="Scalar" Center="Node">{item((nv,), "Float", b + "/u")}</Attribute>\n'
-                f'        <Attribute Name="p" AttributeType="Vector" Center="Node">{item((nv, 3), "Float", b + "/p")}</Attribute>\n'
-                f'      </Grid>\n'
-                f'      <Grid Name="{name}/crack" GridType="Uniform">\n'
-                f'        <Topology TopologyType="Polyline" NumberOfElements="{nc - 1}" NodesPerElement="2">'
-                f'{item((nc - 1, 2), "Int", b + "/crack_topology")}</Topology>\n'
-                f'        <Geometry GeometryType="XYZ">{item((nc, 3), "Float", b + "/crack_geometry")}</Geometry>\n'
-                f'        <Attribute Name="lambda" AttributeType="Scalar" Center="Node">{item((nc,), "Float", b + "/lambda")}</Attribute>\n'
-                f'      </Grid>\n')
-    (folder / "fields.xdmf").write_text(
-        '<?xml version="1.0" ?>\n<Xdmf Version="3.0">\n  <Domain>\n'
-        '    <Grid Name="freefem" GridType="Collection" CollectionType="Spatial">\n'
-        + "".join(grids) + "    </Grid>\n  </Domain>\n</Xdmf>\n")
-
-
 # ---- driver --------------------------------------------------------------------------------------
 
 def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fields=False):
@@ -398,14 +351,22 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
                 case["errors"] = exact_errors(lv, u, exact, normal)
             case["timings_s"] = {"freefem": t_ff, "total": time.perf_counter() - t0}
             cases.append(case)
-            if fields:  # λ at the crack nodes (tip a → tip b; 0 at the tips)
-                lam_nodes = np.zeros(len(lv["crack"]))
-                lam_nodes[lv["crack"][:, 0] != lv["crack"][:, 1]] = lam
-                fields_data.append((level, lv, u, lam_nodes))
+            if fields:  # multipliers at the crack nodes (tip a → tip b; 0 at the tips)
+                crack = lv["crack"]
+                lam_nodes = np.zeros(len(crack))
+                lam_nodes[crack[:, 0] != crack[:, 1]] = lam
+                fields_data.append((level, {
+                    "xy": lv["xy"], "tri": lv["tri"], "crack": crack,
+                    "point": {"u": u, "p": vertex_gradient(lv["xy"], lv["tri"], u)},
+                    "crack_fields": {"jump": u[crack[:, 0]] - u[crack[:, 1]], "multiplier": lam_nodes}}))
             if not keep_work:
                 shutil.rmtree(work)
         if fields:
-            write_fields(tmp, fields_data)
+            try:
+                import sdfields
+            except ImportError as e:
+                raise SolveError(f"--fields needs h5py: apt-get install -y python3-h5py ({e})")
+            sdfields.write_fields(tmp, fields_data)
         summary = {"scene": name, "tool": "freefem", "cases": cases}
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         if out.exists():

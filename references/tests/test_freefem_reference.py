@@ -149,5 +149,12 @@ def test_fields_written(tmp_path):
     with h5py.File(tmp_path / "o" / "fields.h5") as f:
         u = f["cases/level1/u"][:]
         assert np.array_equal(u, np.loadtxt(tmp_path / "o" / "u_level1.txt"))
-        lam = f["cases/level1/lambda"][:]
+        lam = f["cases/level1/crack/multiplier"][:]
         assert lam[0] == 0 and lam[-1] == 0 and lam.min() >= 0 and lam.max() > 0
+        jump = f["cases/level1/crack/jump"][:]
+        assert jump.min() >= -1e-12 and np.all(np.abs(jump * lam) < 1e-10)
+    meshio = pytest.importorskip("meshio")
+    m = meshio.read(tmp_path / "o" / "fields" / "level1.xdmf")
+    assert np.array_equal(m.point_data["u"], u) and m.point_data["p"].shape == (len(u), 3)
+    c = meshio.read(tmp_path / "o" / "fields" / "level1.crack.xdmf")
+    assert np.array_equal(c.point_data["multiplier"], lam)
