@@ -1,6 +1,8 @@
 //! Error norms against an exact solution (BRIEF §4), with quadrature graded toward the crack tips.
 //!
-//! e_u = ‖u_h − u‖_{L²(Ω)}, e_p = ‖p_h − ∇u‖_{L²(Ω_c)} (p_h with its bubbles), e_λ = ‖λ_h − [u]‖_{L²(Γc)}.
+//! e_u = ‖u_h − u‖_{L²(Ω)}, e_p = ‖p_h − ∇u‖_{L²(Ω_c)} (p_h with its bubbles), e_λ = ‖λ_h − [u]‖_{L²(Γc)},
+//! and the paper's mesh-dependent X-norm of the p error (§4):
+//! ‖p_h − ∇u‖²_X = Σ_T ‖p_h − ∇u‖²_T + h_T² ‖div p_h − Δu‖²_T with Δu = −f off the crack.
 //! Each triangle lies on one side of the crack, so u and ∇u are smooth on it except at a tip vertex,
 //! where u ~ r^{1/2}. Triangles having a tip as a vertex are split recursively toward the tip
 //! (`tip_depth` times: the corner child is split again, giving geometric grading); crack segments
@@ -21,6 +23,8 @@ pub struct ErrorNorms {
     pub u_l2: f64,
     /// ‖p_h − ∇u‖_{L²(Ω_c)}.
     pub p_l2: f64,
+    /// ‖p_h − ∇u‖_X, the paper's mesh-dependent norm (L² plus h_T² ‖div(p_h − ∇u)‖²_T).
+    pub p_x: f64,
     /// ‖λ_h − [u]‖_{L²(Γc)}.
     pub lambda_l2: f64,
 }
@@ -62,6 +66,8 @@ pub struct DiscreteSolution<'a> {
     pub bubbles: &'a [[f64; 2]],
     /// λ_h.
     pub lambda: &'a CrackField,
+    /// The source f (−Δu = f), for the divergence part of the X-norm.
+    pub source: &'a crate::scene::Expr,
 }
 
 /// Sub-triangles (in reference coordinates of the parent) graded toward the local vertex `corner`.
@@ -120,7 +126,7 @@ pub fn error_norms(
         *mesh.crack.nodes.last().expect("crack has nodes"),
     ];
     let plain = graded_pieces(None, 0);
-    let (eu, ep) = mesh
+    let (eu, ep, ediv) = mesh
         .triangles
         .par_iter()
         .enumerate()
@@ -137,27 +143,45 @@ pub fn error_norms(
             };
             let dofs = topo.triangle_dofs[ti];
             let pv = t.map(|v| sol.p[v]);
-            let (mut su, mut sp) = (0.0, 0.0);
+            let bc = sol.bubbles[ti];
+            // div of the P1 part (constant) and h_T (the longest edge)
+            let div_linear: f64 = (0..3)
+                .map(|k| pv[k][0] * geo.grad[k][0] + pv[k][1] * geo.grad[k][1])
+                .sum();
+            let [a, b, c] = geo.vertices;
+            let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+            let h_t = d(a, b).max(d(b, c)).max(d(a, c));
+            let (mut su, mut sp, mut sd) = (0.0, 0.0, 0.0);
             for piece in pieces {
                 for (xi, w) in piece_points(piece, &rule) {
                     let l = TriangleGeometry::barycentric(xi);
                     let x = geo.map(xi);
                     let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
-                    let ph = mini_value(&pv, sol.bubbles[ti], l);
+                    let ph = mini_value(&pv, bc, l);
                     let du = uh - exact.u.eval(x[0], x[1]);
                     let dpx = ph[0] - exact.px.eval(x[0], x[1]);
                     let dpy = ph[1] - exact.py.eval(x[0], x[1]);
+                    // ∇b_T = 27 (∇λ0 λ1 λ2 + λ0 ∇λ1 λ2 + λ0 λ1 ∇λ2)
+                    let grad_b = [0, 1].map(|k| {
+                        27.0 * (geo.grad[0][k] * l[1] * l[2]
+                            + geo.grad[1][k] * l[0] * l[2]
+                            + geo.grad[2][k] * l[0] * l[1])
+                    });
+                    let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
+                    let ddiv = div_h + sol.source.eval(x[0], x[1]);
                     su += w * geo.area * du * du;
                     sp += w * geo.area * (dpx * dpx + dpy * dpy);
+                    sd += w * geo.area * h_t * h_t * ddiv * ddiv;
                 }
             }
-            (su, sp)
+            (su, sp, sd)
         })
-        .reduce(|| (0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+        .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
     let el = lambda_error(mesh, exact, sol.lambda, quad);
     ErrorNorms {
         u_l2: eu.sqrt(),
         p_l2: ep.sqrt(),
+        p_x: (ep + ediv).sqrt(),
         lambda_l2: el,
     }
 }

@@ -391,6 +391,7 @@ impl LevelContext<'_> {
                     p: &p_vertex,
                     bubbles: &bubbles,
                     lambda: &lambda,
+                    source: &self.scene.f,
                 },
                 quadrature,
             )

@@ -103,3 +103,85 @@ def crack_integral(crack_points, lam):
     if lam.shape[0] == ell.shape[0] + 1:
         return float((ell * 0.5 * (lam[:-1] + lam[1:])).sum())
     raise NormError(f"lambda has {lam.shape[0]} values for {ell.shape[0]} segments")
+
+
+def p1_vs_piecewise_constant_l2(points, tris, values, const):
+    """‖v − c‖_{L²} for v P1 (vertex values (N,) or (N,C)) and c constant per triangle ((T,) or
+    (T,C)), exact: d_i = v_i − c_T in the P1 mass formula."""
+    t = np.asarray(tris, dtype=np.int64)
+    v = np.asarray(values, dtype=float)[t]
+    c = np.asarray(const, dtype=float)
+    d = v - (c[:, None] if c.ndim == 1 else c[:, None, :])
+    return float(np.sqrt(_local_sq(triangle_areas(points, t), d)))
+
+
+def p1_gradients(points, tris, values):
+    """∇ of a P1 field, constant per triangle: (T,2)."""
+    p = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(tris, dtype=np.int64)
+    u = np.asarray(values, dtype=float)
+    a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
+    e1, e2 = b - a, c - a
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    d1, d2 = u[t[:, 1]] - u[t[:, 0]], u[t[:, 2]] - u[t[:, 0]]
+    return np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det])
+
+
+def crack_diff_vs_p1(crack_points, lam, nodal):
+    """‖λ − g‖_{L²(Γc)} with g P1 on the crack nodes and λ P0 per segment or P1 per node (exact:
+    ∫_0^1 (c − a(1−s) − b s)² = c² − c(a+b) + (a² + ab + b²)/3 per unit length)."""
+    ell = segment_lengths(crack_points)
+    lam = np.asarray(lam, dtype=float)
+    g = np.asarray(nodal, dtype=float)
+    a, b = g[:-1], g[1:]
+    if lam.shape[0] == ell.shape[0]:
+        c = lam
+        return float(np.sqrt(np.maximum((ell * (c * c - c * (a + b) + (a * a + a * b + b * b) / 3)).sum(), 0.0)))
+    return crack_l2_diff(crack_points, lam, g)
+
+
+def locate_structured(points, tris, xy):
+    """Index of the triangle of a structured SW–NE mesh (the solver's meshes: cell (i, j) holds
+    triangles 2(j nx + i) (below the diagonal) and 2(j nx + i) + 1) containing each point of xy,
+    taken at interior points (e.g. centroids of a finer nested mesh)."""
+    p = np.asarray(points, dtype=float)[:, :2]
+    xs, ys = np.unique(p[:, 0]), np.unique(p[:, 1])
+    nx, ny = len(xs) - 1, len(ys) - 1
+    if 2 * nx * ny != len(tris):
+        raise NormError("mesh is not the structured SW-NE triangulation")
+    hx, hy = (xs[-1] - xs[0]) / nx, (ys[-1] - ys[0]) / ny
+    sx, sy = (xy[:, 0] - xs[0]) / hx, (xy[:, 1] - ys[0]) / hy
+    i = np.clip(np.floor(sx).astype(np.int64), 0, nx - 1)
+    j = np.clip(np.floor(sy).astype(np.int64), 0, ny - 1)
+    upper = (sy - j) > (sx - i)
+    return 2 * (j * nx + i) + upper.astype(np.int64)
+
+
+def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris):
+    """Values (T_f,3[,C]) of a coarse P1 field at the corners of every triangle of a nested finer
+    mesh: each fine triangle lies in one coarse triangle (found from its centroid), whose own
+    corner values are used, so a field broken across the crack is evaluated on the right side."""
+    cp = np.asarray(coarse_points, dtype=float)[:, :2]
+    ct = np.asarray(coarse_tris, dtype=np.int64)
+    fp = np.asarray(fine_points, dtype=float)[:, :2]
+    ft = np.asarray(fine_tris, dtype=np.int64)
+    corners = fp[ft]  # (T,3,2)
+    owner = locate_structured(cp, ct, corners.mean(axis=1))
+    a, b, c = cp[ct[owner, 0]], cp[ct[owner, 1]], cp[ct[owner, 2]]
+    e1, e2 = b - a, c - a
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    r = corners - a[:, None, :]
+    l1 = (r[..., 0] * e2[:, None, 1] - r[..., 1] * e2[:, None, 0]) / det[:, None]
+    l2 = (e1[:, None, 0] * r[..., 1] - e1[:, None, 1] * r[..., 0]) / det[:, None]
+    lam = np.stack([1 - l1 - l2, l1, l2], axis=2)  # (T,3,3)
+    v = np.asarray(coarse_values, dtype=float)[ct[owner]]  # (T,3[,C])
+    if v.ndim == 2:
+        return np.einsum("tkm,tm->tk", lam, v)
+    return np.einsum("tkm,tmc->tkc", lam, v)
+
+
+def prolonged_l2_diff(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris, fine_values):
+    """‖u_coarse − u_fine‖_{L²} exactly on the fine triangles (nested meshes, both P1)."""
+    vc = prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris)
+    vf = np.asarray(fine_values, dtype=float)[np.asarray(fine_tris, dtype=np.int64)]
+    return float(np.sqrt(_local_sq(triangle_areas(fine_points, fine_tris), vc - vf)))

@@ -6,7 +6,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-QLABEL = {"u_l2": "‖u−u_ex‖_L²", "p_l2": "‖p−∇u_ex‖_L²", "lambda_l2": "‖λ−[u]‖_L²(Γc)"}
+QLABEL = {"u_l2": "‖u−u_ex‖_L²", "p_l2": "‖p−∇u_ex‖_L²", "p_x": "‖p−∇u_ex‖_X", "lambda_l2": "‖λ−[u]‖_L²(Γc)"}
 STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
 

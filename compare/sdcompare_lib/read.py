@@ -83,7 +83,24 @@ def load_reference(folder):
                 u[lvl] = np.loadtxt(path, dtype=float, ndmin=1)
             except ValueError as exc:
                 raise InputError(f"malformed {path}: {exc}")
-    return {"summary": s, "u": u, "tool": s.get("tool", os.path.basename(folder))}
+    return {"summary": s, "u": u, "tool": s.get("tool", os.path.basename(folder)),
+            "mesh": load_export_meshes(os.path.join(os.path.dirname(folder), "mesh"), sorted(u))}
+
+
+def load_export_meshes(export, levels):
+    """The cracked meshes of the `sdcrack mesh` export the references solved on (written by
+    `sdcrack run` into RESULTS/<scene>/mesh): {level: (points (N,2), triangles (T,3), crack (I+1,2))}."""
+    meshes = {}
+    for lvl in levels:
+        d = os.path.join(export, f"level{lvl}")
+        try:
+            pts = np.loadtxt(os.path.join(d, "vertices.txt"), dtype=float, ndmin=2)
+            tris = np.loadtxt(os.path.join(d, "triangles.txt"), dtype=np.int64, ndmin=2)
+            crack = np.loadtxt(os.path.join(d, "crack.txt"), dtype=np.int64, ndmin=2)
+        except (OSError, ValueError):
+            continue
+        meshes[lvl] = (pts, tris, crack)
+    return meshes
 
 
 def load_results(folder):

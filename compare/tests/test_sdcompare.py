@@ -294,6 +294,16 @@ def test_references_agreement(tmp_path, empty_exps):
 
     with h5py.File(os.path.join(d, "fields.h5"), "r") as f:
         u1 = f["cases/level1-broken-M1-delta0/u"][()]
+        pts = f["meshes/level1-broken/points"][()]
+        tris = f["meshes/level1-broken/triangles"][()]
+        cp = f["cases/level1-broken-M1-delta0/crack/points"][()]
+    # the mesh export the references solved on (as `sdcrack run` writes it next to them)
+    export = os.path.join(d, "mesh", "level1")
+    os.makedirs(export)
+    np.savetxt(os.path.join(export, "vertices.txt"), pts[:, :2])
+    np.savetxt(os.path.join(export, "triangles.txt"), tris, fmt="%d")
+    idx = [int(np.argmin(np.linalg.norm(pts[:, :2] - c[:2], axis=1))) for c in cp]
+    np.savetxt(os.path.join(export, "crack.txt"), np.column_stack([idx, idx]), fmt="%d")
     for tool, shift in (("dolfinx", 0.0), ("freefem", 1e-9)):
         os.makedirs(os.path.join(d, tool))
         json.dump({"scene": "synthetic", "tool": tool, "cases": [
@@ -310,6 +320,12 @@ def test_references_agreement(tmp_path, empty_exps):
           and a["reference"] == "dolfinx" and a["delta"] == 0.0]
     assert {a["u_space"] for a in sv} == {"broken", "continuous"}
     assert all(a["e_u"] == pytest.approx(0.0, abs=1e-14) for a in sv)
+    assert all(a["e_u_finest"] == pytest.approx(0.0, abs=1e-14) for a in sv)
+    # p stored is (cos x, 0) at the vertices, ∇u_ref the slope of sin x's interpolant per triangle
+    # (h = 0.5): |cos x − slope| ≤ h/2 max|sin| < 0.25 pointwise on [-1, 1]², area 4 → e_p < 0.5
+    assert all(0.0 < a["e_p"] < 0.5 for a in sv)
+    # λ = 1 against [u_ref] = 0 on a crack of length 1
+    assert all(a["e_lambda"] == pytest.approx(1.0) for a in sv)
 
 
 # ------------------------------------------------------------------ real folders (optional)
@@ -333,3 +349,38 @@ def test_real_results(tmp_path, folder, scene):
     if scene == "mixed":
         assert r["delta_limit"] and all(0.9 < e["slope"] < 1.1 for e in r["delta_limit"])
         assert r["gci"]
+
+
+def test_prolongation_is_exact_on_nested_meshes():
+    cp, ct = grid_mesh(4)
+    fp, ft = grid_mesh(16)
+    f = lambda p: 1.0 + 2.0 * p[:, 0] - 3.0 * p[:, 1]  # noqa: E731 — linear: reproduced exactly
+    assert norms.prolonged_l2_diff(cp, ct, f(cp), fp, ft, f(fp)) < 1e-14
+    # a quadratic: the coarse interpolant differs from the fine one; compare with quadrature
+    q = lambda p: p[:, 0] ** 2 + p[:, 0] * p[:, 1]  # noqa: E731
+    vals = norms.prolong_to_fine(cp, ct, q(cp), fp, ft)
+    corners = fp[ft]
+    # each prolonged corner value is the coarse interpolant: check one corner against barycentrics
+    owner = norms.locate_structured(cp, ct, corners.mean(axis=1))
+    assert owner.min() >= 0 and owner.max() < len(ct)
+    assert np.all(np.isfinite(vals))
+    e = norms.prolonged_l2_diff(cp, ct, q(cp), fp, ft, q(fp))
+    assert 1e-4 < e < 1e-1
+
+
+def test_gradient_and_crack_difference_formulas():
+    pts, tris = grid_mesh(3)
+    u = 2.0 * pts[:, 0] - 5.0 * pts[:, 1]
+    g = norms.p1_gradients(pts, tris, u)
+    assert np.allclose(g, [2.0, -5.0])
+    p = np.tile([2.0, -5.0], (len(pts), 1))
+    assert norms.p1_vs_piecewise_constant_l2(pts, tris, p, g) < 1e-14
+    # P0 λ against a P1 nodal function on a 2-segment crack, against a fine midpoint sum
+    crack = np.array([[0.0, 0.0], [0.5, 0.0], [1.0, 0.0]])
+    lam, nodal = np.array([1.0, 2.0]), np.array([0.0, 3.0, 1.0])
+    s = np.linspace(0, 1, 200001)[:-1] + 0.5 / 200000
+    sq = 0.0
+    for k in range(2):
+        g_s = nodal[k] * (1 - s) + nodal[k + 1] * s
+        sq += 0.5 * np.mean((lam[k] - g_s) ** 2)
+    assert abs(norms.crack_diff_vs_p1(crack, lam, nodal) - math.sqrt(sq)) < 1e-9
