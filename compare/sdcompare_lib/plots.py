@@ -95,3 +95,31 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     return _save(fig, folder, f"work-precision-{scene}.png")
+
+
+def delta_reference_plot(folder, scene, agreement):
+    """Distance to the reference of the same level as δ decreases: it falls with δ until it reaches
+    the discretisation floor of the level (the δ = 0 value, dotted), and the floor falls with h."""
+    rows = [a for a in agreement if a["kind"] == "solver_vs_reference" and a.get("e_u") is not None]
+    if not rows:
+        return None
+    tool = sorted({a["reference"] for a in rows})[0]
+    mult = sorted({a["multiplier"] for a in rows})[-1]
+    spaces = sorted({a["u_space"] for a in rows})
+    fig, axes = plt.subplots(1, len(spaces), figsize=(5.2 * len(spaces), 4), squeeze=False)
+    for ax, u in zip(axes[0], spaces):
+        sel = [a for a in rows if a["reference"] == tool and a["multiplier"] == mult and a["u_space"] == u]
+        deltas = sorted({a["delta"] for a in sel if a["delta"] > 0})
+        if not deltas:
+            continue
+        for lvl in sorted({a["level"] for a in sel}):
+            pts = sorted((a["delta"], a["e_u"]) for a in sel if a["level"] == lvl and a["delta"] > 0)
+            floor = [a["e_u"] for a in sel if a["level"] == lvl and a["delta"] == 0]
+            line = ax.loglog(*zip(*pts), marker="o", label=f"level {lvl}")[0] if pts else None
+            if floor and line is not None:
+                ax.axhline(floor[0], color=line.get_color(), ls=":", lw=0.8)
+        ax.set_xlabel("δ (dotted: δ = 0, the floor of the level)")
+        ax.set_title(f"{scene}: ‖u_δh − u_{tool}‖_L², {u}/{mult}")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7)
+    return _save(fig, folder, f"delta-reference-{scene}.png")
