@@ -32,10 +32,7 @@ import argparse
 import json
 import logging
 import math
-import os
-import shutil
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -44,6 +41,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
 import sdexpr  # noqa: E402
 import sdfields  # noqa: E402
+import sdresults  # noqa: E402
 
 ACTIVITY_TOL = 1e-12
 MAX_ITER = 100
@@ -339,9 +337,7 @@ def run(export, out, fields=False, overwrite=False):
     levels = [read_level(export, L) | {"level": L} for L in scene["levels"]]
     if out.exists() and not overwrite:
         raise SolveError(f"{out} exists; refusing to overwrite earlier results (use --overwrite)")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
-    try:
+    with sdresults.staged_folder(out) as tmp:
         cases, field_sets = [], []
         for lv in levels:
             case, u, fs = solve_level(scene, lv, trees, fields)
@@ -356,14 +352,7 @@ def run(export, out, fields=False, overwrite=False):
                     "crack_fields": {"jump": fs["jump"], "multiplier": fs["multiplier"]}}))
         if fields:
             sdfields.write_fields(tmp, field_sets)
-        summary = {"scene": scene["name"], "tool": "dolfinx", "cases": cases}
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-        if out.exists():
-            shutil.rmtree(out)
-        os.rename(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        summary = sdresults.write_summary(tmp, scene["name"], "dolfinx", cases)
     return summary
 
 

@@ -18,7 +18,6 @@ import os
 import shutil
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
@@ -34,6 +33,7 @@ try:
     import sdexpr  # the shared translator: parse(src), to_freefem(tree), to_numpy(tree)
 except ImportError:
     sdexpr = None
+import sdresults  # noqa: E402  (standard library only)
 
 
 class SolveError(Exception):
@@ -327,9 +327,7 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
     if out.exists() and not overwrite:
         raise SolveError(f"{out} exists; refusing to overwrite earlier results (use --overwrite)")
     f_ff, g_ff = to_freefem(f_src), to_freefem(g_src)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
-    try:
+    with sdresults.staged_folder(out) as tmp:
         cases, fields_data = [], []
         for level in levels:
             t0 = time.perf_counter()
@@ -367,14 +365,7 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
             except ImportError as e:
                 raise SolveError(f"--fields needs h5py: apt-get install -y python3-h5py ({e})")
             sdfields.write_fields(tmp, fields_data)
-        summary = {"scene": name, "tool": "freefem", "cases": cases}
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-        if out.exists():
-            shutil.rmtree(out)
-        os.rename(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+        summary = sdresults.write_summary(tmp, name, "freefem", cases)
     return summary
 
 
