@@ -272,10 +272,25 @@ def _match(pattern, value):
     return pattern in (None, "*") or pattern == value
 
 
-def check_expectations(scene, rate_entries, exps):
+def _check_agreement(e, agreement):
+    """quantity = "reference_agreement": every level's max |u_dolfinx − u_freefem| <= max_error."""
+    rows = [a for a in agreement if a["kind"] == "reference_vs_reference"]
+    if not rows:
+        return {**e, "variant": None, "status": "not_evaluated", "reason": "no two references in this run"}
+    worst = max(rows, key=lambda a: -1.0 if a["max_vertex_diff"] is None else a["max_vertex_diff"])
+    bad = [a for a in rows if a["max_vertex_diff"] is None or a["max_vertex_diff"] > e["max_error"]]
+    reason = "; ".join(f"level {a['level']}: {a['max_vertex_diff']} > {e['max_error']:.1e}" for a in bad)
+    return {**e, "variant": f"{worst['a']} vs {worst['b']}", "measured_error": worst["max_vertex_diff"],
+            "status": "violated" if bad else "ok", "reason": reason}
+
+
+def check_expectations(scene, rate_entries, exps, agreement=()):
     results = []
     for e in exps:
-        if e["scene"] != scene:
+        if e["scene"] not in (scene, "*"):
+            continue
+        if e["quantity"] == "reference_agreement":
+            results.append(_check_agreement(e, agreement))
             continue
         matched = [r for r in rate_entries if _match(e.get("u_space"), r["u_space"])
                    and _match(e.get("multiplier"), r["multiplier"])

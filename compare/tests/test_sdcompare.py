@@ -384,3 +384,42 @@ def test_gradient_and_crack_difference_formulas():
         g_s = nodal[k] * (1 - s) + nodal[k + 1] * s
         sq += 0.5 * np.mean((lam[k] - g_s) ** 2)
     assert abs(norms.crack_diff_vs_p1(crack, lam, nodal) - math.sqrt(sq)) < 1e-9
+
+
+# ------------------------------------------------------------------ a real small run
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+
+def test_real_small_run_of_sdcrack(tmp_path):
+    """`sdcrack run` on the repo's open-exact scene at levels 1-3 (δ = 0, 1e-4, 1e-2, both
+    references), then sdcompare: the broken variant converges (u rate about 1.4), the continuous
+    one is reported as not converging, the references agree, δ-slope about 1, verdict PASS
+    (expectations on level 4 are not evaluated on this shorter run)."""
+    exe = os.environ.get("SDCRACK_BIN", os.path.join(ROOT, "target", "release", "sdcrack"))
+    if not os.path.isfile(exe):
+        pytest.skip("sdcrack binary not built")
+    text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
+    text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2, 3]")
+    text = text.replace("deltas = [0.0]", "deltas = [1e-2, 1e-4, 0.0]")
+    text = text.replace("fields = []", 'fields = ["u", "p", "lambda"]')
+    scene = tmp_path / "open.toml"
+    scene.write_text(text)
+    env = dict(os.environ, FF_LOADPATH="/usr/lib/freefem++")
+    p = subprocess.run([exe, "run", str(scene), "--out", str(tmp_path / "r"), "--quiet"],
+                       capture_output=True, text=True, env=env)
+    assert p.returncode == 0, p.stderr
+    rc, out, err = run_cli(str(tmp_path / "r" / "open-exact"))
+    assert rc == 0, out + err
+    r = json.load(open(tmp_path / "r" / "open-exact" / "report" / "report.json"))
+    assert r["verdict"] == "PASS"
+    conv = {(e["u_space"], e["multiplier"], e["quantity"]): e for e in r["rates"]}
+    for m in ("M0", "M1", "M1star"):
+        assert conv[("broken", m, "u_l2")]["converges"] is True
+        assert conv[("broken", m, "u_l2")]["rates"][-1] > 1.3
+        for q in ("u_l2", "p_l2", "lambda_l2"):
+            assert conv[("continuous", m, q)]["converges"] is False
+    slopes = [d["slope"] for d in r["delta_limit"] if d["slope"] is not None]
+    assert slopes and all(abs(s - 1.0) < 0.1 for s in slopes)
+    rr = [a for a in r["agreement"] if a["kind"] == "reference_vs_reference"]
+    if rr:  # both references installed
+        assert all(a["max_vertex_diff"] < 1e-8 for a in rr)
