@@ -121,6 +121,12 @@ def test_convergence_rule():
     # early non-monotonicity outside the last three levels is tolerated
     assert rates.converges(h, [1.0, 2.0, 0.5, 0.25, 0.125]) is True
     assert rates.converges(h, [0.0] * 5) is True  # exact (closed crack λ)
+    # decreasing toward a non-zero floor (continuous u, open crack, X-norm of p: limit 0.657)
+    assert rates.converges(h, [2.541, 1.837, 1.377, 1.079, 0.8947]) is False
+    # the measured converging series of the broken u space still pass
+    assert rates.converges(h, [3.354, 2.503, 1.836, 1.341, 0.9772]) is True
+    assert rates.converges(h, [3.133e-2, 1.218e-2, 4.702e-3, 1.793e-3, 7.043e-4]) is True
+    assert rates.converges(h, [c * x ** 0.5 for c, x in zip([1, 1, 1, 1, 1], h)]) is True
     assert rates.converges([0.1], [0.3]) is None
     assert rates.converges([0.2, 0.1], [0.4, 0.1]) is True
 
