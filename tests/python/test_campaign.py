@@ -1,0 +1,66 @@
+"""ci/cases lists the campaign, and its commands rerun single cases reproducibly.
+
+A rerun (one level, u space, multiplier, δ) gives bitwise the same u, p, λ, KKT residuals, active
+set and unknowns as the same case inside a full run. Only the LCP iteration count can differ: in a
+full run each δ is warm-started from the previous δ's active set, a single-case rerun starts cold.
+"""
+
+import json
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack"))
+h5py = pytest.importorskip("h5py")
+
+
+def cases(*scenes, cwd=ROOT):
+    out = subprocess.run([str(ROOT / "ci" / "cases"), *map(str, scenes)], cwd=cwd, check=True,
+                         capture_output=True, text=True).stdout
+    return [line.split(" ", 5) for line in out.splitlines()]
+
+
+def test_case_list_counts_every_case():
+    rows = cases(ROOT / "scenes" / "closed-exact.toml")
+    assert len(rows) == 5 * 2 * 3 * 1
+    assert {r[0] for r in rows} == {"closed-exact"}
+    outs = [r[5].split("--out ")[1] for r in rows]
+    assert len(set(outs)) == len(outs), "one folder per case"
+
+
+def test_rerun_reproduces_the_row(tmp_path):
+    if not EXE.is_file():
+        pytest.skip("sdcrack binary not built")
+    text = (ROOT / "scenes" / "mixed.toml").read_text()
+    text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2]")
+    text = text.replace('references = ["dolfinx", "freefem"]', "references = []")
+    scene = tmp_path / "mixed.toml"
+    scene.write_text(text)
+    subprocess.run([str(EXE), "run", str(scene), "--out", str(tmp_path / "full"), "--quiet"],
+                   check=True, capture_output=True)
+    full = json.loads((tmp_path / "full" / "mixed" / "summary.json").read_text())
+    key = lambda c: (c["level"], c["u_space"], c["multiplier"], c["delta"])  # noqa: E731
+    by_key = {key(c): c for c in full["cases"]}
+    picked = {("2", "broken", "M1star", "0.0"), ("1", "continuous", "M0", "0.01"),
+              ("2", "broken", "M1", "0.0001")}
+    rows = [r for r in cases(scene, cwd=tmp_path) if tuple(r[1:5]) in picked]
+    assert len(rows) == 3
+    for r in rows:
+        cmd = r[5].replace("target/release/sdcrack", str(EXE)).split() + ["--quiet"]
+        subprocess.run(cmd, cwd=tmp_path, check=True, capture_output=True)
+        folder = tmp_path / cmd[cmd.index("--out") + 1] / "mixed"
+        one = json.loads((folder / "summary.json").read_text())["cases"]
+        assert len(one) == 1
+        c, f = one[0], by_key[key(one[0])]
+        for k in ("unknowns", "multipliers", "kkt", "active_multipliers", "converged", "h",
+                  "regularized_pivots"):
+            assert c[k] == f[k], (r[:5], k)
+        assert c["iterations"] >= 1
+        with h5py.File(folder / "fields.h5") as a, h5py.File(tmp_path / "full" / "mixed" / "fields.h5") as b:
+            g = c["fields_grid"]
+            for name in ("u", "p", "crack/lambda"):
+                assert np.array_equal(a[f"cases/{g}/{name}"][()], b[f"cases/{g}/{name}"][()]), (r[:5], name)
