@@ -46,7 +46,9 @@ def markdown(title, sections):
 def _inline_md(text):
     t = html.escape(text)
     parts = t.split("**")
-    return "".join(f"<b>{p}</b>" if i % 2 else p for i, p in enumerate(parts))
+    t = "".join(f"<b>{p}</b>" if i % 2 else p for i, p in enumerate(parts))
+    parts = t.split("`")
+    return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
 
 
 def html_page(title, sections, folder):
@@ -54,7 +56,7 @@ def html_page(title, sections, folder):
            "table{border-collapse:collapse;margin:0.5em 0;font-size:13px}"
            "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
            "th{background:#eee}.PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
-           "img{max-width:100%}")
+           "img{max-width:100%}code{font-size:11px;text-align:left}")
     out = ["<!DOCTYPE html>", "<html><head><meta charset='utf-8'>",
            f"<title>{html.escape(title)}</title><style>{css}</style></head><body>",
            f"<h1>{html.escape(title)}</h1>"]
