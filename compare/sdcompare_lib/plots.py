@@ -11,6 +11,13 @@ STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
 
 
+def _legend(ax):
+    """A legend only when something was drawn with a label (e.g. no δ-differences on a fully
+    closed crack, where λ_δ = λ_0 = 0)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
+
+
 def _save(fig, folder, name):
     path = os.path.join(folder, name)
     fig.tight_layout()
@@ -44,7 +51,7 @@ def rate_plot(folder, scene, rate_entries):
         ax.set_xlabel("h")
         ax.set_title(f"{scene}: {QLABEL[q]}")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        _legend(ax)
     return _save(fig, folder, f"rates-{scene}.png")
 
 
@@ -68,7 +75,7 @@ def delta_plot(folder, scene, delta_entries):
         ax.set_xlabel("δ")
         ax.set_title(f"{scene} level {lvl}: ‖{q.split('_')[0]}_δ − {q.split('_')[0]}_0‖")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        _legend(ax)
     return _save(fig, folder, f"delta-{scene}.png")
 
 
@@ -93,7 +100,7 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
     ax.set_ylabel("‖u − u_ex‖_L²")
     ax.set_title(f"{scene}: work–precision")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    _legend(ax)
     return _save(fig, folder, f"work-precision-{scene}.png")
 
 
@@ -121,5 +128,5 @@ def delta_reference_plot(folder, scene, agreement):
         ax.set_xlabel("δ (dotted: δ = 0, the floor of the level)")
         ax.set_title(f"{scene}: ‖u_δh − u_{tool}‖_L², {u}/{mult}")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        _legend(ax)
     return _save(fig, folder, f"delta-reference-{scene}.png")
