@@ -64,3 +64,13 @@ def test_rerun_reproduces_the_row(tmp_path):
             g = c["fields_grid"]
             for name in ("u", "p", "crack/lambda"):
                 assert np.array_equal(a[f"cases/{g}/{name}"][()], b[f"cases/{g}/{name}"][()]), (r[:5], name)
+
+
+@pytest.mark.parametrize("name", ["inclined", "off-axis", "all-closed", "tip-contact"])
+def test_new_scenes_pass_check(name):
+    if not EXE.is_file():
+        pytest.skip("sdcrack binary not built")
+    r = subprocess.run([str(EXE), "check", str(ROOT / "scenes" / f"{name}.toml")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert f"valid scene '{name}'" in r.stdout
