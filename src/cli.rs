@@ -61,6 +61,17 @@ pub enum Command {
         #[arg(long)]
         level: Option<u32>,
     },
+    /// Time one case and a δ × multiplier sweep against a sparse Cholesky of the same mesh.
+    Bench {
+        /// Scene whose domain, crack and data are used (default: the embedded `mixed` scene).
+        scene: Option<PathBuf>,
+        /// Approximate number of mesh vertices (the scene's cells are scaled by an integer).
+        #[arg(long, default_value_t = 1_000_000, value_parser = parse_vertices)]
+        vertices: usize,
+        /// Print one JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Validate a scene file (and its crack on every level's mesh) without solving.
     Check {
         /// Scene file (TOML).
@@ -76,6 +87,20 @@ fn parse_u_space(s: &str) -> Result<USpace, String> {
 fn parse_multiplier(s: &str) -> Result<MultiplierSpace, String> {
     MultiplierSpace::from_name(s)
         .ok_or_else(|| format!("unknown multiplier space '{s}' (expected M0, M1 or M1star)"))
+}
+
+/// Vertex counts accepted by `bench` (the upper bound keeps one case within ~60 GB).
+const BENCH_VERTICES: std::ops::RangeInclusive<usize> = 100..=8_000_000;
+
+fn parse_vertices(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(v) if BENCH_VERTICES.contains(&v) => Ok(v),
+        _ => Err(format!(
+            "--vertices must be an integer from {} to {}, got '{s}'",
+            BENCH_VERTICES.start(),
+            BENCH_VERTICES.end()
+        )),
+    }
 }
 
 fn parse_delta(s: &str) -> Result<f64, String> {
@@ -141,6 +166,18 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             );
             Ok(0)
         }
+        Command::Bench {
+            scene,
+            vertices,
+            json,
+        } => {
+            let scene = match scene {
+                Some(p) => Scene::from_file(&p).map_err(usage)?,
+                None => Scene::default_scene(),
+            };
+            check_meshes(&scene)?;
+            bench(&scene, vertices, json)
+        }
         Command::Mesh { scene, out, level } => {
             let scene = match scene {
                 Some(p) => Scene::from_file(&p).map_err(usage)?,
@@ -175,6 +212,26 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             run(&scene, &filter, &out, quiet)
         }
     }
+}
+
+/// Runs `sdcrack bench` and prints its table or JSON object on stdout (progress on stderr).
+fn bench(scene: &Scene, vertices: usize, json: bool) -> Result<i32, Failure> {
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::new_spinner()
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let mut progress = Progress { bar };
+    let report = crate::bench::run_bench(scene, vertices, &mut progress).map_err(runtime)?;
+    progress.bar.finish_and_clear();
+    if json {
+        let text = serde_json::to_string_pretty(&report).map_err(runtime)?;
+        println!("{text}");
+    } else {
+        print!("{}", report.table());
+    }
+    Ok(if report.all_converged { 0 } else { 3 })
 }
 
 /// Checks the crack against the level-0 mesh (the same check every level makes).

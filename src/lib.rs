@@ -15,12 +15,14 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod assembly;
+pub mod bench;
 pub mod cli;
 pub mod contact;
 pub mod fe;
 pub mod linalg;
 pub mod mesh;
 pub mod norms;
+pub mod ordering;
 pub mod output;
 pub mod references;
 pub mod scene;

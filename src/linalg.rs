@@ -350,11 +350,45 @@ impl SymbolicLdlt {
     /// [`LinalgError::IndexOutOfBounds`] for an invalid [`SymCsc`],
     /// [`LinalgError::Symbolic`] if faer fails (e.g. out of memory, index overflow).
     pub fn analyze(matrix: &SymCsc) -> Result<SymbolicLdlt, LinalgError> {
+        Self::analyze_with(matrix, SymmetricOrdering::Amd)
+    }
+
+    /// Analyzes the pattern of `matrix` with a given elimination order: `order[position]` is
+    /// the unknown eliminated at `position` (e.g. [`crate::ordering::nested_dissection`]).
+    ///
+    /// # Errors
+    /// As [`SymbolicLdlt::analyze`], and [`LinalgError::Dimension`] /
+    /// [`LinalgError::Symbolic`] when `order` is not a permutation of `0..n`.
+    pub fn analyze_ordered(matrix: &SymCsc, order: &[usize]) -> Result<SymbolicLdlt, LinalgError> {
+        if order.len() != matrix.n {
+            return Err(LinalgError::Dimension {
+                what: "order",
+                expected: matrix.n,
+                found: order.len(),
+            });
+        }
+        let mut inverse = vec![usize::MAX; order.len()];
+        for (position, &k) in order.iter().enumerate() {
+            if k >= order.len() || inverse[k] != usize::MAX {
+                return Err(LinalgError::Symbolic(format!(
+                    "the elimination order is not a permutation (entry {position} = {k})"
+                )));
+            }
+            inverse[k] = position;
+        }
+        let perm = faer::perm::PermRef::new_checked(order, &inverse, order.len());
+        Self::analyze_with(matrix, SymmetricOrdering::Custom(perm))
+    }
+
+    fn analyze_with(
+        matrix: &SymCsc,
+        ordering: SymmetricOrdering<'_, usize>,
+    ) -> Result<SymbolicLdlt, LinalgError> {
         matrix.validate()?;
         let inner = factorize_symbolic_cholesky(
             matrix.faer_symbolic(),
             Side::Lower,
-            SymmetricOrdering::Amd,
+            ordering,
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| LinalgError::Symbolic(format!("{e:?}")))?;
@@ -510,6 +544,100 @@ impl Ldlt {
         &self.stats
     }
 
+    /// `(K⁻¹)[indices, indices]` as a dense row-major `c × c` matrix (`c = indices.len()`), for
+    /// the factored (possibly regularized) `K`, read off the trailing block of the factor.
+    ///
+    /// With `K = P L D Lᵀ Pᵀ` and the unknowns `indices` eliminated last, the trailing `c × c`
+    /// blocks `L_S`, `D_S` factor the Schur complement `S` of everything else, and
+    /// `(K⁻¹)_SS = S⁻¹ = L_S⁻ᵀ D_S⁻¹ L_S⁻¹`: O(c³) dense work instead of `c` sparse solves.
+    /// Returns `None` when `indices` are not the last `c` unknowns of the elimination order
+    /// (analyse with [`SymbolicLdlt::analyze_ordered`] and put them at the end) or repeat.
+    pub fn trailing_inverse(&self, indices: &[usize]) -> Option<Vec<f64>> {
+        let (n, c) = (self.n, indices.len());
+        if c == 0 || c > n {
+            return None;
+        }
+        let t0 = n - c;
+        // local[k] = position of indices[k] inside the trailing block
+        let local: Vec<usize> = match self.symbolic.perm() {
+            Some(perm) => {
+                let (_, inverse) = perm.arrays();
+                indices.iter().map(|&i| inverse.get(i).copied()).collect::<Option<_>>()?
+            }
+            None => indices.to_vec(),
+        };
+        let mut seen = vec![false; c];
+        for &p in &local {
+            if p < t0 || std::mem::replace(&mut seen[p - t0], true) {
+                return None;
+            }
+        }
+        let (l, d) = self.trailing_factor(t0);
+        // X = L_S⁻¹ (unit lower triangular), then (K⁻¹)_SS = Xᵀ D⁻¹ X.
+        let mut x = faer::Mat::<f64>::identity(c, c);
+        faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+            l.as_ref(),
+            x.as_mut(),
+            Par::Seq,
+        );
+        let mut dx = x.clone();
+        for i in 0..c {
+            for j in 0..c {
+                dx[(i, j)] /= d[i];
+            }
+        }
+        let inv = x.transpose() * &dx;
+        let mut out = vec![0.0; c * c];
+        for (a, &pa) in local.iter().enumerate() {
+            for (b, &pb) in local.iter().enumerate() {
+                out[a * c + b] = inv[(pa - t0, pb - t0)];
+            }
+        }
+        Some(out)
+    }
+
+    /// The trailing `L_S` (unit lower, dense) and `D_S` of the factor, from position `t0` on.
+    fn trailing_factor(&self, t0: usize) -> (faer::Mat<f64>, Vec<f64>) {
+        let c = self.n - t0;
+        let mut l = faer::Mat::<f64>::identity(c, c);
+        let mut d = vec![0.0; c];
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let (col_ptr, row_idx) = (s.col_ptr(), s.row_idx());
+                for j in t0..self.n {
+                    // the first entry of a column holds D_jj, the others L_ij (i > j)
+                    d[j - t0] = self.values[col_ptr[j]];
+                    for k in col_ptr[j] + 1..col_ptr[j + 1] {
+                        l[(row_idx[k] - t0, j - t0)] = self.values[k];
+                    }
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let factor = SupernodalLdltRef::new(s, &self.values);
+                for sn in 0..s.n_supernodes() {
+                    let (begin, end) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
+                    if end <= t0 {
+                        continue;
+                    }
+                    let node = factor.supernode(sn);
+                    let val = node.val();
+                    let width = end - begin;
+                    for j in begin.max(t0)..end {
+                        let jj = j - begin;
+                        d[j - t0] = val[(jj, jj)];
+                        for ii in jj + 1..width {
+                            l[(begin + ii - t0, j - t0)] = val[(ii, jj)];
+                        }
+                        for (k, &row) in node.pattern().iter().enumerate() {
+                            l[(row - t0, j - t0)] = val[(width + k, jj)];
+                        }
+                    }
+                }
+            }
+        }
+        (l, d)
+    }
+
     /// x = K⁻¹ b for the factored (possibly regularized) matrix, in place.
     ///
     /// # Panics
@@ -619,6 +747,81 @@ impl Ldlt {
         x.copy_from_slice(&best_x);
         best_rel
     }
+}
+
+/// Seconds spent by [`cholesky_solve`] in each phase.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct CholeskyTimings {
+    /// AMD ordering, elimination tree, supernodes.
+    pub symbolic_s: f64,
+    /// Numeric LLᵀ.
+    pub numeric_s: f64,
+    /// One forward/backward solve.
+    pub solve_s: f64,
+    /// Stored values of the factor.
+    pub factor_nnz: usize,
+}
+
+/// Solves `A x = b` in place for an SPD `A` with faer's sparse Cholesky `LLᵀ` and its default
+/// settings (AMD ordering): the plain sparse direct solve that `sdcrack bench` uses as its
+/// yardstick. Returns the time of each phase.
+///
+/// # Errors
+/// Invalid structure, [`LinalgError::Symbolic`], [`LinalgError::Numeric`] when `A` is not
+/// positive definite or memory runs out.
+pub fn cholesky_solve(matrix: &SymCsc, b: &mut [f64]) -> Result<CholeskyTimings, LinalgError> {
+    use faer::linalg::cholesky::llt::factor::LltRegularization;
+    use faer::sparse::linalg::cholesky::LltRef;
+    use std::time::Instant;
+    matrix.validate()?;
+    let t0 = Instant::now();
+    let symbolic = factorize_symbolic_cholesky(
+        matrix.faer_symbolic(),
+        Side::Lower,
+        SymmetricOrdering::Amd,
+        CholeskySymbolicParams::default(),
+    )
+    .map_err(|e| LinalgError::Symbolic(format!("{e:?}")))?;
+    let symbolic_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let par = Par::rayon(0);
+    let mut values = Vec::new();
+    values
+        .try_reserve_exact(symbolic.len_val())
+        .map_err(|_| LinalgError::Numeric("out of memory for the factor".into()))?;
+    values.resize(symbolic.len_val(), 0.0f64);
+    let mut mem =
+        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Spec::default()))
+            .map_err(|_| LinalgError::Numeric("out of memory for the workspace".into()))?;
+    let a = SparseColMatRef::new(matrix.faer_symbolic(), &matrix.values);
+    symbolic
+        .factorize_numeric_llt(
+            &mut values,
+            a,
+            Side::Lower,
+            LltRegularization::default(),
+            par,
+            MemStack::new(&mut mem),
+            Spec::default(),
+        )
+        .map_err(|e| LinalgError::Numeric(format!("Cholesky: {e:?}")))?;
+    drop(mem);
+    let numeric_s = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+    let rhs = MatMut::from_column_major_slice_mut(b, matrix.n, 1);
+    LltRef::new(&symbolic, &values).solve_in_place_with_conj(
+        Conj::No,
+        rhs,
+        Par::Seq,
+        MemStack::new(&mut mem),
+    );
+    Ok(CholeskyTimings {
+        symbolic_s,
+        numeric_s,
+        solve_s: t2.elapsed().as_secs_f64(),
+        factor_nnz: symbolic.len_val(),
+    })
 }
 
 /// `r = b − K x`, returns `‖r‖_∞`.
@@ -871,6 +1074,59 @@ mod tests {
         let mut z = vec![1.0; n];
         assert_eq!(f.solve_refined(&k, &vec![0.0; n], &mut z, 3, 1e-14), 0.0);
         assert!(z.iter().all(|&v| v == 0.0));
+    }
+
+    /// `trailing_inverse` agrees with column-by-column solves, on the simplicial (m = 10) and
+    /// supernodal (m = 60) paths, and refuses unknowns that are not eliminated last.
+    #[test]
+    fn trailing_inverse_matches_solves() {
+        for m in [10, 60] {
+            let (k, signs, _) = saddle(m, 5);
+            let n = k.n;
+            let picked: Vec<usize> = (0..n).filter(|i| i % 7 == 2).take(12).collect();
+            let mut order: Vec<usize> = (0..n).filter(|i| !picked.contains(i)).collect();
+            order.extend(picked.iter().rev());
+            let sym = SymbolicLdlt::analyze_ordered(&k, &order).unwrap();
+            let f = Ldlt::factor(&sym, &k, &signs).unwrap();
+            let inv = f.trailing_inverse(&picked).unwrap();
+            let c = picked.len();
+            let mut worst = 0.0f64;
+            let mut scale = 0.0f64;
+            for (b, &j) in picked.iter().enumerate() {
+                let mut e = vec![0.0; n];
+                e[j] = 1.0;
+                f.solve_in_place(&mut e);
+                for (a, &i) in picked.iter().enumerate() {
+                    worst = worst.max((inv[a * c + b] - e[i]).abs());
+                    scale = scale.max(e[i].abs());
+                }
+            }
+            assert!(worst <= 1e-12 * scale, "m = {m}: {worst:e} vs {scale:e}");
+            assert!(f.trailing_inverse(&[0]).is_none() || order[n - 1] == 0);
+            let amd = Ldlt::factor(&SymbolicLdlt::analyze(&k).unwrap(), &k, &signs).unwrap();
+            let trailing_amd = amd.symbolic.perm().unwrap().arrays().0[n - 1];
+            assert!(amd.trailing_inverse(&[trailing_amd]).is_some());
+            assert!(amd.trailing_inverse(&[(trailing_amd + 1) % n]).is_none());
+        }
+        let (k, _, _) = saddle(10, 5);
+        assert!(SymbolicLdlt::analyze_ordered(&k, &[0, 0]).is_err());
+        let mut order: Vec<usize> = (0..k.n).collect();
+        order[1] = 0;
+        assert!(SymbolicLdlt::analyze_ordered(&k, &order).is_err());
+    }
+
+    #[test]
+    fn cholesky_solve_matches_ldlt() {
+        let k = random_spd(300, 4, 9);
+        let mut rng = Rng(4);
+        let b = random_vec(&mut rng, k.n);
+        let mut x = b.clone();
+        let t = cholesky_solve(&k, &mut x).unwrap();
+        assert!(t.factor_nnz >= k.n);
+        assert!(rel_residual(&k, &b, &x) < 1e-13);
+        let mut not_spd = k.clone();
+        not_spd.values.iter_mut().for_each(|v| *v = -*v);
+        assert!(cholesky_solve(&not_spd, &mut x).is_err());
     }
 
     #[test]

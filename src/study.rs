@@ -222,7 +222,8 @@ pub fn run_study(
             let system = assemble(&mesh, &topo, &scene.f, &scene.g)?;
             let assembly = mesh_time + t1.elapsed().as_secs_f64();
             let t2 = Instant::now();
-            let symbolic = SymbolicLdlt::analyze(&system.base)?;
+            let order = elimination_order(&mesh, &topo, &ops, system.n_p);
+            let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order)?;
             let symbolic_time = t2.elapsed().as_secs_f64();
             if !scene.fields.is_empty() {
                 result.meshes.push(MeshRecord {
@@ -310,13 +311,50 @@ impl LevelContext<'_> {
         Ok(())
     }
 
-    /// x₀ = K⁻¹ b and H_N = N K⁻¹ Nᵀ from one block solve.
+    /// x₀ = K⁻¹ b and H_N = N K⁻¹ Nᵀ.
     fn reduce(&self, ldlt: Ldlt, matrix: crate::linalg::SymCsc) -> Reduced {
+        let n_p = self.system.n_p;
+        let mut x0 = vec![0.0; self.system.n()];
+        ldlt.solve_refined(&matrix, &self.system.rhs, &mut x0, 2, 1e-15);
+        let q_n = self.ops.apply_n(&x0[..n_p]);
+        let h_n = self
+            .h_n_from_trailing_block(&ldlt)
+            .unwrap_or_else(|| self.h_n_by_solves(&ldlt));
+        Reduced {
+            ldlt,
+            matrix,
+            h_n,
+            q_n,
+        }
+    }
+
+    /// H_N from the dense trailing block of the factor: the crack's p unknowns are eliminated
+    /// last ([`elimination_order`]), so (K⁻¹) restricted to them costs O((2I+2)³), no solve.
+    fn h_n_from_trailing_block(&self, ldlt: &Ldlt) -> Option<Vec<f64>> {
+        let m = self.ops.nodes();
+        let indices: Vec<usize> = self.ops.node_p_dofs.iter().flatten().copied().collect();
+        let inv = ldlt.trailing_inverse(&indices)?;
+        let (c, nu) = (2 * m, self.ops.normal);
+        let mut h_n = vec![0.0; m * m];
+        for i in 0..m {
+            for j in 0..m {
+                let mut v = 0.0;
+                for a in 0..2 {
+                    for b in 0..2 {
+                        v += nu[a] * nu[b] * inv[(2 * i + a) * c + 2 * j + b];
+                    }
+                }
+                h_n[i * m + j] = v;
+            }
+        }
+        Some(h_n)
+    }
+
+    /// H_N = N K⁻¹ Nᵀ column by column from block solves (any elimination order).
+    fn h_n_by_solves(&self, ldlt: &Ldlt) -> Vec<f64> {
         let n = self.system.n();
         let n_p = self.system.n_p;
         let m = self.ops.nodes();
-        let mut x0 = vec![0.0; n];
-        ldlt.solve_refined(&matrix, &self.system.rhs, &mut x0, 2, 1e-15);
         // H_N column by column in blocks, so the right-hand sides never hold more than
         // REDUCTION_BLOCK vectors of length n at once.
         let mut h_n = vec![0.0; m * m];
@@ -338,13 +376,7 @@ impl LevelContext<'_> {
                 }
             }
         }
-        let q_n = self.ops.apply_n(&x0[..n_p]);
-        Reduced {
-            ldlt,
-            matrix,
-            h_n,
-            q_n,
-        }
+        h_n
     }
 
     fn solve_case(
@@ -483,6 +515,21 @@ impl LevelContext<'_> {
             })
             .collect()
     }
+}
+
+/// The elimination order of K: nested dissection of the vertex grid (p and u unknowns of a
+/// vertex together), with the crack nodes' p unknowns last so that the factor's trailing block
+/// yields H_N ([`crate::ordering`]).
+fn elimination_order(mesh: &Mesh, topo: &UTopology, ops: &CrackOperators, n_p: usize) -> Vec<usize> {
+    let vertex_of: Vec<usize> = (0..n_p)
+        .map(|k| k / 2)
+        .chain(topo.dof_vertex.iter().copied())
+        .collect();
+    let mut last = vec![false; vertex_of.len()];
+    for &k in ops.node_p_dofs.iter().flatten() {
+        last[k] = true;
+    }
+    crate::ordering::nested_dissection(mesh.nx, mesh.ny, &vertex_of, &last)
 }
 
 /// Solves a tridiagonal system given as a dense matrix (Thomas algorithm; M_c is SPD).

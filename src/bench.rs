@@ -1,0 +1,379 @@
+//! `sdcrack bench`: the cost of the smooth-domain solver against one sparse Cholesky of its mesh.
+//!
+//! Owns the benchmark protocol of issue #7, measured in one process, one after the other:
+//! 1. the yardstick: faer's sparse Cholesky (AMD, symbolic + numeric + one solve) of the P1
+//!    Laplacian on the interior vertices of the same structured mesh;
+//! 2. one complete case (broken u, M1, δ = 0): mesh, assembly, ordering and symbolic analysis,
+//!    numeric factorisation, crack reduction, contact solve; no field, no error norm, no reference;
+//! 3. a sweep of 6 δ × 3 multipliers (18 cases, 6 numeric factorisations) on the same mesh.
+//!
+//! Peak resident memory is read from `/proc/self/status` (`VmHWM`) and reset between the phases
+//! through `/proc/self/clear_refs` where the kernel allows it.
+
+use std::time::Instant;
+
+use crate::fe::p1::TriangleGeometry;
+use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
+use crate::mesh::{Mesh, MeshError};
+use crate::scene::{FieldSet, MultiplierSpace, Scene, USpace};
+use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
+
+/// The δ values of the sweep (largest first, as every study runs them).
+pub const SWEEP_DELTAS: [f64; 6] = [1.0, 1e-2, 1e-4, 1e-6, 1e-8, 0.0];
+
+/// Errors of the benchmark.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    /// The requested mesh does not fit the scene's crack.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// The yardstick failed.
+    #[error("yardstick Cholesky: {0}")]
+    Linalg(#[from] LinalgError),
+    /// The solver failed.
+    #[error(transparent)]
+    Study(#[from] StudyError),
+}
+
+/// Everything `sdcrack bench` measured (seconds, megabytes).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BenchReport {
+    /// Scene whose geometry and data were used.
+    pub scene: String,
+    /// Vertices of the mesh.
+    pub vertices: usize,
+    /// Cells per direction.
+    pub cells: [usize; 2],
+    /// Unknowns of the yardstick (interior vertices).
+    pub yardstick_unknowns: usize,
+    /// Unknowns of one case (condensed system plus multipliers).
+    pub case_unknowns: usize,
+    /// Crack multipliers of one case (M1: crack nodes).
+    pub multipliers: usize,
+    /// Yardstick phases.
+    pub yardstick: CholeskyTimings,
+    /// Yardstick total: symbolic + numeric + solve.
+    pub bare_cholesky_s: f64,
+    /// Wall time of one complete case.
+    pub case_s: f64,
+    /// Phases of that case.
+    pub case_phases: Timings,
+    /// One numeric factorisation of the condensed system (from the case).
+    pub numeric_factor_s: f64,
+    /// Wall time of the sweep.
+    pub sweep_s: f64,
+    /// δ values of the sweep.
+    pub sweep_deltas: Vec<f64>,
+    /// Cases in the sweep.
+    pub sweep_cases: usize,
+    /// Numeric factorisations in the sweep, summed over its δ.
+    pub sweep_factorization_s: f64,
+    /// Largest relative KKT residual over the case and the sweep.
+    pub worst_kkt: f64,
+    /// True when every case converged.
+    pub all_converged: bool,
+    /// Peak resident memory of the yardstick phase.
+    pub yardstick_peak_rss_mb: f64,
+    /// Peak resident memory of the case phase.
+    pub case_peak_rss_mb: f64,
+    /// Peak resident memory of the sweep phase.
+    pub sweep_peak_rss_mb: f64,
+    /// Peak resident memory of the whole benchmark.
+    pub peak_rss_mb: f64,
+    /// Whether the peak could be reset between phases (else each phase's peak includes earlier ones).
+    pub peak_reset_supported: bool,
+    /// Threads in the rayon pool.
+    pub threads: usize,
+}
+
+impl BenchReport {
+    /// case_s / bare_cholesky_s.
+    pub fn case_ratio(&self) -> f64 {
+        self.case_s / self.bare_cholesky_s
+    }
+
+    /// sweep_s / (6 × numeric_factor_s).
+    pub fn sweep_ratio(&self) -> f64 {
+        self.sweep_s / (self.sweep_deltas.len() as f64 * self.numeric_factor_s)
+    }
+
+    /// case peak memory / yardstick peak memory.
+    pub fn memory_ratio(&self) -> f64 {
+        self.case_peak_rss_mb / self.yardstick_peak_rss_mb
+    }
+
+    /// The readable table printed without `--json`.
+    pub fn table(&self) -> String {
+        let y = self.bare_cholesky_s;
+        let row = |name: &str, s: f64| format!("{name:<44} {s:>9.2} {:>10.2}\n", s / y);
+        let p = &self.case_phases;
+        let mut out = format!(
+            "sdcrack bench: scene '{}', {} × {} cells, {} vertices, {} threads\n\
+             yardstick: {} unknowns (P1 Laplacian); case: {} unknowns, {} multipliers\n\n\
+             {:<44} {:>9} {:>10}\n",
+            self.scene,
+            self.cells[0],
+            self.cells[1],
+            self.vertices,
+            self.threads,
+            self.yardstick_unknowns,
+            self.case_unknowns,
+            self.multipliers,
+            "phase",
+            "seconds",
+            "yardsticks",
+        );
+        out += &row("yardstick: faer Cholesky (AMD), total", y);
+        out += &row("  symbolic", self.yardstick.symbolic_s);
+        out += &row("  numeric", self.yardstick.numeric_s);
+        out += &row("  one solve", self.yardstick.solve_s);
+        out += &row("one case (broken, M1, δ = 0), total", self.case_s);
+        out += &row("  mesh + assembly", p.assembly);
+        out += &row("  ordering + symbolic", p.symbolic);
+        out += &row("  numeric factorisation", p.factorization);
+        out += &row("  crack reduction (x₀, H_N)", p.crack_reduction);
+        out += &row("  contact (LCP, recovery, KKT)", p.contact);
+        out += &row(
+            &format!("sweep {} δ × 3 multipliers, total", self.sweep_deltas.len()),
+            self.sweep_s,
+        );
+        out += &row("  of which numeric factorisations", self.sweep_factorization_s);
+        out += &format!(
+            "\nratios: case / yardstick {:.2}; sweep / ({} numeric factorisations) {:.2}; \
+             case memory / yardstick memory {:.2}\n\
+             peak memory (MB): yardstick {:.0}, case {:.0}, sweep {:.0}{}\n\
+             worst relative KKT residual {:.1e}; all cases converged: {}\n",
+            self.case_ratio(),
+            self.sweep_deltas.len(),
+            self.sweep_ratio(),
+            self.memory_ratio(),
+            self.yardstick_peak_rss_mb,
+            self.case_peak_rss_mb,
+            self.sweep_peak_rss_mb,
+            if self.peak_reset_supported {
+                ""
+            } else {
+                " (not reset between phases)"
+            },
+            self.worst_kkt,
+            self.all_converged,
+        );
+        out
+    }
+}
+
+/// Level-0 cells of the benchmark mesh: the scene's cells times the integer k that brings the
+/// vertex count closest to `vertices` (a multiple keeps the crack's ends on mesh vertices).
+pub fn bench_cells(scene: &Scene, vertices: usize) -> [usize; 2] {
+    let [cx, cy] = scene.cells;
+    let count = |k: usize| (cx * k + 1) * (cy * k + 1);
+    let guess = ((vertices as f64) / (cx * cy) as f64).sqrt().max(1.0) as usize;
+    (guess.saturating_sub(1).max(1)..=guess + 1)
+        .min_by_key(|&k| count(k).abs_diff(vertices))
+        .map_or([cx, cy], |k| [cx * k, cy * k])
+}
+
+/// Runs the three measurements on a mesh of about `vertices` vertices.
+///
+/// # Errors
+/// [`BenchError`] when the mesh cannot be built or a solve fails.
+pub fn run_bench(
+    scene: &Scene,
+    vertices: usize,
+    observer: &mut dyn Observer,
+) -> Result<BenchReport, BenchError> {
+    let cells = bench_cells(scene, vertices);
+    let mut bench_scene = scene.clone();
+    bench_scene.cells = cells;
+    bench_scene.levels = vec![0];
+    bench_scene.fields = FieldSet::default();
+    bench_scene.exact = None;
+    bench_scene.references.clear();
+
+    observer.phase("yardstick: Cholesky of the P1 Laplacian");
+    let peak_reset_supported = reset_peak_rss();
+    let (yardstick, yardstick_unknowns, n_vertices) = yardstick(&bench_scene)?;
+    let yardstick_peak_rss_mb = peak_rss_mb();
+
+    reset_peak_rss();
+    let case_plan = CasePlan {
+        levels: vec![0],
+        u_spaces: vec![USpace::Broken],
+        multipliers: vec![MultiplierSpace::M1],
+        deltas: vec![0.0],
+        ..CasePlan::new(&bench_scene, &CaseFilter::default())
+    };
+    let t0 = Instant::now();
+    let case = run_study(&bench_scene, &case_plan, observer)?;
+    let case_s = t0.elapsed().as_secs_f64();
+    let case_peak_rss_mb = peak_rss_mb();
+
+    reset_peak_rss();
+    let sweep_plan = CasePlan {
+        multipliers: vec![
+            MultiplierSpace::M0,
+            MultiplierSpace::M1,
+            MultiplierSpace::M1Star,
+        ],
+        deltas: SWEEP_DELTAS.to_vec(),
+        ..case_plan
+    };
+    let t1 = Instant::now();
+    let sweep = run_study(&bench_scene, &sweep_plan, observer)?;
+    let sweep_s = t1.elapsed().as_secs_f64();
+    let sweep_peak_rss_mb = peak_rss_mb();
+
+    let first = &case.cases[0];
+    let sweep_factorization_s = sweep
+        .cases
+        .iter()
+        .step_by(sweep_plan.multipliers.len())
+        .map(|c| c.timings.factorization)
+        .sum();
+    let (worst_kkt, all_converged) = summarize(&[&case, &sweep]);
+    Ok(BenchReport {
+        scene: scene.name.clone(),
+        vertices: n_vertices,
+        cells,
+        yardstick_unknowns,
+        case_unknowns: first.unknowns,
+        multipliers: first.multipliers,
+        bare_cholesky_s: yardstick.symbolic_s + yardstick.numeric_s + yardstick.solve_s,
+        yardstick,
+        case_s,
+        case_phases: first.timings,
+        numeric_factor_s: first.timings.factorization,
+        sweep_s,
+        sweep_deltas: SWEEP_DELTAS.to_vec(),
+        sweep_cases: sweep.cases.len(),
+        sweep_factorization_s,
+        worst_kkt,
+        all_converged,
+        yardstick_peak_rss_mb,
+        case_peak_rss_mb,
+        sweep_peak_rss_mb,
+        peak_rss_mb: yardstick_peak_rss_mb
+            .max(case_peak_rss_mb)
+            .max(sweep_peak_rss_mb),
+        peak_reset_supported,
+        threads: rayon::current_num_threads(),
+    })
+}
+
+/// Worst KKT residual and whether every case converged.
+fn summarize(results: &[&StudyResult]) -> (f64, bool) {
+    let cases = results.iter().flat_map(|r| &r.cases);
+    cases.fold((0.0f64, true), |(worst, ok), c| {
+        (worst.max(c.kkt.max()), ok && c.converged)
+    })
+}
+
+/// The yardstick: mesh, P1 stiffness on the interior vertices, Cholesky solve of A x = 1.
+/// Returns the timings, the number of unknowns and the number of mesh vertices.
+fn yardstick(scene: &Scene) -> Result<(CholeskyTimings, usize, usize), BenchError> {
+    let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, 0)?;
+    let a = interior_laplacian(&mesh);
+    let mut x = vec![1.0; a.n];
+    let timings = cholesky_solve(&a, &mut x)?;
+    Ok((timings, a.n, mesh.vertices.len()))
+}
+
+/// The P1 stiffness matrix of the uncut mesh restricted to its interior vertices
+/// (homogeneous Dirichlet conditions eliminated), lower triangle.
+pub fn interior_laplacian(mesh: &Mesh) -> SymCsc {
+    let stride = mesh.nx + 1;
+    let on_boundary = |v: usize| {
+        let (i, j) = (v % stride, v / stride);
+        i == 0 || j == 0 || i == mesh.nx || j == mesh.ny
+    };
+    let mut index = vec![usize::MAX; mesh.vertices.len()];
+    let mut n = 0;
+    for (v, slot) in index.iter_mut().enumerate() {
+        if !on_boundary(v) {
+            *slot = n;
+            n += 1;
+        }
+    }
+    let mut triplets = Vec::with_capacity(6 * mesh.triangles.len());
+    for t in &mesh.triangles {
+        let k = TriangleGeometry::new(t.map(|v| mesh.vertices[v])).stiffness();
+        for a in 0..3 {
+            for b in 0..=a {
+                let (r, c) = (index[t[a]], index[t[b]]);
+                if r != usize::MAX && c != usize::MAX {
+                    triplets.push((r, c, k[a][b]));
+                }
+            }
+        }
+    }
+    // Indices are in range and stiffness entries finite by construction.
+    SymCsc::from_triplets(n, &triplets).unwrap_or_else(|e| unreachable!("{e}"))
+}
+
+/// Resets the kernel's peak-RSS counter of this process; false where not supported.
+fn reset_peak_rss() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// Peak resident set size of this process in MB (`VmHWM`), 0 where unknown.
+pub fn peak_rss_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse::<f64>().ok())
+        })
+        .map_or(0.0, |kb| kb / 1024.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::study::Silent;
+
+    #[test]
+    fn cells_are_multiples_of_the_scene_cells_near_the_target() {
+        let scene = Scene::default_scene();
+        assert_eq!(bench_cells(&scene, 1_000_000), [1000, 1000]);
+        assert_eq!(bench_cells(&scene, 100_000), [320, 320]);
+        assert_eq!(bench_cells(&scene, 10), [8, 8]);
+    }
+
+    #[test]
+    fn laplacian_rows_sum_to_zero_away_from_the_boundary() {
+        let scene = Scene::default_scene();
+        let mesh = Mesh::structured(scene.domain, [4, 4], scene.crack, 0).unwrap();
+        let a = interior_laplacian(&mesh);
+        assert_eq!(a.n, 9);
+        let mut y = vec![0.0; 9];
+        a.mul_vec(&[1.0; 9], &mut y);
+        // the centre vertex (index 4) has no boundary neighbour: its row sums to zero
+        assert!(y[4].abs() < 1e-14, "{y:?}");
+        assert!(y.iter().enumerate().all(|(i, v)| i == 4 || *v > 0.0));
+    }
+
+    #[test]
+    fn small_bench_runs_every_phase() {
+        let scene = Scene::default_scene();
+        let report = run_bench(&scene, 300, &mut Silent).unwrap();
+        assert_eq!(report.cells, [16, 16]);
+        assert_eq!(report.vertices, 17 * 17);
+        assert_eq!(report.sweep_cases, 18);
+        assert!(report.all_converged && report.worst_kkt <= 1e-10);
+        assert!(report.bare_cholesky_s > 0.0 && report.case_s > 0.0 && report.sweep_s > 0.0);
+        let json = serde_json::to_value(&report).unwrap();
+        for key in [
+            "vertices",
+            "bare_cholesky_s",
+            "case_s",
+            "sweep_s",
+            "sweep_deltas",
+            "numeric_factor_s",
+            "peak_rss_mb",
+        ] {
+            assert!(json.get(key).is_some(), "{key}");
+        }
+        assert!(report.table().contains("yardstick"));
+    }
+}
