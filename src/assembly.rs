@@ -19,7 +19,7 @@
 
 use rayon::prelude::*;
 
-use crate::fe::mini::condensed_element;
+use crate::fe::mini::{condensed_element, CondensedElement};
 use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{gauss_legendre, triangle_rule};
 use crate::linalg::SymCsc;
@@ -97,8 +97,7 @@ pub fn assemble(
     let n_p = 2 * mesh.vertices.len();
     let n_u = topo.n_dofs;
     let n = n_p + n_u;
-    let entries = element_entries(mesh, topo, n_p);
-    let (base, delta_values) = lower_csc(n, entries);
+    let (base, delta_values) = assemble_matrix(mesh, topo, n_p);
     let mut rhs = vec![0.0; n];
     boundary_term(mesh, g, &mut rhs[..n_p])?;
     let load = load_vector(mesh, topo, f)?;
@@ -117,76 +116,146 @@ pub fn assemble(
     })
 }
 
-/// (row, col, δ-independent value, δ coefficient) for every element contribution, rows ≥ cols.
-fn element_entries(mesh: &Mesh, topo: &UTopology, n_p: usize) -> Vec<(usize, usize, f64, f64)> {
-    mesh.triangles
-        .par_iter()
-        .zip(topo.triangle_dofs.par_iter())
-        .flat_map_iter(|(t, udofs)| {
-            let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
-            let ce = condensed_element(&geo);
-            let mut out = Vec::with_capacity(45);
-            let mut push = |r: usize, c: usize, v: f64, d: f64| {
-                if r >= c {
-                    out.push((r, c, v, d));
-                }
-            };
-            for k in 0..3 {
-                for l in 0..3 {
-                    for d in 0..2 {
-                        push(2 * t[k] + d, 2 * t[l] + d, ce.g[k][l], 0.0);
-                    }
-                }
-            }
-            for i in 0..3 {
-                let row = n_p + udofs[i];
-                for k in 0..3 {
-                    for d in 0..2 {
-                        push(row, 2 * t[k] + d, ce.b[i][2 * k + d], 0.0);
-                    }
-                }
-                for j in 0..3 {
-                    push(row, n_p + udofs[j], -ce.c[i][j], -ce.m[i][j]);
-                }
-            }
-            out
-        })
-        .collect()
+/// The 9 unknowns of a triangle in the condensed system: p_x, p_y at its 3 vertices (local 0..6,
+/// as `2k + d`), then its 3 u dofs (local 6..9).
+fn element_unknowns(t: &[usize; 3], udofs: &[usize; 3], n_p: usize) -> [usize; 9] {
+    let mut e = [0usize; 9];
+    for k in 0..3 {
+        e[2 * k] = 2 * t[k];
+        e[2 * k + 1] = 2 * t[k] + 1;
+        e[6 + k] = n_p + udofs[k];
+    }
+    e
 }
 
-/// Sums entries into a lower-triangular CSC; returns the matrix with the first values and the
-/// second value array on the same pattern.
-fn lower_csc(n: usize, mut entries: Vec<(usize, usize, f64, f64)>) -> (SymCsc, Vec<f64>) {
-    entries.par_sort_unstable_by_key(|e| (e.1, e.0));
-    let mut col_ptr = vec![0usize; n + 1];
-    let mut row_idx = Vec::new();
-    let mut values = Vec::new();
-    let mut dvals = Vec::new();
-    let mut last: Option<(usize, usize)> = None;
-    for (r, c, v, d) in entries {
-        if last == Some((r, c)) {
-            *values.last_mut().expect("entry exists") += v;
-            *dvals.last_mut().expect("entry exists") += d;
-        } else {
-            row_idx.push(r);
-            values.push(v);
-            dvals.push(d);
-            col_ptr[c + 1] += 1;
-            last = Some((r, c));
+/// Local couplings (a, b) of the condensed element matrix: p–p within one component (G is the
+/// scalar matrix times I₂: 18 pairs), then every u row with all 9 unknowns (B̃ and −0.7A − δM:
+/// 27 pairs). u unknowns are numbered after p, so these hold every entry of the lower triangle.
+const ELEMENT_PAIRS: [(usize, usize); 45] = {
+    let mut pairs = [(0, 0); 45];
+    let mut n = 0;
+    let mut k = 0;
+    while k < 3 {
+        let mut l = 0;
+        while l < 3 {
+            pairs[n] = (2 * k, 2 * l);
+            pairs[n + 1] = (2 * k + 1, 2 * l + 1);
+            n += 2;
+            l += 1;
+        }
+        k += 1;
+    }
+    let mut i = 6;
+    while i < 9 {
+        let mut a = 0;
+        while a < 9 {
+            pairs[n] = (i, a);
+            n += 1;
+            a += 1;
+        }
+        i += 1;
+    }
+    pairs
+};
+
+/// The (K(0), ∂K/∂δ) values of a local pair (a, b) of the condensed element.
+fn element_value(ce: &CondensedElement, a: usize, b: usize) -> (f64, f64) {
+    match (a >= 6, b >= 6) {
+        (false, false) => (ce.g[a / 2][b / 2], 0.0),
+        (true, false) => (ce.b[a - 6][b], 0.0),
+        (false, true) => (ce.b[b - 6][a], 0.0),
+        (true, true) => (-ce.c[a - 6][b - 6], -ce.m[a - 6][b - 6]),
+    }
+}
+
+/// Assembles K(0) and ∂K/∂δ (same pattern, lower triangle) element by element: the pattern
+/// from the element couplings, then the condensed element values scattered into it.
+fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize) -> (SymCsc, Vec<f64>) {
+    let n = n_p + topo.n_dofs;
+    let (col_ptr, row_idx) = lower_pattern(n, mesh, topo, n_p);
+    let mut values = vec![0.0; row_idx.len()];
+    let mut dvals = vec![0.0; row_idx.len()];
+    // element matrices in parallel, a chunk at a time (bounded memory), scattered sequentially
+    const CHUNK: usize = 1 << 15;
+    let triangles = mesh.triangles.chunks(CHUNK).zip(topo.triangle_dofs.chunks(CHUNK));
+    for (tris, dofs) in triangles {
+        let elements: Vec<CondensedElement> = tris
+            .par_iter()
+            .map(|t| condensed_element(&TriangleGeometry::new(t.map(|v| mesh.vertices[v]))))
+            .collect();
+        for ((t, udofs), ce) in tris.iter().zip(dofs).zip(&elements) {
+            let e = element_unknowns(t, udofs, n_p);
+            for &(a, b) in &ELEMENT_PAIRS {
+                let (r, c) = (e[a], e[b]);
+                if r < c {
+                    continue;
+                }
+                let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+                let pos = col_ptr[c]
+                    + rows
+                        .binary_search(&r)
+                        .unwrap_or_else(|_| unreachable!("({r}, {c}) is in the pattern"));
+                let (v, d) = element_value(ce, a, b);
+                values[pos] += v;
+                dvals[pos] += d;
+            }
+        }
+    }
+    let base = SymCsc {
+        n,
+        col_ptr,
+        row_idx,
+        values,
+    };
+    (base, dvals)
+}
+
+/// Column pointers and sorted row indices of the lower triangle coupled by the elements.
+fn lower_pattern(n: usize, mesh: &Mesh, topo: &UTopology, n_p: usize) -> (Vec<usize>, Vec<usize>) {
+    let lower_pairs = |t: &[usize; 3], udofs: &[usize; 3]| {
+        let e = element_unknowns(t, udofs, n_p);
+        ELEMENT_PAIRS
+            .iter()
+            .map(move |&(a, b)| (e[a], e[b]))
+            .filter(|(r, c)| r >= c)
+    };
+    let mut count = vec![0usize; n + 1];
+    for (t, udofs) in mesh.triangles.iter().zip(&topo.triangle_dofs) {
+        for (_, c) in lower_pairs(t, udofs) {
+            count[c + 1] += 1;
         }
     }
     for c in 0..n {
-        col_ptr[c + 1] += col_ptr[c];
+        count[c + 1] += count[c];
     }
-    (
-        SymCsc {
-            n,
-            col_ptr,
-            row_idx,
-            values,
-        },
-        dvals,
-    )
+    let mut next = count.clone();
+    let mut rows = vec![0usize; count[n]];
+    for (t, udofs) in mesh.triangles.iter().zip(&topo.triangle_dofs) {
+        for (r, c) in lower_pairs(t, udofs) {
+            rows[next[c]] = r;
+            next[c] += 1;
+        }
+    }
+    // sort and deduplicate each column, compacting in place
+    let mut col_ptr = vec![0usize; n + 1];
+    let mut write = 0;
+    for c in 0..n {
+        let column = &mut rows[count[c]..count[c + 1]];
+        column.sort_unstable();
+        let mut last = usize::MAX;
+        for k in count[c]..count[c + 1] {
+            let r = rows[k];
+            if r != last {
+                rows[write] = r;
+                write += 1;
+                last = r;
+            }
+        }
+        col_ptr[c + 1] = write;
+    }
+    rows.truncate(write);
+    rows.shrink_to_fit();
+    (col_ptr, rows)
 }
 
 fn non_finite(name: &'static str, e: &Expr, value: f64, p: [f64; 2]) -> AssemblyError {

@@ -450,6 +450,21 @@ impl Ldlt {
         matrix: &SymCsc,
         signs: &[i8],
     ) -> Result<Ldlt, LinalgError> {
+        Self::refactor(symbolic, matrix, signs, None)
+    }
+
+    /// As [`Ldlt::factor`], reusing the value buffer of `previous` (a factor of the same
+    /// pattern, e.g. at the previous δ): a fresh buffer costs a page fault per 4 KiB on first
+    /// touch, measured 35–60 % of the numeric factorisation on 10⁶-unknown systems.
+    ///
+    /// # Errors
+    /// As [`Ldlt::factor`].
+    pub fn refactor(
+        symbolic: &SymbolicLdlt,
+        matrix: &SymCsc,
+        signs: &[i8],
+        previous: Option<Ldlt>,
+    ) -> Result<Ldlt, LinalgError> {
         matrix.validate()?;
         let n = matrix.n;
         if n != symbolic.n
@@ -491,11 +506,16 @@ impl Ldlt {
         let inner = &*symbolic.inner;
         let par = Par::rayon(0);
         let params = Spec::default();
-        let mut values = Vec::new();
-        values
-            .try_reserve_exact(inner.len_val())
-            .map_err(|_| LinalgError::Numeric("out of memory for the factor".into()))?;
-        values.resize(inner.len_val(), 0.0f64);
+        let mut values = previous.map(|p| p.values).unwrap_or_default();
+        if values.len() == inner.len_val() {
+            values.fill(0.0);
+        } else {
+            values = Vec::new();
+            values
+                .try_reserve_exact(inner.len_val())
+                .map_err(|_| LinalgError::Numeric("out of memory for the factor".into()))?;
+            values.resize(inner.len_val(), 0.0f64);
+        }
         let mut mem = MemBuffer::try_new(inner.factorize_numeric_ldlt_scratch::<f64>(par, params))
             .map_err(|_| LinalgError::Numeric("out of memory for the workspace".into()))?;
         let a = SparseColMatRef::new(matrix.faer_symbolic(), &matrix.values);
@@ -824,6 +844,75 @@ pub fn cholesky_solve(matrix: &SymCsc, b: &mut [f64]) -> Result<CholeskyTimings,
     })
 }
 
+impl Ldlt {
+    /// [`Ldlt::solve_refined`] for `k` right-hand sides at once (column-major `n × k` in `b` and
+    /// `x`): every solve and refinement step is one block solve, which reads the factor once for
+    /// all columns. Each column keeps its best iterate; refinement stops once every column has
+    /// `‖r‖_∞ ≤ tol ‖b‖_∞`, after `max_steps` (at least 1) or `STAGNATION_STEPS` steps without
+    /// progress. Returns the relative residual of each column.
+    ///
+    /// # Panics
+    /// If the dimensions disagree (caller bug).
+    pub fn solve_refined_many(
+        &self,
+        matrix: &SymCsc,
+        b: &[f64],
+        x: &mut [f64],
+        max_steps: usize,
+        tol: f64,
+    ) -> Vec<f64> {
+        let n = self.n;
+        assert_eq!(matrix.n, n, "Ldlt::solve_refined_many: matrix dimension");
+        assert_eq!(b.len(), x.len(), "Ldlt::solve_refined_many: b and x");
+        let k = if n == 0 { 0 } else { b.len() / n };
+        assert_eq!(k * n, b.len(), "Ldlt::solve_refined_many: b is not n × k");
+        let norms: Vec<f64> = b.chunks_exact(n.max(1)).map(inf_norm).collect();
+        x.copy_from_slice(b);
+        self.solve_many_in_place(x, k);
+        let mut r = vec![0.0; b.len()];
+        let residuals = |x: &[f64], r: &mut [f64]| -> Vec<f64> {
+            (0..k)
+                .map(|j| {
+                    let cols = j * n..(j + 1) * n;
+                    let res = residual(matrix, &b[cols.clone()], &x[cols.clone()], &mut r[cols]);
+                    if norms[j] == 0.0 {
+                        0.0
+                    } else {
+                        res / norms[j]
+                    }
+                })
+                .collect()
+        };
+        let mut rel = residuals(x, &mut r);
+        let mut best = rel.clone();
+        let mut best_x = x.to_vec();
+        let mut stagnant = 0;
+        for step in 0..max_steps.max(1) {
+            let done = best.iter().all(|&v| v <= tol);
+            if step > 0 && (done || stagnant >= STAGNATION_STEPS) {
+                break;
+            }
+            if rel.iter().any(|v| !v.is_finite()) {
+                break;
+            }
+            self.solve_many_in_place(&mut r, k);
+            x.iter_mut().zip(&r).for_each(|(xi, di)| *xi += di);
+            rel = residuals(x, &mut r);
+            let mut improved = false;
+            for j in 0..k {
+                if rel[j] < best[j] {
+                    best[j] = rel[j];
+                    best_x[j * n..(j + 1) * n].copy_from_slice(&x[j * n..(j + 1) * n]);
+                    improved = true;
+                }
+            }
+            stagnant = if improved { 0 } else { stagnant + 1 };
+        }
+        x.copy_from_slice(&best_x);
+        best
+    }
+}
+
 /// `r = b − K x`, returns `‖r‖_∞`.
 fn residual(matrix: &SymCsc, b: &[f64], x: &[f64], r: &mut [f64]) -> f64 {
     matrix.mul_vec(x, r);
@@ -1127,6 +1216,31 @@ mod tests {
         let mut not_spd = k.clone();
         not_spd.values.iter_mut().for_each(|v| *v = -*v);
         assert!(cholesky_solve(&not_spd, &mut x).is_err());
+    }
+
+    #[test]
+    fn refactor_and_block_refinement_match_single_solves() {
+        let (k, signs, _) = saddle(60, 3);
+        let sym = SymbolicLdlt::analyze(&k).unwrap();
+        let first = Ldlt::factor(&sym, &k, &signs).unwrap();
+        let mut shifted = k.clone();
+        shifted.values.iter_mut().for_each(|v| *v *= 1.5);
+        let again = Ldlt::refactor(&sym, &shifted, &signs, Some(first)).unwrap();
+        let fresh = Ldlt::factor(&sym, &shifted, &signs).unwrap();
+        assert_eq!(again.values, fresh.values);
+        let mut rng = Rng(8);
+        let mut b = random_vec(&mut rng, 3 * k.n);
+        b[k.n..2 * k.n].fill(0.0);
+        let mut x = vec![0.0; b.len()];
+        let rel = again.solve_refined_many(&shifted, &b, &mut x, 3, 1e-15);
+        assert_eq!(rel.len(), 3);
+        assert_eq!(rel[1], 0.0);
+        for j in [0, 2] {
+            let cols = j * k.n..(j + 1) * k.n;
+            assert!(rel[j] < 1e-14, "{rel:?}");
+            assert!(rel_residual(&shifted, &b[cols.clone()], &x[cols]) < 1e-14);
+        }
+        assert!(x[k.n..2 * k.n].iter().all(|&v| v == 0.0));
     }
 
     #[test]

@@ -24,6 +24,11 @@ use crate::scene::{MultiplierSpace, Scene, USpace};
 /// Right-hand sides solved together when reducing K⁻¹ to the crack (bounds memory to 32 n values).
 const REDUCTION_BLOCK: usize = 32;
 
+/// Refinement steps of the recovery solve K x = b − Nᵀ Sᵀ μ, at most.
+const RECOVERY_STEPS: usize = 3;
+/// The recovery's refinement stops once ‖b − K x‖_∞ ≤ this × ‖b‖_∞ for every multiplier space.
+const RECOVERY_TOLERANCE: f64 = 1e-15;
+
 /// Relative KKT residual under which a case counts as solved.
 pub const KKT_TOLERANCE: f64 = 1e-10;
 
@@ -264,6 +269,20 @@ struct LevelContext<'a> {
     base_timings: Timings,
 }
 
+/// The LCP solution of one multiplier space at one δ, before x is recovered.
+struct Contact {
+    multiplier: MultiplierSpace,
+    /// S of D = S N (rows: multipliers).
+    s: Vec<Vec<f64>>,
+    sol: crate::contact::LcpSolution,
+    /// Sᵀ μ on the crack nodes.
+    st_mu: Vec<f64>,
+    /// b − Nᵀ Sᵀ μ.
+    rhs: Vec<f64>,
+    /// Seconds spent on the LCP.
+    time: f64,
+}
+
 /// The factorised system at one δ reduced to the crack.
 struct Reduced {
     ldlt: Ldlt,
@@ -282,6 +301,7 @@ impl LevelContext<'_> {
         out: &mut Vec<CaseResult>,
     ) -> Result<(), StudyError> {
         let mut warm: Vec<Option<Vec<bool>>> = vec![None; plan.multipliers.len()];
+        let mut spare: Option<Ldlt> = None;
         for &delta in &plan.deltas {
             observer.phase(&format!(
                 "level {}, {}, δ = {delta:e}: factorising",
@@ -290,23 +310,35 @@ impl LevelContext<'_> {
             let mut timings = self.base_timings;
             let t0 = Instant::now();
             let matrix = self.system.matrix(delta);
-            let ldlt = Ldlt::factor(self.symbolic, &matrix, &self.system.signs)?;
+            let ldlt = Ldlt::refactor(self.symbolic, &matrix, &self.system.signs, spare.take())?;
             timings.factorization = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
             let reduced = self.reduce(ldlt, matrix);
             timings.crack_reduction = t1.elapsed().as_secs_f64();
-            for (mi, &multiplier) in plan.multipliers.iter().enumerate() {
-                let case = self.solve_case(
+            let contacts: Vec<Contact> = plan
+                .multipliers
+                .iter()
+                .zip(warm.iter_mut())
+                .map(|(&multiplier, warm)| self.solve_lcp(&reduced, multiplier, warm))
+                .collect();
+            let (xs, recovery_time) = self.recover(&reduced, &contacts);
+            // the block recovery is shared equally by the multipliers of this δ
+            let share = recovery_time / contacts.len().max(1) as f64;
+            for (contact, x) in contacts.into_iter().zip(xs.chunks_exact(self.system.n())) {
+                let mut case_timings = timings;
+                case_timings.contact = contact.time + share;
+                let case = self.finish_case(
                     &reduced,
-                    multiplier,
+                    contact,
+                    x,
                     delta,
-                    timings,
-                    &mut warm[mi],
+                    case_timings,
                     plan.norm_quadrature,
                 );
                 observer.case_done(&case);
                 out.push(case);
             }
+            spare = Some(reduced.ldlt);
         }
         Ok(())
     }
@@ -315,7 +347,9 @@ impl LevelContext<'_> {
     fn reduce(&self, ldlt: Ldlt, matrix: crate::linalg::SymCsc) -> Reduced {
         let n_p = self.system.n_p;
         let mut x0 = vec![0.0; self.system.n()];
-        ldlt.solve_refined(&matrix, &self.system.rhs, &mut x0, 2, 1e-15);
+        // unrefined, like H_N: the LCP's data; x itself is recomputed and refined in `recover`
+        x0.copy_from_slice(&self.system.rhs);
+        ldlt.solve_in_place(&mut x0);
         let q_n = self.ops.apply_n(&x0[..n_p]);
         let h_n = self
             .h_n_from_trailing_block(&ldlt)
@@ -379,36 +413,71 @@ impl LevelContext<'_> {
         h_n
     }
 
-    fn solve_case(
+    /// Solves the multiplier LCP of one space on the reduced system (warm-started).
+    fn solve_lcp(
         &self,
         reduced: &Reduced,
         multiplier: MultiplierSpace,
-        delta: f64,
-        mut timings: Timings,
         warm: &mut Option<Vec<bool>>,
-        quadrature: NormQuadrature,
-    ) -> CaseResult {
+    ) -> Contact {
         let t0 = Instant::now();
         let s = self.ops.constraint_map(multiplier);
         let lcp = Lcp::reduce(&s, &reduced.h_n, &reduced.q_n);
         let sol = lcp.solve(warm.as_deref(), LcpOptions::default());
         *warm = Some(sol.active.clone());
-        // Sᵀ μ, then x = K⁻¹ (b − Nᵀ Sᵀ μ) with iterative refinement against the exact K(δ).
+        // Sᵀ μ, and the right-hand side b − Nᵀ Sᵀ μ of the recovery K x = b − Nᵀ Sᵀ μ.
         let m = self.ops.nodes();
         let st_mu: Vec<f64> = (0..m)
             .map(|j| s.iter().zip(&sol.mu).map(|(row, mu)| row[j] * mu).sum())
             .collect();
-        let n_p = self.system.n_p;
         let mut rhs = self.system.rhs.clone();
         let neg: Vec<f64> = st_mu.iter().map(|v| -v).collect();
-        self.ops.add_nt(&neg, &mut rhs[..n_p]);
-        let mut x = vec![0.0; self.system.n()];
+        self.ops.add_nt(&neg, &mut rhs[..self.system.n_p]);
+        Contact {
+            multiplier,
+            s,
+            sol,
+            st_mu,
+            rhs,
+            time: t0.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// x = K⁻¹ (b − Nᵀ Sᵀ μ) for every multiplier space at once (one block solve and block
+    /// refinement steps against the exact K(δ)); returns the n × k solutions and the seconds.
+    fn recover(&self, reduced: &Reduced, contacts: &[Contact]) -> (Vec<f64>, f64) {
+        let t0 = Instant::now();
+        let b: Vec<f64> = contacts.iter().flat_map(|c| c.rhs.iter().copied()).collect();
+        let mut x = vec![0.0; b.len()];
         reduced
             .ldlt
-            .solve_refined(&reduced.matrix, &rhs, &mut x, 3, 1e-15);
-        let kkt = self.kkt(reduced, &s, &sol.mu, &st_mu, &rhs, &x);
-        timings.contact = t0.elapsed().as_secs_f64();
+            .solve_refined_many(&reduced.matrix, &b, &mut x, RECOVERY_STEPS, RECOVERY_TOLERANCE);
+        (x, t0.elapsed().as_secs_f64())
+    }
+
+    /// KKT residuals, λ_h, error norms and fields of one solved case.
+    fn finish_case(
+        &self,
+        reduced: &Reduced,
+        contact: Contact,
+        x: &[f64],
+        delta: f64,
+        mut timings: Timings,
+        quadrature: NormQuadrature,
+    ) -> CaseResult {
+        let t0 = Instant::now();
+        let Contact {
+            multiplier,
+            s,
+            sol,
+            st_mu,
+            rhs,
+            ..
+        } = contact;
+        let kkt = self.kkt(reduced, &s, &sol.mu, &st_mu, &rhs, x);
+        timings.contact += t0.elapsed().as_secs_f64();
         let lambda = self.lambda_field(multiplier, &sol.mu);
+        let n_p = self.system.n_p;
         let (p, u) = x.split_at(n_p);
         let p_vertex: Vec<[f64; 2]> = p.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
         let t1 = Instant::now();
