@@ -177,7 +177,10 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize) -> (SymCsc, Vec<f6
     let mut dvals = vec![0.0; row_idx.len()];
     // element matrices in parallel, a chunk at a time (bounded memory), scattered sequentially
     const CHUNK: usize = 1 << 15;
-    let triangles = mesh.triangles.chunks(CHUNK).zip(topo.triangle_dofs.chunks(CHUNK));
+    let triangles = mesh
+        .triangles
+        .chunks(CHUNK)
+        .zip(topo.triangle_dofs.chunks(CHUNK));
     for (tris, dofs) in triangles {
         let elements: Vec<CondensedElement> = tris
             .par_iter()

@@ -137,7 +137,10 @@ impl BenchReport {
             &format!("sweep {} δ × 3 multipliers, total", self.sweep_deltas.len()),
             self.sweep_s,
         );
-        out += &row("  of which numeric factorisations", self.sweep_factorization_s);
+        out += &row(
+            "  of which numeric factorisations",
+            self.sweep_factorization_s,
+        );
         out += &format!(
             "\nratios: case / yardstick {:.2}; sweep / ({} numeric factorisations) {:.2}; \
              case memory / yardstick memory {:.2}\n\

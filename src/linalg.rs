@@ -582,7 +582,10 @@ impl Ldlt {
         let local: Vec<usize> = match self.symbolic.perm() {
             Some(perm) => {
                 let (_, inverse) = perm.arrays();
-                indices.iter().map(|&i| inverse.get(i).copied()).collect::<Option<_>>()?
+                indices
+                    .iter()
+                    .map(|&i| inverse.get(i).copied())
+                    .collect::<Option<_>>()?
             }
             None => indices.to_vec(),
         };
@@ -864,7 +867,7 @@ impl Ldlt {
         let n = self.n;
         assert_eq!(matrix.n, n, "Ldlt::solve_refined_many: matrix dimension");
         assert_eq!(b.len(), x.len(), "Ldlt::solve_refined_many: b and x");
-        let k = if n == 0 { 0 } else { b.len() / n };
+        let k = b.len().checked_div(n).unwrap_or(0);
         assert_eq!(k * n, b.len(), "Ldlt::solve_refined_many: b is not n × k");
         let norms: Vec<f64> = b.chunks_exact(n.max(1)).map(inf_norm).collect();
         x.copy_from_slice(b);

@@ -29,7 +29,10 @@ pub fn nested_dissection(nx: usize, ny: usize, vertex_of: &[usize], last: &[bool
     // unknowns of each vertex, in CSR form (kept in increasing unknown order)
     let mut start = vec![0usize; n_vertices + 1];
     for (k, &v) in vertex_of.iter().enumerate() {
-        assert!(v < n_vertices, "nested_dissection: vertex {v} outside the grid");
+        assert!(
+            v < n_vertices,
+            "nested_dissection: vertex {v} outside the grid"
+        );
         if !last[k] {
             start[v + 1] += 1;
         }

@@ -447,11 +447,18 @@ impl LevelContext<'_> {
     /// refinement steps against the exact K(δ)); returns the n × k solutions and the seconds.
     fn recover(&self, reduced: &Reduced, contacts: &[Contact]) -> (Vec<f64>, f64) {
         let t0 = Instant::now();
-        let b: Vec<f64> = contacts.iter().flat_map(|c| c.rhs.iter().copied()).collect();
+        let b: Vec<f64> = contacts
+            .iter()
+            .flat_map(|c| c.rhs.iter().copied())
+            .collect();
         let mut x = vec![0.0; b.len()];
-        reduced
-            .ldlt
-            .solve_refined_many(&reduced.matrix, &b, &mut x, RECOVERY_STEPS, RECOVERY_TOLERANCE);
+        reduced.ldlt.solve_refined_many(
+            &reduced.matrix,
+            &b,
+            &mut x,
+            RECOVERY_STEPS,
+            RECOVERY_TOLERANCE,
+        );
         (x, t0.elapsed().as_secs_f64())
     }
 
@@ -589,7 +596,12 @@ impl LevelContext<'_> {
 /// The elimination order of K: nested dissection of the vertex grid (p and u unknowns of a
 /// vertex together), with the crack nodes' p unknowns last so that the factor's trailing block
 /// yields H_N ([`crate::ordering`]).
-fn elimination_order(mesh: &Mesh, topo: &UTopology, ops: &CrackOperators, n_p: usize) -> Vec<usize> {
+fn elimination_order(
+    mesh: &Mesh,
+    topo: &UTopology,
+    ops: &CrackOperators,
+    n_p: usize,
+) -> Vec<usize> {
     let vertex_of: Vec<usize> = (0..n_p)
         .map(|k| k / 2)
         .chain(topo.dof_vertex.iter().copied())
