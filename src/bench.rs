@@ -132,6 +132,7 @@ impl BenchReport {
         out += &row("  ordering + symbolic", p.symbolic);
         out += &row("  numeric factorisation", p.factorization);
         out += &row("  crack reduction (x₀, H_N)", p.crack_reduction);
+        out += &row("  condition estimate of K(δ)", p.condition);
         out += &row("  contact (LCP, recovery, KKT)", p.contact);
         out += &row(
             &format!("sweep {} δ × 3 multipliers, total", self.sweep_deltas.len()),

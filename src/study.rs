@@ -116,6 +116,8 @@ pub struct Timings {
     pub factorization: f64,
     /// x₀ and H_N = N K⁻¹ Nᵀ (shared by the multipliers of a δ).
     pub crack_reduction: f64,
+    /// Condition estimate of K(δ) (shared by the multipliers of a δ).
+    pub condition: f64,
     /// LCP, recovery of x with refinement, KKT residuals.
     pub contact: f64,
     /// Error norms against `[exact]`.
@@ -164,6 +166,8 @@ pub struct CaseResult {
     pub active: usize,
     /// Regularised pivots in the factorisation of K(δ).
     pub regularized_pivots: usize,
+    /// Estimate of the 1-norm condition number κ₁(K(δ)) of the factored system (Hager–Higham).
+    pub condition_estimate: f64,
     /// Phase timings.
     pub timings: Timings,
     /// Errors against `[exact]`.
@@ -315,6 +319,9 @@ impl LevelContext<'_> {
             let t1 = Instant::now();
             let reduced = self.reduce(ldlt, matrix);
             timings.crack_reduction = t1.elapsed().as_secs_f64();
+            let t2 = Instant::now();
+            let condition_estimate = reduced.ldlt.condition_estimate(&reduced.matrix);
+            timings.condition = t2.elapsed().as_secs_f64();
             let contacts: Vec<Contact> = plan
                 .multipliers
                 .iter()
@@ -327,7 +334,7 @@ impl LevelContext<'_> {
             for (contact, x) in contacts.into_iter().zip(xs.chunks_exact(self.system.n())) {
                 let mut case_timings = timings;
                 case_timings.contact = contact.time + share;
-                let case = self.finish_case(
+                let mut case = self.finish_case(
                     &reduced,
                     contact,
                     x,
@@ -335,6 +342,7 @@ impl LevelContext<'_> {
                     case_timings,
                     plan.norm_quadrature,
                 );
+                case.condition_estimate = condition_estimate;
                 observer.case_done(&case);
                 out.push(case);
             }
@@ -527,6 +535,7 @@ impl LevelContext<'_> {
             kkt,
             active: sol.mu.iter().filter(|&&v| v > 0.0).count(),
             regularized_pivots: reduced.ldlt.stats().regularized_pivots,
+            condition_estimate: f64::NAN,
             timings,
             errors,
             fields,

@@ -232,7 +232,8 @@ def kkt_rows(scene, cases):
                      "kkt_max": max([float(v) for v in k.values() if v is not None], default=None),
                      "active_multipliers": c.get("active_multipliers"),
                      "multipliers": c.get("multipliers"),
-                     "regularized_pivots": c.get("regularized_pivots")})
+                     "regularized_pivots": c.get("regularized_pivots"),
+                     "condition_estimate": c.get("condition_estimate")})
     rows.sort(key=lambda r: (r["converged"], r["level"], r["u_space"], r["multiplier"],
                              -r["delta"]))
     return rows

@@ -20,7 +20,7 @@ pub struct Summary {
     /// The KKT tolerance a case must meet to count as converged.
     pub kkt_tolerance: f64,
     /// Timing phases shared by several cases (reported with each of them).
-    pub shared_timings: [&'static str; 4],
+    pub shared_timings: [&'static str; 5],
     /// True when every case converged.
     pub all_converged: bool,
     /// Wall-clock seconds of the solves (all cases, before writing files).
@@ -60,6 +60,8 @@ pub struct CaseSummary {
     pub active_multipliers: usize,
     /// Pivots regularised in the LDLᵀ of K(δ).
     pub regularized_pivots: usize,
+    /// Estimate of κ₁(K(δ)) = ‖K‖₁‖K⁻¹‖₁ (Hager–Higham, a lower bound usually within 3×).
+    pub condition_estimate: f64,
     /// Seconds per phase.
     pub timings_s: Timings,
     /// Errors against `[exact]`, when the scene has it.
@@ -104,6 +106,7 @@ impl CaseSummary {
             kkt: c.kkt,
             active_multipliers: c.active,
             regularized_pivots: c.regularized_pivots,
+            condition_estimate: c.condition_estimate,
             timings_s: c.timings,
             errors: c.errors,
             fields_grid: with_fields.then(|| case_name(c)),
