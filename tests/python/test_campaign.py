@@ -66,7 +66,7 @@ def test_rerun_reproduces_the_row(tmp_path):
                 assert np.array_equal(a[f"cases/{g}/{name}"][()], b[f"cases/{g}/{name}"][()]), (r[:5], name)
 
 
-@pytest.mark.parametrize("name", ["inclined", "off-axis", "all-closed", "tip-contact"])
+@pytest.mark.parametrize("name", ["inclined", "off-axis", "all-closed", "tip-contact", "stress-active-set"])
 def test_new_scenes_pass_check(name):
     if not EXE.is_file():
         pytest.skip("sdcrack binary not built")
