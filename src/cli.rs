@@ -1,8 +1,12 @@
 //! The command line (clap), progress display (indicatif) and the terminal convergence table.
 //!
-//! Exit codes: 0 success; 1 a run-time failure (solver, file system); 2 bad usage or bad input
-//! (arguments, scene file, crack off the mesh, non-finite data); 3 the run finished and wrote its
-//! results but at least one case did not converge.
+//! Exit codes: 0 success; 1 a run-time failure (solver, writing results once solved, a reference
+//! solver that fails); 2 bad usage or bad input (arguments, scene file, crack off the mesh,
+//! non-finite data, a level over the memory limit, an `--out` that cannot be created or already
+//! holds the results folder, a reference solver that is not installed); 3 the run finished and
+//! wrote its results but at least one case did not converge. Every error is one line on stderr,
+//! `sdcrack: error: …` (clap's usage errors included: their usage block is left out); `sdcrack`
+//! alone prints the help and exits 2.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -35,7 +39,7 @@ pub enum Command {
         #[arg(long, default_value = "results")]
         out: PathBuf,
         /// Only this refinement level (need not be listed in the scene).
-        #[arg(long)]
+        #[arg(long, value_parser = parse_level, allow_hyphen_values = true)]
         level: Option<u32>,
         /// Only this u space.
         #[arg(long, value_parser = parse_u_space)]
@@ -44,7 +48,7 @@ pub enum Command {
         #[arg(long, value_parser = parse_multiplier)]
         multiplier: Option<MultiplierSpace>,
         /// Only this δ (≥ 0).
-        #[arg(long, value_parser = parse_delta)]
+        #[arg(long, value_parser = parse_delta, allow_hyphen_values = true)]
         delta: Option<f64>,
         /// No progress bar.
         #[arg(long)]
@@ -58,7 +62,7 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Only this level.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_level, allow_hyphen_values = true)]
         level: Option<u32>,
     },
     /// Time one case and a δ × multiplier sweep against a sparse Cholesky of the same mesh.
@@ -77,6 +81,16 @@ pub enum Command {
         /// Scene file (TOML).
         scene: PathBuf,
     },
+}
+
+fn parse_level(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(l) if l <= crate::scene::MAX_LEVEL => Ok(l),
+        _ => Err(format!(
+            "the level must be an integer from 0 to {}, got '{s}'",
+            crate::scene::MAX_LEVEL
+        )),
+    }
 }
 
 fn parse_u_space(s: &str) -> Result<USpace, String> {
@@ -138,18 +152,56 @@ pub fn main() -> i32 {
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
-            let _ = e.print();
-            return code;
+            use clap::error::ErrorKind;
+            if !e.use_stderr() {
+                // --help, --version: clap's own text on stdout, success.
+                let _ = e.print();
+                return 0;
+            }
+            if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                // `sdcrack` alone: the help, as a reminder of the sub-commands.
+                let _ = e.print();
+                return 2;
+            }
+            eprintln!("sdcrack: {}", clap_one_line(&e));
+            return 2;
         }
     };
     match execute(cli) {
         Ok(code) => code,
         Err(f) => {
-            eprintln!("sdcrack: error: {}", f.message.replace('\n', " "));
+            eprintln!(
+                "sdcrack: error: {}",
+                crate::scene::escape_controls(&f.message)
+            );
             f.code
         }
     }
+}
+
+/// A clap usage error as one line: its `error:` line and its tips, without the usage block.
+fn clap_one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let mut parts: Vec<String> = Vec::new();
+    for line in text.lines() {
+        let trimmed = line.trim();
+        if trimmed.starts_with("error:") || trimmed.starts_with("tip:") {
+            parts.push(trimmed.to_string());
+        } else if line.starts_with(char::is_whitespace) && !trimmed.is_empty() {
+            // The indented list under "required arguments were not provided:".
+            if let Some(last) = parts.last_mut() {
+                last.push(' ');
+                last.push_str(trimmed);
+            }
+        } else if trimmed.starts_with("Usage:") {
+            break;
+        }
+    }
+    if parts.is_empty() {
+        parts.push(format!("error: {}", e.kind()));
+    }
+    let line = crate::scene::escape_controls(&parts.join("; "));
+    format!("{line} (see sdcrack --help)")
 }
 
 /// Runs a parsed command; `Ok(code)` is 0, or 3 when some case did not converge.
@@ -157,7 +209,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
     match cli.command {
         Command::Check { scene } => {
             let s = Scene::from_file(&scene).map_err(usage)?;
-            check_meshes(&s)?;
+            check_meshes(&s, &scene.display().to_string())?;
             println!(
                 "{}: valid scene '{}' ({} cases)",
                 scene.display(),
@@ -171,19 +223,14 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             vertices,
             json,
         } => {
-            let scene = match scene {
-                Some(p) => Scene::from_file(&p).map_err(usage)?,
-                None => Scene::default_scene(),
-            };
-            check_meshes(&scene)?;
+            let (scene, origin) = load(scene)?;
+            check_meshes(&scene, &origin)?;
             bench(&scene, vertices, json)
         }
         Command::Mesh { scene, out, level } => {
-            let scene = match scene {
-                Some(p) => Scene::from_file(&p).map_err(usage)?,
-                None => Scene::default_scene(),
-            };
-            check_meshes(&scene)?;
+            let (scene, origin) = load(scene)?;
+            check_meshes(&scene, &origin)?;
+            check_level_option(&scene, level)?;
             let levels = level.map_or_else(|| scene.levels.clone(), |l| vec![l]);
             let path =
                 crate::output::mesh_export::export_meshes(&scene, &levels, &out).map_err(usage)?;
@@ -199,17 +246,16 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             delta,
             quiet,
         } => {
-            let scene = match scene {
-                Some(p) => Scene::from_file(&p).map_err(usage)?,
-                None => Scene::default_scene(),
-            };
+            let (scene, origin) = load(scene)?;
+            check_meshes(&scene, &origin)?;
+            check_level_option(&scene, level)?;
             let filter = CaseFilter {
                 level,
                 u_space,
                 multiplier,
                 delta,
             };
-            run(&scene, &filter, &out, quiet)
+            run(&scene, &origin, &filter, &out, quiet)
         }
     }
 }
@@ -234,10 +280,35 @@ fn bench(scene: &Scene, vertices: usize, json: bool) -> Result<i32, Failure> {
     Ok(if report.all_converged { 0 } else { 3 })
 }
 
+/// The scene file `path` (or the embedded default scene) and how messages name it.
+fn load(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
+    match path {
+        Some(p) => Ok((
+            Scene::from_file(&p).map_err(usage)?,
+            p.display().to_string(),
+        )),
+        None => Ok((Scene::default_scene(), "(embedded default)".to_string())),
+    }
+}
+
 /// Checks the crack against the level-0 mesh (the same check every level makes).
-fn check_meshes(scene: &Scene) -> Result<(), Failure> {
-    crate::mesh::Mesh::structured(scene.domain, scene.cells, scene.crack, 0).map_err(usage)?;
+fn check_meshes(scene: &Scene, origin: &str) -> Result<(), Failure> {
+    crate::mesh::Mesh::structured(scene.domain, scene.cells, scene.crack, 0).map_err(|e| {
+        usage(format!(
+            "invalid scene {origin}: geometry.crack.segment: {e}"
+        ))
+    })?;
     Ok(())
+}
+
+/// Checks a `--level` (which need not be listed in the scene) like the scene's own levels:
+/// at most [`crate::scene::MAX_LEVEL`] and within the memory estimate.
+fn check_level_option(scene: &Scene, level: Option<u32>) -> Result<(), Failure> {
+    match level {
+        Some(l) => crate::scene::check_level(scene.cells, l)
+            .map_err(|m| usage(format!("--level {l}: {m}"))),
+        None => Ok(()),
+    }
 }
 
 struct Progress {
@@ -263,8 +334,13 @@ impl Observer for Progress {
     }
 }
 
-fn run(scene: &Scene, filter: &CaseFilter, out: &Path, quiet: bool) -> Result<i32, Failure> {
-    check_meshes(scene)?;
+fn run(
+    scene: &Scene,
+    origin: &str,
+    filter: &CaseFilter,
+    out: &Path,
+    quiet: bool,
+) -> Result<i32, Failure> {
     for tool in &scene.references {
         crate::references::check_available(tool).map_err(usage)?;
     }
@@ -283,7 +359,8 @@ fn run(scene: &Scene, filter: &CaseFilter, out: &Path, quiet: bool) -> Result<i3
     let mut progress = Progress { bar };
     let study = run_study(scene, &plan, &mut progress).map_err(|e| match e {
         StudyError::Linalg(_) => runtime(e),
-        _ => usage(e),
+        // Non-finite data at a quadrature point, a crack off a finer mesh: the scene's fault.
+        _ => usage(format!("invalid scene {origin}: {e}")),
     })?;
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();

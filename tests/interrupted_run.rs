@@ -1,0 +1,218 @@
+//! A run killed with SIGKILL (no clean-up possible) while it solves, and again while it writes its
+//! field files: earlier results in the same `--out` stay byte for byte as they were, nothing
+//! appears under the killed run's final name (only its staging folder `OUT/.NAME.partial-PID`
+//! remains, see src/output/mod.rs), and a later run to the same final name succeeds without
+//! touching that leftover.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::os::unix::process::ExitStatusExt;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Earlier, complete results: a small scene with fields.
+const EARLIER: &str = r#"name = "earlier"
+[geometry]
+domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
+crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
+[data]
+f = "20*sin(2*pi*x)*sign(y)"
+g = "0"
+[discretization]
+cells = [4, 4]
+levels = [0, 1]
+u_spaces = ["continuous", "broken"]
+multipliers = ["M0", "M1", "M1star"]
+deltas = [1e-2, 0.0]
+[outputs]
+fields = ["u", "p", "lambda"]
+references = []
+"#;
+
+/// Every file and folder under `dir` (relative path → bytes; folders end in `/` with no bytes).
+fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            let rel = p.strip_prefix(root).unwrap().to_path_buf();
+            if p.is_dir() {
+                out.insert(rel.join(""), Vec::new());
+                walk(root, &p, out);
+            } else {
+                out.insert(rel, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(dir, dir, &mut out);
+    out
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn run(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn spawn(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+        .args(args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("binary starts")
+}
+
+/// Polls every 5 ms until `ready()` or the child exits; panics after 120 s.
+fn wait_for(child: &mut Child, what: &str, ready: impl Fn() -> bool) {
+    let start = Instant::now();
+    while !ready() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("the run ended ({status}) before {what}");
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no {what} after 120 s"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// SIGKILLs `child`, which must still be running, and reaps it.
+fn kill(mut child: Child, when: &str) {
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "the run finished before it could be killed {when}; it needs a bigger case"
+    );
+    child.kill().unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.signal(), Some(9), "killed {when}: {status}");
+}
+
+#[test]
+fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out_s = out.to_str().unwrap();
+    // Complete earlier results in the same --out.
+    let earlier_scene = dir.path().join("earlier.toml");
+    std::fs::write(&earlier_scene, EARLIER).unwrap();
+    let o = run(&[
+        "run",
+        earlier_scene.to_str().unwrap(),
+        "--out",
+        out_s,
+        "--quiet",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let earlier = out.join("earlier");
+    let before = snapshot(&earlier);
+    assert!(
+        before.contains_key(Path::new("fields.h5"))
+            && before.contains_key(Path::new("summary.json")),
+        "{:?}",
+        before.keys()
+    );
+
+    // The big run: the repository's `mixed` scene without its reference solvers (which would be
+    // orphaned subprocesses), level 4 only: 36 cases and their fields, several seconds.
+    let text = std::fs::read_to_string(common::scene_path("mixed")).unwrap();
+    let (head, _) = text
+        .split_once("references =")
+        .expect("mixed lists references");
+    let big = dir.path().join("big.toml");
+    std::fs::write(&big, format!("{head}references = []\n")).unwrap();
+    let args = [
+        "run",
+        big.to_str().unwrap(),
+        "--level",
+        "4",
+        "--out",
+        out_s,
+        "--quiet",
+    ];
+    let final_path = out.join("mixed");
+
+    // 1. Killed while solving: as soon as its staging folder exists.
+    let mut child = spawn(&args);
+    let staging1 = out.join(format!(".mixed.partial-{}", child.id()));
+    wait_for(&mut child, "the staging folder", || staging1.is_dir());
+    std::thread::sleep(Duration::from_millis(200));
+    kill(child, "while solving");
+    assert!(!final_path.exists(), "no folder under the final name");
+    assert_eq!(snapshot(&earlier), before, "earlier results unchanged");
+    assert_eq!(
+        names(&out),
+        vec![
+            staging1.file_name().unwrap().to_string_lossy().into_owned(),
+            "earlier".into()
+        ]
+    );
+
+    // 2. Killed while writing its field files: as soon as fields.h5 appears in the staging folder.
+    let mut child = spawn(&args);
+    let staging2 = out.join(format!(".mixed.partial-{}", child.id()));
+    wait_for(&mut child, "fields.h5", || {
+        staging2.join("fields.h5").exists()
+    });
+    kill(child, "while writing fields");
+    assert!(!final_path.exists(), "no folder under the final name");
+    assert_eq!(snapshot(&earlier), before, "earlier results unchanged");
+    let leftovers = snapshot(&out);
+
+    // 3. A rerun to the same final name succeeds and leaves the leftovers alone.
+    let o = run(&[
+        "run",
+        big.to_str().unwrap(),
+        "--level",
+        "0",
+        "--out",
+        out_s,
+        "--quiet",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(final_path.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["scene"], "mixed");
+    assert_eq!(summary["cases"].as_array().unwrap().len(), 2 * 3 * 6);
+    assert!(final_path.join("fields.h5").is_file());
+    assert_eq!(snapshot(&earlier), before, "earlier results unchanged");
+    let after = snapshot(&out);
+    for (path, bytes) in &leftovers {
+        assert_eq!(after.get(path), Some(bytes), "leftover {path:?} untouched");
+    }
+    let mut expected = vec![
+        staging1.file_name().unwrap().to_string_lossy().into_owned(),
+        staging2.file_name().unwrap().to_string_lossy().into_owned(),
+        "earlier".to_string(),
+        "mixed".to_string(),
+    ];
+    expected.sort();
+    assert_eq!(
+        names(&out),
+        expected,
+        "only the two staging leftovers besides the results"
+    );
+}
