@@ -19,11 +19,19 @@
 //!    side, blocked), [`Ldlt::solve_refined`] (iterative refinement against the
 //!    exact matrix).
 //!
+//! # Equilibration
+//!
+//! [`Ldlt::factor`] factors `K̃ = S K S` with `S = diag(|K_ii|^{-1/2})` (a row's largest entry
+//! where the diagonal is zero), and every solve returns `x = S K̃⁻¹ S b`, so callers see `K⁻¹`.
+//! Blocks of different physical size (on a domain of size L the p–p block scales as L², the u–u
+//! block as 1) then meet the same pivot threshold: without it, L = 1e-5 regularised thousands of
+//! p pivots (tests/stability.rs). The pivot statistics and thresholds below are those of `K̃`.
+//!
 //! # Regularization policy
 //!
 //! The caller gives the expected sign of every pivot (`+1` for rows of the `G`
 //! block, `−1` for rows of the `S` block, in the original numbering; they are
-//! permuted along with the matrix). With `scale = max_i |K_ii|` (or `max |K_ij|`
+//! permuted along with the matrix). With `scale = max_i |K̃_ii|` (or `max |K̃_ij|`
 //! if the diagonal is identically zero), faer's `LdltRegularization` is used with
 //!
 //! * threshold `eps = PIVOT_EPS_REL · scale`, `PIVOT_EPS_REL = 1e-13`,
@@ -242,6 +250,31 @@ impl SymCsc {
         sums.into_iter().fold(0.0, f64::max)
     }
 
+    /// y = |K| |x| (entrywise absolute values, both triangles): the scale of each row of K x,
+    /// for componentwise backward errors.
+    pub fn abs_mul_vec(&self, x: &[f64], y: &mut [f64]) {
+        assert_eq!(
+            x.len(),
+            self.n,
+            "SymCsc::abs_mul_vec: x has the wrong length"
+        );
+        assert_eq!(
+            y.len(),
+            self.n,
+            "SymCsc::abs_mul_vec: y has the wrong length"
+        );
+        y.fill(0.0);
+        for j in 0..self.n {
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let (i, v) = (self.row_idx[k], self.values[k].abs());
+                y[i] += v * x[j].abs();
+                if i != j {
+                    y[j] += v * x[i].abs();
+                }
+            }
+        }
+    }
+
     /// y = K x using the symmetric storage (both triangles).
     ///
     /// # Panics
@@ -426,6 +459,8 @@ impl SymbolicLdlt {
 pub struct Ldlt {
     symbolic: Arc<SymbolicCholesky<usize>>,
     values: Vec<f64>,
+    /// S of the factored K̃ = S K S (see [`equilibration`]).
+    equilibration: Vec<f64>,
     n: usize,
     stats: FactorStats,
 }
@@ -502,15 +537,25 @@ impl Ldlt {
             return Err(LinalgError::NonFinite);
         }
 
+        // Symmetric diagonal (Jacobi) equilibration: K̃ = S K S, S = diag(|K_ii|^{-1/2}), so that
+        // blocks of different physical scale (p–p ~ L², u–u ~ 1 on a domain of size L) meet the
+        // same pivot threshold; K x = b is solved as x = S K̃⁻¹ S b.
+        let equilibration = equilibration(matrix);
+        let scaled: Vec<f64> = (0..n)
+            .flat_map(|j| {
+                let (col, eq) = (matrix.col_ptr[j]..matrix.col_ptr[j + 1], &equilibration);
+                col.map(move |k| matrix.values[k] * eq[matrix.row_idx[k]] * eq[j])
+            })
+            .collect();
         let mut scale = 0.0f64;
         for j in 0..n {
             let start = matrix.col_ptr[j];
             if start < matrix.col_ptr[j + 1] && matrix.row_idx[start] == j {
-                scale = scale.max(matrix.values[start].abs());
+                scale = scale.max(scaled[start].abs());
             }
         }
         if scale == 0.0 {
-            scale = matrix.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            scale = scaled.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         }
         if scale == 0.0 && n > 0 {
             return Err(LinalgError::Numeric("matrix is zero".into()));
@@ -533,7 +578,7 @@ impl Ldlt {
         }
         let mut mem = MemBuffer::try_new(inner.factorize_numeric_ldlt_scratch::<f64>(par, params))
             .map_err(|_| LinalgError::Numeric("out of memory for the workspace".into()))?;
-        let a = SparseColMatRef::new(matrix.faer_symbolic(), &matrix.values);
+        let a = SparseColMatRef::new(matrix.faer_symbolic(), &scaled);
         let mut attempt = 0;
         loop {
             let regularization = LdltRegularization {
@@ -565,10 +610,12 @@ impl Ldlt {
         }
         drop(mem);
 
+        drop(scaled);
         let stats = pivot_stats(inner, &values, delta);
         Ok(Ldlt {
             symbolic: Arc::clone(&symbolic.inner),
             values,
+            equilibration,
             n,
             stats,
         })
@@ -625,10 +672,12 @@ impl Ldlt {
             }
         }
         let inv = x.transpose() * &dx;
+        // (K⁻¹)_SS = S (K̃⁻¹)_SS S
         let mut out = vec![0.0; c * c];
-        for (a, &pa) in local.iter().enumerate() {
-            for (b, &pb) in local.iter().enumerate() {
-                out[a * c + b] = inv[(pa - t0, pb - t0)];
+        for (a, (&pa, &ia)) in local.iter().zip(indices).enumerate() {
+            for (b, (&pb, &ib)) in local.iter().zip(indices).enumerate() {
+                out[a * c + b] =
+                    self.equilibration[ia] * inv[(pa - t0, pb - t0)] * self.equilibration[ib];
             }
         }
         Some(out)
@@ -704,16 +753,28 @@ impl Ldlt {
             Par::Seq => 1,
         };
         let blocks = threads.min(ncols / MIN_COLS_PER_THREAD);
+        self.equilibrate(rhs);
         if blocks <= 1 || n * ncols < MIN_WORK_FOR_THREADS {
             self.solve_block(rhs, ncols);
-            return;
+        } else {
+            let cols_per_block = ncols.div_ceil(blocks);
+            std::thread::scope(|scope| {
+                for block in rhs.chunks_mut(n * cols_per_block) {
+                    scope.spawn(move || self.solve_block(block, block.len() / n));
+                }
+            });
         }
-        let cols_per_block = ncols.div_ceil(blocks);
-        std::thread::scope(|scope| {
-            for block in rhs.chunks_mut(n * cols_per_block) {
-                scope.spawn(move || self.solve_block(block, block.len() / n));
-            }
-        });
+        self.equilibrate(rhs);
+    }
+
+    /// Multiplies every column of an `n × k` block by S (before and after the solve with K̃).
+    fn equilibrate(&self, block: &mut [f64]) {
+        for column in block.chunks_exact_mut(self.n) {
+            column
+                .iter_mut()
+                .zip(&self.equilibration)
+                .for_each(|(v, s)| *v *= s);
+        }
     }
 
     /// Sequential multi-rhs solve of a column-major `n × ncols` block.
@@ -994,6 +1055,35 @@ impl Ldlt {
 /// Hager–Higham iterations of [`Ldlt::condition_estimate`] (LAPACK uses at most 5; 2 reach the
 /// estimate in almost every case, Higham 1988).
 pub const CONDITION_ITERATIONS: usize = 2;
+
+/// The symmetric equilibration S = diag(s) of [`Ldlt::factor`]: `s_i = |K_ii|^{-1/2}` where the
+/// diagonal entry is non-zero, else `(max_j |K_ij|)^{-1/2}` over row i, else 1 (an empty row).
+fn equilibration(matrix: &SymCsc) -> Vec<f64> {
+    let n = matrix.n;
+    let mut diag = vec![0.0f64; n];
+    let mut row_max = vec![0.0f64; n];
+    for j in 0..n {
+        for k in matrix.col_ptr[j]..matrix.col_ptr[j + 1] {
+            let (i, v) = (matrix.row_idx[k], matrix.values[k].abs());
+            if i == j {
+                diag[j] = v;
+            }
+            row_max[i] = row_max[i].max(v);
+            row_max[j] = row_max[j].max(v);
+        }
+    }
+    diag.iter()
+        .zip(&row_max)
+        .map(|(&d, &r)| {
+            let pick = if d > 0.0 { d } else { r };
+            if pick > 0.0 && pick.is_finite() {
+                1.0 / pick.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
 
 /// `r = b − K x`, returns `‖r‖_∞`.
 fn residual(matrix: &SymCsc, b: &[f64], x: &[f64], r: &mut [f64]) -> f64 {

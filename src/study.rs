@@ -555,13 +555,30 @@ impl LevelContext<'_> {
         let mut kx = vec![0.0; n];
         reduced.matrix.mul_vec(x, &mut kx);
         let inf = |v: &[f64]| v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        let eq = kx
-            .iter()
-            .zip(rhs_mu)
-            .fold(0.0f64, |a, (k, r)| a.max((k - r).abs()));
         let mut dt_mu = vec![0.0; self.system.n_p];
         self.ops.add_nt(st_mu, &mut dt_mu);
-        let eq_scale = inf(&self.system.rhs).max(inf(&dt_mu));
+        // Componentwise (Oettli–Prager) backward error of K x + Dᵀμ = b: row i's residual over
+        // (|K||x| + |Dᵀμ| + |b|)_i. Invariant under any diagonal scaling of rows and unknowns, so
+        // under the dilations of the domain and the scaling of the data (tests/stability.rs).
+        let mut scale = vec![0.0; n];
+        reduced.matrix.abs_mul_vec(x, &mut scale);
+        let mut eq = 0.0f64;
+        for i in 0..n {
+            let dt = if i < self.system.n_p {
+                dt_mu[i].abs()
+            } else {
+                0.0
+            };
+            let denominator = scale[i] + dt + self.system.rhs[i].abs();
+            let r = (kx[i] - rhs_mu[i]).abs();
+            if r > 0.0 {
+                eq = eq.max(if denominator > 0.0 {
+                    r / denominator
+                } else {
+                    f64::INFINITY
+                });
+            }
+        }
         let np = self.ops.apply_n(&x[..self.system.n_p]);
         let y: Vec<f64> = s
             .iter()
@@ -573,7 +590,7 @@ impl LevelContext<'_> {
             .fold(0.0, f64::max);
         // y = D P is measured against the size of p, not of p·ν on Γc (≈ 0 where the crack is open).
         let mut k = KktResiduals::constraint_part(mu, &y, s_norm * inf(&x[..self.system.n_p]));
-        k.equations = if eq_scale > 0.0 { eq / eq_scale } else { eq };
+        k.equations = eq;
         k
     }
 

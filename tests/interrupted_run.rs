@@ -132,7 +132,8 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
     );
 
     // The big run: the repository's `mixed` scene without its reference solvers (which would be
-    // orphaned subprocesses), level 4 only: 36 cases and their fields, several seconds.
+    // orphaned subprocesses), level 5 only: 36 cases of 66 049 vertices and their fields (~70 MB),
+    // a few seconds of solving and ~0.5 s of writing, long enough to be caught in either phase.
     let text = std::fs::read_to_string(common::scene_path("mixed")).unwrap();
     let (head, _) = text
         .split_once("references =")
@@ -143,7 +144,7 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
         "run",
         big.to_str().unwrap(),
         "--level",
-        "4",
+        "5",
         "--out",
         out_s,
         "--quiet",
@@ -166,11 +167,18 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
         ]
     );
 
-    // 2. Killed while writing its field files: as soon as fields.h5 appears in the staging folder.
+    // 2. Killed while writing its field files: as soon as the HDF5 file being written (its
+    // temporary `.fields.h5.tmp-*`, renamed to fields.h5 once complete) appears in the staging folder.
     let mut child = spawn(&args);
     let staging2 = out.join(format!(".mixed.partial-{}", child.id()));
-    wait_for(&mut child, "fields.h5", || {
-        staging2.join("fields.h5").exists()
+    wait_for(&mut child, "the field file being written", || {
+        std::fs::read_dir(&staging2).is_ok_and(|entries| {
+            entries.filter_map(Result::ok).any(|e| {
+                e.file_name()
+                    .to_string_lossy()
+                    .starts_with(".fields.h5.tmp-")
+            })
+        })
     });
     kill(child, "while writing fields");
     assert!(!final_path.exists(), "no folder under the final name");

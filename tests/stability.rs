@@ -12,8 +12,8 @@
 //!
 //! Measured numbers are printed with `eprintln!` (`cargo test --release --test stability --
 //! --nocapture`); the tolerances are the project's (KKT ≤ 1e-10) or round-off ones (1e-10
-//! relative), never fitted to the measurements. Two `#[ignore]`d tests record defects found here
-//! (extreme domain sizes); run them with `--ignored`.
+//! relative), never fitted to the measurements. Two tests are regression tests of defects this file
+//! found and that were then fixed (extreme domain sizes; the KKT residual's scale).
 //!
 //! Measured (2 cores, this commit):
 //!
@@ -464,26 +464,23 @@ fn dilating_the_domain_follows_the_scaling_law() {
     check_dilations(&["mixed", "open-exact"], &[1e-3, 10.0, 1e3, 1e6]);
 }
 
-/// Defect found by this file (issue #8): the LDLᵀ's pivot regularisation is relative to the largest
-/// diagonal entry of K, whose p–p block scales as L² and u–u block as 1 under a dilation by L.
-/// Measured on mixed, level 2: for L = 1e-5 (1e-6) the p pivots fall under 1e-13·max and 2163
-/// (2178) of them are replaced by ±1e-6·max: KKT 5e-5 (0.8), fields wrong by O(1); for L = 1e8
-/// two pivots are regularised: KKT 3e-7, fields wrong by 0.7. Reported as non-converged (exit 3),
-/// not silent, but the problem is as well posed as at L = 1: a symmetric diagonal scaling of K
-/// (or p in units of 1/L) would remove it.
+/// Regression test of a defect found by this file (issue #8): the pivot threshold was relative to
+/// the largest diagonal entry of K, whose p–p block scales as L² and u–u block as 1 under a
+/// dilation by L. Measured before the fix on mixed, level 2: for L = 1e-5 (1e-6) 2163 (2178) p
+/// pivots were regularised: KKT 5e-5 (0.8), fields wrong by O(1); for L = 1e8 two pivots: KKT
+/// 3e-7, fields wrong by 0.7 (reported as non-converged, never silent). Fixed by the symmetric
+/// diagonal equilibration K̃ = S K S before the LDLᵀ (src/linalg.rs).
 #[test]
-#[ignore = "issue #8 defect: K(δ) is not equilibrated; extreme domain sizes regularise O(n) pivots"]
 fn dilating_to_extreme_sizes_follows_the_scaling_law() {
     check_dilations(&["mixed"], &[1e-6, 1e8]);
 }
 
-/// Defect found by this file (issue #8): open-exact dilated by L = 1e-4 has no regularised pivot
-/// and fields equal to the L = 1 ones to 3e-14, yet every case reports `converged = false`: the
-/// KKT equations residual 1.27e-10 > 1e-10. It is ‖Kx − b‖∞ / max(‖b‖∞, ‖Dᵀμ‖∞), and with f = 0
-/// ‖b‖∞ is the boundary term G_Γ ~ L, while the round-off of the u rows is that of B̃P, C U ~ 1;
-/// the residual grows as 1/L (9.5e-15 at L = 10, 1.27e-11 at 1e-3, 1.27e-10 at 1e-4).
+/// Regression test of a defect found by this file (issue #8): open-exact dilated by L = 1e-4 had
+/// fields equal to the L = 1 ones to 3e-14, yet every case reported `converged = false`: the KKT
+/// equations residual was ‖Kx − b‖∞ / max(‖b‖∞, ‖Dᵀμ‖∞), and with f = 0 ‖b‖∞ is the boundary
+/// term G_Γ ~ L while the round-off of the u rows is ~1, so it grew as 1/L (1.27e-10 at 1e-4).
+/// Fixed by measuring the componentwise backward error, which is invariant under diagonal scaling.
 #[test]
-#[ignore = "issue #8 defect: the KKT equations residual is not dilation invariant (f = 0 scenes)"]
 fn kkt_equations_residual_is_dilation_invariant() {
     check_dilations(&["open-exact"], &[1e-4]);
 }
