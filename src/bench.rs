@@ -68,6 +68,8 @@ pub struct BenchReport {
     pub sweep_cases: usize,
     /// Numeric factorisations in the sweep, summed over its δ.
     pub sweep_factorization_s: f64,
+    /// Phases of the sweep: the shared ones counted once per (mesh or δ), the others summed.
+    pub sweep_phases: Timings,
     /// Largest relative KKT residual over the case and the sweep.
     pub worst_kkt: f64,
     /// True when every case converged.
@@ -138,10 +140,15 @@ impl BenchReport {
             &format!("sweep {} δ × 3 multipliers, total", self.sweep_deltas.len()),
             self.sweep_s,
         );
+        let q = &self.sweep_phases;
         out += &row(
-            "  of which numeric factorisations",
-            self.sweep_factorization_s,
+            "  mesh + assembly, ordering + symbolic",
+            q.assembly + q.symbolic,
         );
+        out += &row("  numeric factorisations", q.factorization);
+        out += &row("  crack reductions", q.crack_reduction);
+        out += &row("  condition estimates", q.condition);
+        out += &row("  contact (all cases)", q.contact);
         out += &format!(
             "\nratios: case / yardstick {:.2}; sweep / ({} numeric factorisations) {:.2}; \
              case memory / yardstick memory {:.2}\n\
@@ -228,12 +235,8 @@ pub fn run_bench(
     let sweep_peak_rss_mb = peak_rss_mb();
 
     let first = &case.cases[0];
-    let sweep_factorization_s = sweep
-        .cases
-        .iter()
-        .step_by(sweep_plan.multipliers.len())
-        .map(|c| c.timings.factorization)
-        .sum();
+    let sweep_phases = sweep_phases(&sweep, sweep_plan.multipliers.len());
+    let sweep_factorization_s = sweep_phases.factorization;
     let (worst_kkt, all_converged) = summarize(&[&case, &sweep]);
     Ok(BenchReport {
         scene: scene.name.clone(),
@@ -251,6 +254,7 @@ pub fn run_bench(
         sweep_deltas: SWEEP_DELTAS.to_vec(),
         sweep_cases: sweep.cases.len(),
         sweep_factorization_s,
+        sweep_phases,
         worst_kkt,
         all_converged,
         yardstick_peak_rss_mb,
@@ -262,6 +266,26 @@ pub fn run_bench(
         peak_reset_supported,
         threads: rayon::current_num_threads(),
     })
+}
+
+/// The sweep's phases: mesh-level ones once, δ-level ones once per δ, the rest summed over cases.
+fn sweep_phases(sweep: &StudyResult, multipliers: usize) -> Timings {
+    let mut t = Timings::default();
+    if let Some(first) = sweep.cases.first() {
+        t.assembly = first.timings.assembly;
+        t.symbolic = first.timings.symbolic;
+    }
+    for c in sweep.cases.iter().step_by(multipliers.max(1)) {
+        t.factorization += c.timings.factorization;
+        t.crack_reduction += c.timings.crack_reduction;
+        t.condition += c.timings.condition;
+    }
+    for c in &sweep.cases {
+        t.contact += c.timings.contact;
+        t.norms += c.timings.norms;
+        t.fields += c.timings.fields;
+    }
+    t
 }
 
 /// Worst KKT residual and whether every case converged.
