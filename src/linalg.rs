@@ -590,11 +590,7 @@ impl Ldlt {
         if values.len() == inner.len_val() {
             values.fill(0.0);
         } else {
-            values = Vec::new();
-            values
-                .try_reserve_exact(inner.len_val())
-                .map_err(|_| LinalgError::Numeric("out of memory for the factor".into()))?;
-            values.resize(inner.len_val(), 0.0f64);
+            values = factor_buffer(inner.len_val())?;
         }
         let mut mem = MemBuffer::try_new(inner.factorize_numeric_ldlt_scratch::<f64>(par, params))
             .map_err(|_| LinalgError::Numeric("out of memory for the workspace".into()))?;
@@ -904,11 +900,7 @@ pub fn cholesky_solve(matrix: &SymCsc, b: &mut [f64]) -> Result<CholeskyTimings,
     let symbolic_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let par = Par::rayon(0);
-    let mut values = Vec::new();
-    values
-        .try_reserve_exact(symbolic.len_val())
-        .map_err(|_| LinalgError::Numeric("out of memory for the factor".into()))?;
-    values.resize(symbolic.len_val(), 0.0f64);
+    let mut values = factor_buffer(symbolic.len_val())?;
     let mut mem =
         MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Spec::default()))
             .map_err(|_| LinalgError::Numeric("out of memory for the workspace".into()))?;
@@ -1174,6 +1166,21 @@ fn equilibration(matrix: &SymCsc) -> Vec<f64> {
             }
         })
         .collect()
+}
+
+/// A zeroed buffer for the values of a factor, or an out-of-memory error.
+///
+/// Fresh memory is expensive on these machines: the first touch of each page (here, by the
+/// zeroing) cost ~2.2 s per GB in the measurements of docs/performance.md, with or without
+/// transparent huge pages or `MADV_POPULATE_WRITE` (both tried, neither faster). That is why a
+/// δ sweep refactors into the previous δ's buffer ([`Ldlt::refactor`]).
+fn factor_buffer(len: usize) -> Result<Vec<f64>, LinalgError> {
+    let mut values: Vec<f64> = Vec::new();
+    values
+        .try_reserve_exact(len)
+        .map_err(|_| LinalgError::Numeric("out of memory for the factor".into()))?;
+    values.resize(len, 0.0);
+    Ok(values)
 }
 
 /// `r = b − K x`, returns `‖r‖_∞`.
