@@ -15,17 +15,18 @@
 //! relative), never fitted to the measurements. Two tests are regression tests of defects this file
 //! found and that were then fixed (extreme domain sizes; the KKT residual's scale).
 //!
-//! Measured (2 cores, this commit):
+//! Measured (2 cores; after K is equilibrated and the equations residual is the componentwise
+//! backward error, docs/design.md):
 //!
 //! | check | result |
 //! |---|---|
-//! | worst KKT, δ = 1 … 1e-14, 0 (mixed, open-exact, levels 1 and 3, all variants) | ≤ 2.6e-14 at every δ |
+//! | worst KKT, δ = 1 … 1e-14, 0 (mixed, open-exact, levels 1 and 3, all variants) | ≤ 5.0e-14 at every δ (mixed ≤ 3.7e-14) |
 //! | slope of log ‖x_δ − x_0‖ vs log δ (fit where ‖x_δ − x_0‖ ≥ 1e-10 relative: δ ≥ 1e-8 or 1e-9) | 0.996–0.999 |
 //! | δ where ‖x_δ − x_0‖ leaves C·δ by > 10 % (reaches round-off) | 1e-12 … 1e-14 (one series: not by 1e-14); noise ≤ 5.9e-14 relative |
 //! | f, g × 1e-8 … 1e8: u, p, λ relative to s·max | ≤ 3.5e-14; same active sets and iterations |
 //! | translation by (0.75, −2.5), (40, 24) | ≤ 9.0e-14 |
-//! | dilation L = 1e-3 … 1e6 | ≤ 4.5e-14; KKT ≤ 1.3e-11 (open-exact, L = 1e-3) |
-//! | anisotropic cells, aspect 1 / 4 / 16 / 64 | worst KKT 4e-15 / 1.4e-14 / 2.2e-13 / 3.9e-12 |
+//! | dilation L = 1e-3 … 1e6, and 1e-6, 1e8 (mixed), 1e-4 (open-exact) | ≤ 3.7e-14; KKT ≤ 1.5e-14; no regularised pivot |
+//! | anisotropic cells, aspect 1 / 4 / 16 / 64 | worst KKT 2.4e-15 / 2.2e-14 / 1.2e-13 / 3.1e-12 |
 //! | aspect 4, closed-exact (levels 0–2) | u rate 2.02, p rate 1.02 |
 //! | aspect 4, open-exact broken | u 1.14–1.34, p 0.44–0.54, λ 0.75–0.97 |
 //! | stress scene, levels 2–4, all δ | 9 (M0, broken M1) or 10 alternations; 1–7 LCP iterations per case |
