@@ -5,28 +5,14 @@
 //! (what is wrong and where: file, key, line/column, level, coordinates), and no results folder or
 //! staging leftover in `--out` (an existing results folder is left byte for byte as it was).
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// A valid scene that every `edit` case changes in one place.
-const SMALL: &str = r#"name = "small"
-[geometry]
-domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
-crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
-[data]
-f = "20*sin(2*pi*x)*sign(y)"
-g = "0"
-[discretization]
-cells = [4, 4]
-levels = [0, 1]
-u_spaces = ["continuous", "broken"]
-multipliers = ["M0", "M1", "M1star"]
-deltas = [1e-2, 0.0]
-[outputs]
-fields = ["u", "p", "lambda"]
-references = []
-"#;
+use common::SMALL_SCENE as SMALL;
 
 /// What is at the scene path.
 enum Input {

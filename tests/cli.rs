@@ -23,24 +23,7 @@ fn write_scene(dir: &Path, name: &str, text: &str) -> String {
     p.display().to_string()
 }
 
-const SMALL: &str = r#"
-name = "small"
-[geometry]
-domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
-crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
-[data]
-f = "20*sin(2*pi*x)*sign(y)"
-g = "0"
-[discretization]
-cells = [4, 4]
-levels = [0, 1]
-u_spaces = ["continuous", "broken"]
-multipliers = ["M0", "M1", "M1star"]
-deltas = [1e-2, 0.0]
-[outputs]
-fields = ["u", "p", "lambda"]
-references = []
-"#;
+use common::SMALL_SCENE as SMALL;
 
 #[test]
 fn run_writes_summary_and_fields_and_never_overwrites() {

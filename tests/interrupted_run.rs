@@ -12,25 +12,6 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// Earlier, complete results: a small scene with fields.
-const EARLIER: &str = r#"name = "earlier"
-[geometry]
-domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
-crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
-[data]
-f = "20*sin(2*pi*x)*sign(y)"
-g = "0"
-[discretization]
-cells = [4, 4]
-levels = [0, 1]
-u_spaces = ["continuous", "broken"]
-multipliers = ["M0", "M1", "M1star"]
-deltas = [1e-2, 0.0]
-[outputs]
-fields = ["u", "p", "lambda"]
-references = []
-"#;
-
 /// Every file and folder under `dir` (relative path → bytes; folders end in `/` with no bytes).
 fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     fn walk(root: &Path, dir: &Path, out: &mut BTreeMap<PathBuf, Vec<u8>>) {
@@ -108,7 +89,9 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
     let out_s = out.to_str().unwrap();
     // Complete earlier results in the same --out.
     let earlier_scene = dir.path().join("earlier.toml");
-    std::fs::write(&earlier_scene, EARLIER).unwrap();
+    // earlier, complete results: the small scene with fields, under another name
+    let earlier_text = common::SMALL_SCENE.replace("name = \"small\"", "name = \"earlier\"");
+    std::fs::write(&earlier_scene, earlier_text).unwrap();
     let o = run(&[
         "run",
         earlier_scene.to_str().unwrap(),

@@ -4,6 +4,26 @@
 use sdcrack::scene::Scene;
 use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
 
+/// A small valid scene (levels 0–1 of a 4 × 4 mesh, every variant, fields, no reference) that the
+/// CLI, bad-input and interrupted-run tests edit or run.
+pub const SMALL_SCENE: &str = r#"name = "small"
+[geometry]
+domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
+crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
+[data]
+f = "20*sin(2*pi*x)*sign(y)"
+g = "0"
+[discretization]
+cells = [4, 4]
+levels = [0, 1]
+u_spaces = ["continuous", "broken"]
+multipliers = ["M0", "M1", "M1star"]
+deltas = [1e-2, 0.0]
+[outputs]
+fields = ["u", "p", "lambda"]
+references = []
+"#;
+
 /// Path of a repository scene.
 pub fn scene_path(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
