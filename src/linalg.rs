@@ -936,9 +936,8 @@ pub fn cholesky_solve(matrix: &SymCsc, b: &mut [f64]) -> Result<CholeskyTimings,
 }
 
 impl Ldlt {
-    /// [`Ldlt::solve_refined`] for `k` right-hand sides at once (column-major `n × k` in `b` and
-    /// `x`): every solve and refinement step is one block solve, which reads the factor once for
-    /// all columns. Residuals are measured as componentwise backward errors
+    /// [`Ldlt::solve_refined`] for `k` right-hand sides (column-major `n × k` in `b` and `x`),
+    /// each column refined independently (see [`Ldlt::solve_refined_many_with`]). Residuals are measured as componentwise backward errors
     /// `ω = max_i |b − K x|_i / (|K||x| + |b|)_i` (Oettli–Prager: the smallest relative change of
     /// the entries of K and b that x solves exactly). Each column keeps its best iterate;
     /// refinement stops once every column has `ω ≤ tol`, after `max_steps` (at least 1), or after
@@ -958,7 +957,12 @@ impl Ldlt {
     }
 
     /// [`Ldlt::solve_refined_many`], also solving the `riders` (column-major `n × r`, in place,
-    /// unrefined) in the first block solve: one pass over the factor serves both.
+    /// unrefined) as one block.
+    ///
+    /// Each column of `b` is solved and refined on its own, so that its result does not depend
+    /// on the other columns: a rerun of one multiplier space reproduces the full run's numbers
+    /// bit for bit (block solves and a shared stopping rule made the last digits depend on the
+    /// block, tests/python/test_campaign.py).
     ///
     /// # Panics
     /// If the dimensions disagree (caller bug).
@@ -974,25 +978,38 @@ impl Ldlt {
         let n = self.n;
         assert_eq!(matrix.n, n, "Ldlt::solve_refined_many: matrix dimension");
         assert_eq!(b.len(), x.len(), "Ldlt::solve_refined_many: b and x");
-        let k = b.len().checked_div(n).unwrap_or(0);
-        assert_eq!(k * n, b.len(), "Ldlt::solve_refined_many: b is not n × k");
         let r_cols = riders.len().checked_div(n).unwrap_or(0);
         assert_eq!(
             r_cols * n,
             riders.len(),
             "Ldlt::solve_refined_many_with: riders"
         );
-        if r_cols == 0 {
-            x.copy_from_slice(b);
-            self.solve_many_in_place(x, k);
-        } else {
-            let mut block = Vec::with_capacity(b.len() + riders.len());
-            block.extend_from_slice(b);
-            block.extend_from_slice(riders);
-            self.solve_many_in_place(&mut block, k + r_cols);
-            x.copy_from_slice(&block[..b.len()]);
-            riders.copy_from_slice(&block[b.len()..]);
+        if r_cols > 0 {
+            self.solve_many_in_place(riders, r_cols);
         }
+        if n == 0 {
+            return Vec::new();
+        }
+        b.chunks_exact(n)
+            .zip(x.chunks_exact_mut(n))
+            .flat_map(|(bj, xj)| self.refine_columns(matrix, bj, xj, max_steps, tol))
+            .collect()
+    }
+
+    /// Block refinement of the `n × k` columns of `b` (shared block solves and stopping rule).
+    fn refine_columns(
+        &self,
+        matrix: &SymCsc,
+        b: &[f64],
+        x: &mut [f64],
+        max_steps: usize,
+        tol: f64,
+    ) -> Vec<f64> {
+        let n = self.n;
+        let k = b.len().checked_div(n).unwrap_or(0);
+        assert_eq!(k * n, b.len(), "Ldlt::solve_refined_many: b is not n × k");
+        x.copy_from_slice(b);
+        self.solve_many_in_place(x, k);
         let mut r = vec![0.0; b.len()];
         // componentwise backward error of each column: max_i |b − K x|_i / (|K||x| + |b|)_i
         let mut kx = vec![0.0; n * k];

@@ -451,9 +451,9 @@ impl LevelContext<'_> {
         }
     }
 
-    /// x = K⁻¹ (b − Nᵀ Sᵀ μ) for every multiplier space at once (one block solve and block
-    /// refinement steps against the exact K(δ)), and the condition estimate of K(δ), whose two
-    /// probe solves ride along in the first block solve. Returns the n × k solutions, the seconds
+    /// x = K⁻¹ (b − Nᵀ Sᵀ μ) for every multiplier space (each solved and refined against the
+    /// exact K(δ) on its own, so that a rerun of one space reproduces it bit for bit), and the
+    /// condition estimate of K(δ), whose two probes are solved as one block. Returns the n × k solutions, the seconds
     /// of the recovery, the condition estimate and the seconds of its own extra solves.
     fn recover(&self, reduced: &Reduced, contacts: &[Contact]) -> (Vec<f64>, f64, f64, f64) {
         let t0 = Instant::now();
