@@ -937,11 +937,11 @@ pub fn cholesky_solve(matrix: &SymCsc, b: &mut [f64]) -> Result<CholeskyTimings,
 
 impl Ldlt {
     /// [`Ldlt::solve_refined`] for `k` right-hand sides (column-major `n × k` in `b` and `x`),
-    /// each column refined independently (see [`Ldlt::solve_refined_many_with`]). Residuals are measured as componentwise backward errors
-    /// `ω = max_i |b − K x|_i / (|K||x| + |b|)_i` (Oettli–Prager: the smallest relative change of
-    /// the entries of K and b that x solves exactly). Each column keeps its best iterate;
-    /// refinement stops once every column has `ω ≤ tol`, after `max_steps` (at least 1), or after
-    /// a step that halved no column's ω (the round-off floor). Returns ω of each column.
+    /// each column refined independently (see [`Ldlt::solve_refined_many_with`]). Residuals are
+    /// componentwise backward errors `ω = max_i |b − K x|_i / (|K||x| + |b|)_i` (Oettli–Prager:
+    /// the smallest relative change of the entries of K and b that x solves exactly). A column
+    /// keeps its best iterate; its refinement stops once `ω ≤ tol`, after `max_steps` (at least
+    /// 1), or after a step that did not halve ω (the round-off floor). Returns ω of each column.
     ///
     /// # Panics
     /// If the dimensions disagree (caller bug).
@@ -996,7 +996,8 @@ impl Ldlt {
             .collect()
     }
 
-    /// Block refinement of the `n × k` columns of `b` (shared block solves and stopping rule).
+    /// Refinement of the `n × k` columns of `b` with shared block solves and stopping rule; called
+    /// with one column at a time, whose bits then do not depend on any other right-hand side.
     fn refine_columns(
         &self,
         matrix: &SymCsc,
