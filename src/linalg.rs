@@ -937,7 +937,7 @@ pub fn cholesky_solve(matrix: &SymCsc, b: &mut [f64]) -> Result<CholeskyTimings,
 
 impl Ldlt {
     /// [`Ldlt::solve_refined`] for `k` right-hand sides (column-major `n × k` in `b` and `x`),
-    /// each column refined independently (see [`Ldlt::solve_refined_many_with`]). Residuals are
+    /// each column solved and refined on its own. Residuals are
     /// componentwise backward errors `ω = max_i |b − K x|_i / (|K||x| + |b|)_i` (Oettli–Prager:
     /// the smallest relative change of the entries of K and b that x solves exactly). A column
     /// keeps its best iterate; its refinement stops once `ω ≤ tol`, after `max_steps` (at least
@@ -953,43 +953,15 @@ impl Ldlt {
         max_steps: usize,
         tol: f64,
     ) -> Vec<f64> {
-        self.solve_refined_many_with(matrix, b, x, max_steps, tol, &mut [])
-    }
-
-    /// [`Ldlt::solve_refined_many`], also solving the `riders` (column-major `n × r`, in place,
-    /// unrefined) as one block.
-    ///
-    /// Each column of `b` is solved and refined on its own, so that its result does not depend
-    /// on the other columns: a rerun of one multiplier space reproduces the full run's numbers
-    /// bit for bit (block solves and a shared stopping rule made the last digits depend on the
-    /// block, tests/python/test_campaign.py).
-    ///
-    /// # Panics
-    /// If the dimensions disagree (caller bug).
-    pub fn solve_refined_many_with(
-        &self,
-        matrix: &SymCsc,
-        b: &[f64],
-        x: &mut [f64],
-        max_steps: usize,
-        tol: f64,
-        riders: &mut [f64],
-    ) -> Vec<f64> {
         let n = self.n;
         assert_eq!(matrix.n, n, "Ldlt::solve_refined_many: matrix dimension");
         assert_eq!(b.len(), x.len(), "Ldlt::solve_refined_many: b and x");
-        let r_cols = riders.len().checked_div(n).unwrap_or(0);
-        assert_eq!(
-            r_cols * n,
-            riders.len(),
-            "Ldlt::solve_refined_many_with: riders"
-        );
-        if r_cols > 0 {
-            self.solve_many_in_place(riders, r_cols);
-        }
         if n == 0 {
             return Vec::new();
         }
+        // One column at a time: faer's multi-column solve does not give a column the bits of a
+        // single-column solve, and a rerun of one multiplier space must reproduce the full run's
+        // numbers bit for bit (tests/python/test_campaign.py).
         b.chunks_exact(n)
             .zip(x.chunks_exact_mut(n))
             .flat_map(|(bj, xj)| self.refine_columns(matrix, bj, xj, max_steps, tol))
@@ -1089,11 +1061,11 @@ impl Ldlt {
     }
 
     /// [`Ldlt::condition_estimate`] given `K⁻¹` applied to the two [`condition_probes`]
-    /// (column-major `n × 2`), so that their solve can share a block solve with other columns.
+    /// (column-major `n × 2`).
     ///
     /// # Panics
     /// If `solved_probes.len() != 2 n` (caller bug).
-    pub fn condition_estimate_from_probes(&self, matrix: &SymCsc, solved_probes: &[f64]) -> f64 {
+    fn condition_estimate_from_probes(&self, matrix: &SymCsc, solved_probes: &[f64]) -> f64 {
         let n = self.n;
         assert_eq!(solved_probes.len(), 2 * n, "condition probes: n × 2");
         if n == 0 {
@@ -1144,7 +1116,7 @@ pub const CONDITION_ITERATIONS: usize = 1;
 
 /// The two right-hand sides whose solves start [`Ldlt::condition_estimate`], column-major
 /// `n × 2`: `1/n` (Hager's start) and Higham's `(−1)^i (1 + i/(n−1))`.
-pub fn condition_probes(n: usize) -> Vec<f64> {
+fn condition_probes(n: usize) -> Vec<f64> {
     let mut block = vec![1.0 / n.max(1) as f64; 2 * n];
     for i in 0..n {
         let t = if n > 1 {
