@@ -256,42 +256,27 @@ impl SymCsc {
     /// # Panics
     /// If a length differs from `n` (caller bug).
     pub fn mul_vec_with_abs(&self, x: &[f64], y: &mut [f64], s: &mut [f64]) {
-        self.mul_many_with_abs(x, y, s, 1);
-    }
-
-    /// [`SymCsc::mul_vec_with_abs`] for `k` column-major vectors at once (`n × k` in `x`, `y`,
-    /// `s`): the matrix, the larger operand, is read once for all of them.
-    ///
-    /// # Panics
-    /// If a length differs from `n k` (caller bug).
-    pub fn mul_many_with_abs(&self, x: &[f64], y: &mut [f64], s: &mut [f64], k: usize) {
         let n = self.n;
         assert!(
-            x.len() == n * k && y.len() == n * k && s.len() == n * k,
-            "SymCsc::mul_many_with_abs: lengths"
+            x.len() == n && y.len() == n && s.len() == n,
+            "SymCsc::mul_vec_with_abs: lengths"
         );
         y.fill(0.0);
         s.fill(0.0);
         for j in 0..n {
+            let (xj, aj) = (x[j], x[j].abs());
+            let (mut yj, mut sj) = (0.0, 0.0);
             let range = self.col_ptr[j]..self.col_ptr[j + 1];
-            for c in 0..k {
-                let o = c * n;
-                let (xj, aj) = (x[o + j], x[o + j].abs());
-                let (mut yj, mut sj) = (0.0, 0.0);
-                for (&i, &v) in self.row_idx[range.clone()]
-                    .iter()
-                    .zip(&self.values[range.clone()])
-                {
-                    y[o + i] += v * xj;
-                    s[o + i] += v.abs() * aj;
-                    if i != j {
-                        yj += v * x[o + i];
-                        sj += v.abs() * x[o + i].abs();
-                    }
+            for (&i, &v) in self.row_idx[range.clone()].iter().zip(&self.values[range]) {
+                y[i] += v * xj;
+                s[i] += v.abs() * aj;
+                if i != j {
+                    yj += v * x[i];
+                    sj += v.abs() * x[i].abs();
                 }
-                y[o + j] += yj;
-                s[o + j] += sj;
             }
+            y[j] += yj;
+            s[j] += sj;
         }
     }
 
@@ -964,86 +949,74 @@ impl Ldlt {
         // numbers bit for bit (tests/python/test_campaign.py).
         b.chunks_exact(n)
             .zip(x.chunks_exact_mut(n))
-            .flat_map(|(bj, xj)| self.refine_columns(matrix, bj, xj, max_steps, tol))
+            .map(|(bj, xj)| self.refine_column(matrix, bj, xj, max_steps, tol))
             .collect()
     }
 
-    /// Refinement of the `n × k` columns of `b` with shared block solves and stopping rule; called
-    /// with one column at a time, whose bits then do not depend on any other right-hand side.
-    fn refine_columns(
+    /// Solve and refine one right-hand side on the componentwise backward error (see
+    /// [`Ldlt::solve_refined_many`]); returns the best ω.
+    fn refine_column(
         &self,
         matrix: &SymCsc,
         b: &[f64],
         x: &mut [f64],
         max_steps: usize,
         tol: f64,
-    ) -> Vec<f64> {
+    ) -> f64 {
         let n = self.n;
-        let k = b.len().checked_div(n).unwrap_or(0);
-        assert_eq!(k * n, b.len(), "Ldlt::solve_refined_many: b is not n × k");
         x.copy_from_slice(b);
-        self.solve_many_in_place(x, k);
-        let mut r = vec![0.0; b.len()];
-        // componentwise backward error of each column: max_i |b − K x|_i / (|K||x| + |b|)_i
-        let mut kx = vec![0.0; n * k];
-        let mut scale = vec![0.0; n * k];
-        let mut residuals = |x: &[f64], r: &mut [f64]| -> Vec<f64> {
-            matrix.mul_many_with_abs(x, &mut kx, &mut scale, k);
-            (0..k)
-                .map(|j| {
-                    let cols = j * n..(j + 1) * n;
-                    let (bj, rj) = (&b[cols.clone()], &mut r[cols.clone()]);
-                    let (kxj, sj) = (&kx[cols.clone()], &scale[cols]);
-                    let mut omega = 0.0f64;
-                    for i in 0..n {
-                        rj[i] = bj[i] - kxj[i];
-                        let d = sj[i] + bj[i].abs();
-                        if rj[i] != 0.0 {
-                            omega = omega.max(if d > 0.0 {
-                                rj[i].abs() / d
-                            } else {
-                                f64::INFINITY
-                            });
-                        }
-                    }
-                    if rj.iter().any(|v| v.is_nan()) {
-                        f64::NAN
-                    } else {
-                        omega
-                    }
-                })
-                .collect()
+        self.solve_in_place(x);
+        let mut r = vec![0.0; n];
+        let mut kx = vec![0.0; n];
+        let mut scale = vec![0.0; n];
+        // r = b − K x and ω = max_i |r_i| / (|K||x| + |b|)_i
+        let mut residual = |x: &[f64], r: &mut [f64]| -> f64 {
+            matrix.mul_vec_with_abs(x, &mut kx, &mut scale);
+            for i in 0..n {
+                r[i] = b[i] - kx[i];
+                scale[i] += b[i].abs();
+            }
+            componentwise_backward_error(r, &scale)
         };
-        let mut rel = residuals(x, &mut r);
-        let mut best = rel.clone();
+        let mut omega = residual(x, &mut r);
+        let mut best = omega;
         let mut best_x = x.to_vec();
-        let mut stagnant = 0;
         for step in 0..max_steps.max(1) {
-            let done = best.iter().all(|&v| v <= tol);
-            if step > 0 && (done || stagnant >= STAGNATION_STEPS) {
+            if (step > 0 && best <= tol) || !omega.is_finite() {
                 break;
             }
-            if rel.iter().any(|v| !v.is_finite()) {
-                break;
-            }
-            self.solve_many_in_place(&mut r, k);
+            self.solve_in_place(&mut r);
             x.iter_mut().zip(&r).for_each(|(xi, di)| *xi += di);
-            rel = residuals(x, &mut r);
-            // a step that does not halve some column's best residual means every column is at
-            // its round-off floor: one more solve would not change the answer
-            let mut improved = false;
-            for j in 0..k {
-                if rel[j] < best[j] {
-                    improved |= rel[j] < 0.5 * best[j];
-                    best[j] = rel[j];
-                    best_x[j * n..(j + 1) * n].copy_from_slice(&x[j * n..(j + 1) * n]);
-                }
+            omega = residual(x, &mut r);
+            let halved = omega < 0.5 * best;
+            if omega < best {
+                best = omega;
+                best_x.copy_from_slice(x);
             }
-            stagnant = if improved { 0 } else { STAGNATION_STEPS };
+            // a step that does not halve ω means the round-off floor: another would not help
+            if !halved {
+                break;
+            }
         }
         x.copy_from_slice(&best_x);
         best
     }
+}
+
+/// The componentwise (Oettli–Prager) backward error `max_i |r_i| / scale_i` of a residual `r`
+/// whose rows have the sizes `scale` (e.g. `(|K||x| + |b|)_i`): 0/0 counts as 0, a non-zero
+/// residual over a zero scale as ∞, and a NaN residual gives NaN.
+pub fn componentwise_backward_error(residual: &[f64], scale: &[f64]) -> f64 {
+    let mut omega = 0.0f64;
+    for (&r, &d) in residual.iter().zip(scale) {
+        if r.is_nan() {
+            return f64::NAN;
+        }
+        if r != 0.0 {
+            omega = omega.max(if d > 0.0 { r.abs() / d } else { f64::INFINITY });
+        }
+    }
+    omega
 }
 
 impl Ldlt {
@@ -1529,6 +1502,20 @@ mod tests {
                 "m = {m}: {est:e} vs {exact:e}"
             );
         }
+    }
+
+    #[test]
+    fn componentwise_backward_error_conventions() {
+        assert_eq!(
+            componentwise_backward_error(&[0.0, 1e-16], &[0.0, 1.0]),
+            1e-16
+        );
+        assert_eq!(componentwise_backward_error(&[-2.0, 1.0], &[4.0, 8.0]), 0.5);
+        assert_eq!(
+            componentwise_backward_error(&[1e-300], &[0.0]),
+            f64::INFINITY
+        );
+        assert!(componentwise_backward_error(&[0.0, f64::NAN], &[1.0, 1.0]).is_nan());
     }
 
     #[test]

@@ -16,7 +16,7 @@ use crate::assembly::{assemble, AssemblyError, CrackOperators, System};
 use crate::contact::{KktResiduals, Lcp, LcpOptions, LcpStatus};
 use crate::fe::mini::bubble_coefficients;
 use crate::fe::p1::TriangleGeometry;
-use crate::linalg::{Ldlt, LinalgError, SymbolicLdlt};
+use crate::linalg::{componentwise_backward_error, Ldlt, LinalgError, SymbolicLdlt};
 use crate::mesh::{Mesh, MeshError, UTopology};
 use crate::norms::{error_norms, CrackField, DiscreteSolution, ErrorNorms, NormQuadrature};
 use crate::scene::{MultiplierSpace, Scene, USpace};
@@ -566,23 +566,13 @@ impl LevelContext<'_> {
         // Componentwise (Oettli–Prager) backward error of K x + Dᵀμ = b: row i's residual over
         // (|K||x| + |Dᵀμ| + |b|)_i. Invariant under any diagonal scaling of rows and unknowns, so
         // under the dilations of the domain and the scaling of the data (tests/stability.rs).
-        let mut eq = 0.0f64;
+        let n_p = self.system.n_p;
         for i in 0..n {
-            let dt = if i < self.system.n_p {
-                dt_mu[i].abs()
-            } else {
-                0.0
-            };
-            let denominator = scale[i] + dt + self.system.rhs[i].abs();
-            let r = (kx[i] - rhs_mu[i]).abs();
-            if r > 0.0 {
-                eq = eq.max(if denominator > 0.0 {
-                    r / denominator
-                } else {
-                    f64::INFINITY
-                });
-            }
+            let dt = if i < n_p { dt_mu[i].abs() } else { 0.0 };
+            scale[i] = scale[i] + dt + self.system.rhs[i].abs();
+            kx[i] -= rhs_mu[i];
         }
+        let eq = componentwise_backward_error(&kx, &scale);
         let np = self.ops.apply_n(&x[..self.system.n_p]);
         let y: Vec<f64> = s
             .iter()

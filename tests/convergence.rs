@@ -32,18 +32,6 @@ fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
     s
 }
 
-/// (h, e_u, e_p, e_λ) per level for one variant.
-fn series(cases: &[CaseResult], u: USpace, m: MultiplierSpace) -> Vec<(f64, f64, f64, f64)> {
-    cases
-        .iter()
-        .filter(|c| c.u_space == u && c.multiplier == m)
-        .map(|c| {
-            let e = c.errors.expect("exact scene has errors");
-            (c.h, e.u_l2, e.p_l2, e.lambda_l2)
-        })
-        .collect()
-}
-
 /// Observed rate of the paper's X-norm of the p error between the last two levels.
 fn last_px_rate(cases: &[CaseResult], u: USpace, m: MultiplierSpace) -> f64 {
     let s: Vec<(f64, f64)> = cases
@@ -90,7 +78,7 @@ fn closed_crack_converges_optimally_for_every_variant() {
     assert_kkt(&cases);
     for u in [USpace::Continuous, USpace::Broken] {
         for m in MultiplierSpace::ALL {
-            let s = series(&cases, u, m);
+            let s = common::error_series(&cases, u, m);
             let (ru, rp, _) = last_rates(&s);
             let finest = s[s.len() - 1];
             assert!(ru >= 1.85, "{u} {m}: u rate {ru}");
@@ -112,7 +100,7 @@ fn open_crack_broken_converges_continuous_does_not() {
     let cases = common::solve(&scene, CaseFilter::default());
     assert_kkt(&cases);
     for m in MultiplierSpace::ALL {
-        let s = series(&cases, USpace::Broken, m);
+        let s = common::error_series(&cases, USpace::Broken, m);
         let (ru, rp, rl) = last_rates(&s);
         // observed 1.35-1.36, 0.46-0.47, 0.74 (M0) / 0.95 (M1, M1star)
         assert!(ru >= 1.3, "broken {m}: u rate {ru}");
@@ -138,7 +126,7 @@ fn open_crack_broken_converges_continuous_does_not() {
     // Characterisation of the continuous u space on an open crack (BRIEF §2): the errors stall.
     // Recorded at level 4: e_u = 1.90e-1, e_p = 6.57e-1, e_λ = 8.11e-1 (λ_h → 0).
     for m in MultiplierSpace::ALL {
-        let s = series(&cases, USpace::Continuous, m);
+        let s = common::error_series(&cases, USpace::Continuous, m);
         let (ru, rp, rl) = last_rates(&s);
         assert!(
             ru < 0.05 && rp < 0.05 && rl < 0.05,

@@ -562,18 +562,6 @@ fn anisotropic_meshes_solve_to_tolerance() {
     }
 }
 
-/// (h, e_u, e_p, e_λ) per level of one variant.
-fn error_series(cases: &[CaseResult], u: USpace, m: MultiplierSpace) -> Vec<(f64, f64, f64, f64)> {
-    cases
-        .iter()
-        .filter(|c| c.u_space == u && c.multiplier == m)
-        .map(|c| {
-            let e = c.errors.expect("exact scene has errors");
-            (c.h, e.u_l2, e.p_l2, e.lambda_l2)
-        })
-        .collect()
-}
-
 /// The exact solutions on aspect-4 cells ([8, 32] and [32, 8], levels 0–2, δ = 0). Measured rates
 /// between levels 1 and 2:
 ///
@@ -602,7 +590,7 @@ fn exact_solutions_converge_on_aspect_4_meshes() {
             assert_solved(&cases, name);
             for u in [USpace::Continuous, USpace::Broken] {
                 for m in MultiplierSpace::ALL {
-                    let s = error_series(&cases, u, m);
+                    let s = common::error_series(&cases, u, m);
                     let rate = |k: usize, q: fn(&(f64, f64, f64, f64)) -> f64| {
                         common::rate(s[k].0, q(&s[k]), s[k + 1].0, q(&s[k + 1]))
                     };

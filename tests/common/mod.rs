@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use sdcrack::scene::Scene;
+use sdcrack::scene::{MultiplierSpace, Scene, USpace};
 use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
 
 /// A small valid scene (levels 0–1 of a 4 × 4 mesh, every variant, fields, no reference) that the
@@ -47,4 +47,20 @@ pub fn solve(scene: &Scene, filter: CaseFilter) -> Vec<CaseResult> {
 /// Observed rate log(e0/e1)/log(h0/h1).
 pub fn rate(h0: f64, e0: f64, h1: f64, e1: f64) -> f64 {
     (e0 / e1).ln() / (h0 / h1).ln()
+}
+
+/// (h, e_u, e_p, e_λ) per level of one variant of a scene with `[exact]`.
+pub fn error_series(
+    cases: &[CaseResult],
+    u: USpace,
+    m: MultiplierSpace,
+) -> Vec<(f64, f64, f64, f64)> {
+    cases
+        .iter()
+        .filter(|c| c.u_space == u && c.multiplier == m)
+        .map(|c| {
+            let e = c.errors.expect("exact scene has errors");
+            (c.h, e.u_l2, e.p_l2, e.lambda_l2)
+        })
+        .collect()
 }
