@@ -21,7 +21,7 @@ use rayon::prelude::*;
 
 use crate::fe::mini::{condensed_element, CondensedElement};
 use crate::fe::p1::TriangleGeometry;
-use crate::fe::quadrature::{gauss_legendre, triangle_rule};
+use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};
 use crate::linalg::SymCsc;
 use crate::mesh::{Mesh, UTopology};
 use crate::scene::{Expr, MultiplierSpace};
@@ -308,15 +308,14 @@ fn load_vector(mesh: &Mesh, topo: &UTopology, f: &Expr) -> Result<Vec<f64>, Asse
         .map(|t| {
             let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
             let mut r = [0.0; 3];
-            for (xi, w) in rule.points.iter().zip(&rule.weights) {
-                let p = geo.map(*xi);
-                let fv = f.eval(p[0], p[1]);
+            for q in physical_points(&rule, geo.vertices, REFERENCE_TRIANGLE) {
+                let fv = f.eval(q.x[0], q.x[1]);
                 if !fv.is_finite() {
-                    return Err(non_finite("f", f, fv, p));
+                    return Err(non_finite("f", f, fv, q.x));
                 }
-                let l = TriangleGeometry::barycentric(*xi);
+                let l = TriangleGeometry::barycentric(q.xi);
                 for i in 0..3 {
-                    r[i] += 2.0 * geo.area * w * fv * l[i];
+                    r[i] += q.weight * fv * l[i];
                 }
             }
             Ok(r)

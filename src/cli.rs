@@ -364,7 +364,7 @@ fn run(
     })?;
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
-    write_run(results.work_path(), scene, &study, wall).map_err(runtime)?;
+    write_run(results.work_path(), scene, &plan, &study, wall).map_err(runtime)?;
     run_references(scene, &plan, results.work_path(), quiet)?;
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);

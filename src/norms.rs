@@ -12,7 +12,7 @@
 
 use crate::fe::mini::mini_value;
 use crate::fe::p1::TriangleGeometry;
-use crate::fe::quadrature::{gauss_legendre, triangle_rule, TriangleRule};
+use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};
 use crate::mesh::{Mesh, UTopology};
 use crate::scene::{eval_on_face, Exact};
 
@@ -72,7 +72,7 @@ pub struct DiscreteSolution<'a> {
 
 /// Sub-triangles (in reference coordinates of the parent) graded toward the local vertex `corner`.
 fn graded_pieces(corner: Option<usize>, depth: usize) -> Vec<[[f64; 2]; 3]> {
-    let full = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    let full = REFERENCE_TRIANGLE;
     let Some(c) = corner else {
         return vec![full];
     };
@@ -91,24 +91,6 @@ fn graded_pieces(corner: Option<usize>, depth: usize) -> Vec<[[f64; 2]; 3]> {
     }
     pieces.push(current);
     pieces
-}
-
-fn piece_points(piece: &[[f64; 2]; 3], rule: &TriangleRule) -> Vec<([f64; 2], f64)> {
-    let [a, b, c] = *piece;
-    let det = ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs();
-    rule.points
-        .iter()
-        .zip(&rule.weights)
-        .map(|(xi, w)| {
-            (
-                [
-                    a[0] + xi[0] * (b[0] - a[0]) + xi[1] * (c[0] - a[0]),
-                    a[1] + xi[0] * (b[1] - a[1]) + xi[1] * (c[1] - a[1]),
-                ],
-                w * det,
-            )
-        })
-        .collect()
 }
 
 /// Computes e_u, e_p, e_λ of `sol` against `exact`.
@@ -153,9 +135,8 @@ pub fn error_norms(
             let h_t = d(a, b).max(d(b, c)).max(d(a, c));
             let (mut su, mut sp, mut sd) = (0.0, 0.0, 0.0);
             for piece in pieces {
-                for (xi, w) in piece_points(piece, &rule) {
-                    let l = TriangleGeometry::barycentric(xi);
-                    let x = geo.map(xi);
+                for q in physical_points(&rule, geo.vertices, *piece) {
+                    let (l, x, w) = (TriangleGeometry::barycentric(q.xi), q.x, q.weight);
                     let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
                     let ph = mini_value(&pv, bc, l);
                     let du = uh - exact.u.eval(x[0], x[1]);
@@ -169,9 +150,9 @@ pub fn error_norms(
                     });
                     let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
                     let ddiv = div_h + sol.source.eval(x[0], x[1]);
-                    su += w * geo.area * du * du;
-                    sp += w * geo.area * (dpx * dpx + dpy * dpy);
-                    sd += w * geo.area * h_t * h_t * ddiv * ddiv;
+                    su += w * du * du;
+                    sp += w * (dpx * dpx + dpy * dpy);
+                    sd += w * h_t * h_t * ddiv * ddiv;
                 }
             }
             (su, sp, sd)
@@ -251,5 +232,64 @@ mod tests {
                 assert_eq!(smallest[0], v, "last piece sits at the corner");
             }
         }
+    }
+
+    use crate::scene::{Scene, USpace};
+    use std::f64::consts::PI;
+
+    /// The error norms of the zero discrete solution of a repository scene at `level`.
+    fn zero_field_norms(scene_toml: &str, level: u32) -> (ErrorNorms, Mesh) {
+        let scene = Scene::from_toml(scene_toml).expect("repository scene is valid");
+        let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, level).unwrap();
+        let topo = mesh.u_topology(USpace::Broken);
+        let exact = scene.exact.as_ref().expect("exact scene");
+        let u = vec![0.0; topo.n_dofs];
+        let p = vec![[0.0; 2]; mesh.vertices.len()];
+        let bubbles = vec![[0.0; 2]; mesh.triangles.len()];
+        let lambda = CrackField::PerNode(vec![0.0; mesh.crack.nodes.len()]);
+        let sol = DiscreteSolution {
+            u: &u,
+            p: &p,
+            bubbles: &bubbles,
+            lambda: &lambda,
+            source: &scene.f,
+        };
+        let norms = error_norms(&mesh, &topo, exact, &sol, NormQuadrature::default());
+        (norms, mesh)
+    }
+
+    /// The error of the zero field is the norm of the exact solution, here in closed form:
+    /// u = sin(πx)cos(πy) − y on (−1, 1)² has ‖u‖² = 1 + 4/3, ‖∇u‖² = 2π² + 4, and
+    /// f = −Δu = 2π² sin(πx)cos(πy) has ‖f‖² = 4π⁴ (the X-norm adds h_T²‖f‖²_T with h_T the
+    /// diagonal of a cell). A quadrature weight off by a constant factor fails this test.
+    #[test]
+    fn zero_field_error_is_the_closed_form_norm_of_the_exact_solution() {
+        let (n, mesh) = zero_field_norms(include_str!("../scenes/closed-exact.toml"), 1);
+        let h_t = std::f64::consts::SQRT_2 * 2.0 / 16.0;
+        let close = |a: f64, b: f64, what: &str| {
+            assert!((a - b).abs() <= 1e-12 * b, "{what}: {a} vs closed form {b}");
+        };
+        close(n.u_l2, (7.0f64 / 3.0).sqrt(), "‖u‖");
+        close(n.p_l2, (2.0 * PI * PI + 4.0).sqrt(), "‖∇u‖");
+        close(
+            n.p_x,
+            (2.0 * PI * PI + 4.0 + h_t * h_t * 4.0 * PI.powi(4)).sqrt(),
+            "‖∇u‖_X",
+        );
+        assert_eq!(n.lambda_l2, 0.0, "[u] = 0 on the closed crack");
+        assert_eq!(mesh.triangles.len(), 2 * 16 * 16);
+    }
+
+    /// On the open crack [u] = 2 sqrt(1/4 − x²) on (−1/2, 1/2): ‖[u]‖² = 4 (1/4 − 1/12) = 2/3,
+    /// integrated through the r^{1/2} tips by the graded segments.
+    #[test]
+    fn zero_multiplier_error_is_the_closed_form_norm_of_the_jump() {
+        let (n, _) = zero_field_norms(include_str!("../scenes/open-exact.toml"), 0);
+        let exact = (2.0f64 / 3.0).sqrt();
+        assert!(
+            (n.lambda_l2 - exact).abs() <= 1e-9 * exact,
+            "‖[u]‖ = {} vs {exact}",
+            n.lambda_l2
+        );
     }
 }

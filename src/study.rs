@@ -134,6 +134,8 @@ pub struct CaseFieldData {
     pub u: Vec<f64>,
     /// p at each dof's vertex.
     pub p: Vec<[f64; 2]>,
+    /// Bubble coefficients of p per triangle (see [`crate::fe::mini::mini_value`]).
+    pub p_bubble: Vec<[f64; 2]>,
     /// λ_h on the crack.
     pub lambda: CrackField,
 }
@@ -501,8 +503,13 @@ impl LevelContext<'_> {
         let (p, u) = x.split_at(n_p);
         let p_vertex: Vec<[f64; 2]> = p.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
         let t1 = Instant::now();
+        let needs_bubbles = self.scene.exact.is_some() || self.scene.fields.p;
+        let bubbles = if needs_bubbles {
+            self.bubbles(&p_vertex, u)
+        } else {
+            Vec::new()
+        };
         let errors = self.scene.exact.as_ref().map(|exact| {
-            let bubbles = self.bubbles(&p_vertex, u);
             error_norms(
                 self.mesh,
                 self.topo,
@@ -522,6 +529,7 @@ impl LevelContext<'_> {
         let fields = (!self.scene.fields.is_empty()).then(|| CaseFieldData {
             u: u.to_vec(),
             p: self.topo.dof_vertex.iter().map(|&v| p_vertex[v]).collect(),
+            p_bubble: bubbles,
             lambda: lambda.clone(),
         });
         timings.fields = t2.elapsed().as_secs_f64();

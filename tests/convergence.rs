@@ -2,17 +2,17 @@
 //! residuals, and the quadrature of the error norms.
 //!
 //! Measured on levels 2, 3, 4 of the 8×8 scenes (h = 0.0884, 0.0442, 0.0221), rates log2 between
-//! levels 3 and 4 (this commit, 2 cores):
+//! levels 3 and 4 (remeasured after the √2 fix of the norms' quadrature weights, issue 12):
 //!
 //! (the X-norm of the p error, `p_x`, has rate 1.00 on the closed and 0.46 on the open crack)
 //!
 //! | scene  | u space    | mult.  | e_u (lvl 4) | rate u | e_p (lvl 4) | rate p | e_λ (lvl 4) | rate λ |
 //! |--------|------------|--------|-------------|--------|-------------|--------|-------------|--------|
-//! | closed | both       | all    | 2.30e-4     | 2.00   | 4.82e-2     | 1.00   | 0           | –      |
-//! | open   | broken     | M0     | 7.06e-4     | 1.36   | 1.21e-1     | 0.47   | 2.19e-2     | 0.74   |
-//! | open   | broken     | M1     | 7.04e-4     | 1.35   | 1.21e-1     | 0.46   | 7.27e-3     | 0.95   |
-//! | open   | broken     | M1star | 7.04e-4     | 1.35   | 1.21e-1     | 0.46   | 7.27e-3     | 0.95   |
-//! | open   | continuous | all    | 1.90e-1     | −0.01  | 6.57e-1     | −0.00  | 8.11e-1     | −0.01  |
+//! | closed | both       | all    | 3.25e-4     | 2.00   | 6.81e-2     | 1.00   | 0           | –      |
+//! | open   | broken     | M0     | 9.99e-4     | 1.36   | 1.72e-1     | 0.47   | 2.19e-2     | 0.74   |
+//! | open   | broken     | M1     | 9.96e-4     | 1.35   | 1.71e-1     | 0.46   | 7.27e-3     | 0.95   |
+//! | open   | broken     | M1star | 9.96e-4     | 1.35   | 1.71e-1     | 0.46   | 7.27e-3     | 0.95   |
+//! | open   | continuous | all    | 2.69e-1     | −0.01  | 9.30e-1     | −0.00  | 8.11e-1     | −0.01  |
 //!
 //! The open crack has r^{1/2} tip singularities (u ∈ H^{3/2−ε}), which bounds the rates of u and p;
 //! the `continuous` u space cannot carry the jump and does not converge at all (λ_h → 0, so
@@ -86,8 +86,8 @@ fn closed_crack_converges_optimally_for_every_variant() {
             // X-norm (paper §4): observed 1.00
             let rx = last_px_rate(&cases, u, m);
             assert!(rx >= 0.9, "{u} {m}: p X-norm rate {rx}");
-            assert!(finest.1 < 2.5e-4, "{u} {m}: e_u = {}", finest.1);
-            assert!(finest.2 < 5.0e-2, "{u} {m}: e_p = {}", finest.2);
+            assert!(finest.1 < 3.6e-4, "{u} {m}: e_u = {}", finest.1);
+            assert!(finest.2 < 7.5e-2, "{u} {m}: e_p = {}", finest.2);
             // closed crack: λ_h = 0 = [u] exactly
             assert!(finest.3 < 1e-12, "{u} {m}: e_λ = {}", finest.3);
         }
@@ -111,7 +111,10 @@ fn open_crack_broken_converges_continuous_does_not() {
         let rl_min = if m == MultiplierSpace::M0 { 0.68 } else { 0.9 };
         assert!(rl >= rl_min, "broken {m}: λ rate {rl}");
         let finest = s[2];
-        assert!(finest.1 < 8e-4 && finest.2 < 0.13, "broken {m}: {finest:?}");
+        assert!(
+            finest.1 < 1.1e-3 && finest.2 < 0.19,
+            "broken {m}: {finest:?}"
+        );
         // the paper's rates (Thm 4.3: h^1/2 for M0 and M1, h^3/4 for M1star) are met or exceeded
         let paper = if m == MultiplierSpace::M1Star {
             0.75
@@ -124,7 +127,8 @@ fn open_crack_broken_converges_continuous_does_not() {
         );
     }
     // Characterisation of the continuous u space on an open crack (BRIEF §2): the errors stall.
-    // Recorded at level 4: e_u = 1.90e-1, e_p = 6.57e-1, e_λ = 8.11e-1 (λ_h → 0).
+    // Recorded at level 4: e_u = 2.69e-1, e_p = 9.30e-1, e_λ = 8.11e-1 (λ_h → 0, so e_λ tends
+    // to ‖[u]‖ = sqrt(2/3) = 0.8165, the closed form of the norms' unit test).
     for m in MultiplierSpace::ALL {
         let s = common::error_series(&cases, USpace::Continuous, m);
         let (ru, rp, rl) = last_rates(&s);
@@ -134,12 +138,12 @@ fn open_crack_broken_converges_continuous_does_not() {
         );
         let finest = s[2];
         assert!(
-            (finest.1 - 0.190).abs() < 0.005,
+            (finest.1 - 0.269).abs() < 0.005,
             "continuous {m}: e_u = {}",
             finest.1
         );
         assert!(
-            (finest.2 - 0.657).abs() < 0.005,
+            (finest.2 - 0.930).abs() < 0.005,
             "continuous {m}: e_p = {}",
             finest.2
         );

@@ -98,7 +98,7 @@ pub fn mini_value(p: &[[f64; 2]; 3], bc: [f64; 2], l: [f64; 3]) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fe::quadrature::triangle_rule;
+    use crate::fe::quadrature::{physical_points, triangle_rule, REFERENCE_TRIANGLE};
 
     /// Builds the full (uncondensed) element system by quadrature and eliminates the bubbles densely.
     #[test]
@@ -113,9 +113,8 @@ mod tests {
                 + t.grad[1][d] * l[0] * l[2]
                 + t.grad[2][d] * l[0] * l[1])
         };
-        for (xi, w) in rule.points.iter().zip(&rule.weights) {
-            let w = w * 2.0 * t.area;
-            let l = TriangleGeometry::barycentric(*xi);
+        for q in physical_points(&rule, t.vertices, REFERENCE_TRIANGLE) {
+            let (w, l) = (q.weight, TriangleGeometry::barycentric(q.xi));
             let b = bubble(l);
             // p basis: value (vector) and divergence
             let mut val = [[0.0; 2]; 8];

@@ -1,5 +1,6 @@
 //! Quadrature rules: Gauss–Legendre on [0, 1] and collapsed (Duffy/conical-product) Gauss rules on
-//! the reference triangle {ξ, η ≥ 0, ξ + η ≤ 1}.
+//! the reference triangle {ξ, η ≥ 0, ξ + η ≤ 1}, and [`physical_points`], the one place where a
+//! reference rule becomes a rule on a physical triangle (weights summing to its area).
 //!
 //! The collapsed rule with n × n points, ξ = s, η = t(1 − s), weight w_s w_t (1 − s), integrates every
 //! polynomial of total degree ≤ 2n − 2 exactly; all its points are strictly inside the triangle, so
@@ -83,6 +84,54 @@ pub fn triangle_rule(degree: usize) -> TriangleRule {
     }
 }
 
+/// The reference triangle, as a piece of itself: (0, 0), (1, 0), (0, 1).
+pub const REFERENCE_TRIANGLE: [[f64; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+
+/// A quadrature point on a physical triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct PhysicalPoint {
+    /// Reference coordinates (ξ, η) of the point in its (parent) triangle.
+    pub xi: [f64; 2],
+    /// The physical point x = v0 + ξ(v1 − v0) + η(v2 − v0).
+    pub x: [f64; 2],
+    /// Physical weight: the weights of a piece sum to the piece's area (units of length²).
+    pub weight: f64,
+}
+
+/// The points of `rule` on the sub-triangle `piece` of the physical triangle `vertices`, `piece`
+/// given in the reference coordinates of `vertices` ([`REFERENCE_TRIANGLE`] for the whole
+/// triangle). Each weight is the reference weight times |det(piece)| (the piece's share of the
+/// reference triangle, ×2) times the physical Jacobian |det(v1 − v0, v2 − v0)| = 2|T|: the weights
+/// of `rule` sum to 1/2, so those returned sum to the physical area of the piece.
+pub fn physical_points(
+    rule: &TriangleRule,
+    vertices: [[f64; 2]; 3],
+    piece: [[f64; 2]; 3],
+) -> Vec<PhysicalPoint> {
+    let det = |[a, b, c]: [[f64; 2]; 3]| {
+        ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
+    };
+    let affine = |[a, b, c]: [[f64; 2]; 3], s: [f64; 2]| {
+        [
+            a[0] + s[0] * (b[0] - a[0]) + s[1] * (c[0] - a[0]),
+            a[1] + s[0] * (b[1] - a[1]) + s[1] * (c[1] - a[1]),
+        ]
+    };
+    let scale = det(piece) * det(vertices);
+    rule.points
+        .iter()
+        .zip(&rule.weights)
+        .map(|(s, w)| {
+            let xi = affine(piece, *s);
+            PhysicalPoint {
+                xi,
+                x: affine(vertices, xi),
+                weight: w * scale,
+            }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -130,5 +179,102 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// ∫_T x^a y^b dA by Green's theorem, ∮_∂T x^(a+1) y^b / (a + 1) dy, each edge with a 1-D
+    /// Gauss rule exact for its degree a + b + 1: a path independent of the triangle rules.
+    fn monomial_by_green(v: [[f64; 2]; 3], a: i32, b: i32) -> f64 {
+        let g = gauss_legendre(((a + b + 2) / 2 + 1) as usize);
+        let signed =
+            (v[1][0] - v[0][0]) * (v[2][1] - v[0][1]) - (v[2][0] - v[0][0]) * (v[1][1] - v[0][1]);
+        let mut total = 0.0;
+        for k in 0..3 {
+            let (p, q) = (v[k], v[(k + 1) % 3]);
+            for (t, w) in g.points.iter().zip(&g.weights) {
+                let x = p[0] + t * (q[0] - p[0]);
+                let y = p[1] + t * (q[1] - p[1]);
+                total += w * x.powi(a + 1) * y.powi(b) / f64::from(a + 1) * (q[1] - p[1]);
+            }
+        }
+        total * signed.signum()
+    }
+
+    /// Physical triangles of both orientations, far from the reference one, and a sliver.
+    const PHYSICAL: [[[f64; 2]; 3]; 4] = [
+        [[0.2, -0.1], [1.1, 0.3], [0.4, 0.9]],
+        [[-0.75, -1.0], [-0.5, -0.75], [-0.75, -0.75]],
+        [[3.0, 2.0], [1.0, 5.0], [4.5, 6.0]],
+        [[0.0, 0.0], [1.0, 1e-3], [0.5, 2e-3]],
+    ];
+
+    #[test]
+    fn every_rule_integrates_one_to_the_area_of_physical_triangles() {
+        for degree in [0, 2, 4, 6, 8, 10, 12] {
+            let rule = triangle_rule(degree);
+            for v in PHYSICAL {
+                let area = monomial_by_green(v, 0, 0).abs();
+                let q: f64 = physical_points(&rule, v, REFERENCE_TRIANGLE)
+                    .iter()
+                    .map(|p| p.weight)
+                    .sum();
+                assert!(
+                    (q - area).abs() <= 1e-14 * area,
+                    "degree {degree}, triangle {v:?}: Σ w = {q}, area {area}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn every_rule_is_exact_on_monomials_of_physical_triangles() {
+        for degree in [0, 2, 4, 6, 8, 10, 12] {
+            let rule = triangle_rule(degree);
+            for v in PHYSICAL {
+                let points = physical_points(&rule, v, REFERENCE_TRIANGLE);
+                for a in 0..=degree as i32 {
+                    for b in 0..=(degree as i32 - a) {
+                        let exact = monomial_by_green(v, a, b);
+                        let q: f64 = points
+                            .iter()
+                            .map(|p| p.weight * p.x[0].powi(a) * p.x[1].powi(b))
+                            .sum();
+                        let scale = points
+                            .iter()
+                            .map(|p| p.weight * (p.x[0].powi(a) * p.x[1].powi(b)).abs())
+                            .sum::<f64>();
+                        assert!(
+                            (q - exact).abs() <= 1e-13 * scale,
+                            "degree {degree}, {v:?}: x^{a} y^{b}: {q} vs {exact}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn pieces_tile_their_parent_with_physical_weights() {
+        // four congruent children of the reference triangle integrate like the parent
+        let rule = triangle_rule(6);
+        let v = PHYSICAL[2];
+        let children = [
+            [[0.0, 0.0], [0.5, 0.0], [0.0, 0.5]],
+            [[0.5, 0.0], [1.0, 0.0], [0.5, 0.5]],
+            [[0.0, 0.5], [0.5, 0.5], [0.0, 1.0]],
+            [[0.5, 0.5], [0.0, 0.5], [0.5, 0.0]],
+        ];
+        let f = |x: [f64; 2]| x[0].powi(3) * x[1].powi(2) - 2.0 * x[1];
+        let whole: f64 = physical_points(&rule, v, REFERENCE_TRIANGLE)
+            .iter()
+            .map(|p| p.weight * f(p.x))
+            .sum();
+        let split: f64 = children
+            .iter()
+            .flat_map(|c| physical_points(&rule, v, *c))
+            .map(|p| p.weight * f(p.x))
+            .sum();
+        let exact = monomial_by_green(v, 3, 2) - 2.0 * monomial_by_green(v, 0, 1);
+        assert!((whole - exact).abs() <= 1e-12 * exact.abs());
+        assert!((split - exact).abs() <= 1e-12 * exact.abs());
     }
 }

@@ -155,13 +155,24 @@ pub enum WriteError {
     Fields(#[from] xdmf::OutputError),
 }
 
-/// Writes `summary.json` and, when the scene asks for fields, `fields.h5` + `fields.xdmf` into `dir`.
+/// The copy of the scene file in a results folder (the embedded default's text for `sdcrack run`
+/// without a file): what the run was asked to do, read by the compare tool.
+pub const SCENE_COPY: &str = "scene.toml";
+
+/// Writes `scene.toml` (the scene's text byte for byte), `summary.json` and, when the scene asks
+/// for fields, `fields.h5` + `fields.xdmf` into `dir`.
 pub fn write_run(
     dir: &Path,
     scene: &crate::scene::Scene,
+    plan: &crate::study::CasePlan,
     study: &crate::study::StudyResult,
     wall_s: f64,
 ) -> Result<(), WriteError> {
+    let copy = dir.join(SCENE_COPY);
+    atomic_write(&copy, scene.source.as_bytes()).map_err(|e| WriteError::Io {
+        path: copy,
+        reason: e.to_string(),
+    })?;
     let with_fields = !scene.fields.is_empty();
     let t0 = std::time::Instant::now();
     if with_fields {
@@ -173,6 +184,7 @@ pub fn write_run(
         description: scene.description.clone(),
         sdcrack_version: env!("CARGO_PKG_VERSION"),
         kkt_tolerance: crate::study::KKT_TOLERANCE,
+        plan: summary::PlanSummary::from_plan(plan),
         shared_timings: [
             "assembly",
             "symbolic",
@@ -237,6 +249,7 @@ fn write_fields(
                 mesh_key: mesh_key(c.level, c.u_space),
                 u: scene.fields.u.then(|| f.u.clone()),
                 p: scene.fields.p.then(|| f.p.clone()),
+                p_bubble: scene.fields.p.then(|| f.p_bubble.clone()),
                 crack_points: crack_points(c.level),
                 lambda: scene.fields.lambda.then(|| match &f.lambda {
                     CrackField::PerSegment(v) => (xdmf::Centering::Cell, v.clone()),

@@ -19,6 +19,8 @@ pub struct Summary {
     pub sdcrack_version: &'static str,
     /// The KKT tolerance a case must meet to count as converged.
     pub kkt_tolerance: f64,
+    /// The cases the run was asked for: the scene's lists, restricted by the command line's filters.
+    pub plan: PlanSummary,
     /// Timing phases shared by several cases (reported with each of them).
     pub shared_timings: [&'static str; 5],
     /// True when every case converged.
@@ -29,6 +31,31 @@ pub struct Summary {
     pub fields_write_s: f64,
     /// The cases.
     pub cases: Vec<CaseSummary>,
+}
+
+/// What a run was asked to solve: every combination of these is a case of `cases`.
+#[derive(Serialize, Debug)]
+pub struct PlanSummary {
+    /// Levels, increasing.
+    pub levels: Vec<u32>,
+    /// u spaces.
+    pub u_spaces: Vec<String>,
+    /// Multiplier spaces.
+    pub multipliers: Vec<String>,
+    /// δ values, decreasing.
+    pub deltas: Vec<f64>,
+}
+
+impl PlanSummary {
+    /// The summary of `plan`.
+    pub fn from_plan(plan: &crate::study::CasePlan) -> PlanSummary {
+        PlanSummary {
+            levels: plan.levels.clone(),
+            u_spaces: plan.u_spaces.iter().map(ToString::to_string).collect(),
+            multipliers: plan.multipliers.iter().map(ToString::to_string).collect(),
+            deltas: plan.deltas.clone(),
+        }
+    }
 }
 
 /// One case of the summary.

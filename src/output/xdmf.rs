@@ -19,6 +19,8 @@
 //! /cases/CASE/mesh                 soft link to /meshes/KEY
 //! /cases/CASE/u                    f64 (N,)    optional
 //! /cases/CASE/p                    f64 (N, 3)  optional, z = 0
+//! /cases/CASE/p_bubble             f64 (T, 2)  with p: bubble coefficients of the MINI p per
+//!                                              triangle (p_h = Σ p_i λ_i + p_bubble · 27 λ0 λ1 λ2)
 //! /cases/CASE/crack/points         f64 (I+1, 3) crack nodes, z = 0
 //! /cases/CASE/crack/segments       i64 (I, 2)  [k, k+1]
 //! /cases/CASE/crack/lambda         f64 (I+1,) per node or (I,) per segment, optional
@@ -122,6 +124,9 @@ pub struct CaseFields {
     pub u: Option<Vec<f64>>,
     /// Flux / gradient variable, one 2-vector per mesh node (written with z = 0).
     pub p: Option<Vec<[f64; 2]>>,
+    /// Bubble coefficients of p, one 2-vector per mesh triangle (same order as the triangles):
+    /// on triangle T, p_h = Σ_i p_i λ_i + p_bubble[T] · 27 λ0 λ1 λ2 (the MINI field). Only with `p`.
+    pub p_bubble: Option<Vec<[f64; 2]>>,
     /// Crack polyline nodes (`I + 1` of them; empty for no crack grid).
     pub crack_points: Vec<[f64; 2]>,
     /// Contact multiplier on the crack, per node or per segment.
@@ -389,6 +394,18 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
             }
             check_finite(p, || format!("case {name:?}: field p"))?;
         }
+        if let Some(b) = &case.p_bubble {
+            let t = meshes[m].triangles.len();
+            if case.p.is_none() || b.len() != t {
+                return Err(OutputError::Invalid(format!(
+                    "case {name:?}: field p_bubble has {} values, mesh {:?} has {t} triangles \
+                     (and it needs p)",
+                    b.len(),
+                    case.mesh_key
+                )));
+            }
+            check_finite(b, || format!("case {name:?}: field p_bubble"))?;
+        }
         let nc = case.crack_points.len();
         if nc == 1 || (nc == 0 && case.lambda.is_some()) {
             return Err(OutputError::Invalid(format!(
@@ -472,6 +489,10 @@ fn write_h5(
                 }
                 if let Some(p) = &case.p {
                     write_f64(&g, "p", &pad3(p), vec![p.len(), 3])?;
+                }
+                if let Some(b) = &case.p_bubble {
+                    let flat: Vec<f64> = b.iter().flatten().copied().collect();
+                    write_f64(&g, "p_bubble", &flat, vec![b.len(), 2])?;
                 }
                 if has_crack(case) {
                     let gk = g.create_group("crack")?;
@@ -706,6 +727,11 @@ mod tests {
                 mesh.points
                     .iter()
                     .map(|q| [s * q[0] * q[1], s * (q[0] - q[1])])
+                    .collect()
+            }),
+            p_bubble: p.then(|| {
+                (0..mesh.triangles.len())
+                    .map(|t| [s * t as f64, -s])
                     .collect()
             }),
             crack_points,
@@ -1033,6 +1059,7 @@ mod tests {
             mesh_key: "m".into(),
             u: None,
             p: None,
+            p_bubble: None,
             crack_points: vec![],
             lambda: None,
         };

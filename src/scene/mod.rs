@@ -7,6 +7,7 @@
 //! validated [`Scene`], never on raw TOML.
 
 pub mod expr;
+pub mod verification;
 
 use std::fmt;
 use std::path::Path;
@@ -14,6 +15,7 @@ use std::path::Path;
 use serde::Deserialize;
 
 pub use expr::{Expr, ExprError, Var};
+pub use verification::{ExpectedFailure, Verification};
 
 /// The embedded default scene (`sdcrack run` without argument): a partly open, partly closed crack.
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/mixed.toml");
@@ -257,6 +259,10 @@ pub struct Scene {
     pub fields: FieldSet,
     /// Reference tools to run (`dolfinx`, `freefem`).
     pub references: Vec<String>,
+    /// What the verdict may expect of the scene (`[verification]`).
+    pub verification: Verification,
+    /// The scene's TOML text as read (copied byte for byte into the results folder).
+    pub source: String,
 }
 
 /// Largest refinement level accepted (4^13 · cells would not fit in memory anyway).
@@ -280,6 +286,7 @@ struct SceneToml {
     exact: Option<ExactToml>,
     discretization: DiscretizationToml,
     outputs: Option<OutputsToml>,
+    verification: Option<verification::VerificationToml>,
 }
 
 #[derive(Deserialize)]
@@ -347,6 +354,7 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
             "exact",
             "discretization",
             "outputs",
+            "verification",
         ],
     ),
     ("geometry", &["domain", "crack"]),
@@ -359,6 +367,11 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
         &["cells", "levels", "u_spaces", "multipliers", "deltas"],
     ),
     ("outputs", &["fields", "references"]),
+    ("verification", verification::VERIFICATION_KEYS),
+    (
+        "verification.expected_failure",
+        verification::EXPECTED_FAILURE_KEYS,
+    ),
 ];
 
 /// Reference tools the project knows how to run.
@@ -431,7 +444,9 @@ impl Scene {
         }
         let raw: SceneToml =
             toml::from_str(text).map_err(|e| SceneError::Toml(toml_message(&e, text)))?;
-        raw.validate()
+        let mut scene = raw.validate()?;
+        scene.source = text.to_string();
+        Ok(scene)
     }
 
     /// Total number of cases (level × u space × multiplier × δ).
@@ -727,6 +742,10 @@ impl SceneToml {
                 validate_references(&o.references)?,
             ),
         };
+        let verification = match self.verification {
+            None => Verification::default(),
+            Some(v) => v.validate(&u_spaces, &multipliers)?,
+        };
         Ok(Scene {
             name,
             description: self.description,
@@ -742,6 +761,8 @@ impl SceneToml {
             deltas,
             fields,
             references,
+            verification,
+            source: String::new(),
         })
     }
 }

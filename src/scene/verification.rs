@@ -1,0 +1,240 @@
+//! The scene's `[verification]` table: what the compare tool's verdict may expect of this scene.
+//!
+//! The solver does not use these settings; it validates them (so `sdcrack check` catches a typo
+//! before a long run) and keeps them in the scene copy of the results folder, where the compare
+//! tool reads them. The defaults and the rule that a scene may only tighten them belong to the
+//! compare tool (compare/README.md). Keys:
+//!
+//! ```toml
+//! [verification]
+//! smoke = false                 # true: fewer than 3 levels is a smoke run (series inconclusive, not failed)
+//! kkt_tolerance = 1e-10         # largest relative KKT residual of every solver and reference case
+//! reference_agreement = 1e-8    # largest |u_dolfinx − u_freefem| at the vertices of every level
+//! delta_slope_tolerance = 0.1   # |slope − 1| allowed for the δ → 0 fits above round-off
+//! min_rate = 0.4                # smallest observed rate of a converging series
+//!
+//! [[verification.expected_failure]]   # a series known not to converge, with the reason
+//! u_space = "continuous"        # continuous | broken | "*"
+//! multiplier = "*"              # M0 | M1 | M1star | "*" (default "*")
+//! quantity = "*"                # u_l2 | p_l2 | p_x | lambda_l2 | "*" (default "*")
+//! reason = "continuous P1 u cannot carry the jump [u] > 0 of the open crack"
+//! ```
+
+use serde::Deserialize;
+
+use super::{suggest, MultiplierSpace, SceneError, USpace};
+
+/// The error quantities of a series (the keys of `errors` in summary.json).
+pub const QUANTITIES: [&str; 4] = ["u_l2", "p_l2", "p_x", "lambda_l2"];
+
+/// A series declared not to converge, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExpectedFailure {
+    /// u space, or `None` for every u space (`"*"`).
+    pub u_space: Option<USpace>,
+    /// Multiplier space, or `None` for every one (`"*"`).
+    pub multiplier: Option<MultiplierSpace>,
+    /// One of [`QUANTITIES`], or `None` for every quantity (`"*"`).
+    pub quantity: Option<String>,
+    /// Why the series is expected not to converge (shown in the report).
+    pub reason: String,
+}
+
+/// The validated `[verification]` table; `None` means the compare tool's default.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Verification {
+    /// A smoke run: fewer than 3 levels make a series inconclusive instead of failed.
+    pub smoke: bool,
+    /// Largest relative KKT residual accepted (> 0).
+    pub kkt_tolerance: Option<f64>,
+    /// Largest vertex difference of the two references accepted (> 0).
+    pub reference_agreement: Option<f64>,
+    /// Largest |slope − 1| of the δ → 0 fits accepted (> 0).
+    pub delta_slope_tolerance: Option<f64>,
+    /// Smallest observed rate of a converging series (> 0).
+    pub min_rate: Option<f64>,
+    /// Series declared not to converge.
+    pub expected_failures: Vec<ExpectedFailure>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct VerificationToml {
+    #[serde(default)]
+    smoke: bool,
+    kkt_tolerance: Option<f64>,
+    reference_agreement: Option<f64>,
+    delta_slope_tolerance: Option<f64>,
+    min_rate: Option<f64>,
+    #[serde(default)]
+    expected_failure: Vec<ExpectedFailureToml>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ExpectedFailureToml {
+    u_space: String,
+    multiplier: Option<String>,
+    quantity: Option<String>,
+    reason: String,
+}
+
+/// Keys of the two tables, for "unknown key" messages (same order as the structs).
+pub(super) const VERIFICATION_KEYS: &[&str] = &[
+    "smoke",
+    "kkt_tolerance",
+    "reference_agreement",
+    "delta_slope_tolerance",
+    "min_rate",
+    "expected_failure",
+];
+/// Keys of one `[[verification.expected_failure]]`.
+pub(super) const EXPECTED_FAILURE_KEYS: &[&str] = &["u_space", "multiplier", "quantity", "reason"];
+
+/// `"*"` → `None`; otherwise one of `known` (a value the scene runs), with a suggestion.
+fn pattern<T: Copy>(
+    key: &str,
+    value: &str,
+    known: &[(T, String)],
+) -> Result<Option<T>, SceneError> {
+    if value == "*" {
+        return Ok(None);
+    }
+    if let Some((v, _)) = known.iter().find(|(_, n)| n == value) {
+        return Ok(Some(*v));
+    }
+    let names: Vec<&str> = known.iter().map(|(_, n)| n.as_str()).collect();
+    let hint = suggest(value, &names)
+        .map(|s| format!("; did you mean \"{s}\"?"))
+        .unwrap_or_default();
+    Err(SceneError::Value(format!(
+        "{key}: {value:?} is not among the scene's values ({} or \"*\"){hint}",
+        names.join(", ")
+    )))
+}
+
+fn positive(key: &str, v: Option<f64>) -> Result<Option<f64>, SceneError> {
+    match v {
+        Some(x) if !(x.is_finite() && x > 0.0) => Err(SceneError::Value(format!(
+            "verification.{key} = {x} must be a finite number > 0"
+        ))),
+        _ => Ok(v),
+    }
+}
+
+impl VerificationToml {
+    /// Validates against the u spaces and multipliers the scene runs.
+    pub(super) fn validate(
+        self,
+        u_spaces: &[USpace],
+        multipliers: &[MultiplierSpace],
+    ) -> Result<Verification, SceneError> {
+        let us: Vec<(USpace, String)> = u_spaces.iter().map(|&u| (u, u.to_string())).collect();
+        let ms: Vec<(MultiplierSpace, String)> =
+            multipliers.iter().map(|&m| (m, m.to_string())).collect();
+        let qs: Vec<(usize, String)> = QUANTITIES
+            .iter()
+            .enumerate()
+            .map(|(i, q)| (i, q.to_string()))
+            .collect();
+        let mut expected_failures: Vec<ExpectedFailure> = Vec::new();
+        for (i, e) in self.expected_failure.into_iter().enumerate() {
+            let key = |k: &str| format!("verification.expected_failure[{i}].{k}");
+            let reason = e.reason.trim().to_string();
+            if reason.is_empty() {
+                return Err(SceneError::Value(format!(
+                    "{}: say why the series is expected not to converge",
+                    key("reason")
+                )));
+            }
+            let failure = ExpectedFailure {
+                u_space: pattern(&key("u_space"), &e.u_space, &us)?,
+                multiplier: pattern(
+                    &key("multiplier"),
+                    e.multiplier.as_deref().unwrap_or("*"),
+                    &ms,
+                )?,
+                quantity: pattern(&key("quantity"), e.quantity.as_deref().unwrap_or("*"), &qs)?
+                    .map(|q| QUANTITIES[q].to_string()),
+                reason,
+            };
+            if expected_failures.iter().any(|f| {
+                (f.u_space, f.multiplier, &f.quantity)
+                    == (failure.u_space, failure.multiplier, &failure.quantity)
+            }) {
+                return Err(SceneError::Value(format!(
+                    "verification.expected_failure[{i}] declares the same series as an earlier one"
+                )));
+            }
+            expected_failures.push(failure);
+        }
+        Ok(Verification {
+            smoke: self.smoke,
+            kkt_tolerance: positive("kkt_tolerance", self.kkt_tolerance)?,
+            reference_agreement: positive("reference_agreement", self.reference_agreement)?,
+            delta_slope_tolerance: positive("delta_slope_tolerance", self.delta_slope_tolerance)?,
+            min_rate: positive("min_rate", self.min_rate)?,
+            expected_failures,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::scene::{Scene, DEFAULT_SCENE};
+
+    fn with(table: &str) -> Result<Scene, String> {
+        Scene::from_toml(&format!("{DEFAULT_SCENE}\n{table}")).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn expected_failures_and_tolerances_are_read() {
+        let s = with(
+            "[verification]\nkkt_tolerance = 1e-12\nsmoke = true\n\
+             [[verification.expected_failure]]\nu_space = \"continuous\"\n\
+             reason = \" no jump \"\n",
+        )
+        .unwrap();
+        let v = &s.verification;
+        assert!(v.smoke);
+        assert_eq!(v.kkt_tolerance, Some(1e-12));
+        assert_eq!(v.reference_agreement, None);
+        assert_eq!(v.expected_failures.len(), 1);
+        let f = &v.expected_failures[0];
+        assert_eq!(f.u_space, Some(crate::scene::USpace::Continuous));
+        assert_eq!((f.multiplier, f.quantity.as_deref()), (None, None));
+        assert_eq!(f.reason, "no jump");
+        assert_eq!(with("").unwrap().verification, Default::default());
+    }
+
+    #[test]
+    fn bad_declarations_are_one_line_errors_naming_the_key() {
+        let cases = [
+            (
+                "[[verification.expected_failure]]\nu_space = \"continous\"\nreason = \"r\"\n",
+                "verification.expected_failure[0].u_space: \"continous\" is not among the scene's values (continuous, broken or \"*\"); did you mean \"continuous\"?",
+            ),
+            (
+                "[[verification.expected_failure]]\nu_space = \"*\"\nquantity = \"u_L2\"\nreason = \"r\"\n",
+                "did you mean \"u_l2\"?",
+            ),
+            (
+                "[[verification.expected_failure]]\nu_space = \"*\"\nreason = \"  \"\n",
+                "verification.expected_failure[0].reason: say why",
+            ),
+            (
+                "[[verification.expected_failure]]\nu_space = \"broken\"\nreason = \"a\"\n\
+                 [[verification.expected_failure]]\nu_space = \"broken\"\nreason = \"b\"\n",
+                "expected_failure[1] declares the same series",
+            ),
+            ("[verification]\nkkt_tolerance = -1.0\n", "kkt_tolerance = -1 must be"),
+            ("[verification]\nmin_rate = nan\n", "min_rate = NaN must be"),
+            ("[verification]\nkkt_tolerence = 1e-12\n", "did you mean `kkt_tolerance`?"),
+        ];
+        for (table, needle) in cases {
+            let e = with(table).expect_err(table);
+            assert!(e.contains(needle), "{table:?}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+    }
+}
