@@ -554,3 +554,220 @@ def to_freefem(tree):
         raise ValueError(f"bad node {n!r}")
 
     return r(tree)
+
+
+# ---------------------------------------------------------------------------------------------
+# Symbolic derivative
+# ---------------------------------------------------------------------------------------------
+
+def _d_is_num(n, v=None):
+    return n[0] == "num" and (v is None or n[1] == v)
+
+
+def _d_is_const(n):
+    k = n[0]
+    if k == "num":
+        return True
+    if k in ("x", "y"):
+        return False
+    if k == "f1":
+        return _d_is_const(n[2])
+    if k == "f2":
+        return _d_is_const(n[2]) and _d_is_const(n[3])
+    return all(_d_is_const(c) for c in n[1:])
+
+
+def _d_fold(v, fallback):
+    """A folded constant when finite, else the unfolded node (so 1/0 stays an expression)."""
+    return ("num", float(v)) if isinstance(v, float) and math.isfinite(v) else fallback
+
+
+def _d_neg(a):
+    if a[0] == "num":
+        return ("num", -a[1])
+    if a[0] == "neg":
+        return a[1]
+    return ("neg", a)
+
+
+def _d_add(a, b):
+    if _d_is_num(a, 0.0):
+        return b
+    if _d_is_num(b, 0.0):
+        return a
+    if a[0] == "num" and b[0] == "num":
+        return _d_fold(a[1] + b[1], ("+", a, b))
+    return ("+", a, b)
+
+
+def _d_sub(a, b):
+    if _d_is_num(b, 0.0):
+        return a
+    if _d_is_num(a, 0.0):
+        return _d_neg(b)
+    if a[0] == "num" and b[0] == "num":
+        return _d_fold(a[1] - b[1], ("-", a, b))
+    return ("-", a, b)
+
+
+def _d_mul(a, b):
+    # 0*a -> 0 even for a non-finite a: the Rust simplifier folds the same way.
+    if _d_is_num(a, 0.0) or _d_is_num(b, 0.0):
+        return ("num", 0.0)
+    if _d_is_num(a, 1.0):
+        return b
+    if _d_is_num(b, 1.0):
+        return a
+    if _d_is_num(a, -1.0):
+        return _d_neg(b)
+    if _d_is_num(b, -1.0):
+        return _d_neg(a)
+    if a[0] == "num" and b[0] == "num":
+        return _d_fold(a[1] * b[1], ("*", a, b))
+    return ("*", a, b)
+
+
+def _d_div(a, b):
+    if _d_is_num(a, 0.0):
+        return ("num", 0.0)
+    if _d_is_num(b, 1.0):
+        return a
+    if a[0] == "num" and b[0] == "num" and b[1] != 0.0:
+        return _d_fold(a[1] / b[1], ("/", a, b))
+    return ("/", a, b)
+
+
+def _d_pow(a, b):
+    if _d_is_num(b, 1.0):
+        return a
+    if _d_is_num(b, 0.0):
+        return ("num", 1.0)
+    if a[0] == "num" and b[0] == "num":
+        try:
+            v = math.pow(a[1], b[1])
+        except (ValueError, OverflowError):
+            v = math.nan
+        return _d_fold(v, ("^", a, b))
+    return ("^", a, b)
+
+
+def _d_f1(name, a):
+    if a[0] == "num":
+        return _d_fold(evaluate(("f1", name, a), 0.0, 0.0), ("f1", name, a))
+    return ("f1", name, a)
+
+
+def _d_select(a, b, c, d):
+    """``c if a < b else d`` in the tree forms (no conditional node exists):
+    c*((1 - s)/2) + d*((1 + s)/2) with s = sign((a - b) + 0). Adding +0 turns a difference of
+    -0 into +0, so a == b (ties, signed zeros included) gives s = 1 and selects d exactly like
+    the Rust ``a < b`` test. Exact whenever the unselected branch is finite (0*inf is NaN), and
+    NaN where a - b is NaN (Rust selects d there); the same caveats as the Rust infix rendering."""
+    if c == d:
+        return c
+    s = ("f1", "sign", ("+", _d_sub(a, b), ("num", 0.0)))
+    lo = _d_mul(c, _d_div(_d_sub(("num", 1.0), s), ("num", 2.0)))
+    hi = _d_mul(d, _d_div(_d_add(("num", 1.0), s), ("num", 2.0)))
+    return _d_add(lo, hi)
+
+
+def _deriv(n, var):
+    k = n[0]
+    if k == "num":
+        return ("num", 0.0)
+    if k in ("x", "y"):
+        return ("num", 1.0 if k == var else 0.0)
+    if k == "neg":
+        return _d_neg(_deriv(n[1], var))
+    if k == "f1":
+        return _deriv_f1(n[1], n[2], var)
+    if k == "f2":
+        return _deriv_f2(n[1], n[2], n[3], var)
+    a, b = n[1], n[2]
+    if k == "+":
+        return _d_add(_deriv(a, var), _deriv(b, var))
+    if k == "-":
+        return _d_sub(_deriv(a, var), _deriv(b, var))
+    if k == "*":
+        return _d_add(_d_mul(_deriv(a, var), b), _d_mul(a, _deriv(b, var)))
+    if k == "/":
+        # (a/b)' = a'/b - a*b'/b/b (as the Rust quotient rule: two divisions, no b^2)
+        return _d_sub(_d_div(_deriv(a, var), b), _d_div(_d_div(_d_mul(a, _deriv(b, var)), b), b))
+    if k == "^":
+        return _deriv_pow(a, b, var)
+    raise ValueError(f"bad node {n!r}")
+
+
+def _deriv_pow(a, b, var):
+    da = _deriv(a, var)
+    if _d_is_const(b):
+        # b * a^(b-1) * a'
+        return _d_mul(_d_mul(b, _d_pow(a, _d_sub(b, ("num", 1.0)))), da)
+    db = _deriv(b, var)
+    p = _d_pow(a, b)
+    if _d_is_const(a):
+        return _d_mul(_d_mul(p, _d_f1("log", a)), db)
+    # a^b * (b'*log(a) + b*a'/a)
+    return _d_mul(p, _d_add(_d_mul(db, _d_f1("log", a)), _d_div(_d_mul(b, da), a)))
+
+
+def _deriv_f1(name, a, var):
+    da = _deriv(a, var)
+    if _d_is_num(da, 0.0) or name == "sign":
+        return ("num", 0.0)  # sign' = 0 (also at 0, as in Rust)
+    if name == "sin":
+        outer = _d_f1("cos", a)
+    elif name == "cos":
+        outer = _d_neg(_d_f1("sin", a))
+    elif name == "tan":
+        outer = _d_div(("num", 1.0), _d_pow(_d_f1("cos", a), ("num", 2.0)))
+    elif name == "exp":
+        outer = _d_f1("exp", a)
+    elif name == "log":
+        outer = _d_div(("num", 1.0), a)
+    elif name == "sqrt":
+        outer = _d_div(("num", 0.5), _d_f1("sqrt", a))
+    elif name == "abs":
+        outer = _d_f1("sign", a)  # abs' = sign (sign(+0) = 1)
+    else:
+        raise ValueError(f"bad function {name!r}")
+    return _d_mul(outer, da)
+
+
+def _deriv_f2(name, a, b, var):
+    da, db = _deriv(a, var), _deriv(b, var)
+    if name == "atan2":
+        # (b*a' - a*b') / (a^2 + b^2)
+        numer = _d_sub(_d_mul(b, da), _d_mul(a, db))
+        denom = _d_add(_d_pow(a, ("num", 2.0)), _d_pow(b, ("num", 2.0)))
+        return _d_div(numer, denom)
+    if name == "min":
+        return _d_select(a, b, da, db)  # a < b: a' ; ties: the second argument's
+    if name == "max":
+        return _d_select(a, b, db, da)  # a < b: b' ; ties: the first argument's
+    raise ValueError(f"bad function {name!r}")
+
+
+def derivative(tree, var):
+    """The symbolic derivative of ``tree`` (a tree or a source string) by ``var`` ("x" or "y"),
+    as a tree of the same forms, lightly simplified (0*a -> 0, 1*a -> a, a+0 -> a, folding of
+    finite constants). Conventions of ``Expr::derivative`` in src/scene/expr.rs:
+    sign' = 0 everywhere, abs(a)' = sign(a)*a', min/max take the derivative of the active
+    argument (``a < b`` decides; ties: the second argument's for min, the first's for max),
+    (a^b)' = b*a^(b-1)*a' when b is constant, a^b*log(a)*b' when a is constant, else
+    a^b*(b'*log(a) + b*a'/a); atan2(a, b)' = (b*a' - a*b')/(a^2 + b^2); sqrt(a)' = 0.5/sqrt(a)*a'.
+    The min/max selection is written with sign() (see ``_d_select``): exact wherever the
+    unselected branch's derivative is finite."""
+    if var not in ("x", "y"):
+        raise ValueError(f"derivative variable must be 'x' or 'y', got {var!r}")
+    tree = _tree(tree)
+    old_limit = sys.getrecursionlimit()
+    if old_limit < 40 * MAX_DEPTH:
+        sys.setrecursionlimit(40 * MAX_DEPTH)
+    try:
+        return _deriv(tree, var)
+    finally:
+        sys.setrecursionlimit(old_limit)
+
+
+__all__.append("derivative")

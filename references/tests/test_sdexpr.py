@@ -194,3 +194,135 @@ def test_ufl_backend():
         e = sdexpr.to_ufl(src, x)
         assert isinstance(e, ufl.core.expr.Expr)
         assert e.ufl_shape == ()
+
+
+# ---------------------------------------------------------------------------------------------
+# Symbolic derivative (sdexpr.derivative), conventions of Expr::derivative in src/scene/expr.rs
+# ---------------------------------------------------------------------------------------------
+
+# The expressions of the Rust test derivatives_match_finite_differences, plus the scenes' u.
+DERIV_SRCS = [
+    "20*sin(2*pi*x)*sign(y)",
+    "x^3*y - 2*x/y + y^2.5",
+    "exp(x*y) * log(1 + x^2)",
+    "tan(x/2) + cos(x*y)",
+    "sqrt(x^2 + y^2) * abs(x - 3)",
+    "atan2(y - 0.1, x + 0.2) * x",
+    "min(x, y) + max(x*x, y) * min(2, x)",
+    "x^y + 2^(x*y) - (1/x)",
+    "-(x - y)/(x + y)/(1 + x*y)",
+    "abs(sin(3*x)) * sign(x - y)",
+    "sin(pi*x)*cos(pi*y) - y",
+    "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)",
+    "-x^2 + 2^-y + 2^3^0.5 - max(x, 1.2)*min(y, 0.9)",
+]
+
+
+def _fd(f, x, y, var, h=1e-3):
+    """5-point central difference (error O(h^4))."""
+    if var == "x":
+        g = lambda t: f(x + t, y)  # noqa: E731
+    else:
+        g = lambda t: f(x, y + t)  # noqa: E731
+    return (-g(2 * h) + 8 * g(h) - 8 * g(-h) + g(-2 * h)) / (12 * h)
+
+
+@pytest.mark.parametrize("src", DERIV_SRCS)
+def test_derivative_matches_finite_differences(src):
+    tree = parse(src)
+    f = lambda x, y: evaluate(tree, x, y)  # noqa: E731
+    d = {v: sdexpr.derivative(tree, v) for v in ("x", "y")}
+    rng = np.random.default_rng(7)
+    checked = 0
+    while checked < 25:
+        x, y = rng.uniform(0.3, 1.6), rng.uniform(0.35, 1.5)
+        # stay 1e-2 away from the kinks / jumps of abs, sign, min, max in these expressions
+        kinks = [x - y, x * x - y, 2 - x, math.sin(3 * x), x - 1.2, y - 0.9]
+        if min(abs(k) for k in kinks) < 1e-2:
+            continue
+        checked += 1
+        for v in ("x", "y"):
+            fd = _fd(f, x, y, v)
+            got = evaluate(d[v], x, y)
+            assert abs(got - fd) <= 1e-7 * (1 + abs(fd)), f"d/d{v} {src} at ({x}, {y}): {got} vs fd {fd}"
+            # the numpy back-end gives the same values
+            assert to_numpy(d[v])(x, y) == pytest.approx(got, rel=1e-14, abs=1e-14)
+
+
+def test_derivative_simplification_as_in_rust():
+    # the cases of the Rust unit test derivative_simplification (src/scene/expr.rs)
+    D = sdexpr.derivative
+    assert D("x", "x") == ("num", 1.0)
+    assert D("x", "y") == ("num", 0.0)
+    assert D("3*x + 2", "x") == ("num", 3.0)
+    assert D("x^2", "x") == ("*", ("num", 2.0), ("x",))          # Rust: "(2 * x)"
+    assert D("sin(y)", "x") == ("num", 0.0)
+    assert D("sign(x)", "x") == ("num", 0.0)
+    assert D("x*y", "y") == ("x",)
+    assert D(D("x*y", "x"), "x") == ("num", 0.0)
+    assert "sign" in repr(D("min(x, 2*x)", "x"))
+    assert D(D("min(x, 2*x)", "x"), "x") == ("num", 0.0)
+    with pytest.raises(ValueError):
+        D("x", "z")
+
+
+@pytest.mark.parametrize("src,x,y,var,value", [
+    ("abs(x)", 0.0, 0.0, "x", 1.0),          # abs' = sign, sign(+0) = 1
+    ("abs(x)", -0.0, 0.0, "x", -1.0),        # sign(-0) = -1
+    ("sign(x)", 0.0, 0.0, "x", 0.0),         # sign' = 0, also at the jump
+    ("min(x, 2*x)", 0.0, 0.0, "x", 2.0),     # tie: min takes the second argument's derivative
+    ("max(x, 2*x)", 0.0, 0.0, "x", 1.0),     # tie: max takes the first argument's
+    ("min(x, 2*x)", 1.0, 0.0, "x", 1.0),     # x < 2x: the first
+    ("min(x, 2*x)", -1.0, 0.0, "x", 2.0),
+    ("max(x, 0)", -0.0, 0.0, "x", 1.0),      # -0 < 0 is false: the first, as Rust's a < b test
+    ("max(x, 0)", -1e-300, 0.0, "x", 0.0),
+    ("max(x, 0)", 1e-300, 0.0, "x", 1.0),
+    ("min(y, x)", 0.5, 0.5, "y", 0.0),       # tie: second argument (x), d/dy x = 0
+    ("sqrt(x)", 4.0, 0.0, "x", 0.25),
+    ("atan2(y, x)", 1.0, 1.0, "x", -0.5),
+    ("2^x", 3.0, 0.0, "x", 8 * math.log(2)),
+    ("x^y", 2.0, 3.0, "y", 8 * math.log(2)),
+    ("x^y", 2.0, 3.0, "x", 12.0),
+])
+def test_derivative_conventions(src, x, y, var, value):
+    d = sdexpr.derivative(src, var)
+    assert evaluate(d, x, y) == pytest.approx(value, rel=1e-15, abs=1e-300)
+    assert float(to_numpy(d)(x, y)) == pytest.approx(value, rel=1e-15, abs=1e-300)
+
+
+def test_derivative_of_open_exact_u_and_its_faces():
+    # u = Im w, w = sqrt(z - 1/2) sqrt(z + 1/2), w' = z / w: u_x = Im(z/w), u_y = Re(z/w)
+    src = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
+    px, py = to_numpy(sdexpr.derivative(src, "x")), to_numpy(sdexpr.derivative(src, "y"))
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(-1, 1, 400), rng.uniform(-1, 1, 400)
+    z = x + 1j * y
+    wp = z / (np.sqrt(z - 0.5) * np.sqrt(z + 0.5))
+    np.testing.assert_allclose(px(x, y), wp.imag, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(py(x, y), wp.real, rtol=1e-12, atol=1e-12)
+    # on the faces of the crack (y = +-0): u± = ±sqrt(1/4 - x^2), so u_x = ∓x/sqrt(1/4 - x^2), u_y = 0
+    xs = np.linspace(-0.45, 0.45, 19)
+    for side in (1.0, -1.0):
+        ys = np.full_like(xs, math.copysign(0.0, side))
+        np.testing.assert_allclose(px(xs, ys), -side * xs / np.sqrt(0.25 - xs ** 2), rtol=1e-13, atol=1e-13)
+        np.testing.assert_allclose(py(xs, ys), 0.0, atol=1e-13)
+
+
+def test_derivative_of_closed_exact_u():
+    src = "sin(pi*x)*cos(pi*y) - y"
+    px, py = to_numpy(sdexpr.derivative(src, "x")), to_numpy(sdexpr.derivative(src, "y"))
+    rng = np.random.default_rng(4)
+    x, y = rng.uniform(-1, 1, 100), rng.uniform(-1, 1, 100)
+    np.testing.assert_allclose(px(x, y), np.pi * np.cos(np.pi * x) * np.cos(np.pi * y), rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(py(x, y), -np.pi * np.sin(np.pi * x) * np.sin(np.pi * y) - 1, rtol=1e-14,
+                               atol=1e-14)
+
+
+def test_derivative_trees_render_and_reparse():
+    # the result uses only the documented tree forms: FreeFEM renders it, and differentiating twice works
+    for src in DERIV_SRCS:
+        for v in ("x", "y"):
+            d = sdexpr.derivative(src, v)
+            assert isinstance(to_freefem(d), str)
+            dd = sdexpr.derivative(d, "x")
+            assert np.isfinite(to_numpy(dd)(0.77, 0.61))

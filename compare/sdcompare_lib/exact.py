@@ -1,0 +1,655 @@
+"""Errors against a scene's exact solution, computed independently of the solver (src/norms.rs).
+
+What is computed (the quantities of summary.json's ``errors``)
+-----------------------------------------------------------
+* ``u_l2``      = ‖u_h − u‖_{L²(Ω)}
+* ``p_l2``      = ‖p_h − ∇u‖_{L²(Ω_c)}           (p_h MINI: P1 vertex part + bubble 27 λ0 λ1 λ2)
+* ``p_x``       = sqrt(p_l2² + Σ_T h_T² ‖div p_h + f‖²_T),  h_T the longest edge of T
+* ``lambda_l2`` = ‖λ_h − [u]‖_{L²(Γc)}            (λ_h P0 per segment or P1 per node)
+
+``solver_case_errors`` takes one solver case (fields.h5 layout, see ``read_h5_case``);
+``p1_field_errors`` takes a reference solver's P1 field on the cracked mesh (there
+p_h = ∇u_h, constant per triangle, and λ_h = [u_h], piecewise linear along the crack).
+Exact data come from the scene's ``[exact]`` (u, optional px, py, jump) and ``[data] f``, parsed
+with references/common/sdexpr.py; missing px / py are the symbolic derivatives of u
+(``sdexpr.derivative``), a missing jump is u on the + face minus u on the − face with the
+signed-zero convention of ``eval_on_face`` (src/scene/mod.rs).
+
+Quadrature (deliberately not the solver's: src/norms.rs uses collapsed Gauss–Legendre rules of
+degree 10 and 16 dyadic splits toward each tip)
+----------------------------------------------------------------------------------------------
+All rules are tensor rules on [0, 1]² mapped to the triangle; every point is strictly inside the
+triangle, so data are never evaluated on the crack or on an edge.
+
+* Regular triangles: Stroud's conical product rule, Gauss–Jacobi (weight 1 − s, n points) ×
+  Gauss–Legendre (n points), λ1 = s, λ2 = (1 − s) t: n² points, exact for total degree 2n − 1
+  (default n = 8: degree 15).
+* Triangles with a crack tip as a vertex (where u ~ r^{1/2}, ∇u ~ r^{−1/2}): a Duffy transform
+  collapsed at the tip, x = tip + s ((1 − t)(B − tip) + t (C − tip)), followed by s = σ²:
+  dA = 2|T| s ds dt = 4|T| σ³ dσ dt, Gauss–Legendre in σ and t (m points each, default m = 16).
+  With r = s |d(t)| every term of the singular expansion Σ r^{k/2} φ_k(θ) becomes analytic
+  in (σ, t): r^{1/2} = σ |d(t)|^{1/2}, and |∇u|² ~ r^{−1} times the Jacobian 4σ³ is ~ σ.
+  The integrands are therefore analytic on the closed square and Gauss converges exponentially
+  (r^{−1} and r^{−1/2}-type integrands to round-off, compare/tests/test_exact.py); polynomials of total
+  degree ≤ m − 2 are integrated exactly.
+* Triangles near a tip but not touching it: split recursively into 4 midpoint children until each
+  piece P satisfies dist(tip, P) ≥ η · diam(P) (default η = 1), then the Stroud rule on each piece.
+  The singularity then lies at least one piece diameter away from every piece, where the n-point
+  rules converge geometrically in n.
+* Crack segments: Gauss–Legendre with n_line points (default 12); the segment at a tip in
+  σ with s = σ² measured from the tip ([u] ~ s^{1/2} becomes analytic).
+
+``Quadrature().doubled()`` doubles n, m, n_line and η; compare/tests/test_exact.py checks that the errors
+of open-exact change by < 1e-10 relative under it.
+"""
+import math
+import os
+import sys
+
+import numpy as np
+
+_COMMON = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                       "references", "common")
+if _COMMON not in sys.path:
+    sys.path.insert(0, _COMMON)
+import sdexpr  # noqa: E402
+
+__all__ = ["ExactSolution", "Quadrature", "load_scene", "solver_case_errors", "solver_case_errors_h5",
+           "read_h5_case", "p1_field_errors", "recover_bubble", "stroud_rule", "tip_rule",
+           "integrate_on_triangle", "SharedEvaluator", "ExactError"]
+
+CHUNK_POINTS = 1 << 16  # expression evaluation in chunks that stay in cache
+
+
+class ExactError(ValueError):
+    """Inconsistent input (shapes, missing data, a tip not on the mesh, ...)."""
+
+
+# ---------------------------------------------------------------------------------------------
+# 1D and triangle rules
+# ---------------------------------------------------------------------------------------------
+
+def gauss_legendre01(n):
+    """n-point Gauss–Legendre rule on [0, 1] (weights sum to 1, exact to degree 2n − 1)."""
+    x, w = np.polynomial.legendre.leggauss(int(n))
+    return 0.5 * (x + 1.0), 0.5 * w
+
+
+def gauss_jacobi01(n, alpha):
+    """n-point Gauss rule on [0, 1] for the weight (1 − s)^alpha (Golub–Welsch on the Jacobi
+    recurrence, β = 0): Σ w g(s_i) = ∫_0^1 (1 − s)^alpha g(s) ds exactly for deg g ≤ 2n − 1."""
+    n = int(n)
+    a, b = float(alpha), 0.0
+    k = np.arange(n, dtype=float)
+    s = 2 * k + a + b
+    diag = (b * b - a * a) / (s * (s + 2))
+    kk = np.arange(1, n, dtype=float)
+    s1 = 2 * kk + a + b
+    off = np.sqrt(4 * kk * (kk + a) * (kk + b) * (kk + a + b) / (s1 * s1 * (s1 + 1) * (s1 - 1)))
+    J = np.diag(diag) + np.diag(off, 1) + np.diag(off, -1)
+    x, V = np.linalg.eigh(J)
+    mu0 = 2 ** (a + b + 1) * math.gamma(a + 1) * math.gamma(b + 1) / math.gamma(a + b + 2)
+    w = mu0 * V[0] ** 2
+    # x in [-1, 1] with weight (1 - x)^a  ->  s = (1 + x)/2, (1 - x)^a = 2^a (1 - s)^a, dx = 2 ds
+    return 0.5 * (x + 1.0), w / 2 ** (a + 1)
+
+
+def stroud_rule(n):
+    """Stroud's conical product rule on a triangle: barycentric points L (n², 3) and weights W
+    (n²,) with Σ W = 1, so ∫_T g ≈ |T| Σ W g(Σ_i L_i v_i); exact for total degree ≤ 2n − 1."""
+    s, ws = gauss_jacobi01(n, 1.0)
+    t, wt = gauss_legendre01(n)
+    S, Tt = np.meshgrid(s, t, indexing="ij")
+    l1 = S.ravel()
+    l2 = ((1 - S) * Tt).ravel()
+    L = np.column_stack([(1 - S).ravel() * (1 - Tt).ravel(), l1, l2])
+    W = 2.0 * np.outer(ws, wt).ravel()
+    return L, W
+
+
+def tip_rule(m, corner=0):
+    """Duffy rule collapsed at local vertex ``corner`` with s = σ²: barycentrics L (m², 3), weights W
+    (Σ W = 1). λ_corner = 1 − s, the next two (cyclically) s (1 − t) and s t; W = 4 σ³ w_σ w_t."""
+    g, w = gauss_legendre01(m)
+    sig, tt = np.meshgrid(g, g, indexing="ij")
+    ww = np.outer(w, w)
+    s = sig * sig
+    L = np.empty((m * m, 3))
+    c = int(corner)
+    L[:, c] = (1 - s).ravel()
+    L[:, (c + 1) % 3] = (s * (1 - tt)).ravel()
+    L[:, (c + 2) % 3] = (s * tt).ravel()
+    return L, (4.0 * sig ** 3 * ww).ravel()
+
+
+class Quadrature:
+    """Resolution of the error quadrature (see the module documentation)."""
+
+    def __init__(self, n=8, tip_m=16, eta=1.0, line_n=12):
+        self.n, self.tip_m, self.eta, self.line_n = int(n), int(tip_m), float(eta), int(line_n)
+
+    def doubled(self):
+        return Quadrature(2 * self.n, 2 * self.tip_m, 2 * self.eta, 2 * self.line_n)
+
+    def __repr__(self):
+        return f"Quadrature(n={self.n}, tip_m={self.tip_m}, eta={self.eta}, line_n={self.line_n})"
+
+
+# ---------------------------------------------------------------------------------------------
+# Exact solution
+# ---------------------------------------------------------------------------------------------
+
+def load_scene(path):
+    """The scene TOML as a dict (tomllib)."""
+    import tomllib
+
+    with open(path, "rb") as fh:
+        return tomllib.load(fh)
+
+
+class SharedEvaluator:
+    """Evaluates several sdexpr trees at once on numpy arrays, each distinct subtree once (common
+    subexpression elimination: the symbolic gradient of open-exact's u repeats its subtrees, 350
+    nodes for 55 distinct ones). Node semantics are those of ``sdexpr.to_numpy`` (same numpy
+    functions in the same order, so the values are bit for bit the same; compare/tests/test_exact.py
+    checks it), evaluated in chunks of CHUNK_POINTS points."""
+
+    _BIN = {"+": np.add, "-": np.subtract, "*": np.multiply, "/": np.divide, "^": np.power}
+    _F1 = {"sin": np.sin, "cos": np.cos, "tan": np.tan, "exp": np.exp, "log": np.log, "sqrt": np.sqrt,
+           "abs": np.abs, "sign": lambda v: np.where(np.isnan(v), np.nan, np.copysign(1.0, v))}
+    _F2 = {"atan2": np.arctan2, "min": np.fmin, "max": np.fmax}
+
+    def __init__(self, trees):
+        self.nodes = []  # (op, payload, child ids)
+        self._ids = {}
+        old = sys.getrecursionlimit()
+        sys.setrecursionlimit(max(old, 40 * sdexpr.MAX_DEPTH))
+        try:
+            self.roots = [self._add(sdexpr.parse(t) if isinstance(t, str) else t) for t in trees]
+        finally:
+            sys.setrecursionlimit(old)
+        last = [-1] * len(self.nodes)
+        for i, (_, _, kids) in enumerate(self.nodes):
+            for c in kids:
+                last[c] = i
+        for r in self.roots:
+            last[r] = len(self.nodes)
+        self._free_after = [[] for _ in self.nodes]
+        for c, i in enumerate(last):
+            if 0 <= i < len(self.nodes):
+                self._free_after[i].append(c)
+
+    def _add(self, t):
+        k = t[0]
+        if k == "num":
+            key, kids, payload = ("num", repr(float(t[1]))), (), float(t[1])
+        elif k in ("x", "y"):
+            key, kids, payload = (k,), (), None
+        elif k == "neg":
+            kids = (self._add(t[1]),)
+            key, payload = ("neg",) + kids, None
+        elif k in self._BIN:
+            kids = (self._add(t[1]), self._add(t[2]))
+            key, payload = (k,) + kids, None
+        elif k == "f1":
+            kids = (self._add(t[2]),)
+            key, payload = ("f1", t[1]) + kids, t[1]
+        elif k == "f2":
+            kids = (self._add(t[2]), self._add(t[3]))
+            key, payload = ("f2", t[1]) + kids, t[1]
+        else:
+            raise ValueError(f"bad node {t!r}")
+        i = self._ids.get(key)
+        if i is None:
+            i = self._ids[key] = len(self.nodes)
+            self.nodes.append((k, payload, kids))
+        return i
+
+    def _run(self, x, y):
+        v = [None] * len(self.nodes)
+        for i, (k, payload, kids) in enumerate(self.nodes):
+            if k == "num":
+                r = payload
+            elif k == "x":
+                r = x
+            elif k == "y":
+                r = y
+            elif k == "neg":
+                r = np.negative(v[kids[0]])
+            elif k == "f1":
+                r = self._F1[payload](v[kids[0]])
+            elif k == "f2":
+                r = self._F2[payload](v[kids[0]], v[kids[1]])
+            else:
+                r = self._BIN[k](v[kids[0]], v[kids[1]])
+            v[i] = r
+            for c in self._free_after[i]:
+                v[c] = None
+        return [v[r] for r in self.roots]
+
+    def __call__(self, x, y):
+        """List of arrays, one per tree, of the broadcast shape of x and y."""
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        shape = x.shape
+        xf, yf = x.ravel(), y.ravel()
+        out = [np.empty(xf.shape[0]) for _ in self.roots]
+        with np.errstate(all="ignore"):
+            for a in range(0, xf.shape[0], CHUNK_POINTS):
+                for o, r in zip(out, self._run(xf[a:a + CHUNK_POINTS], yf[a:a + CHUNK_POINTS])):
+                    o[a:a + CHUNK_POINTS] = r
+        return [o.reshape(shape) for o in out]
+
+
+class ExactSolution:
+    """Exact u, ∇u, [u] and f of a scene.
+
+    ``u``, ``px``, ``py``, ``jump``, ``f``: expression strings (or sdexpr trees); px / py default to
+    the symbolic derivatives of u, jump to u⁺ − u⁻ on the faces, f to 0. ``crack``: the scene's
+    segment ((ax, ay), (bx, by)), optional (used for the tips / normal when the data have none)."""
+
+    def __init__(self, u, px=None, py=None, jump=None, f="0", crack=None):
+        self.u_tree = sdexpr.parse(u) if isinstance(u, str) else u
+        self.px_tree = (sdexpr.parse(px) if isinstance(px, str) else px) if px is not None \
+            else sdexpr.derivative(self.u_tree, "x")
+        self.py_tree = (sdexpr.parse(py) if isinstance(py, str) else py) if py is not None \
+            else sdexpr.derivative(self.u_tree, "y")
+        self.jump_tree = (sdexpr.parse(jump) if isinstance(jump, str) else jump) if jump is not None else None
+        self.f_tree = sdexpr.parse(f) if isinstance(f, str) else f
+        self._evaluators = {}
+        self._jump = SharedEvaluator([self.jump_tree]) if self.jump_tree is not None else None
+        self.crack = None if crack is None else np.asarray(crack, dtype=float)[:, :2]
+
+    @classmethod
+    def from_scene(cls, scene):
+        """From a scene file path or its parsed dict; raises ExactError without [exact]."""
+        if not isinstance(scene, dict):
+            scene = load_scene(scene)
+        ex = scene.get("exact")
+        if ex is None:
+            raise ExactError("the scene has no [exact] table")
+        crack = scene.get("geometry", {}).get("crack", {}).get("segment")
+        return cls(ex["u"], ex.get("px"), ex.get("py"), ex.get("jump"),
+                   scene.get("data", {}).get("f", "0"), crack)
+
+    def evaluate(self, x, y, u=True, grad=True, f=False):
+        """dict with "u", "px", "py", "f" (those asked for) at the points (x, y), all evaluated in one
+        pass that shares common subexpressions."""
+        names = tuple(n for n, want in (("u", u), ("px", grad), ("py", grad), ("f", f)) if want)
+        if not names:
+            return {}
+        ev = self._evaluators.get(names)
+        if ev is None:
+            trees = {"u": self.u_tree, "px": self.px_tree, "py": self.py_tree, "f": self.f_tree}
+            ev = self._evaluators[names] = SharedEvaluator([trees[n] for n in names])
+        return dict(zip(names, ev(x, y)))
+
+    def u(self, x, y):
+        return self.evaluate(x, y, grad=False)["u"]
+
+    def grad(self, x, y):
+        """(∂u/∂x, ∂u/∂y): the scene's px, py, else the symbolic derivatives of u."""
+        v = self.evaluate(x, y, u=False)
+        return v["px"], v["py"]
+
+    def u_grad(self, x, y):
+        """(u, ∂u/∂x, ∂u/∂y), sharing common subexpressions."""
+        v = self.evaluate(x, y)
+        return v["u"], v["px"], v["py"]
+
+    def f(self, x, y):
+        return self.evaluate(x, y, u=False, grad=False, f=True)["f"]
+
+    def on_face(self, xy, normal, side):
+        """u on the face ``side`` (+1 / −1) at crack points xy (K, 2): a coordinate that is exactly
+        zero while the normal has a component in that direction gets the sign of side·ν there
+        (signed zero selects the branch of sign / atan2), as eval_on_face in src/scene/mod.rs."""
+        q = np.array(xy, dtype=float)[:, :2]
+        for d in range(2):
+            if normal[d] != 0.0:
+                z = q[:, d] == 0.0
+                q[z, d] = math.copysign(0.0, side * normal[d])
+        return self.u(q[:, 0], q[:, 1])
+
+    def jump(self, xy, normal):
+        """[u] = u⁺ − u⁻ at crack points xy (K, 2): the scene's jump, else from the faces."""
+        xy = np.asarray(xy, dtype=float)
+        if self._jump is not None:
+            return self._jump(xy[:, 0], xy[:, 1])[0]
+        return self.on_face(xy, normal, 1.0) - self.on_face(xy, normal, -1.0)
+
+
+def crack_normal(a, b):
+    """ν: the direction a → b turned by +90° (unit)."""
+    d = np.asarray(b, dtype=float)[:2] - np.asarray(a, dtype=float)[:2]
+    d = d / math.hypot(d[0], d[1])
+    return np.array([-d[1], d[0]])
+
+
+# ---------------------------------------------------------------------------------------------
+# Geometry
+# ---------------------------------------------------------------------------------------------
+
+def _geometry(P, tris):
+    """Vertices (T,3,2), areas (T,), barycentric gradients (T,3,2), longest edges (T,)."""
+    X = P[tris]
+    e1, e2 = X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    if np.any(det == 0):
+        raise ExactError("degenerate triangle")
+    g1 = np.column_stack([e2[:, 1], -e2[:, 0]]) / det[:, None]
+    g2 = np.column_stack([-e1[:, 1], e1[:, 0]]) / det[:, None]
+    G = np.stack([-g1 - g2, g1, g2], axis=1)
+    edges = np.stack([np.linalg.norm(X[:, 1] - X[:, 0], axis=1), np.linalg.norm(X[:, 2] - X[:, 1], axis=1),
+                      np.linalg.norm(X[:, 0] - X[:, 2], axis=1)], axis=1)
+    return X, 0.5 * np.abs(det), G, edges.max(axis=1)
+
+
+def _point_segment_distance(q, a, b):
+    """Distance of point q (2,) to segments a-b (K,2)."""
+    d = b - a
+    t = np.clip(((q - a) * d).sum(axis=1) / np.maximum((d * d).sum(axis=1), 1e-300), 0.0, 1.0)
+    return np.linalg.norm(a + t[:, None] * d - q, axis=1)
+
+
+def _distance_to_triangles(q, X):
+    """Distance of q (2,) to triangles X (K,3,2) (0 if inside)."""
+    dist = np.min(np.stack([_point_segment_distance(q, X[:, i], X[:, (i + 1) % 3]) for i in range(3)]), axis=0)
+    # inside test (signed areas)
+    s = [(X[:, (i + 1) % 3, 0] - X[:, i, 0]) * (q[1] - X[:, i, 1])
+         - (X[:, (i + 1) % 3, 1] - X[:, i, 1]) * (q[0] - X[:, i, 0]) for i in range(3)]
+    inside = ((s[0] >= 0) & (s[1] >= 0) & (s[2] >= 0)) | ((s[0] <= 0) & (s[1] <= 0) & (s[2] <= 0))
+    return np.where(inside, 0.0, dist)
+
+
+_MID = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]])
+
+
+def _children(V):
+    """The 4 midpoint children of pieces V (K,3,3) (rows: vertices in parent barycentrics)."""
+    m01, m12, m02 = 0.5 * (V[:, 0] + V[:, 1]), 0.5 * (V[:, 1] + V[:, 2]), 0.5 * (V[:, 0] + V[:, 2])
+    kids = [np.stack(c, axis=1) for c in ((V[:, 0], m01, m02), (m01, V[:, 1], m12), (m02, m12, V[:, 2]),
+                                          (m01, m12, m02))]
+    return np.stack(kids, axis=1).reshape(-1, 3, 3)
+
+
+def _near_tip_pieces(X, tri_ids, tips, eta, max_depth=40):
+    """Split triangles tri_ids (their vertices X[tri_ids]) until every piece P has
+    dist(tip, P) ≥ eta·diam(P) for every tip. Returns (owner (K,), V (K,3,3) in parent barycentrics)."""
+    owner = np.asarray(tri_ids, dtype=np.int64)
+    V = np.broadcast_to(np.eye(3), (owner.shape[0], 3, 3)).copy()
+    done_o, done_V = [], []
+    for _ in range(max_depth):
+        if owner.shape[0] == 0:
+            break
+        phys = np.einsum("kvb,kbd->kvd", V, X[owner])
+        diam = np.max(np.stack([np.linalg.norm(phys[:, i] - phys[:, (i + 1) % 3], axis=1) for i in range(3)]),
+                      axis=0)
+        ok = np.ones(owner.shape[0], dtype=bool)
+        for tp in tips:
+            ok &= _distance_to_triangles(tp, phys) >= eta * diam
+        done_o.append(owner[ok])
+        done_V.append(V[ok])
+        owner, V = np.repeat(owner[~ok], 4), _children(V[~ok])
+    else:
+        raise ExactError("a tip lies inside a triangle that does not have it as a vertex")
+    if owner.shape[0]:
+        raise ExactError("near-tip subdivision did not terminate")
+    return np.concatenate(done_o), np.concatenate(done_V)
+
+
+def _tip_corners(P, tris, tips, scale):
+    """(T,) local index of the tip vertex of each triangle, −1 if none."""
+    corner = np.full(tris.shape[0], -1, dtype=np.int64)
+    X = P[tris]
+    tol = 1e-10 * scale
+    for tp in tips:
+        hit = np.linalg.norm(X - tp[None, None, :], axis=2) <= tol  # (T,3)
+        rows = hit.any(axis=1)
+        if np.any(corner[rows] >= 0):
+            raise ExactError("a triangle touches both crack tips")
+        corner[rows] = hit[rows].argmax(axis=1)
+    return corner
+
+
+# ---------------------------------------------------------------------------------------------
+# Domain integrals
+# ---------------------------------------------------------------------------------------------
+
+def _point_batches(P, tris, tips, quad, chunk_tris=1024):
+    """Yields (ids (K,), L, W): triangle (or piece owner) ids, barycentric points L (K,q,3) — or
+    (q,3) shared by all K — in triangle ids[k], weights W (K,q) — or (q,) — as fractions of
+    |T_ids[k]|; together they cover the whole mesh."""
+    T = tris.shape[0]
+    X = P[tris]
+    scale = max(1.0, float(np.abs(P).max()))
+    corner = _tip_corners(P, tris, tips, scale) if len(tips) else np.full(T, -1, dtype=np.int64)
+    touching = corner >= 0
+    # near-tip non-touching triangles: a cheap conservative test first (the exact test splits)
+    near = np.zeros(T, dtype=bool)
+    if len(tips):
+        cen = X.mean(axis=1)
+        rad = np.max(np.linalg.norm(X - cen[:, None, :], axis=2), axis=1)
+        diam = np.max(np.stack([np.linalg.norm(X[:, i] - X[:, (i + 1) % 3], axis=1) for i in range(3)]), axis=0)
+        for tp in tips:
+            near |= np.linalg.norm(cen - tp, axis=1) - rad < quad.eta * diam
+        near &= ~touching
+    regular = np.flatnonzero(~touching & ~near)
+    Ls, Ws = stroud_rule(quad.n)
+    q = Ws.shape[0]
+    for a in range(0, regular.shape[0], chunk_tris):
+        yield regular[a:a + chunk_tris], Ls, Ws
+    tip_ids = np.flatnonzero(touching)
+    if tip_ids.shape[0]:
+        rules = [tip_rule(quad.tip_m, c) for c in range(3)]
+        yield (tip_ids, np.stack([rules[corner[i]][0] for i in tip_ids]),
+               np.stack([rules[corner[i]][1] for i in tip_ids]))
+    near_ids = np.flatnonzero(near)
+    if near_ids.shape[0]:
+        owner, V = _near_tip_pieces(X, near_ids, tips, quad.eta)
+        ratio = np.abs(np.linalg.det(V))  # area(piece) / area(parent)
+        yield owner, np.einsum("qv,kvb->kqb", Ls, V), ratio[:, None] * Ws[None, :]
+
+
+def _domain_errors(P, tris, exact, tips, quad, u_tri=None, p_tri=None, bubble=None, want_div=True):
+    """Σ_T ∫_T (u_h − u)², (p_h − ∇u)², h_T² (div p_h + f)² with
+    u_tri (T,3) vertex values of u_h per triangle, p_tri (T,3,2) vertex values of the P1 part of
+    p_h per triangle, bubble (T,2) bubble coefficients of b_T = 27 λ0 λ1 λ2 (or None)."""
+    X, area, G, hT = _geometry(P, tris)
+    f_zero = exact.f_tree[0] == "num" and exact.f_tree[1] == 0.0
+    want_div = want_div and p_tri is not None
+    div_lin = np.einsum("tvd,tvd->t", p_tri, G) if p_tri is not None else None
+    su = sp = sd = 0.0
+    for ids, L, W in _point_batches(P, tris, tips, quad):
+        w = W * area[ids][:, None]  # (K,q)
+        xy = L @ X[ids]  # (K,q,2); matmul broadcasts a shared (q,3) L
+        x, y = xy[..., 0], xy[..., 1]
+        vals = exact.evaluate(x, y, u=u_tri is not None, grad=p_tri is not None, f=want_div and not f_zero)
+        if u_tri is not None:
+            d = (L @ u_tri[ids][:, :, None])[..., 0] - vals["u"]
+            su += float(np.sum(w * d * d))
+        if p_tri is not None:
+            ph = L @ p_tri[ids]
+            if bubble is not None:
+                b = 27.0 * L[..., 0] * L[..., 1] * L[..., 2]
+                ph = ph + b[..., None] * bubble[ids][:, None, :]
+            dx = ph[..., 0] - vals["px"]
+            dy = ph[..., 1] - vals["py"]
+            sp += float(np.sum(w * (dx * dx + dy * dy)))
+            if want_div:
+                div = div_lin[ids][:, None]
+                if bubble is not None:
+                    # ∇b = 27 (∇λ0 λ1λ2 + ∇λ1 λ0λ2 + ∇λ2 λ0λ1)
+                    prods = np.stack([L[..., 1] * L[..., 2], L[..., 0] * L[..., 2], L[..., 0] * L[..., 1]], axis=-1)
+                    gb = 27.0 * (prods @ G[ids])  # (K,q,2)
+                    div = div + (gb @ bubble[ids][:, :, None])[..., 0]
+                r = div if f_zero else div + vals["f"]
+                sd += float(np.sum(w * hT[ids][:, None] ** 2 * r * r))
+    return su, sp, sd
+
+
+# ---------------------------------------------------------------------------------------------
+# Crack integrals
+# ---------------------------------------------------------------------------------------------
+
+def _crack_error(C, lam_fn, exact, normal, quad):
+    """∫_Γc (λ_h − [u])², Γc the polyline C (I+1, 2) whose end points are the tips.
+    lam_fn(k, s) gives λ_h on segment k at local coordinate s ∈ [0, 1] (0 at C[k])."""
+    I = C.shape[0] - 1
+    g, wg = gauss_legendre01(quad.line_n)
+    ell = np.linalg.norm(C[1:] - C[:-1], axis=1)
+    seg, s, w = [], [], []
+    # interior segments: plain Gauss
+    inner = np.arange(1, I - 1) if I >= 2 else np.arange(0)
+    for k in inner:
+        seg.append(np.full(g.shape[0], k)), s.append(g), w.append(wg * ell[k])
+    # tip ends: s = σ² measured from the tip (from both ends on a lone segment, split at its middle)
+    if I == 1:
+        pieces = [(0, 0.0, 0.5), (0, 1.0, 0.5)]
+    else:
+        pieces = [(0, 0.0, 1.0), (I - 1, 1.0, 1.0)]
+    for k, tip_end, length in pieces:
+        dist = length * g * g  # distance from the tip end, in segment-local units
+        seg.append(np.full(g.shape[0], k))
+        s.append(dist if tip_end == 0.0 else 1.0 - dist)
+        w.append(2.0 * g * wg * length * ell[k])
+    seg, s, w = np.concatenate(seg), np.concatenate(s), np.concatenate(w)
+    a, b = C[seg], C[seg + 1]
+    xy = a + s[:, None] * (b - a)
+    d = lam_fn(seg, s) - exact.jump(xy, normal)
+    return float(np.dot(w, d * d))
+
+
+def _lambda_fn(lam, I):
+    lam = np.asarray(lam, dtype=float)
+    if lam.shape[0] == I:
+        return lambda k, s: lam[k]
+    if lam.shape[0] == I + 1:
+        return lambda k, s: (1.0 - s) * lam[k] + s * lam[k + 1]
+    raise ExactError(f"lambda has {lam.shape[0]} values for {I} crack segments")
+
+
+# ---------------------------------------------------------------------------------------------
+# Public API
+# ---------------------------------------------------------------------------------------------
+
+def recover_bubble(points, triangles, u, p):
+    """Bubble coefficients (T,2) of p_h from u_h and the vertex values of p: the bubble rows of
+    ∫ p·ψ + ∫ u div ψ = (boundary terms, which vanish for ψ = b_T e_d) give, with ∫b = 9|T|/20,
+    ∫λ_k b = 3|T|/20, ∫b² = 81|T|/280 (b = 27 λ0λ1λ2): c_d = 14/9 ∂_d u_h − 14/27 Σ_k p_{k,d}.
+    (Local to T, independent of δ and of the contact terms, which the bubble does not see.)"""
+    P = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    _, _, G, _ = _geometry(P, t)
+    gu = np.einsum("tv,tvd->td", np.asarray(u, dtype=float)[t], G)
+    return 14.0 / 9.0 * gu - 14.0 / 27.0 * np.asarray(p, dtype=float)[:, :2][t].sum(axis=1)
+
+
+def _tips_and_normal(crack_points, exact):
+    if crack_points is not None and len(crack_points) >= 2:
+        C = np.asarray(crack_points, dtype=float)[:, :2]
+        a, b = C[0], C[-1]
+    elif exact.crack is not None:
+        a, b = exact.crack[0], exact.crack[1]
+    else:
+        raise ExactError("no crack geometry: give crack_points or an ExactSolution with crack")
+    return [a, b], crack_normal(a, b)
+
+
+def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exact, quad=None):
+    """Errors of one solver case against ``exact`` (an ExactSolution).
+
+    points (N,2|3), triangles (T,3) of the case mesh (the cracked mesh for the broken u space, the
+    plain mesh for the continuous one; u is P1 per triangle on it), u (N,), p (N,2|3) vertex values
+    of p_h, p_bubble (T,2) its bubble coefficients (b_T = 27 λ0λ1λ2, triangle order of the mesh;
+    None: recovered from u and p by ``recover_bubble``), crack_points (I+1,2|3) from tip A to tip B,
+    lam (I,) per segment or (I+1,) per node. Any of u, p, lam may be None (its errors are None).
+
+    Returns {"u_l2", "p_l2", "p_x", "lambda_l2"} (floats or None) and "bubble": "stored",
+    "recovered" or None."""
+    quad = quad or Quadrature()
+    P = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    tips, normal = _tips_and_normal(crack_points, exact)
+    u_tri = None if u is None else np.asarray(u, dtype=float)[t]
+    p_tri, bub, bsrc = None, None, None
+    if p is not None:
+        p_tri = np.asarray(p, dtype=float)[:, :2][t]
+        if p_bubble is not None:
+            bub, bsrc = np.asarray(p_bubble, dtype=float)[:, :2], "stored"
+            if bub.shape[0] != t.shape[0]:
+                raise ExactError(f"p_bubble has {bub.shape[0]} rows for {t.shape[0]} triangles")
+        elif u is not None:
+            bub, bsrc = recover_bubble(P, t, u, p), "recovered"
+        else:
+            raise ExactError("p without p_bubble and without u: the bubble is unknown")
+    su, sp, sd = _domain_errors(P, t, exact, tips, quad, u_tri, p_tri, bub)
+    out = {"u_l2": None if u is None else math.sqrt(su),
+           "p_l2": None if p is None else math.sqrt(sp),
+           "p_x": None if p is None else math.sqrt(sp + sd),
+           "lambda_l2": None, "bubble": bsrc}
+    if lam is not None:
+        C = np.asarray(crack_points, dtype=float)[:, :2]
+        out["lambda_l2"] = math.sqrt(_crack_error(C, _lambda_fn(lam, C.shape[0] - 1), exact, normal, quad))
+    return out
+
+
+def read_h5_case(h5, case):
+    """Datasets of /cases/CASE in fields.h5 (an open h5py File or a path): dict(points, triangles,
+    u, p, p_bubble, crack_points, lam), missing ones None."""
+    import h5py
+
+    own = not isinstance(h5, h5py.File)
+    f = h5py.File(h5, "r") if own else h5
+    try:
+        g = f[f"cases/{case}"]
+
+        def get(name, dtype=float):
+            return np.asarray(g[name][()], dtype=dtype) if name in g else None
+
+        return {"points": get("mesh/points"), "triangles": get("mesh/triangles", np.int64), "u": get("u"),
+                "p": get("p"), "p_bubble": get("p_bubble"), "crack_points": get("crack/points"),
+                "lam": get("crack/lambda")}
+    finally:
+        if own:
+            f.close()
+
+
+def solver_case_errors_h5(h5, case, exact, quad=None):
+    """``solver_case_errors`` of the case CASE of fields.h5 (open h5py File or path)."""
+    d = read_h5_case(h5, case)
+    return solver_case_errors(d["points"], d["triangles"], d["u"], d["p"], d["p_bubble"], d["crack_points"],
+                              d["lam"], exact, quad)
+
+
+def p1_field_errors(points, triangles, u, crack_pairs, exact, quad=None):
+    """Errors of a P1 field u (N,) on a cracked mesh (a reference solver's solution):
+    crack_pairs (I+1,2) the (plus, minus) vertex pairs from tip A to tip B (a tip: the same index
+    twice). p_h = ∇u_h (constant per triangle), λ_h = [u_h] = u[plus] − u[minus] linear along the
+    crack. Returns {"u_l2", "p_l2", "lambda_l2"}."""
+    quad = quad or Quadrature()
+    P = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    pairs = np.asarray(crack_pairs, dtype=np.int64)
+    uu = np.asarray(u, dtype=float)
+    C = P[pairs[:, 0]]
+    if np.abs(P[pairs[:, 1]] - C).max() > 1e-12 * max(1.0, float(np.abs(P).max())):
+        raise ExactError("crack pairs are not at the same positions")
+    tips, normal = [C[0], C[-1]], crack_normal(C[0], C[-1])
+    _, _, G, _ = _geometry(P, t)
+    grad = np.einsum("tv,tvd->td", uu[t], G)
+    p_tri = np.repeat(grad[:, None, :], 3, axis=1)
+    su, sp, _ = _domain_errors(P, t, exact, tips, quad, uu[t], p_tri, None, want_div=False)
+    jump_h = uu[pairs[:, 0]] - uu[pairs[:, 1]]
+    sl = _crack_error(C, _lambda_fn(jump_h, C.shape[0] - 1), exact, normal, quad)
+    return {"u_l2": math.sqrt(su), "p_l2": math.sqrt(sp), "lambda_l2": math.sqrt(sl)}
+
+
+def integrate_on_triangle(fn, vertices, tip=None, quad=None):
+    """∫_T fn(x, y) over one triangle: the tip rule collapsed at vertex ``tip`` (0, 1 or 2), or
+    for tip=None the plain Stroud rule (no near-tip splitting). For tests."""
+    quad = quad or Quadrature()
+    X = np.asarray(vertices, dtype=float)[:, :2]
+    area = 0.5 * abs((X[1, 0] - X[0, 0]) * (X[2, 1] - X[0, 1]) - (X[1, 1] - X[0, 1]) * (X[2, 0] - X[0, 0]))
+    L, W = tip_rule(quad.tip_m, tip) if tip is not None else stroud_rule(quad.n)
+    xy = L @ X
+    return area * float(np.dot(W, fn(xy[:, 0], xy[:, 1])))
