@@ -4,9 +4,9 @@
 //! solver that fails); 2 bad usage or bad input (arguments, scene file, crack off the mesh,
 //! non-finite data, a level over the memory limit, an `--out` that cannot be created or already
 //! holds the results folder, a reference solver that is not installed); 3 the run finished and
-//! wrote its results but at least one case did not converge. Every error is one line on stderr,
-//! `sdcrack: error: …` (clap's usage errors included: their usage block is left out); `sdcrack`
-//! alone prints the help and exits 2.
+//! wrote its results but at least one case (of the solver or of a reference) did not converge.
+//! Every error is one line on stderr, `sdcrack: error: …` (clap's usage errors included: their
+//! usage block is left out); `sdcrack` alone prints the help and exits 2.
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -365,7 +365,7 @@ fn run(
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     write_run(results.work_path(), scene, &plan, &study, wall).map_err(runtime)?;
-    run_references(scene, &plan, results.work_path(), quiet)?;
+    let references_converged = run_references(scene, &plan, results.work_path(), quiet)?;
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);
     let failed = study.cases.iter().filter(|c| !c.converged).count();
@@ -377,16 +377,29 @@ fn run(
     );
     if failed > 0 {
         eprintln!("sdcrack: {failed} case(s) did not converge; see summary.json");
-        return Ok(3);
     }
-    Ok(0)
+    if !references_converged {
+        eprintln!("sdcrack: some reference case did not converge; see <tool>/summary.json");
+    }
+    Ok(if failed > 0 || !references_converged {
+        3
+    } else {
+        0
+    })
 }
 
-/// Exports the plan's meshes and runs every reference the scene lists, into `dir/<tool>/`.
-fn run_references(scene: &Scene, plan: &CasePlan, dir: &Path, quiet: bool) -> Result<(), Failure> {
+/// Exports the plan's meshes and runs every reference the scene lists, into `dir/<tool>/`;
+/// returns false when some reference case did not converge (its results are kept).
+fn run_references(
+    scene: &Scene,
+    plan: &CasePlan,
+    dir: &Path,
+    quiet: bool,
+) -> Result<bool, Failure> {
     if scene.references.is_empty() {
-        return Ok(());
+        return Ok(true);
     }
+    let mut all_converged = true;
     let mesh_dir = dir.join("mesh");
     crate::output::mesh_export::export_meshes(scene, &plan.levels, &mesh_dir).map_err(runtime)?;
     for tool in &scene.references {
@@ -397,7 +410,7 @@ fn run_references(scene: &Scene, plan: &CasePlan, dir: &Path, quiet: bool) -> Re
         };
         spinner.set_message(format!("reference {tool}: levels {:?}", plan.levels));
         spinner.enable_steady_tick(std::time::Duration::from_millis(200));
-        let seconds = crate::references::run_reference(
+        let run = crate::references::run_reference(
             tool,
             &mesh_dir,
             &dir.join(tool),
@@ -405,9 +418,10 @@ fn run_references(scene: &Scene, plan: &CasePlan, dir: &Path, quiet: bool) -> Re
         )
         .map_err(runtime)?;
         spinner.finish_and_clear();
-        println!("reference {tool}: {seconds:.1} s");
+        println!("reference {tool}: {:.1} s", run.seconds);
+        all_converged &= run.all_converged;
     }
-    Ok(())
+    Ok(all_converged)
 }
 
 /// log2 rate between two (h, e) pairs.

@@ -110,13 +110,26 @@ fn which(bin: &str) -> Option<PathBuf> {
     })
 }
 
-/// Runs `tool` on the mesh export `mesh_dir`, writing into `out`; returns the wall time in seconds.
+/// Exit status of a reference script that wrote its results but has a case whose `status` is not
+/// "converged" (references/freefem/README.md).
+pub const EXIT_NOT_CONVERGED: i32 = 3;
+
+/// What a reference run gave: its wall time and whether every case converged.
+#[derive(Clone, Copy, Debug)]
+pub struct ReferenceRun {
+    /// Wall time of the script, seconds.
+    pub seconds: f64,
+    /// False when the script exited [`EXIT_NOT_CONVERGED`]: results written, some case not converged.
+    pub all_converged: bool,
+}
+
+/// Runs `tool` on the mesh export `mesh_dir`, writing into `out`.
 pub fn run_reference(
     tool: &str,
     mesh_dir: &Path,
     out: &Path,
     fields: bool,
-) -> Result<f64, ReferenceError> {
+) -> Result<ReferenceRun, ReferenceError> {
     let script = scripts_dir().join(tool).join("solve.py");
     let start = Instant::now();
     // Absolute paths: a tool may change its working directory.
@@ -134,7 +147,8 @@ pub fn run_reference(
         tool: tool.to_string(),
         reason: e.to_string(),
     })?;
-    if !output.status.success() {
+    let not_converged = output.status.code() == Some(EXIT_NOT_CONVERGED);
+    if !output.status.success() && !not_converged {
         let stderr = String::from_utf8_lossy(&output.stderr);
         let message = stderr
             .lines()
@@ -149,5 +163,8 @@ pub fn run_reference(
             message,
         });
     }
-    Ok(start.elapsed().as_secs_f64())
+    Ok(ReferenceRun {
+        seconds: start.elapsed().as_secs_f64(),
+        all_converged: !not_converged,
+    })
 }

@@ -1,5 +1,6 @@
 """Result folders of the reference solvers: written under a temporary name beside the final one
-and renamed only when complete, so an interrupted run leaves nothing under the final name."""
+and renamed only when complete, so an interrupted run leaves nothing under the final name; and the
+per-case `status` both references write (KKT residuals against the shared tolerance)."""
 
 import json
 import os
@@ -31,3 +32,41 @@ def write_summary(folder, scene, tool, cases):
     summary = {"scene": scene, "tool": tool, "cases": cases}
     (Path(folder) / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
+
+
+# ---- KKT residuals and case status ---------------------------------------------------------------
+
+KKT_KEYS = ("equations", "primal", "dual", "complementarity")
+KKT_TOLERANCE = 1e-10  # as the Rust solver's KKT_TOLERANCE (src/study.rs): every residual is relative
+
+
+def case_status(kkt, tolerance=KKT_TOLERANCE, failure=None):
+    """The `status` of one case: "converged" when the QP solver reported success (`failure` is None)
+    and every KKT residual of `kkt` (the four KKT_KEYS) is ≤ `tolerance`; otherwise
+    "not_converged: " and the reasons, e.g. "not_converged: complementarity 3.0e-04 > 1e-10" or
+    "not_converged: active set did not converge in 100 solves". A missing or NaN residual fails."""
+    reasons = [] if failure is None else [str(failure)]
+    for key in KKT_KEYS:
+        v = kkt.get(key) if isinstance(kkt, dict) else None
+        if not isinstance(v, (int, float)) or isinstance(v, bool):
+            reasons.append(f"{key} missing")
+        elif not v <= tolerance:  # also NaN
+            reasons.append(f"{key} {v:.1e} > {tolerance:.0e}")
+    return "converged" if not reasons else "not_converged: " + "; ".join(reasons)
+
+
+def componentwise_backward_error(residual, scale):
+    """max_i |r_i| / scale_i (Oettli–Prager, as src/linalg.rs): 0/0 counts as 0, a non-zero residual
+    over a zero scale as ∞, a NaN residual gives NaN."""
+    import numpy as np
+
+    r = np.abs(np.asarray(residual, dtype=float))
+    s = np.asarray(scale, dtype=float)
+    if np.isnan(r).any():
+        return float("nan")
+    nz = r != 0.0
+    if not nz.any():
+        return 0.0
+    with np.errstate(divide="ignore"):
+        q = np.where(s[nz] > 0.0, r[nz] / np.where(s[nz] > 0.0, s[nz], 1.0), np.inf)
+    return float(q.max())
