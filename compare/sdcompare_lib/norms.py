@@ -115,6 +115,21 @@ def p1_vs_piecewise_constant_l2(points, tris, values, const):
     return float(np.sqrt(_local_sq(triangle_areas(points, t), d)))
 
 
+def mini_vs_piecewise_constant_l2(points, tris, values, bubble, const):
+    """‖v + b_T c_b − c‖_{L²} for the MINI field v (P1 vertex values (N,C)) plus bubble
+    coefficients c_b (T,C) of b_T = 27 λ0 λ1 λ2, against c constant per triangle (T,C), exact:
+    ∫ b_T λ_i = 3|T|/20 and ∫ b_T² = 81|T|/280 added to the P1 mass formula of d_i = v_i − c_T."""
+    t = np.asarray(tris, dtype=np.int64)
+    area = triangle_areas(points, t)
+    d = np.asarray(values, dtype=float)[t] - np.asarray(const, dtype=float)[:, None, :]
+    cb = np.asarray(bubble, dtype=float)
+    if cb.shape != (t.shape[0], d.shape[2]):
+        raise NormError(f"bubble coefficients of shape {cb.shape} for {t.shape[0]} triangles")
+    cross = (2.0 * 3.0 / 20.0) * (area[:, None] * cb * d.sum(axis=1)).sum()
+    square = (81.0 / 280.0) * (area[:, None] * cb * cb).sum()
+    return float(np.sqrt(_local_sq(area, d) + cross + square))
+
+
 def p1_gradients(points, tris, values):
     """∇ of a P1 field, constant per triangle: (T,2)."""
     p = np.asarray(points, dtype=float)[:, :2]

@@ -6,7 +6,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-QLABEL = {"u_l2": "‖u−u_ex‖_L²", "p_l2": "‖p−∇u_ex‖_L²", "p_x": "‖p−∇u_ex‖_X", "lambda_l2": "‖λ−[u]‖_L²(Γc)"}
+QLABEL = {"u_l2": "‖u_h−u‖_L²", "p_l2": "‖p_h−∇u‖_L²", "p_x": "‖p_h−∇u‖_X", "lambda_l2": "‖λ_h−[u]‖_L²(Γc)"}
 STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
 
@@ -26,30 +26,38 @@ def _save(fig, folder, name):
     return name
 
 
+def _positive(e):
+    return e is not None and e > 0
+
+
 def rate_plot(folder, scene, rate_entries):
-    ents = [r for r in rate_entries if any(e > 0 for e in r["errors"])]
+    """Errors against h per quantity (u = the exact or the reference solution, per the series'
+    `against`); a series that does not converge is marked in its label by its status."""
+    ents = [r for r in rate_entries if any(_positive(e) for e in r["errors"])]
     if not ents:
         return None
     qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
     fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
     for ax, q in zip(axes[0], qs):
         for r in (r for r in ents if r["quantity"] == q):
-            pts = [(h, e) for h, e in zip(r["h"], r["errors"]) if e > 0]
+            pts = [(h, e) for h, e in zip(r["h"], r["errors"]) if _positive(e)]
             if not pts:
                 continue
             ax.loglog(*zip(*pts), STYLE.get(r["u_space"], ":"), marker=MARK.get(r["multiplier"], "x"),
-                      label=f"{r['u_space']}/{r['multiplier']}" + ("" if r["converges"] else " (no conv.)"))
+                      label=f"{r['u_space']}/{r['multiplier']}"
+                      + ("" if r["status"] == "converges" else f" ({r['status']})"))
         h = [x for r in ents for x in r["h"]]
         if h:
             h0, h1 = max(h), min(h)
-            ref = [e for r in ents if r["quantity"] == q for e in r["errors"] if e > 0]
+            ref = [e for r in ents if r["quantity"] == q for e in r["errors"] if _positive(e)]
             if ref:
                 e0 = min(ref)
                 for p in (0.5, 1.0, 2.0):
                     ax.loglog([h0, h1], [e0 * 4, e0 * 4 * (h1 / h0) ** p], "k:", lw=0.7)
                     ax.annotate(f"h^{p:g}", (h1, e0 * 4 * (h1 / h0) ** p), fontsize=7)
         ax.set_xlabel("h")
-        ax.set_title(f"{scene}: {QLABEL[q]}")
+        against = sorted({r["against"] for r in ents if r["quantity"] == q and r["against"]})
+        ax.set_title(f"{scene}: {QLABEL[q]}" + (f", u = {' / '.join(against)}" if against else ""))
         ax.grid(True, which="both", alpha=0.3)
         _legend(ax)
     return _save(fig, folder, f"rates-{scene}.png")

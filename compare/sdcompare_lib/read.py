@@ -69,7 +69,8 @@ class Fields:
             return np.asarray(g[name][()], dtype=float) if name in g else None
 
         return {"points": pts, "tris": tris, "u": get("u"), "p": get("p"),
-                "crack_points": get("crack/points"), "lam": get("crack/lambda")}
+                "p_bubble": get("p_bubble"), "crack_points": get("crack/points"),
+                "lam": get("crack/lambda")}
 
 
 def load_reference(folder):
@@ -113,6 +114,11 @@ def load_results(folder):
         for k in ("level", "h", "u_space", "multiplier", "delta", "kkt"):
             if k not in c:
                 raise InputError(f"{folder}/summary.json: case {i} lacks '{k}'")
+    scene_text, scene_file = load_scene_copy(folder)
+    plan = summary.get("plan")
+    if not (isinstance(plan, dict) and all(isinstance(plan.get(k), list) for k in PLAN_KEYS)):
+        raise InputError(f"{folder}/summary.json has no 'plan' ({', '.join(PLAN_KEYS)}): it was "
+                         "written by an sdcrack older than the scene copy; rerun the scene")
     fpath = os.path.join(folder, "fields.h5")
     fields = Fields(fpath) if os.path.exists(fpath) else None
     refs = {}
@@ -121,4 +127,28 @@ def load_results(folder):
         if os.path.exists(os.path.join(sub, "summary.json")):
             refs[tool] = load_reference(sub)
     return {"folder": folder, "summary": summary, "scene": summary.get("scene", os.path.basename(
-        os.path.normpath(folder))), "fields": fields, "refs": refs}
+        os.path.normpath(folder))), "fields": fields, "refs": refs, "plan": plan,
+        "scene_text": scene_text, "scene_file": scene_file}
+
+
+PLAN_KEYS = ("levels", "u_spaces", "multipliers", "deltas")
+SCENE_COPY = "scene.toml"
+
+
+def load_scene_copy(folder):
+    """(text, parsed TOML) of the scene copy sdcrack keeps in the results folder."""
+    import tomllib
+
+    path = os.path.join(folder, SCENE_COPY)
+    try:
+        with open(path, encoding="utf-8") as fh:
+            text = fh.read()
+    except FileNotFoundError:
+        raise InputError(f"missing file: {path} (the copy of the scene that sdcrack writes with its "
+                         "results; without it the verdict cannot know what was asked for)")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"cannot read {path}: {exc}")
+    try:
+        return text, tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"malformed TOML in {path}: {exc}")

@@ -1,6 +1,7 @@
 """Report rendering (Markdown + self-contained HTML + JSON) and the atomic report folder write.
 
-A report is a list of sections: dict(title, paras=[str], tables=[(headers, rows)], images=[png]).
+A report is a list of sections: dict(title, paras=[str], tables=[(headers, rows)], images=[png],
+paras_after=[str]).
 """
 import base64
 import html
@@ -40,6 +41,8 @@ def markdown(title, sections):
             out.append("")
         for img in s.get("images", []):
             out += [f"![{img}]({img})", ""]
+        for p in s.get("paras_after", []):
+            out += [p, ""]
     return "\n".join(out)
 
 
@@ -76,6 +79,8 @@ def html_page(title, sections, folder):
             with open(os.path.join(folder, img), "rb") as fh:
                 b64 = base64.b64encode(fh.read()).decode("ascii")
             out.append(f"<p><img alt='{html.escape(img)}' src='data:image/png;base64,{b64}'></p>")
+        for p in s.get("paras_after", []):
+            out.append(f"<p>{_inline_md(p)}</p>")
     out.append("</body></html>")
     return "\n".join(out)
 

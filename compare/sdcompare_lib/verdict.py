@@ -1,6 +1,7 @@
 """All computed checks (rates, δ-limit, references, GCI, KKT, timings), expectations, baseline,
 and the verdict."""
 import math
+import os
 import tomllib
 from collections import defaultdict
 
@@ -8,9 +9,8 @@ import numpy as np
 
 from . import norms, rates
 from .read import case_key, total_time
+from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
-# p_x is the paper's mesh-dependent X-norm of the p error (summary.json, when computed).
-QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.
 PAPER_NORMS = ("u_l2", "p_x", "lambda_l2")
 PAPER_RATE = {"M0": 0.5, "M1": 0.5, "M1star": 0.75}
@@ -42,24 +42,90 @@ def series_by_variant(cases, delta):
 
 
 # ---------------------------------------------------------------- h -> 0 (Theorem 4.3)
-def compute_rates(scene, cases):
+# Against the reference the quantities are the same norms with the reference in place of the exact
+# solution: ‖u_h − u_ref‖, ‖p_h − ∇u_ref‖ (p_h with its bubble), ‖λ_h − [u_ref]‖ (compute_agreement).
+REFERENCE_QUANTITIES = {"u_l2": "e_u", "p_l2": "e_p", "lambda_l2": "e_lambda"}
+PREFERRED_REFERENCE = ("dolfinx", "freefem")
+# Series statuses that fail the run (inconclusive fails unless the scene is a smoke run).
+FAILING = ("does not converge", "unexpected pass", "incomplete")
+
+
+def _finite(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _measured_series(cases, agreement, has_exact):
+    """{(u, m, q): (against, reference, [(level, h, error or None)])} at δ = ref_delta."""
+    delta = ref_delta(cases)
+    out = {}
+    if has_exact:
+        for (u, m), cs in series_by_variant(cases, delta).items():
+            for q in QUANTITIES:
+                out[(u, m, q)] = ("exact", None, [
+                    (int(c["level"]), float(c["h"]),
+                     (c.get("errors") or {}).get(q) if isinstance(c.get("errors"), dict) else None)
+                    for c in cs])
+        return delta, out
+    rows = [r for r in agreement if r["kind"] == "solver_vs_reference" and "level" in r]
+    tools = [t for t in PREFERRED_REFERENCE if any(r["reference"] == t for r in rows)]
+    h_of = {(int(c["level"])): float(c["h"]) for c in cases}
+    for (u, m), cs in series_by_variant(cases, delta).items():
+        for q, key in REFERENCE_QUANTITIES.items():
+            if not tools:
+                out[(u, m, q)] = (None, None, [(int(c["level"]), float(c["h"]), None) for c in cs])
+                continue
+            tool = tools[0]
+            by_level = {r["level"]: r.get(key) for r in rows if r["reference"] == tool
+                        and r["u_space"] == u and r["multiplier"] == m and r["delta"] == delta}
+            out[(u, m, q)] = ("reference", tool, [(int(c["level"]), h_of[int(c["level"])],
+                                                   by_level.get(int(c["level"]))) for c in cs])
+    return delta, out
+
+
+def compute_series(scene, cases, agreement, has_exact, settings):
+    """One entry per (u space, multiplier, quantity): the errors against the exact solution (scenes
+    with [exact]) or against the reference of the same level, their rates, the measured status
+    (rates.series_status) and the status after the scene's expected failures."""
     out = []
     if not cases:
         return out
-    delta = ref_delta(cases)
-    for (u, m), cs in series_by_variant(cases, delta).items():
-        for q in QUANTITIES:
-            pts = [(float(c["h"]), float(c["errors"][q]), int(c["level"])) for c in cs
-                   if isinstance(c.get("errors"), dict) and c["errors"].get(q) is not None]
-            if not pts:
-                continue
-            h = [p[0] for p in pts]
-            e = [p[1] for p in pts]
-            out.append({"scene": scene, "u_space": u, "multiplier": m, "quantity": q,
-                        "delta": delta, "levels": [p[2] for p in pts], "h": h, "errors": e,
-                        "rates": rates.successive_rates(h, e), "converges": rates.converges(h, e),
-                        "paper_rate": PAPER_RATE.get(m) if q in PAPER_NORMS else None})
+    delta, measured = _measured_series(cases, agreement, has_exact)
+    order = {q: i for i, q in enumerate(QUANTITIES)}
+    for (u, m, q), (against, tool, pts) in sorted(measured.items(),
+                                                  key=lambda kv: (kv[0][:2], order[kv[0][2]])):
+        levels = [p[0] for p in pts]
+        h = [p[1] for p in pts]
+        e = [p[2] for p in pts]
+        bad = [lv for lv, v in zip(levels, e) if not _finite(v)]
+        if against is None:
+            status, reason = "inconclusive", ("no exact solution and no reference with solver "
+                                              "fields to measure against")
+        elif bad:
+            status, reason = "incomplete", (f"error against the {against} missing, null or NaN at "
+                                            f"level(s) {bad}")
+        else:
+            status, reason = rates.series_status(h, e, levels, settings["min_rate"])
+        measured_status = status
+        xfail = expected_failure(settings, u, m, q)
+        if xfail is not None and status == "converges":
+            status, reason = "unexpected pass", (f"declared an expected failure ({xfail}) but it "
+                                                 f"converges: {reason}")
+        elif xfail is not None and status == "does not converge":
+            status, reason = "expected failure", f"declared in the scene; measured: {reason}"
+        ok_e = [v if _finite(v) else None for v in e]
+        out.append({"scene": scene, "u_space": u, "multiplier": m, "quantity": q,
+                    "against": against, "reference": tool, "delta": delta, "levels": levels,
+                    "h": h, "errors": ok_e,
+                    "rates": rates.successive_rates(h, ok_e) if not bad else [None] * (len(e) - 1),
+                    "measured_status": measured_status, "status": status, "reason": reason,
+                    "expected_failure": xfail,
+                    "finest_error": ok_e[-1] if ok_e else None,
+                    "paper_rate": PAPER_RATE.get(m) if q in PAPER_NORMS else None})
     return out
+
+
+def series_fails(s, settings):
+    return s["status"] in FAILING or (s["status"] == "inconclusive" and not settings["smoke"])
 
 
 # ---------------------------------------------------------------- δ -> 0 (Theorem 2.1)
@@ -133,8 +199,8 @@ def compute_agreement(scene, cases, fields, refs):
 
 
 def _solver_vs_reference(scene, cases, fields, ref, tool):
-    """e_u, e_p (P1 part of p), e_λ of every solver case against the reference of the same level
-    and against the reference's finest level (nested meshes: the coarse field is evaluated exactly
+    """e_u, e_p (p with its bubble), e_λ of every solver case against the reference of the same
+    level, and e_u, e_p (P1 part of p) against the reference's finest level (nested meshes: the coarse field is evaluated exactly
     at the fine triangles' corners), all exact on shared (sub)triangles."""
     out = []
     meshes = ref.get("mesh") or {}
@@ -162,7 +228,14 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
                 row["e_u"] = norms.p1_l2_diff_two_meshes(f["points"], f["tris"], f["u"], pts, tris, uref)
             p = None if f.get("p") is None else np.asarray(f["p"])[:, :2]
             grad = norms.p1_gradients(pts, tris, uref)
-            row["e_p"] = None if p is None else norms.p1_vs_piecewise_constant_l2(f["points"], f["tris"], p, grad)
+            if p is None:
+                row["e_p"] = None
+            elif f.get("p_bubble") is not None:
+                row["e_p"] = norms.mini_vs_piecewise_constant_l2(f["points"], f["tris"], p,
+                                                                 f["p_bubble"], grad)
+            else:
+                row["e_p"] = None
+                row["note"] = "no p_bubble in fields.h5: e_p (MINI p) not computed"
             jump = uref[crack[:, 0]] - uref[crack[:, 1]]
             row["e_lambda"] = (None if f.get("lam") is None
                                else norms.crack_diff_vs_p1(pts[crack[:, 0]], f["lam"], jump))
@@ -251,79 +324,128 @@ def timing_rows(scene, cases):
 
 
 # ---------------------------------------------------------------- expectations
+# An expectation of scenes/expectations.toml bounds one series at one level of one scene:
+# max_error (the error at `level`) and min_rate (the rate from level − 1 to `level`). Every name in
+# it must exist: the scene among the scene files beside the expectations file (or the judged
+# scene), the u space, multiplier and level among those the judged scene's file lists, the
+# quantity among QUANTITIES; otherwise exit 2. Known failures are declared in the scene file
+# ([[verification.expected_failure]]), not here.
+EXPECTATION_KEYS = {"scene", "u_space", "multiplier", "quantity", "level", "min_rate", "max_error",
+                    "note"}
+MOVED_KEYS = {
+    "converges": "declare a known failure in the scene file's [[verification.expected_failure]] "
+                 "(every series is expected to converge)",
+    "finest_level": "use `level = L`: the bounds apply to the error at level L and the rate from "
+                    "L − 1 to L",
+}
+
+
+def _scene_names_beside(path):
+    import glob
+
+    names = set()
+    for f in glob.glob(os.path.join(os.path.dirname(os.path.abspath(path)), "*.toml")):
+        try:
+            with open(f, "rb") as fh:
+                name = tomllib.load(fh).get("name")
+        except (OSError, ValueError):
+            continue
+        if isinstance(name, str):
+            names.add(name)
+    return names
+
+
 def load_expectations(path):
+    """The [[expectation]] tables of `path`, keys checked (ValueError names the bad one)."""
     with open(path, "rb") as fh:
         data = tomllib.load(fh)
     exps = data.get("expectation", [])
-    if not isinstance(exps, list):
-        raise ValueError("'expectation' must be an array of tables ([[expectation]])")
-    allowed = {"scene", "u_space", "multiplier", "quantity", "converges", "min_rate",
-               "max_error", "finest_level", "note"}
+    if not isinstance(exps, list) or set(data) - {"expectation"}:
+        raise ValueError("only [[expectation]] tables are allowed")
     for i, e in enumerate(exps):
-        bad = set(e) - allowed
+        for k in set(e) & set(MOVED_KEYS):
+            raise ValueError(f"expectation {i}: key '{k}' is no longer used: {MOVED_KEYS[k]}")
+        bad = set(e) - EXPECTATION_KEYS
         if bad:
-            raise ValueError(f"expectation {i}: unknown keys {sorted(bad)}; allowed {sorted(allowed)}")
-        for k in ("scene", "u_space", "quantity"):
+            raise ValueError(f"expectation {i}: unknown keys {sorted(bad)}; allowed "
+                             f"{sorted(EXPECTATION_KEYS)}")
+        for k in ("scene", "u_space", "multiplier", "quantity", "level"):
             if k not in e:
                 raise ValueError(f"expectation {i}: missing '{k}'")
+        if not ("min_rate" in e or "max_error" in e):
+            raise ValueError(f"expectation {i}: it bounds nothing (give min_rate and/or max_error)")
+        if e["quantity"] not in QUANTITIES + ("*",):
+            raise ValueError(f"expectation {i}: quantity {e['quantity']!r} is none of "
+                             f"{', '.join(QUANTITIES)} or '*'")
     return exps
+
+
+def validate_expectations(exps, path, scene, scene_file):
+    """The expectations that apply to `scene`; a name that matches nothing is a ValueError."""
+    from .settings import scene_lists
+
+    known_scenes = _scene_names_beside(path) | {scene}
+    levels, u_spaces, multipliers, _ = scene_lists(scene_file)
+    mine = []
+    for i, e in enumerate(exps):
+        if e["scene"] != "*" and e["scene"] not in known_scenes:
+            raise ValueError(f"expectation {i} names scene {e['scene']!r}, which is neither this "
+                             f"results folder's scene nor a scene file beside {path}")
+        if e["scene"] not in ("*", scene):
+            continue
+        for key, values in (("u_space", u_spaces), ("multiplier", multipliers)):
+            if e[key] != "*" and e[key] not in values:
+                raise ValueError(f"expectation {i}: {key} {e[key]!r} is not run by scene "
+                                 f"{scene!r} (its scene file lists {values})")
+        if not isinstance(e["level"], int) or e["level"] not in levels:
+            raise ValueError(f"expectation {i}: level {e['level']!r} is not a level of scene "
+                             f"{scene!r} (its scene file lists {levels})")
+        if "min_rate" in e and e["level"] - 1 not in levels:
+            raise ValueError(f"expectation {i}: min_rate at level {e['level']} needs level "
+                             f"{e['level'] - 1}, which scene {scene!r} does not run")
+        mine.append({**e, "index": i})
+    return mine
+
+
+def check_expectations(series, exps):
+    """Evaluates each applicable expectation on every series it matches: status "ok", "violated"
+    or "not evaluated" (the level is missing from this run's results); the last two fail."""
+    results = []
+    for e in exps:
+        matched = [s for s in series if _match(e["u_space"], s["u_space"])
+                   and _match(e["multiplier"], s["multiplier"]) and _match(e["quantity"], s["quantity"])]
+        if not matched:
+            results.append({**e, "variant": None, "status": "not evaluated",
+                            "reason": "no series of this run matches it"})
+        for s in matched:
+            res = {**e, "u_space": s["u_space"], "multiplier": s["multiplier"],
+                   "quantity": s["quantity"], "variant": f"{s['u_space']}/{s['multiplier']}"}
+            at = dict(zip(s["levels"], s["errors"]))
+            err, prev = at.get(e["level"]), at.get(e["level"] - 1)
+            problems, missing = [], []
+            if err is None:
+                missing.append(f"no error at level {e['level']}")
+            elif "max_error" in e and not err <= e["max_error"]:
+                problems.append(f"error {err:.3e} > {e['max_error']:.3e} at level {e['level']}")
+            r = None
+            if "min_rate" in e:
+                if err is None or prev is None:
+                    missing.append(f"no errors at levels {e['level'] - 1} and {e['level']}")
+                else:
+                    i = s["levels"].index(e["level"])
+                    r = rates.rate(s["h"][i - 1], prev, s["h"][i], err)
+                    if r is None or r < e["min_rate"]:
+                        problems.append(f"rate {r if r is None else round(r, 3)} < {e['min_rate']} "
+                                        f"from level {e['level'] - 1} to {e['level']}")
+            status = "not evaluated" if missing else ("violated" if problems else "ok")
+            res.update(measured_error=err, measured_rate=r, status=status,
+                       reason="; ".join(missing + problems))
+            results.append(res)
+    return results
 
 
 def _match(pattern, value):
     return pattern in (None, "*") or pattern == value
-
-
-def _check_agreement(e, agreement):
-    """quantity = "reference_agreement": every level's max |u_dolfinx − u_freefem| <= max_error."""
-    rows = [a for a in agreement if a["kind"] == "reference_vs_reference"]
-    if not rows:
-        return {**e, "variant": None, "status": "not_evaluated", "reason": "no two references in this run"}
-    worst = max(rows, key=lambda a: -1.0 if a["max_vertex_diff"] is None else a["max_vertex_diff"])
-    bad = [a for a in rows if a["max_vertex_diff"] is None or a["max_vertex_diff"] > e["max_error"]]
-    reason = "; ".join(f"level {a['level']}: {a['max_vertex_diff']} > {e['max_error']:.1e}" for a in bad)
-    return {**e, "variant": f"{worst['a']} vs {worst['b']}", "measured_error": worst["max_vertex_diff"],
-            "status": "violated" if bad else "ok", "reason": reason}
-
-
-def check_expectations(scene, rate_entries, exps, agreement=()):
-    results = []
-    for e in exps:
-        if e["scene"] not in (scene, "*"):
-            continue
-        if e["quantity"] == "reference_agreement":
-            results.append(_check_agreement(e, agreement))
-            continue
-        matched = [r for r in rate_entries if _match(e.get("u_space"), r["u_space"])
-                   and _match(e.get("multiplier"), r["multiplier"])
-                   and _match(e.get("quantity"), r["quantity"])]
-        if not matched:
-            results.append({**e, "variant": None, "status": "not_evaluated",
-                            "reason": "no matching variant/quantity in this run"})
-            continue
-        for r in matched:
-            res = {**e, "multiplier": r["multiplier"], "u_space": r["u_space"],
-                   "quantity": r["quantity"], "variant": f"{r['u_space']}/{r['multiplier']}"}
-            finest = r["levels"][-1]
-            if "finest_level" in e and (finest != e["finest_level"] or len(r["levels"]) < 3):
-                res.update(status="not_evaluated",
-                           reason=f"run has levels {r['levels']}, expectation needs finest level "
-                                  f"{e['finest_level']} and >= 3 levels")
-                results.append(res)
-                continue
-            problems = []
-            last_rate = r["rates"][-1] if r["rates"] else None
-            if "converges" in e and r["converges"] is not None and \
-                    bool(r["converges"]) != bool(e["converges"]):
-                problems.append(f"converges = {r['converges']}, expected {e['converges']}")
-            if "min_rate" in e and last_rate is not None and last_rate < e["min_rate"]:
-                problems.append(f"rate {last_rate:.3f} < {e['min_rate']}")
-            if "max_error" in e and r["errors"][-1] > e["max_error"]:
-                problems.append(f"error {r['errors'][-1]:.3e} > {e['max_error']:.3e}")
-            res.update(measured_converges=r["converges"], measured_rate=last_rate,
-                       measured_error=r["errors"][-1],
-                       status="violated" if problems else "ok", reason="; ".join(problems))
-            results.append(res)
-    return results
 
 
 # ---------------------------------------------------------------- baseline
@@ -366,21 +488,17 @@ def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
                 flags.append({"scene": scene, "kind": "rate", "variant": f"{r['u_space']}/"
                               f"{r['multiplier']}", "quantity": r["quantity"], "level": lv,
                               "old": ro, "new": rn, "abs_change": abs(rn - ro)})
-        if o["converges"] != r["converges"]:
-            flags.append({"scene": scene, "kind": "converges", "variant": f"{r['u_space']}/"
+        if o["status"] != r["status"]:
+            flags.append({"scene": scene, "kind": "status", "variant": f"{r['u_space']}/"
                           f"{r['multiplier']}", "quantity": r["quantity"],
-                          "old": o["converges"], "new": r["converges"]})
+                          "old": o["status"], "new": r["status"]})
     return flags
 
 
-def decide(kkt, expectation_results):
-    reasons = []
-    bad = [r for r in kkt if not r["converged"]]
-    if bad:
-        reasons.append(f"{len(bad)} case(s) did not converge (KKT)")
-    viol = [e for e in expectation_results if e["status"] == "violated"]
-    if viol:
-        reasons.append(f"{len(viol)} expectation(s) violated")
+def decide(groups):
+    """PASS iff no check has a problem. groups: [(label, [problem, ...])]; returns the verdict and
+    the reasons, one line per problem prefixed by its check's label."""
+    reasons = [f"{label}: {p}" for label, problems in groups for p in problems]
     return ("FAIL" if reasons else "PASS"), reasons
 
 

@@ -518,7 +518,8 @@ fn table_name(table: &str) -> String {
     if table.is_empty() {
         "at the top level".to_string()
     } else {
-        format!("in [{table}]")
+        // a header may hold a tab or other control character (`[verification.\tx]`)
+        format!("in [{}]", escape_controls(table))
     }
 }
 

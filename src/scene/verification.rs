@@ -183,8 +183,13 @@ impl VerificationToml {
 mod tests {
     use crate::scene::{Scene, DEFAULT_SCENE};
 
+    /// The default scene with `table` in place of its own verification tables.
     fn with(table: &str) -> Result<Scene, String> {
-        Scene::from_toml(&format!("{DEFAULT_SCENE}\n{table}")).map_err(|e| e.to_string())
+        let base = DEFAULT_SCENE
+            .split("\n[[verification")
+            .next()
+            .unwrap_or(DEFAULT_SCENE);
+        Scene::from_toml(&format!("{base}\n{table}")).map_err(|e| e.to_string())
     }
 
     #[test]
@@ -205,6 +210,13 @@ mod tests {
         assert_eq!((f.multiplier, f.quantity.as_deref()), (None, None));
         assert_eq!(f.reason, "no jump");
         assert_eq!(with("").unwrap().verification, Default::default());
+        // the repository's default scene declares the continuous u space an expected failure
+        let own = &crate::scene::Scene::default_scene().verification;
+        assert_eq!(own.expected_failures.len(), 1);
+        assert_eq!(
+            own.expected_failures[0].u_space,
+            Some(crate::scene::USpace::Continuous)
+        );
     }
 
     #[test]
