@@ -6,8 +6,6 @@ Each check returns rows (for the report) and problems (one line each); any probl
 """
 import math
 
-import numpy as np
-
 from . import exact
 from .read import case_key
 from .settings import QUANTITIES, scene_lists
@@ -224,7 +222,3 @@ def _error_row(source, c, reported, ours, quantities=QUANTITIES):
     row["worst"] = worst
     return row
 
-
-def worst_relative(rows, source_is_solver):
-    sel = [r["worst"] for r in rows if (r["source"] == "sdcrack") == source_is_solver]
-    return float(np.max(sel)) if sel else None
