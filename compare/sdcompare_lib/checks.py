@@ -108,6 +108,9 @@ def completeness(res, scene_file):
     if no_mesh:
         problems.append(f"the mesh export mesh/ the references solved on lacks level(s) {no_mesh}: "
                         "their fields cannot be compared there")
+    exported = res.get("mesh_scene")
+    if exported is not None and exported.get("name") != name:
+        problems.append(f"the mesh export mesh/ is of scene {exported.get('name')!r}, not {name!r}")
     return problems
 
 

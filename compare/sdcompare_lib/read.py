@@ -119,6 +119,7 @@ def load_results(folder):
     if not (isinstance(plan, dict) and all(isinstance(plan.get(k), list) for k in PLAN_KEYS)):
         raise InputError(f"{folder}/summary.json has no 'plan' ({', '.join(PLAN_KEYS)}): it was "
                          "written by an sdcrack older than the scene copy; rerun the scene")
+    mesh_scene = os.path.join(folder, "mesh", "scene.json")
     fpath = os.path.join(folder, "fields.h5")
     fields = Fields(fpath) if os.path.exists(fpath) else None
     refs = {}
@@ -128,7 +129,8 @@ def load_results(folder):
             refs[tool] = load_reference(sub)
     return {"folder": folder, "summary": summary, "scene": summary.get("scene", os.path.basename(
         os.path.normpath(folder))), "fields": fields, "refs": refs, "plan": plan,
-        "scene_text": scene_text, "scene_file": scene_file}
+        "scene_text": scene_text, "scene_file": scene_file,
+        "mesh_scene": _load_json(mesh_scene) if os.path.exists(mesh_scene) else None}
 
 
 PLAN_KEYS = ("levels", "u_spaces", "multipliers", "deltas")

@@ -300,7 +300,7 @@ def kkt_rows(scene, cases):
         k = c.get("kkt") or {}
         rows.append({"scene": scene, "level": int(c["level"]), "u_space": c["u_space"],
                      "multiplier": c["multiplier"], "delta": float(c["delta"]),
-                     "converged": bool(c.get("converged", False)), "status": c.get("status"),
+                     "converged": c.get("converged") is True, "status": c.get("status"),
                      "iterations": c.get("iterations"), "kkt": k,
                      "kkt_max": max([float(v) for v in k.values() if v is not None], default=None),
                      "active_multipliers": c.get("active_multipliers"),
