@@ -7,7 +7,7 @@ Each check returns rows (for the report) and problems (one line each); any probl
 import math
 
 from . import exact
-from .read import case_key
+from .read import case_key, finite_number
 from .settings import QUANTITIES, scene_lists
 
 # The solver's errors against the compare tool's own (exact.py: another rule family, Duffy rules
@@ -20,12 +20,8 @@ REFERENCE_ERRORS_RTOL = 1e-6
 ERRORS_ATOL = 1e-13
 
 
-def _finite(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
 def _rel(a, b):
-    if not (_finite(a) and _finite(b)):
+    if not (finite_number(a) and finite_number(b)):
         return math.inf
     if max(abs(a), abs(b)) <= ERRORS_ATOL:
         return 0.0
@@ -79,7 +75,7 @@ def completeness(res, scene_file):
         problems.append("summary.json lists a case twice")
     if "exact" in scene_file:
         bad = [c for c in s["cases"] if not isinstance(c.get("errors"), dict)
-               or not all(_finite(c["errors"].get(q)) for q in QUANTITIES)]
+               or not all(finite_number(c["errors"].get(q)) for q in QUANTITIES)]
         if bad:
             k = case_key(bad[0])
             problems.append(f"{len(bad)} case(s) of an exact scene lack a finite error "
@@ -114,15 +110,20 @@ def completeness(res, scene_file):
     return problems
 
 
+def worst_residual(kkt):
+    """The largest KKT residual of a case; absent residuals, or one that is not a finite number
+    (null, NaN), count as infinite (max() over a NaN keeps whichever comes first, so a NaN after a
+    small residual would otherwise vanish)."""
+    if not isinstance(kkt, dict) or not kkt:
+        return math.inf
+    return max(float(v) if finite_number(v) else math.inf for v in kkt.values())
+
+
 def solver_values(kkt_rows, tol):
     """Problems: solver cases not converged or with a KKT residual above `tol` (NaN included)."""
     bad = []
     for k in kkt_rows:
-        values = [v for v in (k["kkt"] or {}).values()]
-        # A residual that is not a finite number (null, NaN) counts as infinite: max() over a NaN
-        # keeps whichever comes first, so a NaN after a small residual would otherwise vanish.
-        worst = max((float(v) if _finite(v) else math.inf for v in values), default=math.inf)
-        if not k["converged"] or not worst <= tol:
+        if not k["converged"] or not worst_residual(k["kkt"]) <= tol:
             bad.append(k)
     if not bad:
         return []
@@ -138,11 +139,8 @@ def reference_values(refs, tol):
     problems = []
     for tool, ref in sorted(refs.items()):
         for c in ref["summary"].get("cases", []):
-            kkt = c.get("kkt")
             status = c.get("status")
-            worst = math.inf
-            if isinstance(kkt, dict) and kkt:
-                worst = max(float(v) if _finite(v) else math.inf for v in kkt.values())
+            worst = worst_residual(c.get("kkt"))
             if status != "converged" or not worst <= tol:
                 problems.append(f"reference {tool} level {c.get('level')}: status {status!r}, "
                                 f"largest KKT residual {worst:.1e} (must be 'converged' and "

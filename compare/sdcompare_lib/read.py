@@ -1,5 +1,6 @@
 """Reading an sdcrack results folder (OUT/<scene>/) and its optional reference subfolders."""
 import json
+import math
 import os
 
 import numpy as np
@@ -19,6 +20,11 @@ def _load_json(path):
         raise InputError(f"missing file: {path}")
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"malformed JSON in {path}: {exc}")
+
+
+def finite_number(v):
+    """True for an int or float (not a bool) that is finite: a usable error or residual."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def case_key(c):

@@ -8,7 +8,7 @@ from collections import defaultdict
 import numpy as np
 
 from . import norms, rates
-from .read import case_key, total_time
+from .read import case_key, finite_number, total_time
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.
@@ -48,10 +48,6 @@ REFERENCE_QUANTITIES = {"u_l2": "e_u", "p_l2": "e_p", "lambda_l2": "e_lambda"}
 PREFERRED_REFERENCE = ("dolfinx", "freefem")
 # Series statuses that fail the run (inconclusive fails unless the scene is a smoke run).
 FAILING = ("does not converge", "unexpected pass", "incomplete")
-
-
-def _finite(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def _measured_series(cases, agreement, has_exact):
@@ -96,7 +92,7 @@ def compute_series(scene, cases, agreement, has_exact, settings):
         levels = [p[0] for p in pts]
         h = [p[1] for p in pts]
         e = [p[2] for p in pts]
-        bad = [lv for lv, v in zip(levels, e) if not _finite(v)]
+        bad = [lv for lv, v in zip(levels, e) if not finite_number(v)]
         if against is None:
             status, reason = "inconclusive", ("no exact solution and no reference with solver "
                                               "fields to measure against")
@@ -112,7 +108,7 @@ def compute_series(scene, cases, agreement, has_exact, settings):
                                                  f"converges: {reason}")
         elif xfail is not None and status == "does not converge":
             status, reason = "expected failure", f"declared in the scene; measured: {reason}"
-        ok_e = [v if _finite(v) else None for v in e]
+        ok_e = [v if finite_number(v) else None for v in e]
         out.append({"scene": scene, "u_space": u, "multiplier": m, "quantity": q,
                     "against": against, "reference": tool, "delta": delta, "levels": levels,
                     "h": h, "errors": ok_e,
@@ -200,8 +196,9 @@ def compute_agreement(scene, cases, fields, refs):
 
 def _solver_vs_reference(scene, cases, fields, ref, tool):
     """e_u, e_p (p with its bubble), e_λ of every solver case against the reference of the same
-    level, and e_u, e_p (P1 part of p) against the reference's finest level (nested meshes: the coarse field is evaluated exactly
-    at the fine triangles' corners), all exact on shared (sub)triangles."""
+    level, and e_u, e_p (P1 part of p) against the reference's finest level (nested meshes: the
+    coarse field is evaluated exactly at the fine triangles' corners), all exact on shared
+    (sub)triangles."""
     out = []
     meshes = ref.get("mesh") or {}
     if not meshes:
