@@ -10,7 +10,12 @@ triangles.txt, crack.txt, boundary.txt, sides.txt}) and, per level, solves on th
     u⁺_j − u⁻_j ≥ 0 at every interior crack node pair j,
 
 i.e. the convex QP  min ½uᵀKu − Fᵀu.  K, F are assembled by dolfinx (f as a UFL expression of the scene
-string, translated by references/common/sdexpr.py, quadrature degree 8).  Change of variables u = T v:
+string, translated by references/common/sdexpr.py).  Quadrature, shared with the FreeFEM reference so that
+both solve the same discrete problem to round-off: F with references/common/sdquad.py's rule (symmetric
+Xiao–Gimbutas, degree 16, 55 interior points: f is never evaluated on the crack) as a UFL custom rule
+(load_measure), K with the one-point rule (exact for P1); g enters only through its values at the
+boundary vertices.  (With degree 8 here and qf9pT in FreeFEM the two differed by 2.9e-7 on mixed with
+cells [4, 4] at level 0; see references/freefem/README.md.)  Change of variables u = T v:
 the + copy's unknown becomes the jump w_j = u⁺_j − u⁻_j, K' = TᵀKT, F' = TᵀF (scipy.sparse), bound
 w ≥ 0.  Primal–dual active set (c = 1): A = {j : λ_j − w_j > tol}, λ = (K'v − F')_plus, w_A = 0, LU
 solve of the rest (scipy SuperLU), until A repeats (tol = 1e-12 · max(1, ‖λ‖∞, ‖w‖∞); ≤ 100 solves).
@@ -52,16 +57,18 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
 import sdexpr  # noqa: E402
 import sdfields  # noqa: E402
+import sdquad  # noqa: E402  the load quadrature shared with the FreeFEM reference
 import sdresults  # noqa: E402
 
 ACTIVITY_TOL = 1e-12
 MAX_ITER = 100
-QUAD_DEGREE = 8           # assembly of K and F
+STIFFNESS_DEGREE = 0      # K: the P1 integrand is constant per cell, the one-point rule is exact
 KKT_TOLERANCE = sdresults.KKT_TOLERANCE
 NORM_DEGREE = 20          # error norms: basix's default rule on cells and crack facets without a tip
 TIP_POINTS = 16           # error norms: Gauss points per direction of the tip rules (see tip_cell_rule)
 # FFCx clamps table values within 1e-9 of 0 and 1e-6 (relative) of ±1 by default, which would move
-# quadrature points lying close to a vertex: keep the tables as tabulated for the error forms.
+# quadrature points lying close to a vertex: keep the tables as tabulated for the error forms and
+# the load (whose points are the FreeFEM reference's, to be evaluated where FreeFEM evaluates f).
 NORM_FFCX = {"table_rtol": 1e-15, "table_atol": 1e-300}
 
 
@@ -185,17 +192,18 @@ def solve_level(scene, lv, trees, want_fields, quadrature=None):
 
     # ---- assembly ----------------------------------------------------------------------------
     x = ufl.SpatialCoordinate(mesh)
-    dx = ufl.dx(metadata={"quadrature_degree": QUAD_DEGREE})
+    dx_k = ufl.dx(metadata={"quadrature_degree": STIFFNESS_DEGREE})
+    dx_f = load_measure()
     u_, v_ = ufl.TrialFunction(V), ufl.TestFunction(V)
     f_ufl = sdexpr.to_ufl(trees["f"], x)
-    A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(ufl.inner(ufl.grad(u_), ufl.grad(v_)) * dx))
+    A = dolfinx.fem.petsc.assemble_matrix(dolfinx.fem.form(ufl.inner(ufl.grad(u_), ufl.grad(v_)) * dx_k))
     A.assemble()
     load = f_ufl * v_
     if isinstance(load, ufl.constantvalue.Zero):  # f = 0: UFL simplified the form away
         b = PETSc.Vec().createSeq(nv)
         b.set(0.0)
     else:
-        b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(load * dx))
+        b = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(load * dx_f, form_compiler_params=NORM_FFCX))
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     indptr, indices, data = A.getValuesCSR()
     Kd = sp.csr_matrix((data, indices, indptr), shape=A.getSize())
@@ -292,6 +300,17 @@ def solve_level(scene, lv, trees, want_fields, quadrature=None):
             fields["u_exact"] = sdexpr.to_numpy(trees["exact_u"])(sx, sy)
     case["timings_s"] = {"assembly": t_asm, "solve": t_solve, "total": time.perf_counter() - t0}
     return case, u, fields
+
+
+def load_measure():
+    """The cell measure of the load form: sdquad.load_rule() as a custom rule (reference points,
+    weights summing to 1/2), the FreeFEM reference's rule; assemble with NORM_FFCX (unclamped tables)."""
+    import ufl
+
+    points, weights = sdquad.load_rule()
+    # lists, not arrays: UFL signs metadata with str() (see custom_measure)
+    return ufl.dx(metadata={"quadrature_rule": "custom", "quadrature_points": points.tolist(),
+                            "quadrature_weights": weights.tolist()})
 
 
 def kkt_residuals(K, F, u, plus, minus, free, active):
