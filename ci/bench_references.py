@@ -7,9 +7,9 @@ timed from outside with a wall clock):
 * sdcrack: `sdcrack run` of one case (broken u, M1, δ = 0; no fields, no reference run);
 * dolfinx / FreeFEM: `sdcrack mesh` (not timed: it is shared input), then the reference script.
 
-Each tool reports its own ‖u_h − u‖_{L²} against the exact solution (sdcrack: tip-graded
-quadrature on the smooth domain; dolfinx: UFL quadrature; FreeFEM: numpy quadrature on the cracked
-mesh). Two times are tabulated: the process wall time (start-up, imports, assembly, solve and
+Each tool reports its own ‖u_h − u‖_{L²} against the exact solution, each with a tip-graded
+quadrature (sdcrack: collapsed Gauss rules graded toward the tips; dolfinx: UFL forms with rules
+collapsed at the tips; FreeFEM's script: numpy rules graded toward the tips on the cracked mesh). Two times are tabulated: the process wall time (start-up, imports, assembly, solve and
 error evaluation), and the solve time by each tool's own timer without start-up and without the
 error evaluation (sdcrack: its phases but `norms`; dolfinx: assembly + solve; FreeFEM: the
 FreeFem++ run). The speed-up at equal error interpolates each reference's (error, time) curve

@@ -8,8 +8,9 @@ import numpy as np
 #   fewer than RULE_LEVELS levels is "inconclusive"; otherwise it "converges" iff over its last
 #   RULE_LEVELS levels the errors decrease strictly AND each of the last two observed rates
 #   log(e_(l-1)/e_l)/log(h_(l-1)/h_l) is >= min_rate; else it "does not converge". Two rates, not
-#   one, and no extrapolation: a series slowing toward a non-zero floor (1.826, 1.374, 1.079: rates
-#   0.41, 0.35) fails on its last rate, whatever the number of levels. A series whose errors are
+#   one, and no extrapolation: a series slowing toward a non-zero floor (the X-norm of p for
+#   continuous u on the open crack, levels 1-3: 2.582, 1.944, 1.526, rates 0.41, 0.35) fails on its
+#   last rate, whatever the number of levels. A series whose errors are
 #   all <= ZERO_FLOOR is exact ("converges", rates null): e.g. e_lambda on a closed crack, where
 #   lambda_h = [u] = 0 exactly.
 RULE_LEVELS = 3

@@ -127,9 +127,11 @@ def test_convergence_rule():
     assert status([0.0] * 5) == "converges"  # exact (closed crack λ)
     # decreasing toward a non-zero floor (continuous u, open crack, X-norm of p, levels 1-5)
     assert status([2.541, 1.837, 1.377, 1.079, 0.8947]) == "does not converge"
-    # the stalled series that the former Richardson test called converging at levels 0-3
+    # the stalled series that the former Richardson test called converging (continuous u, open
+    # crack, X-norm of p, levels 1-3; 1.826, 1.374, 1.079 before the √2 fix of the norms)
+    assert status([2.582, 1.944, 1.526]) == "does not converge"
+    assert status([3.3, 2.582, 1.944, 1.526]) == "does not converge"
     assert status([1.826, 1.374, 1.079]) == "does not converge"
-    assert status([2.0, 1.826, 1.374, 1.079]) == "does not converge"
     # the measured converging series of the broken u space still pass, at any number of levels
     for series in ([3.354, 2.503, 1.836, 1.341, 0.9772],
                    [3.133e-2, 1.218e-2, 4.702e-3, 1.793e-3, 7.043e-4]):
