@@ -470,7 +470,7 @@ def test_expectation_violation_and_baseline(open_run, tmp_path, empty_exps):
     assert rc == 0, out
     r = json.load(open(open_run / "report" / "report.json"))
     kinds = {f["kind"] for f in r["baseline"]}
-    assert "error" in kinds
+    assert "error" in kinds and "status" not in kinds
 
 
 def test_default_expectations_naming_a_level_the_scene_lacks_are_exit_2(open_run):
