@@ -474,6 +474,19 @@ def evaluate(tree, x, y):
 # UFL back-end
 # ---------------------------------------------------------------------------------------------
 
+def on_face(x, y, normal, side):
+    """Coordinates of crack points as seen from face `side` (+1: the side ν points into), the rule
+    of eval_on_face (src/scene/mod.rs): exactly-zero coordinates get the sign of side·ν (IEEE
+    signed zero), so that ``to_numpy`` of ``sign``/``atan2`` selects that face."""
+    import numpy as np
+
+    x, y = np.array(x, dtype=float), np.array(y, dtype=float)
+    for c, nu in ((x, normal[0]), (y, normal[1])):
+        if nu != 0.0:
+            c[c == 0.0] = np.copysign(0.0, side * nu)
+    return x, y
+
+
 def to_ufl(tree, x):
     """UFL expression of the tree; ``x = ufl.SpatialCoordinate(mesh)`` (x[0] = x, x[1] = y)."""
     import ufl

@@ -68,3 +68,10 @@ def load_rule():
                 pts.append(perm[1:])
                 wts.append(weight)
     return np.array(pts), np.array(wts)
+
+
+def gauss01(n):
+    """n-point Gauss–Legendre rule on [0, 1] (weights sum 1): the 1-D building block of both
+    references' error quadratures."""
+    g, w = np.polynomial.legendre.leggauss(n)
+    return (g + 1) / 2, w / 2

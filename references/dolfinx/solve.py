@@ -357,17 +357,11 @@ def kkt_residuals(K, F, u, plus, minus, free, active):
 REFERENCE_TRIANGLE = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-def gauss01(n):
-    """n-point Gauss–Legendre rule on [0, 1] (weights sum 1)."""
-    g, w = np.polynomial.legendre.leggauss(n)
-    return (g + 1) / 2, w / 2
-
-
 def duffy_sqrt_rule(tri, k, n):
     """Rule on the triangle `tri` (3×2 reference coordinates) for integrands singular like r^(-1) at
     its vertex k: x = A + σ²((1 − t)(B − A) + t(C − A)), weight 2σ³·|det(B − A, C − A)| dσ dt."""
     a, b, c = tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]
-    g, w = gauss01(n)
+    g, w = sdquad.gauss01(n)
     sig, t = (m.ravel() for m in np.meshgrid(g, g, indexing="ij"))
     ws, wt = (m.ravel() for m in np.meshgrid(w, w, indexing="ij"))
     rho = sig ** 2
@@ -404,7 +398,7 @@ def tip_cell_rule(corners, n, degree):
 def tip_facet_rule(at_start, at_end, n):
     """Points s ∈ (0, 1) and weights (sum 1) on a crack segment with a tip at s = 0 and/or s = 1:
     s = σ² from the tip (weight 2σ dσ), so [u] ~ s^(1/2) becomes smooth in σ; both: each half."""
-    g, w = gauss01(n)
+    g, w = sdquad.gauss01(n)
     if at_start and at_end:
         s0, w0 = tip_facet_rule(True, False, n)
         return np.concatenate([s0 / 2, 1 - s0 / 2]), np.concatenate([w0 / 2, w0 / 2])
@@ -523,23 +517,13 @@ def jump_error_ufl(mesh, uh, dof_of, inp, crack, jump_h, jump_tree, degree, n):
     return math.sqrt(max(value, 0.0))
 
 
-def on_face(x, y, normal, side):
-    """Crack points as seen from face `side` (+1: the side ν points into), the rule of eval_on_face
-    (src/scene/mod.rs): exactly-zero coordinates get the sign of side·ν (IEEE signed zero)."""
-    x, y = np.array(x, dtype=float), np.array(y, dtype=float)
-    for c, nu in ((x, normal[0]), (y, normal[1])):
-        if nu != 0.0:
-            c[c == 0.0] = np.copysign(0.0, side * nu)
-    return x, y
-
-
 def jump_error_numpy(xy, crack, jump_h, trees, normal, degree, n):
     """‖[u_h] − [u]‖_{L²(Γc)} in numpy, with the rules of jump_error_ufl (tip_facet_rule at the tips,
     Gauss of `degree` elsewhere). Without exact.jump, [u] = u⁺ − u⁻ by on_face (UFL has no signed
     zero to select a face)."""
     fj = sdexpr.to_numpy(trees["exact_jump"]) if trees.get("exact_jump") is not None else None
     fu = sdexpr.to_numpy(trees["exact_u"])
-    g, gw = gauss01(degree // 2 + 1)
+    g, gw = sdquad.gauss01(degree // 2 + 1)
     total = 0.0
     last = len(crack) - 2
     for k in range(len(crack) - 1):
@@ -549,7 +533,7 @@ def jump_error_numpy(xy, crack, jump_h, trees, normal, degree, n):
         if fj is not None:
             je = fj(X, Y)
         else:
-            je = fu(*on_face(X, Y, normal, 1.0)) - fu(*on_face(X, Y, normal, -1.0))
+            je = fu(*sdexpr.on_face(X, Y, normal, 1.0)) - fu(*sdexpr.on_face(X, Y, normal, -1.0))
         jh = (1 - s) * jump_h[k] + s * jump_h[k + 1]
         total += float(np.hypot(*(b - a)) * np.sum(w * (jh - je) ** 2))
     return math.sqrt(total)

@@ -245,16 +245,10 @@ def run_level(exe, lv, f_ff, g_ff, work):
 REFERENCE_TRIANGLE = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-def gauss01(n):
-    """n-point Gauss–Legendre rule on [0, 1] (weights sum 1)."""
-    g, w = np.polynomial.legendre.leggauss(n)
-    return (g + 1) / 2, w / 2
-
-
 def collapsed_rule(degree):
     """Collapsed Gauss rule on the reference triangle, exact for polynomials of `degree` (n² points,
     n = degree/2 + 1; all interior; weights sum 1/2): the rule of src/fe/quadrature.rs."""
-    g, w = gauss01(degree // 2 + 1)
+    g, w = sdquad.gauss01(degree // 2 + 1)
     a, b = np.meshgrid(g, g, indexing="ij")
     wa, wb = np.meshgrid(w, w, indexing="ij")
     return np.column_stack([a.ravel(), (b * (1 - a)).ravel()]), (wa * wb * (1 - a)).ravel()
@@ -295,19 +289,9 @@ def graded_segment_rule(at_start, at_end, degree, depth):
     if at_end:
         cuts |= {1.0 - 0.5 ** i for i in range(1, depth + 1)}
     cuts = np.array(sorted(cuts))
-    g, w = gauss01(degree // 2 + 1)
+    g, w = sdquad.gauss01(degree // 2 + 1)
     s0, s1 = cuts[:-1, None], cuts[1:, None]
     return (s0 + g * (s1 - s0)).ravel(), (w * (s1 - s0)).ravel()
-
-
-def on_face(x, y, normal, side):
-    """Coordinates of crack points as seen from face `side` (+1: the side ν points into), the rule
-    of eval_on_face (src/scene/mod.rs): exactly-zero coordinates get the sign of side·ν."""
-    x, y = np.array(x, dtype=float), np.array(y, dtype=float)
-    for c, n in ((x, normal[0]), (y, normal[1])):
-        if n != 0.0:
-            c[c == 0.0] = np.copysign(0.0, side * n)
-    return x, y
 
 
 def exact_gradient(exact):
@@ -371,7 +355,7 @@ def exact_errors(lv, u_h, exact, normal, degree=NORM_DEGREE, near_degree=NORM_NE
         if u_jump is not None:
             jx = u_jump(X, Y)
         else:
-            jx = u_ex(*on_face(X, Y, normal, 1.0)) - u_ex(*on_face(X, Y, normal, -1.0))
+            jx = u_ex(*sdexpr.on_face(X, Y, normal, 1.0)) - u_ex(*sdexpr.on_face(X, Y, normal, -1.0))
         jh = (1 - s) * jump_h[k] + s * jump_h[k + 1]
         sl += float(length[k] * np.sum(w * (jh - jx) ** 2))
     return {"u_l2": float(np.sqrt(su)), "p_l2": float(np.sqrt(sp)), "lambda_l2": float(np.sqrt(sl))}
