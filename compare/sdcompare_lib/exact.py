@@ -435,7 +435,6 @@ def _point_batches(P, tris, tips, quad, chunk_tris=1024):
         near &= ~touching
     regular = np.flatnonzero(~touching & ~near)
     Ls, Ws = stroud_rule(quad.n)
-    q = Ws.shape[0]
     for a in range(0, regular.shape[0], chunk_tris):
         yield regular[a:a + chunk_tris], Ls, Ws
     tip_ids = np.flatnonzero(touching)
