@@ -15,7 +15,7 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::output::{write_run, ResultsDir};
+use crate::output::{summary::Provenance, write_run, ResultsDir};
 use crate::scene::{MultiplierSpace, Scene, USpace};
 use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
 
@@ -346,6 +346,7 @@ fn run(
     }
     let plan = CasePlan::new(scene, filter);
     let results = ResultsDir::create(out, &scene.name).map_err(usage)?;
+    let provenance = Provenance::of_this_process(origin, std::time::SystemTime::now());
     let start = Instant::now();
     let bar = if quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
@@ -364,7 +365,7 @@ fn run(
     })?;
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
-    write_run(results.work_path(), scene, &plan, &study, wall).map_err(runtime)?;
+    write_run(results.work_path(), scene, &plan, &study, wall, &provenance).map_err(runtime)?;
     let references_converged = run_references(scene, &plan, results.work_path(), quiet)?;
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);

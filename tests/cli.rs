@@ -55,7 +55,32 @@ fn run_writes_summary_and_fields_and_never_overwrites() {
         assert!(c.get("errors").is_none(), "no [exact] → no errors");
         assert_eq!(c["converged"], true, "{c}");
     }
-    assert!(folder.join("fields.h5").is_file() && folder.join("fields.xdmf").is_file());
+    assert!(folder.join("fields.h5").is_file());
+    // one time series (and its crack) per level, u space and multiplier; no spatial collection
+    assert!(!folder.join("fields.xdmf").exists());
+    let series = std::fs::read_dir(folder.join("fields")).unwrap().count();
+    assert_eq!(
+        series,
+        (2 * 2 * 3) * 2,
+        "12 series, a mesh file and a crack file each"
+    );
+    for c in cases {
+        let file = c["fields_series"].as_str().unwrap();
+        assert!(folder.join(file).is_file(), "{file}");
+        assert!(c["fields_grid"]
+            .as_str()
+            .unwrap()
+            .starts_with(file.trim_start_matches("fields/").trim_end_matches(".xdmf")));
+    }
+    // provenance: the command line as given, the binary, the date
+    let prov = &summary["provenance"];
+    assert_eq!(prov["command_line"][1], "run");
+    assert_eq!(prov["command_line"][2], scene.as_str());
+    assert!(prov["executable"].as_str().unwrap().ends_with("sdcrack"));
+    assert!(prov["date_utc"].as_str().unwrap().ends_with('Z'));
+    assert!(prov["cores"].as_u64().unwrap() >= 1);
+    assert_eq!(prov["scene_origin"], scene.as_str());
+    assert_eq!(prov["sdcrack_version"], env!("CARGO_PKG_VERSION"));
     // no partial folders left
     let names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
@@ -93,7 +118,7 @@ fn no_fields_asked_no_field_files_and_filters_select_one_case() {
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let folder = out.join("small");
-    assert!(!folder.join("fields.h5").exists() && !folder.join("fields.xdmf").exists());
+    assert!(!folder.join("fields.h5").exists() && !folder.join("fields").exists());
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
     let cases = summary["cases"].as_array().unwrap();

@@ -159,7 +159,7 @@ pub enum WriteError {
 /// without a file): what the run was asked to do, read by the compare tool.
 pub const SCENE_COPY: &str = "scene.toml";
 
-/// Writes `scene.toml` (the scene's text byte for byte), `summary.json` and, when the scene asks
+/// Writes `scene.toml` (the scene's text byte for byte), `summary.json` (with `provenance`) and, when the scene asks
 /// for fields, `fields.h5` + `fields.xdmf` into `dir`.
 pub fn write_run(
     dir: &Path,
@@ -167,6 +167,7 @@ pub fn write_run(
     plan: &crate::study::CasePlan,
     study: &crate::study::StudyResult,
     wall_s: f64,
+    provenance: &summary::Provenance,
 ) -> Result<(), WriteError> {
     let copy = dir.join(SCENE_COPY);
     atomic_write(&copy, scene.source.as_bytes()).map_err(|e| WriteError::Io {
@@ -183,6 +184,7 @@ pub fn write_run(
         scene: scene.name.clone(),
         description: scene.description.clone(),
         sdcrack_version: env!("CARGO_PKG_VERSION"),
+        provenance: provenance.clone(),
         kkt_tolerance: crate::study::KKT_TOLERANCE,
         plan: summary::PlanSummary::from_plan(plan),
         shared_timings: [
@@ -222,6 +224,7 @@ fn write_fields(
     study: &crate::study::StudyResult,
 ) -> Result<(), WriteError> {
     use crate::norms::CrackField;
+    use xdmf::Meta;
     let meshes: Vec<xdmf::MeshData> = study
         .meshes
         .iter()
@@ -255,6 +258,14 @@ fn write_fields(
                     CrackField::PerSegment(v) => (xdmf::Centering::Cell, v.clone()),
                     CrackField::PerNode(v) => (xdmf::Centering::Node, v.clone()),
                 }),
+                series: summary::series_name(c),
+                metadata: vec![
+                    ("level".into(), Meta::Int(i64::from(c.level))),
+                    ("h".into(), Meta::Float(c.h)),
+                    ("u_space".into(), Meta::Text(c.u_space.to_string())),
+                    ("multiplier".into(), Meta::Text(c.multiplier.to_string())),
+                    ("delta".into(), Meta::Float(c.delta)),
+                ],
             })
         })
         .collect();

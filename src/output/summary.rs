@@ -17,6 +17,8 @@ pub struct Summary {
     pub description: String,
     /// Version of sdcrack that wrote it.
     pub sdcrack_version: &'static str,
+    /// Where the results come from: command line, binary, commit, date, machine.
+    pub provenance: Provenance,
     /// The KKT tolerance a case must meet to count as converged.
     pub kkt_tolerance: f64,
     /// The cases the run was asked for: the scene's lists, restricted by the command line's filters.
@@ -31,6 +33,60 @@ pub struct Summary {
     pub fields_write_s: f64,
     /// The cases.
     pub cases: Vec<CaseSummary>,
+}
+
+/// Where a results folder comes from: enough to rerun it and to tell two runs apart.
+#[derive(Serialize, Debug, Clone)]
+pub struct Provenance {
+    /// The command line exactly as given (`argv`, lossily converted to UTF-8).
+    pub command_line: Vec<String>,
+    /// Absolute working directory the command ran in (relative paths of the command line are
+    /// relative to it).
+    pub working_directory: String,
+    /// Absolute path of the sdcrack binary that ran.
+    pub executable: String,
+    /// Version of sdcrack (Cargo.toml).
+    pub sdcrack_version: &'static str,
+    /// Git commit the binary was built from (`None` outside a git checkout).
+    pub git_commit: Option<&'static str>,
+    /// True when the binary's sources (`src/`, `Cargo.*`, `build.rs`) differed from that
+    /// commit at build time (`None` outside a git checkout).
+    pub git_dirty: Option<bool>,
+    /// Start of the run, UTC, RFC 3339 to the second (`2026-11-23T16:00:00Z`).
+    pub date_utc: String,
+    /// Cores available to the process (`std::thread::available_parallelism`).
+    pub cores: usize,
+    /// The scene file as given on the command line, or `(embedded default)`; its text is the
+    /// results folder's `scene.toml`.
+    pub scene_origin: String,
+}
+
+impl Provenance {
+    /// The provenance of this process, started at `start`, running the scene from `scene_origin`.
+    pub fn of_this_process(scene_origin: &str, start: std::time::SystemTime) -> Provenance {
+        let absolute = |p: std::io::Result<std::path::PathBuf>| {
+            p.map(|p| p.display().to_string())
+                .unwrap_or_else(|e| format!("(unknown: {e})"))
+        };
+        let commit = env!("SDCRACK_GIT_COMMIT");
+        Provenance {
+            command_line: std::env::args_os()
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect(),
+            working_directory: absolute(std::env::current_dir()),
+            executable: absolute(std::env::current_exe()),
+            sdcrack_version: env!("CARGO_PKG_VERSION"),
+            git_commit: (!commit.is_empty()).then_some(commit),
+            git_dirty: match env!("SDCRACK_GIT_DIRTY") {
+                "true" => Some(true),
+                "false" => Some(false),
+                _ => None,
+            },
+            date_utc: humantime::format_rfc3339_seconds(start).to_string(),
+            cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            scene_origin: scene_origin.to_string(),
+        }
+    }
 }
 
 /// What a run was asked to solve: every combination of these is a case of `cases`.
@@ -94,17 +150,31 @@ pub struct CaseSummary {
     /// Errors against `[exact]`, when the scene has it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub errors: Option<ErrorNorms>,
-    /// Name of the case's grid in `fields.xdmf`, when fields are written.
+    /// Name of the case in the field files, when fields are written: its group
+    /// `/cases/<fields_grid>` in `fields.h5` and its step grid in the series file.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fields_grid: Option<String>,
+    /// The series file (relative to the results folder, `fields/<series>.xdmf`) whose time
+    /// steps are this case's δ sweep, when fields are written.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fields_series: Option<String>,
 }
 
-/// Grid name of a case in the field files.
+/// Name of a case in the field files: its `/cases/` group in `fields.h5` and its step grid,
+/// e.g. `level3-broken-M1-delta1e-2` (δ = 0 is written `delta0`).
 pub fn case_name(c: &CaseResult) -> String {
-    format!(
-        "level{}-{}-{}-delta{:e}",
-        c.level, c.u_space, c.multiplier, c.delta
-    )
+    let delta = if c.delta == 0.0 {
+        "0".to_string()
+    } else {
+        format!("{:e}", c.delta)
+    };
+    format!("{}-delta{delta}", series_name(c))
+}
+
+/// Name of the δ sweep a case belongs to in the field files, e.g. `level3-broken-M1`: the
+/// time series `fields/<series>.xdmf` whose steps are the sweep's δ.
+pub fn series_name(c: &CaseResult) -> String {
+    format!("level{}-{}-{}", c.level, c.u_space, c.multiplier)
 }
 
 impl CaseSummary {
@@ -137,6 +207,7 @@ impl CaseSummary {
             timings_s: c.timings,
             errors: c.errors,
             fields_grid: with_fields.then(|| case_name(c)),
+            fields_series: with_fields.then(|| format!("fields/{}.xdmf", series_name(c))),
         }
     }
 }

@@ -6,10 +6,13 @@
 //!
 //! ```text
 //! DIR/STEM.h5                      all heavy data (HDF5)
-//! DIR/STEM.xdmf                    every grid of every case, for ParaView
-//! DIR/STEM/CASE.xdmf               the triangle grid of one case, for meshio.read
-//! DIR/STEM/CASE.crack.xdmf         the crack polyline of one case, for meshio.read
+//! DIR/STEM/SERIES.xdmf             the triangle grids of one series, one time step per case
+//! DIR/STEM/SERIES.crack.xdmf       the crack polylines of the same series (when it has a crack)
 //! ```
+//!
+//! A *series* is a list of cases on one mesh that a viewer walks through with its time slider;
+//! the solver makes one series per (level, u space, multiplier), whose steps are the δ sweep in
+//! the order solved (δ decreasing, so the slider walks δ → 0).
 //!
 //! # HDF5 datasets (`STEM.h5`)
 //!
@@ -26,48 +29,55 @@
 //! /cases/CASE/crack/lambda         f64 (I+1,) per node or (I,) per segment, optional
 //! ```
 //!
+//! The group `/cases/CASE` and every field dataset in it (`u`, `p`, `p_bubble`, `crack/lambda`)
+//! carry the case's [`CaseFields::metadata`] as HDF5 attributes (the solver's: `level`, `h`,
+//! `u_space`, `multiplier`, `delta`), plus `series` (text) and `step` (integer).
+//!
 //! Each mesh is stored once, however many cases use it; only meshes used by at least one case are
 //! written. A case whose `crack_points` is empty (and has no `lambda`) has no `crack` group and no
 //! crack grid. Data are stored contiguously, uncompressed.
 //!
-//! # XDMF (`STEM.xdmf`)
+//! # XDMF (`STEM/SERIES.xdmf`, `STEM/SERIES.crack.xdmf`)
 //!
 //! ```text
 //! <Xdmf Version="3.0">
 //!   <Domain>
-//!     <Grid Name="STEM" GridType="Collection" CollectionType="Spatial">
-//!       <Grid Name="CASE" GridType="Uniform">            Triangle topology, XYZ geometry,
-//!                                                        Attributes u (Scalar), p (Vector), Center="Node"
-//!       <Grid Name="CASE/crack" GridType="Uniform">      Polyline topology, NodesPerElement="2",
-//!                                                        Attribute lambda (Scalar), Center="Node" or "Cell"
-//!       ... the same pair for every case, in the order given ...
+//!     <Grid Name="SERIES" GridType="Collection" CollectionType="Temporal">
+//!       <Grid Name="CASE" GridType="Uniform">       one per case of the series, in order
+//!         <Time Value="k"/>                         k = 0, 1, ...: the step's index
+//!         <Information Name="delta" Value="0.01"/>  the case's metadata, one element per key
+//!         Triangle topology, XYZ geometry,
+//!         Attributes u (Scalar), p (Vector), Center="Node"
+//!       ...
 //! ```
 //!
-//! All `DataItem`s are `Format="HDF"` and name the heavy file by its final name relative to the
-//! XDMF file (`STEM.h5:/cases/CASE/u`); grids on the same mesh point at the same
-//! `/meshes/KEY/...` datasets. A spatial collection is what ParaView's XDMF 3 reader turns into a
-//! multiblock dataset with one named block per grid.
+//! The crack file has the same shape with Polyline topology (`NodesPerElement="2"`) and the
+//! attribute `lambda` (Scalar, `Center="Node"` or `"Cell"`). All `DataItem`s are `Format="HDF"`
+//! and name the heavy file relative to the XDMF file (`../STEM.h5:/cases/CASE/u`); the steps of
+//! a series point at the same `/meshes/KEY/...` datasets.
 //!
-//! meshio's `meshio.read` (5.x) accepts only a `Domain` holding exactly one uniform `Grid`, so it
-//! cannot open `STEM.xdmf`. For it every case also gets `STEM/CASE.xdmf` (the triangle grid with
-//! `u`, `p`) and, when the case has a crack, `STEM/CASE.crack.xdmf` (the polyline with `lambda`):
-//! the same grids as in `STEM.xdmf`, alone in their `Domain`, referencing `../STEM.h5`.
+//! This is the shape both clients read: ParaView's default XDMF 3 reader opens a temporal
+//! collection as one dataset with time steps, and meshio 5's `meshio.xdmf.TimeSeriesReader`
+//! reads the points and cells of the first step and the data and `Time` of every step (it skips
+//! `Information`, and would reject `Center="Grid"` attributes, which are therefore not used).
+//! No file holds more than one series: overlapping grids of several levels or δ in one spatial
+//! collection are what a viewer cannot show.
 //!
 //! # Names
 //!
-//! `STEM`, mesh keys and case names are used as file names, HDF5 link names and inside XDMF
-//! `DataItem`s, so they must be non-empty, not `.` or `..`, and free of `/`, `\`, `:` and control
-//! characters. XML special characters are allowed and escaped.
+//! `STEM`, mesh keys, case names and series names are used as file names, HDF5 link names and
+//! inside XDMF `DataItem`s, so they must be non-empty, not `.` or `..`, and free of `/`, `\`,
+//! `:` and control characters. XML special characters are allowed and escaped.
 //!
 //! # Atomicity
 //!
-//! Everything is validated before anything is written. The three outputs are then written under
-//! temporary names in `DIR` (`.STEM.h5.tmp-PID-N`, `.STEM.xdmf.tmp-PID-N`, folder
-//! `.STEM.tmp-PID-N`), fsynced, and renamed in the order `STEM.h5`, `STEM/`, `STEM.xdmf`. Each
-//! rename is atomic; an existing `STEM/` folder is first moved aside (`.STEM.old-PID-N`) and
-//! deleted after the new one is in place. On any error before the renames every temporary is
-//! removed and existing files under the final names are left untouched. Whether overwriting an
-//! existing pair is allowed is the caller's decision: this module always replaces.
+//! Everything is validated before anything is written. The outputs are then written under
+//! temporary names in `DIR` (`.STEM.h5.tmp-PID-N`, folder `.STEM.tmp-PID-N`), fsynced, and
+//! renamed in the order `STEM.h5`, `STEM/`. Each rename is atomic; an existing `STEM/` folder is
+//! first moved aside (`.STEM.old-PID-N`) and deleted after the new one is in place. On any error
+//! before the renames every temporary is removed and existing files under the final names are
+//! left untouched. Whether overwriting is allowed is the caller's decision: this module always
+//! replaces.
 
 use std::fs;
 use std::io::Write;
@@ -131,14 +141,42 @@ pub struct CaseFields {
     pub crack_points: Vec<[f64; 2]>,
     /// Contact multiplier on the crack, per node or per segment.
     pub lambda: Option<(Centering, Vec<f64>)>,
+    /// Name of the series the case is a step of (see the module documentation): the cases of
+    /// one series share one mesh and one crack, and are its steps in the order given.
+    pub series: String,
+    /// Named values describing the case (the solver's: level, h, u space, multiplier, δ),
+    /// written as HDF5 attributes and XDMF `Information` elements.
+    pub metadata: Vec<(String, Meta)>,
 }
 
-/// Writes DIR/<stem>.h5 and DIR/<stem>.xdmf atomically: both are written under temporary names in DIR (e.g. `.<stem>.h5.tmp-<pid>`), fsynced, then renamed; on any error the temporaries are removed and nothing existing under the final names is touched.
-///
-/// Also writes the per-case meshio files `DIR/<stem>/<case>.xdmf` and
-/// `DIR/<stem>/<case>.crack.xdmf` (see the module documentation for the layout). The inputs are
-/// validated first: every `mesh_key` must exist, field lengths must match the mesh / crack,
-/// names must be unique and usable as file and HDF5 names, triangle indices must be in range and
+/// A metadata value of a case.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Meta {
+    /// An integer.
+    Int(i64),
+    /// A number, written in XDMF as its shortest round-trip form (`0.01` as `1e-2`, zero as `0`).
+    Float(f64),
+    /// A text.
+    Text(String),
+}
+
+impl std::fmt::Display for Meta {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Meta::Int(i) => write!(f, "{i}"),
+            Meta::Float(x) if *x == 0.0 => write!(f, "0"),
+            Meta::Float(x) => write!(f, "{x:e}"),
+            Meta::Text(t) => f.write_str(t),
+        }
+    }
+}
+
+/// Writes `DIR/<stem>.h5` and the series files `DIR/<stem>/<series>.xdmf` and
+/// `DIR/<stem>/<series>.crack.xdmf` atomically (see the module documentation for the layout and
+/// the commit order); on any error the temporaries are removed and nothing existing under the
+/// final names is touched. The inputs are validated first: every `mesh_key` must exist, field
+/// lengths must match the mesh / crack, names must be unique and usable as file and HDF5 names,
+/// the cases of a series must share their mesh and crack, triangle indices must be in range and
 /// all values finite; otherwise [`OutputError::Invalid`] names the case and field.
 pub fn write_fields(
     dir: &Path,
@@ -164,7 +202,6 @@ pub fn write_fields(
         }
     }
     let final_h5 = dir.join(format!("{stem}.h5"));
-    let final_xdmf = dir.join(format!("{stem}.xdmf"));
     let final_cases = dir.join(stem);
     match fs::symlink_metadata(&final_cases) {
         Ok(m) if !m.is_dir() => {
@@ -184,7 +221,6 @@ pub fn write_fields(
     );
     let temps = Temporaries {
         h5: dir.join(format!(".{stem}.h5.tmp-{tag}")),
-        xdmf: dir.join(format!(".{stem}.xdmf.tmp-{tag}")),
         cases: dir.join(format!(".{stem}.tmp-{tag}")),
         old_cases: dir.join(format!(".{stem}.old-{tag}")),
     };
@@ -193,46 +229,34 @@ pub fn write_fields(
     write_h5(&temps.h5, meshes, cases, &plan)?;
     sync_path(&temps.h5)?;
 
-    // Per-case files for meshio.
+    // Series files.
     fs::create_dir(&temps.cases).map_err(io_err(&temps.cases))?;
-    let h5_from_sub = format!("../{stem}.h5");
-    for (c, case) in cases.iter().enumerate() {
-        let mesh = &meshes[plan.case_mesh[c]];
-        let body = mesh_grid_xml(&h5_from_sub, mesh, case, "    ");
+    let h5 = format!("../{stem}.h5");
+    for series in &plan.series {
+        let first = &cases[series.cases[0]];
+        let mesh = &meshes[plan.case_mesh[series.cases[0]]];
+        let steps: Vec<&CaseFields> = series.cases.iter().map(|&c| &cases[c]).collect();
+        let grids = |grid: &dyn Fn(&CaseFields, usize) -> String| -> String {
+            steps.iter().enumerate().map(|(k, c)| grid(c, k)).collect()
+        };
+        let body = grids(&|c, k| mesh_grid_xml(&h5, mesh, c, k, "      "));
         write_synced(
-            &temps.cases.join(format!("{}.xdmf", case.name)),
-            &document(&body),
+            &temps.cases.join(format!("{}.xdmf", first.series)),
+            &document(&temporal(&first.series, &body)),
         )?;
-        if has_crack(case) {
-            let body = crack_grid_xml(&h5_from_sub, case, "    ");
+        if has_crack(first) {
+            let body = grids(&|c, k| crack_grid_xml(&h5, c, k, "      "));
             write_synced(
-                &temps.cases.join(format!("{}.crack.xdmf", case.name)),
-                &document(&body),
+                &temps.cases.join(format!("{}.crack.xdmf", first.series)),
+                &document(&temporal(&first.series, &body)),
             )?;
         }
     }
     sync_path(&temps.cases)?;
 
-    // Main file.
-    let h5_name = format!("{stem}.h5");
-    let mut body = format!(
-        "    <Grid Name=\"{}\" GridType=\"Collection\" CollectionType=\"Spatial\">\n",
-        xml_escape(stem)
-    );
-    for (c, case) in cases.iter().enumerate() {
-        let mesh = &meshes[plan.case_mesh[c]];
-        body.push_str(&mesh_grid_xml(&h5_name, mesh, case, "      "));
-        if has_crack(case) {
-            body.push_str(&crack_grid_xml(&h5_name, case, "      "));
-        }
-    }
-    body.push_str("    </Grid>\n");
-    write_synced(&temps.xdmf, &document(&body))?;
-
     // Commit.
     fs::rename(&temps.h5, &final_h5).map_err(io_err(&final_h5))?;
     replace_dir(&temps.cases, &final_cases, &temps.old_cases)?;
-    fs::rename(&temps.xdmf, &final_xdmf).map_err(io_err(&final_xdmf))?;
     // Persist the renames; failure here leaves correct files, so it is not an error.
     let _ = sync_path(dir);
     Ok(())
@@ -241,7 +265,6 @@ pub fn write_fields(
 /// Temporary paths of one [`write_fields`] call, removed on drop (success or failure).
 struct Temporaries {
     h5: PathBuf,
-    xdmf: PathBuf,
     cases: PathBuf,
     old_cases: PathBuf,
 }
@@ -249,16 +272,32 @@ struct Temporaries {
 impl Drop for Temporaries {
     fn drop(&mut self) {
         let _ = fs::remove_file(&self.h5);
-        let _ = fs::remove_file(&self.xdmf);
         let _ = fs::remove_dir_all(&self.cases);
         let _ = fs::remove_dir_all(&self.old_cases);
     }
 }
 
-/// Result of validation: index into `meshes` of each case's mesh, and which meshes are used.
+/// Result of validation: index into `meshes` of each case's mesh, which meshes are used, and
+/// the series in order of first appearance.
 struct Plan {
     case_mesh: Vec<usize>,
     used: Vec<bool>,
+    series: Vec<Series>,
+}
+
+/// The cases (indices into `cases`) of one series, in order: its steps.
+struct Series {
+    cases: Vec<usize>,
+}
+
+impl Plan {
+    /// Index of case `c` within its series.
+    fn step(&self, c: usize) -> usize {
+        self.series
+            .iter()
+            .find_map(|s| s.cases.iter().position(|&i| i == c))
+            .unwrap_or(0)
+    }
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> OutputError + '_ {
@@ -347,7 +386,6 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
         }
     }
     let mut names = HashSet::new();
-    let mut files = HashSet::new();
     let mut case_mesh = Vec::with_capacity(cases.len());
     let mut used = vec![false; meshes.len()];
     for case in cases {
@@ -358,13 +396,7 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
                 "case name {name:?} is given twice"
             )));
         }
-        for file in [format!("{name}.xdmf"), format!("{name}.crack.xdmf")] {
-            if !files.insert(file.clone()) {
-                return Err(OutputError::Invalid(format!(
-                    "case {name:?}: per-case file {file:?} clashes with another case's file"
-                )));
-            }
-        }
+        check_name("series name", &case.series)?;
         let Some(&m) = by_key.get(case.mesh_key.as_str()) else {
             return Err(OutputError::Invalid(format!(
                 "case {name:?}: mesh {:?} is not among the meshes given",
@@ -429,19 +461,105 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
             check_finite_scalar(lambda, || format!("case {name:?}: field lambda"))?;
         }
     }
-    Ok(Plan { case_mesh, used })
+    let series = group_series(cases, &case_mesh)?;
+    Ok(Plan {
+        case_mesh,
+        used,
+        series,
+    })
+}
+
+/// Groups the cases into series (in order of first appearance) and checks that the cases of a
+/// series share mesh and crack, and that no two series' files clash.
+fn group_series(cases: &[CaseFields], case_mesh: &[usize]) -> Result<Vec<Series>, OutputError> {
+    use std::collections::{HashMap, HashSet};
+    let mut index: HashMap<&str, usize> = HashMap::new();
+    let mut series: Vec<Series> = Vec::new();
+    for (c, case) in cases.iter().enumerate() {
+        match index.get(case.series.as_str()) {
+            Some(&s) => {
+                let first = series[s].cases[0];
+                if case_mesh[first] != case_mesh[c]
+                    || cases[first].crack_points != case.crack_points
+                {
+                    return Err(OutputError::Invalid(format!(
+                        "case {:?}: series {:?} mixes meshes or cracks (case {:?} has another)",
+                        case.name, case.series, cases[first].name
+                    )));
+                }
+                series[s].cases.push(c);
+            }
+            None => {
+                index.insert(&case.series, series.len());
+                series.push(Series { cases: vec![c] });
+            }
+        }
+    }
+    let mut files = HashSet::new();
+    for s in &series {
+        let name = &cases[s.cases[0]].series;
+        for file in [format!("{name}.xdmf"), format!("{name}.crack.xdmf")] {
+            if !files.insert(file.clone()) {
+                return Err(OutputError::Invalid(format!(
+                    "series {name:?}: file {file:?} clashes with another series' file"
+                )));
+            }
+        }
+    }
+    Ok(series)
 }
 
 fn pad3(points: &[[f64; 2]]) -> Vec<f64> {
     points.iter().flat_map(|&[x, y]| [x, y, 0.0]).collect()
 }
 
-fn write_f64(group: &hdf5::Group, name: &str, data: &[f64], shape: Vec<usize>) -> hdf5::Result<()> {
+fn write_f64(
+    group: &hdf5::Group,
+    name: &str,
+    data: &[f64],
+    shape: Vec<usize>,
+) -> hdf5::Result<hdf5::Dataset> {
     let ds = group.new_dataset::<f64>().shape(shape).create(name)?;
     if !data.is_empty() {
         ds.write_raw(data)?;
     }
+    Ok(ds)
+}
+
+/// Writes `meta` as scalar attributes of `loc` (a group or a dataset).
+fn write_attrs(loc: &hdf5::Location, meta: &[(String, Meta)]) -> hdf5::Result<()> {
+    for (key, value) in meta {
+        match value {
+            Meta::Int(i) => loc
+                .new_attr::<i64>()
+                .shape(())
+                .create(key.as_str())?
+                .write_scalar(i)?,
+            Meta::Float(x) => loc
+                .new_attr::<f64>()
+                .shape(())
+                .create(key.as_str())?
+                .write_scalar(x)?,
+            Meta::Text(t) => {
+                let text: hdf5::types::VarLenUnicode = t
+                    .parse()
+                    .map_err(|e| hdf5::Error::from(format!("attribute {key}: {e}")))?;
+                loc.new_attr::<hdf5::types::VarLenUnicode>()
+                    .shape(())
+                    .create(key.as_str())?
+                    .write_scalar(&text)?
+            }
+        }
+    }
     Ok(())
+}
+
+/// The attributes of case `c`: its metadata, its series and its step.
+fn case_attrs(cases: &[CaseFields], plan: &Plan, c: usize) -> Vec<(String, Meta)> {
+    let mut meta = cases[c].metadata.clone();
+    meta.push(("series".into(), Meta::Text(cases[c].series.clone())));
+    meta.push(("step".into(), Meta::Int(to_i64(plan.step(c)))));
+    meta
 }
 
 fn write_i64(group: &hdf5::Group, name: &str, data: &[i64], shape: Vec<usize>) -> hdf5::Result<()> {
@@ -481,18 +599,23 @@ fn write_h5(
                 write_i64(&g, "triangles", &tris, vec![mesh.triangles.len(), 3])?;
             }
             let gc = file.create_group("cases")?;
-            for case in cases {
+            for (c, case) in cases.iter().enumerate() {
+                let meta = case_attrs(cases, plan, c);
                 let g = gc.create_group(&case.name)?;
+                write_attrs(&g, &meta)?;
                 g.link_soft(&format!("/meshes/{}", case.mesh_key), "mesh")?;
                 if let Some(u) = &case.u {
-                    write_f64(&g, "u", u, vec![u.len()])?;
+                    let ds = write_f64(&g, "u", u, vec![u.len()])?;
+                    write_attrs(&ds, &meta)?;
                 }
                 if let Some(p) = &case.p {
-                    write_f64(&g, "p", &pad3(p), vec![p.len(), 3])?;
+                    let ds = write_f64(&g, "p", &pad3(p), vec![p.len(), 3])?;
+                    write_attrs(&ds, &meta)?;
                 }
                 if let Some(b) = &case.p_bubble {
                     let flat: Vec<f64> = b.iter().flatten().copied().collect();
-                    write_f64(&g, "p_bubble", &flat, vec![b.len(), 2])?;
+                    let ds = write_f64(&g, "p_bubble", &flat, vec![b.len(), 2])?;
+                    write_attrs(&ds, &meta)?;
                 }
                 if has_crack(case) {
                     let gk = g.create_group("crack")?;
@@ -503,7 +626,8 @@ fn write_h5(
                         .collect();
                     write_i64(&gk, "segments", &segs, vec![n - 1, 2])?;
                     if let Some((_, lambda)) = &case.lambda {
-                        write_f64(&gk, "lambda", lambda, vec![lambda.len()])?;
+                        let ds = write_f64(&gk, "lambda", lambda, vec![lambda.len()])?;
+                        write_attrs(&ds, &meta)?;
                     }
                 }
             }
@@ -599,16 +723,37 @@ fn attribute(indent: &str, name: &str, kind: &str, center: &str, item: String) -
     )
 }
 
-fn mesh_grid_xml(h5: &str, mesh: &MeshData, case: &CaseFields, indent: &str) -> String {
+/// A temporal collection named `name` around the step grids `body`.
+fn temporal(name: &str, body: &str) -> String {
+    format!(
+        "    <Grid Name=\"{}\" GridType=\"Collection\" CollectionType=\"Temporal\">\n{body}    </Grid>\n",
+        xml_escape(name)
+    )
+}
+
+/// Opening of the step grid `name`, step `k`: its `Time` and its metadata as `Information`.
+fn step_head(name: &str, k: usize, metadata: &[(String, Meta)], indent: &str) -> String {
+    let mut s = format!(
+        "{indent}<Grid Name=\"{}\" GridType=\"Uniform\">\n{indent}  <Time Value=\"{k}\"/>\n",
+        xml_escape(name)
+    );
+    for (key, value) in metadata {
+        s.push_str(&format!(
+            "{indent}  <Information Name=\"{}\" Value=\"{}\"/>\n",
+            xml_escape(key),
+            xml_escape(&value.to_string())
+        ));
+    }
+    s
+}
+
+fn mesh_grid_xml(h5: &str, mesh: &MeshData, case: &CaseFields, k: usize, indent: &str) -> String {
     let i2 = format!("{indent}  ");
     let i3 = format!("{indent}    ");
     let mp = format!("/meshes/{}", mesh.key);
     let cp = format!("/cases/{}", case.name);
     let (n, t) = (mesh.points.len(), mesh.triangles.len());
-    let mut s = format!(
-        "{indent}<Grid Name=\"{}\" GridType=\"Uniform\">\n",
-        xml_escape(&case.name)
-    );
+    let mut s = step_head(&case.name, k, &case.metadata, indent);
     s.push_str(&format!(
         "{i2}<Topology TopologyType=\"Triangle\" NumberOfElements=\"{t}\" NodesPerElement=\"3\">\n"
     ));
@@ -636,15 +781,12 @@ fn mesh_grid_xml(h5: &str, mesh: &MeshData, case: &CaseFields, indent: &str) -> 
     s
 }
 
-fn crack_grid_xml(h5: &str, case: &CaseFields, indent: &str) -> String {
+fn crack_grid_xml(h5: &str, case: &CaseFields, k: usize, indent: &str) -> String {
     let i2 = format!("{indent}  ");
     let i3 = format!("{indent}    ");
     let kp = format!("/cases/{}/crack", case.name);
     let n = case.crack_points.len();
-    let mut s = format!(
-        "{indent}<Grid Name=\"{}/crack\" GridType=\"Uniform\">\n",
-        xml_escape(&case.name)
-    );
+    let mut s = step_head(&format!("{}/crack", case.name), k, &case.metadata, indent);
     s.push_str(&format!(
         "{i2}<Topology TopologyType=\"Polyline\" NumberOfElements=\"{}\" NodesPerElement=\"2\">\n",
         n - 1
@@ -701,13 +843,15 @@ mod tests {
     }
 
     /// u = s(x + 2y), p = s(xy, x − y), crack on y = 1/2 from x = 1/4 to 3/4 with `ni` segments,
-    /// lambda = s·k per node or s·(k + 1/2) per segment.
+    /// lambda = s·k per node or s·(k + 1/2) per segment; metadata δ = `delta`, level = `ni − 1`.
+    #[allow(clippy::too_many_arguments)]
     fn case(
         name: &str,
+        series: &str,
+        delta: f64,
         mesh: &MeshData,
         s: f64,
         ni: usize,
-        u: bool,
         p: bool,
         lambda: Option<Centering>,
     ) -> CaseFields {
@@ -717,12 +861,12 @@ mod tests {
         CaseFields {
             name: name.to_string(),
             mesh_key: mesh.key.clone(),
-            u: u.then(|| {
+            u: Some(
                 mesh.points
                     .iter()
                     .map(|q| s * (q[0] + 2.0 * q[1]))
-                    .collect()
-            }),
+                    .collect(),
+            ),
             p: p.then(|| {
                 mesh.points
                     .iter()
@@ -739,36 +883,38 @@ mod tests {
                 Centering::Node => (c, (0..=ni).map(|k| s * k as f64).collect()),
                 Centering::Cell => (c, (0..ni).map(|k| s * (k as f64 + 0.5)).collect()),
             }),
+            series: series.to_string(),
+            metadata: vec![
+                ("level".into(), Meta::Int(ni as i64 - 1)),
+                ("u_space".into(), Meta::Text("P1".into())),
+                ("delta".into(), Meta::Float(delta)),
+            ],
         }
     }
 
     const ODD: &str = "odd <&>\"' name";
 
-    /// The fixture that check_meshio.py / test_xdmf_readback.py expect.
+    /// The fixture that test_xdmf_readback.py expects: three series, the first with two steps.
     fn fixture() -> (Vec<MeshData>, Vec<CaseFields>) {
         let m2 = square_mesh("level1-P1", 2);
         let m4 = square_mesh("level2-P1", 4);
         let unused = square_mesh("unused", 1);
+        let (s1, s2) = ("level1-P1-P0", "level2-P1-P1");
+        let cell = Some(Centering::Cell);
         let cases = vec![
-            case(
-                "level1-P1-P0-delta1e-2",
-                &m2,
-                1.0,
-                2,
-                true,
-                true,
-                Some(Centering::Cell),
-            ),
+            case("level1-P1-P0-delta1e-2", s1, 1e-2, &m2, 1.0, 2, true, cell),
             case(
                 "level2-P1-P1-delta1.5e-2",
+                s2,
+                1.5e-2,
                 &m4,
                 2.0,
                 4,
                 true,
-                true,
                 Some(Centering::Node),
             ),
-            case(ODD, &m2, 3.0, 2, true, false, None),
+            case("level1-P1-P0-delta0", s1, 0.0, &m2, 4.0, 2, true, cell),
+            case(ODD, ODD, 0.0, &m2, 3.0, 2, false, None),
         ];
         (vec![m2, m4, unused], cases)
     }
@@ -783,10 +929,10 @@ mod tests {
     }
 
     fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
-        let mut out = Vec::new();
-        for rel in ["fields.h5", "fields.xdmf"] {
-            out.push((rel.to_string(), fs::read(dir.join(rel)).unwrap()));
-        }
+        let mut out = vec![(
+            "fields.h5".to_string(),
+            fs::read(dir.join("fields.h5")).unwrap(),
+        )];
         for name in listing(&dir.join("fields")) {
             let bytes = fs::read(dir.join("fields").join(&name)).unwrap();
             out.push((format!("fields/{name}"), bytes));
@@ -869,29 +1015,52 @@ mod tests {
                 None => assert!(!g.link_exists("crack/lambda")),
             }
         }
+
+        // Attributes on the case group and its field datasets.
+        let g = f.group("cases/level1-P1-P0-delta0").unwrap();
+        for loc in [
+            g.dataset("u").unwrap().as_location().unwrap(),
+            g.dataset("p").unwrap().as_location().unwrap(),
+            g.dataset("crack/lambda").unwrap().as_location().unwrap(),
+            g.as_location().unwrap(),
+        ] {
+            assert_eq!(
+                loc.attr("delta").unwrap().read_scalar::<f64>().unwrap(),
+                0.0
+            );
+            assert_eq!(loc.attr("level").unwrap().read_scalar::<i64>().unwrap(), 1);
+            assert_eq!(loc.attr("step").unwrap().read_scalar::<i64>().unwrap(), 1);
+            let series: hdf5::types::VarLenUnicode =
+                loc.attr("series").unwrap().read_scalar().unwrap();
+            assert_eq!(series.as_str(), "level1-P1-P0");
+        }
         drop(f);
 
-        let xdmf = fs::read_to_string(dir.join("fields.xdmf")).unwrap();
+        let xdmf = fs::read_to_string(dir.join("fields/level1-P1-P0.xdmf")).unwrap();
         assert!(xdmf.contains("<Xdmf Version=\"3.0\">"));
-        assert!(xdmf.contains("CollectionType=\"Spatial\""));
-        assert!(xdmf.contains(">fields.h5:/meshes/level1-P1/points<"));
+        assert!(xdmf.contains("CollectionType=\"Temporal\""));
+        assert!(xdmf.contains(">../fields.h5:/meshes/level1-P1/points<"));
         assert!(
             !xdmf.contains(".tmp-"),
             "must reference the final file name"
         );
-        assert!(xdmf.contains("Name=\"odd &lt;&amp;&gt;&quot;&apos; name/crack\""));
+        let steps: Vec<&str> = xdmf.matches("<Time Value=").collect();
+        assert_eq!(steps.len(), 2, "two δ steps");
+        assert!(xdmf.find("<Time Value=\"0\"/>") < xdmf.find("<Time Value=\"1\"/>"));
+        assert!(xdmf.contains("<Information Name=\"delta\" Value=\"1e-2\"/>"));
+        assert!(xdmf.contains("<Information Name=\"delta\" Value=\"0\"/>"));
+        let odd = fs::read_to_string(dir.join(format!("fields/{ODD}.crack.xdmf"))).unwrap();
+        assert!(odd.contains("Name=\"odd &lt;&amp;&gt;&quot;&apos; name/crack\""));
         let mut want_files = vec![
-            "level1-P1-P0-delta1e-2.crack.xdmf".to_string(),
-            "level1-P1-P0-delta1e-2.xdmf".to_string(),
-            "level2-P1-P1-delta1.5e-2.crack.xdmf".to_string(),
-            "level2-P1-P1-delta1.5e-2.xdmf".to_string(),
+            "level1-P1-P0.crack.xdmf".to_string(),
+            "level1-P1-P0.xdmf".to_string(),
+            "level2-P1-P1.crack.xdmf".to_string(),
+            "level2-P1-P1.xdmf".to_string(),
             format!("{ODD}.crack.xdmf"),
             format!("{ODD}.xdmf"),
         ];
         want_files.sort();
         assert_eq!(listing(&dir.join("fields")), want_files);
-        let per_case = fs::read_to_string(dir.join("fields/level1-P1-P0-delta1e-2.xdmf")).unwrap();
-        assert!(per_case.contains(">../fields.h5:/meshes/level1-P1/triangles<"));
         assert!(!listing(&dir).iter().any(|n| n.starts_with('.')));
     }
 
@@ -933,11 +1102,15 @@ mod tests {
         let (meshes, cases) = fixture();
         fs::create_dir(tmp.path().join("fields.h5")).unwrap();
         fs::write(tmp.path().join("fields.h5/keep"), b"x").unwrap();
-        fs::write(tmp.path().join("fields.xdmf"), b"old").unwrap();
+        fs::create_dir(tmp.path().join("fields")).unwrap();
+        fs::write(tmp.path().join("fields/old.xdmf"), b"old").unwrap();
         let e = write_fields(tmp.path(), "fields", &meshes, &cases).unwrap_err();
         assert!(matches!(e, OutputError::Io { .. }), "{e}");
-        assert_eq!(listing(tmp.path()), ["fields.h5", "fields.xdmf"]);
-        assert_eq!(fs::read(tmp.path().join("fields.xdmf")).unwrap(), b"old");
+        assert_eq!(listing(tmp.path()), ["fields", "fields.h5"]);
+        assert_eq!(
+            fs::read(tmp.path().join("fields/old.xdmf")).unwrap(),
+            b"old"
+        );
     }
 
     #[test]
@@ -952,15 +1125,12 @@ mod tests {
         write_fields(tmp.path(), "fields", &m, &c).unwrap();
         let after = snapshot(tmp.path());
         assert_ne!(before[0].1, after[0].1, "h5 replaced");
-        assert_ne!(before[1].1, after[1].1, "xdmf replaced");
+        assert_ne!(before[2].1, after[2].1, "xdmf replaced");
         assert_eq!(
             listing(&tmp.path().join("fields")),
-            [
-                "level1-P1-P0-delta1e-2.crack.xdmf",
-                "level1-P1-P0-delta1e-2.xdmf"
-            ]
+            ["level1-P1-P0.crack.xdmf", "level1-P1-P0.xdmf"]
         );
-        assert_eq!(listing(tmp.path()), ["fields", "fields.h5", "fields.xdmf"]);
+        assert_eq!(listing(tmp.path()), ["fields", "fields.h5"]);
         let f = hdf5::File::open(tmp.path().join("fields.h5")).unwrap();
         let u = f.dataset("cases/level1-P1-P0-delta1e-2/u").unwrap();
         assert_eq!(u.read_raw::<f64>().unwrap(), vec![7.0; 9]);
@@ -979,7 +1149,7 @@ mod tests {
             assert!(msg.contains(n), "{msg:?} lacks {n:?}");
         }
         assert_eq!(snapshot(tmp.path()), before, "old files byte-identical");
-        assert_eq!(listing(tmp.path()), ["fields", "fields.h5", "fields.xdmf"]);
+        assert_eq!(listing(tmp.path()), ["fields", "fields.h5"]);
     }
 
     #[test]
@@ -1016,11 +1186,11 @@ mod tests {
         expect_invalid(&m, &cc, &[case0, "field lambda", "value 1"]);
 
         let mut cc = c.clone();
-        cc[2].crack_points.truncate(1);
+        cc[3].crack_points.truncate(1);
         expect_invalid(&m, &cc, &["odd <&>", "crack polyline"]);
 
         let mut cc = c.clone();
-        cc[2].name = case0.into();
+        cc[3].name = case0.into();
         expect_invalid(&m, &cc, &[case0, "twice"]);
 
         let mut cc = c.clone();
@@ -1028,9 +1198,16 @@ mod tests {
         expect_invalid(&m, &cc, &["a/b", "not a valid name"]);
 
         let mut cc = c.clone();
-        cc[0].name = "a".into();
-        cc[1].name = "a.crack".into();
-        expect_invalid(&m, &cc, &["a.crack.xdmf", "clashes"]);
+        cc[1].series = "level1-P1-P0.crack".into();
+        expect_invalid(&m, &cc, &["level1-P1-P0.crack.xdmf", "clashes"]);
+
+        let mut cc = c.clone();
+        cc[1].series = "level1-P1-P0".into();
+        expect_invalid(&m, &cc, &["level2-P1-P1-delta1.5e-2", "mixes meshes"]);
+
+        let mut cc = c.clone();
+        cc[0].series = "s:1".into();
+        expect_invalid(&m, &cc, &["s:1", "not a valid name"]);
 
         let mut mm = m.clone();
         mm[0].triangles[1][2] = 9;
@@ -1062,10 +1239,12 @@ mod tests {
             p_bubble: None,
             crack_points: vec![],
             lambda: None,
+            series: "bare".into(),
+            metadata: vec![],
         };
         write_fields(tmp.path(), "out", &[m], &[c]).unwrap();
         assert_eq!(listing(&tmp.path().join("out")), ["bare.xdmf"]);
-        let xdmf = fs::read_to_string(tmp.path().join("out.xdmf")).unwrap();
+        let xdmf = fs::read_to_string(tmp.path().join("out/bare.xdmf")).unwrap();
         assert!(!xdmf.contains("crack") && !xdmf.contains("Attribute"));
         let f = hdf5::File::open(tmp.path().join("out.h5")).unwrap();
         assert!(!f.link_exists("cases/bare/crack"));

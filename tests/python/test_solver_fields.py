@@ -2,9 +2,10 @@
 
 The folder comes from SDCRACK_RUN_DIR (ci/test runs the `mixed` scene at level 1 into a temporary
 folder); the tests skip when it is unset. Checks: every case of summary.json with a `fields_grid`
-has a per-case XDMF file that meshio reads, with u and p at every point of the (cracked) mesh and
-λ on the crack polyline (per segment for M0, per node otherwise); the values meshio returns are the
-ones stored in fields.h5; the + and − copies of a crack vertex sit at the same point.
+is a step of its series file (one XDMF temporal collection per level, u space and multiplier, δ
+decreasing), which meshio's TimeSeriesReader reads, with u and p at every point of the (cracked)
+mesh and λ on the crack polyline (per segment for M0, per node otherwise); the values meshio
+returns are the ones stored in fields.h5, whose datasets carry level, h, u space, multiplier and δ.
 """
 
 import json
@@ -16,6 +17,7 @@ import pytest
 
 meshio = pytest.importorskip("meshio")
 h5py = pytest.importorskip("h5py")
+from meshio.xdmf import TimeSeriesReader  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -31,43 +33,83 @@ def summary(run_dir):
     return json.loads((run_dir / "summary.json").read_text())
 
 
-def test_every_case_has_a_readable_grid(run_dir, summary):
+def series_steps(run_dir, summary):
+    """{series file: [cases in step order]} from summary.json (cases are listed in sweep order)."""
+    out = {}
+    for case in summary["cases"]:
+        out.setdefault(case["fields_series"], []).append(case)
+    return out
+
+
+def read_series(path):
+    """(points, cells, [(t, point_data, cell_data)]) of a time-series XDMF file, by meshio."""
+    with TimeSeriesReader(path) as r:
+        points, cells = r.read_points_cells()
+        steps = [r.read_data(k) for k in range(r.num_steps)]
+    return points, cells, steps
+
+
+def test_every_xdmf_file_is_a_time_series_meshio_reads(run_dir, summary):
+    """Every .xdmf under the results folder is one temporal collection that meshio reads, and
+    every one of them is named by summary.json; there is no top-level spatial collection."""
+    files = sorted(run_dir.rglob("*.xdmf"))
+    solver_files = [f for f in files if f.parent == run_dir / "fields"]
+    assert not (run_dir / "fields.xdmf").exists()
+    named = {run_dir / s for s in series_steps(run_dir, summary)}
+    assert {f for f in solver_files if not f.name.endswith(".crack.xdmf")} == named
+    for f in solver_files:
+        points, cells, steps = read_series(f)
+        assert len(points) > 0 and len(cells) == 1 and steps
+        for t, point_data, cell_data in steps:
+            for v in list(point_data.values()) + [a for v in cell_data.values() for a in v]:
+                assert np.all(np.isfinite(v)), f
+
+
+def test_every_case_is_a_step_of_its_series(run_dir, summary):
     cases = summary["cases"]
     assert cases, "summary lists cases"
     with h5py.File(run_dir / "fields.h5", "r") as h5:
-        for case in cases:
-            grid = case["fields_grid"]
-            mesh = meshio.read(run_dir / "fields" / f"{grid}.xdmf")
-            n = len(mesh.points)
-            u = mesh.point_data["u"]
-            p = mesh.point_data["p"]
-            assert u.shape == (n,) and p.shape == (n, 3)
-            assert np.all(np.isfinite(u)) and np.all(np.isfinite(p))
-            assert np.allclose(p[:, 2], 0.0)
-            np.testing.assert_array_equal(u, h5[f"cases/{grid}/u"][...])
-            tri = mesh.cells_dict["triangle"]
+        for series, steps in series_steps(run_dir, summary).items():
+            points, cells, data = read_series(run_dir / series)
+            assert len(data) == len(steps)
+            deltas = [c["delta"] for c in steps]
+            assert deltas == sorted(deltas, reverse=True), "the slider walks δ → 0"
+            n = len(points)
+            tri = dict((c.type, c.data) for c in cells)["triangle"]
             assert tri.max() < n and tri.min() >= 0
-            # unknowns = 2 p values per vertex + u dofs + multipliers; the points are the u dofs
-            vertices = len(np.unique(mesh.points[:, :2], axis=0))
-            assert case["unknowns"] == 2 * vertices + n + case["multipliers"]
-            if case["u_space"] == "continuous":
-                assert n == vertices
-            else:
-                assert n > vertices  # duplicated crack vertices (cracked mesh)
+            for k, (case, (t, point_data, _)) in enumerate(zip(steps, data)):
+                grid = case["fields_grid"]
+                assert t == k and "0e0" not in grid
+                u, p = point_data["u"], point_data["p"]
+                assert u.shape == (n,) and p.shape == (n, 3)
+                assert np.allclose(p[:, 2], 0.0)
+                np.testing.assert_array_equal(u, h5[f"cases/{grid}/u"][...])
+                attrs = h5[f"cases/{grid}/u"].attrs
+                assert attrs["delta"] == case["delta"] and attrs["level"] == case["level"]
+                assert attrs["h"] == case["h"] and attrs["multiplier"] == case["multiplier"]
+                assert attrs["u_space"] == case["u_space"]
+                # unknowns = 2 p values per vertex + u dofs + multipliers; points are the u dofs
+                vertices = len(np.unique(points[:, :2], axis=0))
+                assert case["unknowns"] == 2 * vertices + n + case["multipliers"]
+                if case["u_space"] == "continuous":
+                    assert n == vertices
+                else:
+                    assert n > vertices  # duplicated crack vertices (cracked mesh)
 
 
 def test_lambda_lives_on_the_crack(run_dir, summary):
-    for case in summary["cases"]:
-        crack = meshio.read(run_dir / "fields" / f"{case['fields_grid']}.crack.xdmf")
-        if case["multiplier"] == "M0":
-            lam = crack.cell_data["lambda"][0]
-            assert len(lam) == case["multipliers"] == len(crack.points) - 1
-            assert np.all(lam >= 0.0)
-        else:
-            lam = crack.point_data["lambda"]
-            assert len(lam) == case["multipliers"] == len(crack.points)
-            if case["multiplier"] == "M1":
+    for series, steps in series_steps(run_dir, summary).items():
+        points, cells, data = read_series(run_dir / series.replace(".xdmf", ".crack.xdmf"))
+        for case, (_, point_data, cell_data) in zip(steps, data):
+            if case["multiplier"] == "M0":
+                lam = cell_data["lambda"][0]
+                assert len(lam) == case["multipliers"] == len(points) - 1
                 assert np.all(lam >= 0.0)
+            else:
+                lam = point_data["lambda"]
+                assert len(lam) == case["multipliers"] == len(points)
+                if case["multiplier"] == "M1":
+                    assert np.all(lam >= 0.0)
         # the crack of the mixed scene is y = 0, -0.5 <= x <= 0.5
-        assert np.allclose(crack.points[:, 1], 0.0)
-        assert np.isclose(crack.points[:, 0].min(), -0.5) and np.isclose(crack.points[:, 0].max(), 0.5)
+        assert np.allclose(points[:, 1], 0.0)
+        assert np.isclose(points[:, 0].min(), -0.5) and np.isclose(points[:, 0].max(), 0.5)

@@ -1,4 +1,4 @@
-"""Read-back check of the sdcrack field files (fields.h5 + fields.xdmf + fields/<case>.xdmf).
+"""Read-back check of the sdcrack field files (fields.h5 + fields/<series>.xdmf time series).
 
 The folder is the one written by the Rust test
 `output::xdmf::tests::fixture_for_python_and_h5_readback` with SDCRACK_FIELDS_DIR set:
@@ -13,7 +13,10 @@ from the fixture's definition (keep in sync with the Rust test):
   triangles per square [a, a+1, a+n+2], [a, a+n+2, a+n+1], a = j(n+1)+i;
 * u = s(x + 2y), p = s(xy, x - y) (written with z = 0);
 * crack: I = n segments on y = 1/2 from x = 1/4 to 3/4; lambda = s*k per node or s*(k + 1/2) per
-  segment.
+  segment;
+* series (one XDMF temporal collection each, steps in this order): "level1-P1-P0" = the cases
+  delta 1e-2 (s = 1) then delta 0 (s = 4); "level2-P1-P1" = delta 1.5e-2 (s = 2); ODD (s = 3, no
+  p, no lambda).
 
 Also needs meshio and h5py (Debian: python3-meshio, python3-h5py; run with /usr/bin/python3).
 """
@@ -27,15 +30,20 @@ import pytest
 
 meshio = pytest.importorskip("meshio")
 h5py = pytest.importorskip("h5py")
+from meshio.xdmf import TimeSeriesReader  # noqa: E402
 
 STEM = "fields"
 ODD = "odd <&>\"' name"
-# name -> (mesh key, n, s, has u, has p, lambda centering or None)
+# case name -> (series, delta, mesh key, n, s, has p, lambda centering or None)
 CASES = {
-    "level1-P1-P0-delta1e-2": ("level1-P1", 2, 1.0, True, True, "Cell"),
-    "level2-P1-P1-delta1.5e-2": ("level2-P1", 4, 2.0, True, True, "Node"),
-    ODD: ("level1-P1", 2, 3.0, True, False, None),
+    "level1-P1-P0-delta1e-2": ("level1-P1-P0", 1e-2, "level1-P1", 2, 1.0, True, "Cell"),
+    "level2-P1-P1-delta1.5e-2": ("level2-P1-P1", 1.5e-2, "level2-P1", 4, 2.0, True, "Node"),
+    "level1-P1-P0-delta0": ("level1-P1-P0", 0.0, "level1-P1", 2, 4.0, True, "Cell"),
+    ODD: (ODD, 0.0, "level1-P1", 2, 3.0, False, None),
 }
+SERIES = {}
+for _name, _c in CASES.items():
+    SERIES.setdefault(_c[0], []).append(_name)
 
 
 @pytest.fixture
@@ -60,12 +68,10 @@ def square_mesh(n):
 
 
 def expected(name):
-    key, n, s, has_u, has_p, centering = CASES[name]
+    series, delta, key, n, s, has_p, centering = CASES[name]
     pts, tris = square_mesh(n)
     x, y = pts[:, 0], pts[:, 1]
-    point_data = {}
-    if has_u:
-        point_data["u"] = s * (x + 2 * y)
+    point_data = {"u": s * (x + 2 * y)}
     if has_p:
         point_data["p"] = np.stack([s * x * y, s * (x - y), np.zeros_like(x)], axis=1)
     k = np.arange(n + 1)
@@ -77,62 +83,98 @@ def expected(name):
     elif centering == "Cell":
         lam = s * (np.arange(n) + 0.5)
     return dict(
-        key=key, pts=pts, tris=tris, point_data=point_data, crack=crack, segs=segs,
-        centering=centering, lam=lam,
+        series=series, delta=delta, level=n - 1, key=key, pts=pts, tris=tris,
+        point_data=point_data, crack=crack, segs=segs, centering=centering, lam=lam,
     )
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
-def test_meshio_reads_case_grid(folder, name):
-    e = expected(name)
-    m = meshio.read(folder / STEM / f"{name}.xdmf")
-    np.testing.assert_allclose(m.points, e["pts"], rtol=0, atol=1e-15)
-    assert [c.type for c in m.cells] == ["triangle"]
-    np.testing.assert_array_equal(m.cells[0].data, e["tris"])
-    assert sorted(m.point_data) == sorted(e["point_data"])
-    for k, v in e["point_data"].items():
-        np.testing.assert_allclose(m.point_data[k], v, rtol=1e-15, atol=1e-15)
-    assert not m.cell_data
+def test_only_series_files_no_spatial_collection(folder):
+    """No file mixes series: no top-level fields.xdmf; one mesh and one crack file per series."""
+    assert not (folder / f"{STEM}.xdmf").exists()
+    want = sorted(f"{s}{ext}" for s in SERIES for ext in (".xdmf", ".crack.xdmf"))
+    assert sorted(p.name for p in (folder / STEM).iterdir()) == want
 
 
-@pytest.mark.parametrize("name", sorted(CASES))
-def test_meshio_reads_crack_grid(folder, name):
-    e = expected(name)
-    m = meshio.read(folder / STEM / f"{name}.crack.xdmf")
-    np.testing.assert_allclose(m.points, e["crack"], rtol=0, atol=1e-15)
-    assert [c.type for c in m.cells] == ["line"]
-    np.testing.assert_array_equal(m.cells[0].data, e["segs"])
-    if e["centering"] == "Node":
-        np.testing.assert_allclose(m.point_data["lambda"], e["lam"], rtol=1e-15)
-        assert not m.cell_data
-    elif e["centering"] == "Cell":
-        assert len(m.cell_data["lambda"]) == 1
-        np.testing.assert_allclose(m.cell_data["lambda"][0], e["lam"], rtol=1e-15)
-        assert not m.point_data
-    else:
-        assert not m.point_data and not m.cell_data
+@pytest.mark.parametrize("series", sorted(SERIES))
+def test_meshio_time_series_reads_mesh_series(folder, series):
+    names = SERIES[series]
+    first = expected(names[0])
+    with TimeSeriesReader(folder / STEM / f"{series}.xdmf") as r:
+        points, cells = r.read_points_cells()
+        np.testing.assert_allclose(points, first["pts"], rtol=0, atol=1e-15)
+        assert [c.type for c in cells] == ["triangle"]
+        np.testing.assert_array_equal(cells[0].data, first["tris"])
+        assert r.num_steps == len(names)
+        for k, name in enumerate(names):
+            e = expected(name)
+            t, point_data, cell_data = r.read_data(k)
+            assert t == k, "the time of step k is k: the slider walks the sweep in order"
+            assert sorted(point_data) == sorted(e["point_data"])
+            for key, v in e["point_data"].items():
+                np.testing.assert_allclose(point_data[key], v, rtol=1e-15, atol=1e-15)
+            assert not cell_data
 
 
-def test_main_xdmf_references_h5(folder):
-    """Every grid of fields.xdmf exists, and every DataItem names an existing h5 dataset."""
-    root = ET.parse(folder / f"{STEM}.xdmf").getroot()
-    assert root.tag == "Xdmf" and root.attrib["Version"] == "3.0"
-    (domain,) = list(root)
-    (coll,) = list(domain)
-    assert coll.attrib["GridType"] == "Collection"
-    assert coll.attrib["CollectionType"] == "Spatial"
-    names = [g.attrib["Name"] for g in coll]
-    want = []
-    for n in CASES:
-        want += [n, f"{n}/crack"]
-    assert names == want
+@pytest.mark.parametrize("series", sorted(SERIES))
+def test_meshio_time_series_reads_crack_series(folder, series):
+    names = SERIES[series]
+    first = expected(names[0])
+    with TimeSeriesReader(folder / STEM / f"{series}.crack.xdmf") as r:
+        points, cells = r.read_points_cells()
+        np.testing.assert_allclose(points, first["crack"], rtol=0, atol=1e-15)
+        assert [c.type for c in cells] == ["line"]
+        np.testing.assert_array_equal(cells[0].data, first["segs"])
+        for k, name in enumerate(names):
+            e = expected(name)
+            t, point_data, cell_data = r.read_data(k)
+            assert t == k
+            if e["centering"] == "Node":
+                np.testing.assert_allclose(point_data["lambda"], e["lam"], rtol=1e-15)
+                assert not cell_data
+            elif e["centering"] == "Cell":
+                assert len(cell_data["lambda"]) == 1
+                np.testing.assert_allclose(cell_data["lambda"][0], e["lam"], rtol=1e-15)
+                assert not point_data
+            else:
+                assert not point_data and not cell_data
+
+
+@pytest.mark.parametrize("series", sorted(SERIES))
+def test_steps_carry_name_time_and_delta(folder, series):
+    """Each step grid is named after its case (δ in the name), has Time k and Information δ."""
+    for ext, suffix in ((".xdmf", ""), (".crack.xdmf", "/crack")):
+        root = ET.parse(folder / STEM / f"{series}{ext}").getroot()
+        assert root.tag == "Xdmf" and root.attrib["Version"] == "3.0"
+        (domain,) = list(root)
+        (coll,) = list(domain)
+        assert coll.attrib["Name"] == series
+        assert (coll.attrib["GridType"], coll.attrib["CollectionType"]) == ("Collection", "Temporal")
+        steps = list(coll)
+        assert [g.attrib["Name"] for g in steps] == [n + suffix for n in SERIES[series]]
+        for k, (g, name) in enumerate(zip(steps, SERIES[series])):
+            e = expected(name)
+            assert g.find("Time").attrib["Value"] == str(k)
+            info = {i.attrib["Name"]: i.attrib["Value"] for i in g.findall("Information")}
+            assert float(info["delta"]) == e["delta"]
+            assert int(info["level"]) == e["level"]
+            assert "0e0" not in info["delta"]
+
+
+@pytest.mark.parametrize("series", sorted(SERIES))
+def test_data_items_name_existing_datasets(folder, series):
     with h5py.File(folder / f"{STEM}.h5", "r") as f:
-        for item in root.iter("DataItem"):
-            assert item.attrib["Format"] == "HDF"
-            fname, path = item.text.strip().split(":")
-            assert fname == f"{STEM}.h5"
-            dims = tuple(int(d) for d in item.attrib["Dimensions"].split())
-            assert f[path].shape == dims, path
+        for ext in (".xdmf", ".crack.xdmf"):
+            root = ET.parse(folder / STEM / f"{series}{ext}").getroot()
+            for item in root.iter("DataItem"):
+                assert item.attrib["Format"] == "HDF"
+                fname, path = item.text.strip().split(":")
+                assert fname == f"../{STEM}.h5"
+                dims = tuple(int(d) for d in item.attrib["Dimensions"].split())
+                assert f[path].shape == dims, path
+
+
+def test_h5_data_and_attributes(folder):
+    with h5py.File(folder / f"{STEM}.h5", "r") as f:
         # each mesh once, only the used ones
         assert sorted(f["meshes"]) == ["level1-P1", "level2-P1"]
         for name in CASES:
@@ -148,22 +190,13 @@ def test_main_xdmf_references_h5(folder):
                 assert "lambda" not in g["crack"]
             else:
                 np.testing.assert_allclose(g["crack/lambda"][()], e["lam"], rtol=1e-15)
-
-
-def test_main_xdmf_grids_match_per_case_files(folder):
-    """The grids of fields.xdmf are those of the per-case files up to the h5 path prefix."""
-    root = ET.parse(folder / f"{STEM}.xdmf").getroot()
-    grids = {g.attrib["Name"]: g for g in root.iter("Grid") if "GridType" in g.attrib
-             and g.attrib["GridType"] == "Uniform"}
-    for name in CASES:
-        for gname, fname in [(name, f"{name}.xdmf"), (f"{name}/crack", f"{name}.crack.xdmf")]:
-            sub = ET.parse(folder / STEM / fname).getroot()
-            (dom,) = list(sub)
-            (g,) = list(dom)
-            assert g.attrib["Name"] == gname
-            a = [i.text.strip() for i in grids[gname].iter("DataItem")]
-            b = [i.text.strip() for i in g.iter("DataItem")]
-            assert b == ["../" + t for t in a]
+            fields = [g] + [g[k] for k in ("u", "p", "p_bubble", "crack/lambda") if k in g]
+            for obj in fields:
+                a = obj.attrs
+                assert a["delta"] == e["delta"] and a["level"] == e["level"], (name, obj.name)
+                assert a["series"] == e["series"]
+                assert a["step"] == SERIES[e["series"]].index(name)
+                assert a["u_space"] == "P1"
 
 
 if __name__ == "__main__":

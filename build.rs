@@ -1,0 +1,50 @@
+//! Records the git commit the binary is built from, and whether its sources differ from it, as
+//! the compile-time variables `SDCRACK_GIT_COMMIT` (40 hex digits, empty outside a git checkout)
+//! and `SDCRACK_GIT_DIRTY` (`true`, `false`, or empty outside a git checkout). "Dirty" means a
+//! tracked or untracked file under `src/`, `Cargo.toml`, `Cargo.lock` or `build.rs` differs from
+//! the commit: the files the binary is compiled from, not the docs or scripts beside them.
+
+use std::process::Command;
+
+/// Paths the binary is compiled from (relative to the crate root).
+const SOURCES: [&str; 4] = ["src", "Cargo.toml", "Cargo.lock", "build.rs"];
+
+fn git(args: &[&str]) -> Option<String> {
+    let out = Command::new("git").args(args).output().ok()?;
+    out.status
+        .success()
+        .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+}
+
+fn main() {
+    for path in SOURCES {
+        println!("cargo:rerun-if-changed={path}");
+    }
+    let commit = git(&["rev-parse", "--verify", "HEAD"]);
+    let dirty = commit.as_ref().and_then(|_| {
+        let mut args = vec!["status", "--porcelain", "--untracked-files=all", "--"];
+        args.extend(SOURCES);
+        git(&args).map(|s| !s.is_empty())
+    });
+    if commit.is_some() {
+        // A commit, a checkout or a staged change moves these files.
+        for name in ["HEAD", "index", "packed-refs"] {
+            if let Some(p) = git(&["rev-parse", "--git-path", name]) {
+                println!("cargo:rerun-if-changed={p}");
+            }
+        }
+        if let Some(r) = git(&["symbolic-ref", "-q", "HEAD"]) {
+            if let Some(p) = git(&["rev-parse", "--git-path", &r]) {
+                println!("cargo:rerun-if-changed={p}");
+            }
+        }
+    }
+    println!(
+        "cargo:rustc-env=SDCRACK_GIT_COMMIT={}",
+        commit.unwrap_or_default()
+    );
+    println!(
+        "cargo:rustc-env=SDCRACK_GIT_DIRTY={}",
+        dirty.map_or("", |d| if d { "true" } else { "false" })
+    );
+}
