@@ -1,4 +1,4 @@
-//! Runs the reference solvers (BRIEF §3) that a scene lists in `[outputs] references`.
+//! Runs the reference solvers (the reference problem of docs/design.md) that a scene lists in `[outputs] references`.
 //!
 //! Each reference is an independent program under `references/<tool>/solve.py`, run with Debian's
 //! `/usr/bin/python3` as `solve.py MESH_EXPORT --out RESULTS/<tool> [--fields]`. It reads the mesh
@@ -26,6 +26,14 @@ pub enum ReferenceError {
         what: String,
         /// Install command.
         install: &'static str,
+    },
+    /// The installed tool is a version the reference script does not support.
+    #[error("reference '{tool}' cannot run here: {message}")]
+    Unsupported {
+        /// Tool name.
+        tool: String,
+        /// The script's one-line reason.
+        message: String,
     },
     /// The scripts folder is missing.
     #[error("reference scripts not found at {0}; set SDCRACK_REFERENCES to the repository's references/ folder")]
@@ -58,6 +66,17 @@ pub fn scripts_dir() -> PathBuf {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("references"))
 }
 
+/// The last non-empty line of a program's stderr (its one-line error), or `no message`.
+fn last_line(stderr: &[u8]) -> String {
+    String::from_utf8_lossy(stderr)
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("no message")
+        .trim()
+        .to_string()
+}
+
 /// True when the command runs and exits 0.
 fn succeeds(cmd: &mut Command) -> bool {
     cmd.stdout(std::process::Stdio::null())
@@ -86,6 +105,23 @@ pub fn check_available(tool: &str) -> Result<(), ReferenceError> {
             "python module dolfinx under /usr/bin/python3",
             "apt-get install python3-dolfinx",
         ));
+    }
+    if tool == "dolfinx" {
+        // The script refuses a dolfinx outside the versions it supports, in one line.
+        let check = Command::new(PYTHON)
+            .arg(&script)
+            .arg("--check-install")
+            .output()
+            .map_err(|e| ReferenceError::Spawn {
+                tool: tool.to_string(),
+                reason: e.to_string(),
+            })?;
+        if !check.status.success() {
+            return Err(ReferenceError::Unsupported {
+                tool: tool.to_string(),
+                message: last_line(&check.stderr),
+            });
+        }
     }
     if tool == "freefem" && which("FreeFem++").is_none() {
         return Err(missing(
@@ -149,18 +185,10 @@ pub fn run_reference(
     })?;
     let not_converged = output.status.code() == Some(EXIT_NOT_CONVERGED);
     if !output.status.success() && !not_converged {
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        let message = stderr
-            .lines()
-            .rev()
-            .find(|l| !l.trim().is_empty())
-            .unwrap_or("no message")
-            .trim()
-            .to_string();
         return Err(ReferenceError::Failed {
             tool: tool.to_string(),
             code: output.status.code().unwrap_or(-1),
-            message,
+            message: last_line(&output.stderr),
         });
     }
     Ok(ReferenceRun {

@@ -1,12 +1,18 @@
-"""Field files of the reference solvers: fields.h5 + fields.xdmf in the layout of the solver's
-writer (src/output/xdmf.rs), one grid per level on the cracked mesh, so ParaView and the compare
-tool read solver and references alike.
+"""Field files of the reference solvers: fields.h5 in the layout of the solver's writer
+(src/output/xdmf.rs), one grid per level on the cracked mesh, and one XDMF file per grid, so
+ParaView, meshio and the compare tool read solver and references alike.
 
     fields.h5   /meshes/level{L}/points (N,3)   /meshes/level{L}/triangles (T,3) int64
                 /cases/level{L}/<point field>   scalar (N,) or vector (N,3)
                 /cases/level{L}/crack/points (I+1,3)  /crack/segments (I,2)  /crack/<crack field> (I+1,)
-    fields.xdmf a spatial collection of the grids "level{L}" and "level{L}/crack"
-    fields/level{L}.xdmf, fields/level{L}.crack.xdmf   one grid each (meshio reads one grid a file)
+                every dataset has the attributes "level" (int), "tool" (str) and, when the caller
+                gives it, "h" (float, the level's mesh size); the file has the attribute "tool"
+    fields/level{L}.xdmf         XDMF 3, the Triangle grid "level{L}" with the point fields
+    fields/level{L}.crack.xdmf   XDMF 3, the Polyline grid "level{L}/crack" with the crack fields
+                                 (one grid a file: meshio reads them, ParaView opens them as they are)
+
+There is no top-level fields.xdmf: a spatial collection of all levels' grids (they overlap) showed
+as one grey square in ParaView and meshio.read could not read it.
 """
 
 import numpy as np
@@ -53,36 +59,42 @@ def _pad3(a):
     return np.column_stack([a, np.zeros(len(a))]) if a.ndim == 2 and a.shape[1] == 2 else a
 
 
-def write_fields(folder, field_sets):
-    """Writes the files into `folder` (the caller's temporary output folder).
+def write_fields(folder, field_sets, tool):
+    """Writes the files into `folder` (the caller's temporary output folder); `tool` ("dolfinx",
+    "freefem") goes into the HDF5 attributes.
 
     field_sets: [(level, {"xy": (N,2), "tri": (T,3), "crack": (I+1,2) (+, −) vertex pairs,
-                          "point": {name: (N,) or (N,2)}, "crack_fields": {name: (I+1,)}})]."""
+                          "point": {name: (N,) or (N,2)}, "crack_fields": {name: (I+1,)},
+                          "h": mesh size (optional)})]."""
     import h5py
 
     head = '<?xml version="1.0"?>\n<Xdmf Version="3.0">\n<Domain>\n'
     tail = "</Domain>\n</Xdmf>\n"
     (folder / "fields").mkdir()
-    grids = []
     with h5py.File(folder / "fields.h5", "w") as h5:
+        h5.attrs["tool"] = str(tool)
         for level, fs in field_sets:
             name = f"level{level}"
+            attrs = {"level": int(level), "tool": str(tool)}
+            if fs.get("h") is not None:
+                attrs["h"] = float(fs["h"])
+
+            def put(path, values):
+                h5[path] = values
+                h5[path].attrs.update(attrs)
+
             fs = dict(fs, point={k: _pad3(v) for k, v in fs["point"].items()})
-            h5[f"/meshes/{name}/points"] = _pad3(fs["xy"])
-            h5[f"/meshes/{name}/triangles"] = np.asarray(fs["tri"], dtype=np.int64)
+            put(f"/meshes/{name}/points", _pad3(fs["xy"]))
+            put(f"/meshes/{name}/triangles", np.asarray(fs["tri"], dtype=np.int64))
             for key, values in fs["point"].items():
-                h5[f"/cases/{name}/{key}"] = values
+                put(f"/cases/{name}/{key}", values)
             crack = np.asarray(fs["crack"])
-            h5[f"/cases/{name}/crack/points"] = _pad3(np.asarray(fs["xy"])[crack[:, 0]])
+            put(f"/cases/{name}/crack/points", _pad3(np.asarray(fs["xy"])[crack[:, 0]]))
             m = len(crack)
-            h5[f"/cases/{name}/crack/segments"] = np.column_stack(
-                [np.arange(m - 1), np.arange(1, m)]).astype(np.int64)
+            put(f"/cases/{name}/crack/segments",
+                np.column_stack([np.arange(m - 1), np.arange(1, m)]).astype(np.int64))
             for key, values in fs["crack_fields"].items():
-                h5[f"/cases/{name}/crack/{key}"] = np.asarray(values, dtype=float)
-            grids += [_mesh_grid("fields.h5", level, fs), _crack_grid("fields.h5", level, fs)]
+                put(f"/cases/{name}/crack/{key}", np.asarray(values, dtype=float))
             (folder / "fields" / f"{name}.xdmf").write_text(head + _mesh_grid("../fields.h5", level, fs) + "\n" + tail)
             (folder / "fields" / f"{name}.crack.xdmf").write_text(
                 head + _crack_grid("../fields.h5", level, fs) + "\n" + tail)
-    (folder / "fields.xdmf").write_text(
-        head + '<Grid Name="fields" GridType="Collection" CollectionType="Spatial">\n'
-        + "\n".join(grids) + "\n</Grid>\n" + tail)

@@ -1,11 +1,15 @@
 """Result folders of the reference solvers: written under a temporary name beside the final one
-and renamed only when complete, so an interrupted run leaves nothing under the final name; and the
+and renamed only when complete, so an interrupted run leaves nothing under the final name; the
+`provenance` of summary.json (tool and library versions, date, command line, cores); and the
 per-case `status` both references write (KKT residuals against the shared tolerance)."""
 
 import json
 import os
+import platform
 import shutil
+import sys
 import tempfile
+import time
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -27,9 +31,23 @@ def staged_folder(out):
         raise
 
 
-def write_summary(folder, scene, tool, cases):
-    """folder/summary.json = {"scene", "tool", "cases"}; returns the dict."""
-    summary = {"scene": scene, "tool": tool, "cases": cases}
+PROVENANCE_KEYS = ("tool", "tool_version", "python", "numpy", "date_utc", "command_line", "cores")
+
+
+def provenance(tool, tool_version):
+    """{"tool", "tool_version", "python", "numpy", "date_utc" (now, "YYYY-MM-DDTHH:MM:SSZ"),
+    "command_line" (sys.argv), "cores" (os.cpu_count())}: what produced a result folder."""
+    import numpy
+
+    return {"tool": tool, "tool_version": str(tool_version), "python": platform.python_version(),
+            "numpy": numpy.__version__, "date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+            "command_line": list(sys.argv), "cores": os.cpu_count()}
+
+
+def write_summary(folder, scene, tool, cases, tool_version):
+    """folder/summary.json = {"scene", "tool", "provenance" (see `provenance`; date = now), "cases"};
+    returns the dict."""
+    summary = {"scene": scene, "tool": tool, "provenance": provenance(tool, tool_version), "cases": cases}
     (Path(folder) / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
 

@@ -1,6 +1,15 @@
-"""dolfinx 0.5.2 reference solver for the sdcrack reference problem (BRIEF §3).
+"""dolfinx 0.5.2 reference solver for the sdcrack reference problem (docs/design.md).
 
 Usage:  /usr/bin/python3 references/dolfinx/solve.py MESH_EXPORT_DIR --out OUT [--fields] [--overwrite]
+
+`solve.py --check-install` runs the version check below alone (exit 0, or 2 with its one line): what
+`sdcrack run` asks before solving anything.
+
+Supported dolfinx: 0.5.x only (SUPPORTED_DOLFINX; the Debian 12 package python3-dolfinx, 0.5.2), whose
+API this file uses. Before anything else main() imports the package `dolfinx` alone and reads its
+__version__; any other version (or none importable) exits with status 2 and one line on stderr, e.g.
+"dolfinx reference: dolfinx 0.6.0 is not supported (supported: 0.5.x, the Debian 12 package
+python3-dolfinx)".
 
 Reads a folder written by `sdcrack mesh SCENE --out DIR` (scene.json, level{L}/{mesh.json, vertices.txt,
 triangles.txt, crack.txt, boundary.txt, sides.txt}) and, per level, solves on the CRACKED mesh
@@ -21,9 +30,11 @@ w ≥ 0.  Primal–dual active set (c = 1): A = {j : λ_j − w_j > tol}, λ = (
 solve of the rest (scipy SuperLU), until A repeats (tol = 1e-12 · max(1, ‖λ‖∞, ‖w‖∞); ≤ 100 solves).
 λ_j are nodal forces ≈ −∫ φ_j ∂u/∂ν on Γc.
 
-Writes OUT/summary.json ({"scene", "tool": "dolfinx", "cases": [{"level", "h", "unknowns" (P1 dofs of
-the cracked mesh), "iterations" (linear solves), "active" (closed crack nodes), "kkt", "status",
+Writes OUT/summary.json ({"scene", "tool": "dolfinx", "provenance", "cases": [{"level", "h", "unknowns"
+(P1 dofs of the cracked mesh), "iterations" (linear solves), "active" (closed crack nodes), "kkt", "status",
 "timings_s": {"assembly", "solve", "total"}, "errors" (exact scenes only)}]}):
+  provenance: {"tool": "dolfinx", "tool_version" (dolfinx.__version__), "python", "numpy", "date_utc",
+    "command_line" (sys.argv), "cores"} (references/common/sdresults.py: provenance);
   kkt: relative KKT residuals of the QP in the cracked unknowns (kkt_residuals; the definitions of
     crack_qp.edp, modelled on docs/design.md), with λ_j = (K u − F) at the + copy on the active set,
     0 off it, w = u⁺ − u⁻, B the jump operator (‖B‖∞ = 2):
@@ -39,9 +50,12 @@ the cracked mesh), "iterations" (linear solves), "active" (closed crack nodes), 
     [u] from exact.jump, else, in numpy, exact.u on each face with the signed-zero rule of
     eval_on_face)}: UFL forms with converged quadrature ("Errors against an exact solution" below),
 OUT/u_level{L}.txt (u at the cracked vertices in the export's numbering, %.17g, for cross-checks with
-the FreeFEM reference) and with --fields OUT/fields.xdmf + fields.h5 (one grid "level{L}" per level with
-u, and u_exact when the scene has one).  OUT is written atomically (temporary folder, then rename); an
-existing OUT is an error unless --overwrite.  Errors: one line on stderr, exit status 1.
+the FreeFEM reference) and with --fields OUT/fields.h5 + OUT/fields/level{L}.xdmf (the grid "level{L}"
+with u, and u_exact when the scene has one) + OUT/fields/level{L}.crack.xdmf (jump, multiplier)
+(references/common/sdfields.py).  OUT is written atomically (temporary folder, then rename); an
+existing OUT is an error unless --overwrite.  Errors: one line on stderr; exit status 2 for an
+unsupported dolfinx and for an invalid scene (scene.json malformed, an expression outside the grammar
+of references/common/sdexpr.py: no scene text is ever evaluated as code), 1 for any other failure.
 """
 
 import argparse
@@ -60,6 +74,8 @@ import sdfields  # noqa: E402
 import sdquad  # noqa: E402  the load quadrature shared with the FreeFEM reference
 import sdresults  # noqa: E402
 
+# The dolfinx release series whose API this file uses (0.5.x: the Debian 12 package python3-dolfinx).
+SUPPORTED_DOLFINX = "0.5"
 ACTIVITY_TOL = 1e-12
 MAX_ITER = 100
 STIFFNESS_DEGREE = 0      # K: the P1 integrand is constant per cell, the one-point rule is exact
@@ -73,7 +89,27 @@ NORM_FFCX = {"table_rtol": 1e-15, "table_atol": 1e-300}
 
 
 class SolveError(Exception):
-    pass
+    """A failure reported as one line (exit status 1)."""
+
+
+class SceneError(SolveError):
+    """An invalid scene (scene.json malformed, an expression outside the grammar): exit status 2,
+    as `sdcrack` for an invalid scene."""
+
+
+def dolfinx_version_problem():
+    """None when the installed dolfinx is of the SUPPORTED_DOLFINX series, else the one-line reason.
+    Imports the package `dolfinx` alone (for its __version__), nothing else from it."""
+    supported = f"(supported: {SUPPORTED_DOLFINX}.x, the Debian 12 package python3-dolfinx)"
+    try:
+        import dolfinx
+    except Exception as e:  # noqa: BLE001 — not installed, or a broken installation
+        why = f"{type(e).__name__}: {e}".replace("\n", " ")
+        return f"dolfinx reference: dolfinx cannot be imported ({why}) {supported}"
+    version = str(getattr(dolfinx, "__version__", "(no __version__)"))
+    if version == SUPPORTED_DOLFINX or version.startswith(SUPPORTED_DOLFINX + "."):
+        return None
+    return f"dolfinx reference: dolfinx {version} is not supported {supported}".replace("\n", " ")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -101,10 +137,12 @@ def read_scene(export):
     try:
         scene = json.loads(p.read_text())
     except json.JSONDecodeError as e:
-        raise SolveError(f"{p}: invalid JSON: {e}") from None
+        raise SceneError(f"{p}: invalid JSON: {e}") from None
+    if not isinstance(scene, dict):
+        raise SceneError(f"{p}: not a JSON object")
     for key in ("name", "f", "g", "crack", "levels"):
         if key not in scene:
-            raise SolveError(f"{p}: missing key '{key}'")
+            raise SceneError(f"{p}: missing key '{key}'")
     return scene
 
 
@@ -135,7 +173,7 @@ def parse_expr(scene, key, src):
     try:
         return sdexpr.parse(src)
     except sdexpr.ExprError as e:
-        raise SolveError(f"scene expression {key} = {src!r}: column {e.column}: {e.message}") from None
+        raise SceneError(f"scene expression {key} = {src!r}: column {e.column}: {e.message}") from None
 
 
 def side_points(xy, side, normal):
@@ -544,13 +582,18 @@ def jump_error_numpy(xy, crack, jump_h, trees, normal, degree, n):
 # ---------------------------------------------------------------------------------------------
 
 def run(export, out, fields=False, overwrite=False, quadrature=None):
+    problem = dolfinx_version_problem()
+    if problem is not None:
+        raise SolveError(problem)
+    import dolfinx
+
     export, out = Path(export), Path(out)
     scene = read_scene(export)
     trees = {"f": parse_expr(scene, "f", scene["f"]), "g": parse_expr(scene, "g", scene["g"])}
     exact = scene.get("exact") or None
     if exact is not None:
         if "u" not in exact:
-            raise SolveError("scene.json: exact without 'u'")
+            raise SceneError("scene.json: exact without 'u'")
         trees["exact_u"] = parse_expr(scene, "exact.u", exact["u"])
         for k in ("jump", "px", "py"):
             if exact.get(k):
@@ -570,18 +613,25 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
                     point["u_exact"] = fs["u_exact"]
                 field_sets.append((case["level"], {
                     "xy": fs["xy"], "tri": fs["tri"], "crack": fs["crack"], "point": point,
+                    "h": case["h"] if math.isfinite(case["h"]) else None,
                     "crack_fields": {"jump": fs["jump"], "multiplier": fs["multiplier"]}}))
         if fields:
-            sdfields.write_fields(tmp, field_sets)
-        summary = sdresults.write_summary(tmp, scene["name"], "dolfinx", cases)
+            sdfields.write_fields(tmp, field_sets, "dolfinx")
+        summary = sdresults.write_summary(tmp, scene["name"], "dolfinx", cases, tool_version=dolfinx.__version__)
     return summary
 
 
 def main(argv=None):
+    problem = dolfinx_version_problem()  # first: the rest of this file needs dolfinx 0.5's API
+    if problem is not None:
+        print(problem, file=sys.stderr)
+        return 2
+    if (sys.argv[1:] if argv is None else list(argv)) == ["--check-install"]:
+        return 0  # `sdcrack run` asks before solving anything: the version check alone
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("export", help="folder written by `sdcrack mesh SCENE --out DIR`")
     ap.add_argument("--out", required=True, help="result folder (summary.json, u_level{L}.txt)")
-    ap.add_argument("--fields", action="store_true", help="also write fields.xdmf + fields.h5")
+    ap.add_argument("--fields", action="store_true", help="also write fields.h5 + fields/level{L}[.crack].xdmf")
     ap.add_argument("--overwrite", action="store_true", help="replace an existing OUT")
     args = ap.parse_args(argv)
     logging.getLogger().setLevel(logging.WARNING)
@@ -590,7 +640,7 @@ def main(argv=None):
     except (SolveError, OSError, ValueError, KeyError) as e:
         msg = str(e).replace("\n", " ")
         print(f"error: {msg}", file=sys.stderr)
-        return 1
+        return 2 if isinstance(e, SceneError) else 1
     for c in summary["cases"]:
         err = c.get("errors", {})
         extra = "".join(f" {k}={v:.3e}" for k, v in err.items() if v is not None)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""FreeFEM reference solver for the crack problem of BRIEF §3.
+"""FreeFEM reference solver for the reference problem of docs/design.md.
 
 Usage: solve.py MESH_EXPORT_DIR --out OUT [--fields] [--freefem FreeFem++] [--keep-work] [--overwrite]
 
@@ -14,8 +14,11 @@ stiffness with qf1pT (exact for P1); u = g by the P1 interpolant at the boundary
 g). With qf9pT for the load (and dolfinx's degree 8) the two references differed by 2.9e-7 on mixed with
 cells [4, 4] at level 0; now by round-off (references/freefem/README.md).
 
-summary.json: {"scene", "tool": "freefem", "cases": [{"level", "h", "unknowns", "iterations", "active",
-"kkt", "status", "errors" (exact scenes only), "timings_s": {"freefem", "total"}}]}:
+summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h", "unknowns", "iterations",
+"active", "kkt", "status", "errors" (exact scenes only), "timings_s": {"freefem", "total"}}]}:
+  provenance: {"tool": "freefem", "tool_version" (from FreeFem++'s banner, freefem_version; "unknown"
+    with a warning if unreadable), "python", "numpy", "date_utc", "command_line" (sys.argv), "cores"}
+    (references/common/sdresults.py: provenance);
   kkt: {"equations", "primal", "dual", "complementarity"}, relative, computed by crack_qp.edp:
     the componentwise backward error max_i |K u − F − Bᵀλ|_i / (|K||u| + |Bᵀλ| + |F|)_i over the free
     rows, max(0, −min w) / (2‖u‖∞), max(0, −min λ) / ‖λ‖∞, max |λ_j w_j| / (‖λ‖∞ 2‖u‖∞) (w = u⁺ − u⁻);
@@ -28,8 +31,12 @@ summary.json: {"scene", "tool": "freefem", "cases": [{"level", "h", "unknowns", 
     u_l2 = ‖u_h − u‖_{L²(Ω_c)},  p_l2 = ‖∇u_h − ∇u‖_{L²(Ω_c)},  lambda_l2 = ‖[u_h] − [u]‖_{L²(Γc)},
     ∇u from exact.px/py, else sdexpr's symbolic derivative of exact.u; [u] from exact.jump, else u on
     each face by the signed-zero rule of eval_on_face (src/scene/mod.rs).
+With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf + level{L}.crack.xdmf
+(references/common/sdfields.py).
 OUT is written atomically (a temporary folder, then one rename); an existing OUT is an error unless
---overwrite is given. Every failure is one line on stderr and exit status 1.
+--overwrite is given. Every failure is one line on stderr: exit status 2 for an invalid scene
+(scene.json malformed, an expression outside the grammar of references/common/sdexpr.py: no scene
+text is ever evaluated as code), 1 for any other failure.
 """
 
 import argparse
@@ -62,7 +69,12 @@ NORM_TIP_DEPTH = 32       # splits toward each crack tip (triangles with a tip v
 
 
 class SolveError(Exception):
-    """A failure reported as one line."""
+    """A failure reported as one line (exit status 1)."""
+
+
+class SceneError(SolveError):
+    """An invalid scene (scene.json unreadable or malformed, an expression outside the grammar):
+    exit status 2, as `sdcrack` for an invalid scene."""
 
 
 # ---- expressions ---------------------------------------------------------------------------------
@@ -71,7 +83,7 @@ def parse(key, src):
     try:
         return sdexpr.parse(src)
     except sdexpr.ExprError as e:
-        raise SolveError(f"scene expression {key} = {src!r}: column {e.column}: {e.message}") from None
+        raise SceneError(f"scene expression {key} = {src!r}: column {e.column}: {e.message}") from None
 
 
 def to_freefem(key, src):
@@ -183,6 +195,35 @@ def freefem_binary(name):
     return exe
 
 
+def freefem_env():
+    env = dict(os.environ)
+    env.setdefault("FF_LOADPATH", FF_LOADPATH_DEFAULT)
+    return env
+
+
+def freefem_version(exe):
+    """The version in FreeFem++'s banner: run without arguments it prints
+    "FreeFem++ - version 4.9 ( - git no git) 64bits" and its usage (exit status 1) -> "4.9".
+    (Scripts see only the number `version`, a real: 4.10 would read 4.1.) "unknown", with a
+    warning on stderr, when the banner cannot be read."""
+    import re
+
+    try:
+        proc = subprocess.run([exe], stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True, errors="replace", env=freefem_env(),
+                              timeout=60)
+        m = re.search(r"FreeFem\+\+\s+-?\s*v(?:ersion)?\s*([0-9][0-9A-Za-z.+~-]*)", proc.stdout)
+    except (OSError, subprocess.SubprocessError) as e:
+        m, why = None, f"{type(e).__name__}: {e}"
+    else:
+        why = f"no version in its banner {proc.stdout.strip().splitlines()[:1]}"
+    if m is None:
+        print(f"solve.py: warning: cannot read the FreeFem++ version of {exe} ({why}); "
+              "provenance.tool_version = \"unknown\"", file=sys.stderr)
+        return "unknown"
+    return m.group(1).rstrip(".")
+
+
 def run_level(exe, lv, f_ff, g_ff, work):
     xy_u, tri_u = lv["xy_uncut"], lv["tri_uncut"]
     n = len(lv["xy"])
@@ -203,10 +244,8 @@ def run_level(exe, lv, f_ff, g_ff, work):
               f"int maxIterations = {int(MAX_ITERATIONS)};\nfunc f = {f_ff};\nfunc g = {g_ff};\n"
               + load_rule_edp())
     (work / "run.edp").write_text(header + EDP_BODY.read_text())
-    env = dict(os.environ)
-    env.setdefault("FF_LOADPATH", FF_LOADPATH_DEFAULT)
     t0 = time.perf_counter()
-    proc = subprocess.run([exe, "-nw", "-ns", "-v", "0", str(work / "run.edp")], cwd=work, env=env,
+    proc = subprocess.run([exe, "-nw", "-ns", "-v", "0", str(work / "run.edp")], cwd=work, env=freefem_env(),
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     t_ff = time.perf_counter() - t0
     (work / "freefem.log").write_text(proc.stdout)
@@ -361,7 +400,7 @@ def exact_errors(lv, u_h, exact, normal, degree=NORM_DEGREE, near_degree=NORM_NE
     return {"u_l2": float(np.sqrt(su)), "p_l2": float(np.sqrt(sp)), "lambda_l2": float(np.sqrt(sl))}
 
 
-# ---- fields (--fields): fields.h5 + fields.xdmf, the shapes of src/output/xdmf.rs ----------------
+# ---- fields (--fields): fields.h5 + fields/level{L}[.crack].xdmf (references/common/sdfields.py) --
 
 def vertex_gradient(xy, tri, u):
     """∇u_h at the cracked vertices: area-weighted mean of the constant triangle gradients."""
@@ -392,16 +431,17 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
         levels, exact = scene["levels"], scene.get("exact")
         normal = scene["crack"]["normal"]
     except (ValueError, KeyError, TypeError) as e:
-        raise SolveError(f"{scene_path}: malformed scene ({e})")
+        raise SceneError(f"{scene_path}: malformed scene ({e})")
     if out.exists() and not overwrite:
         raise SolveError(f"{out} exists; refusing to overwrite earlier results (use --overwrite)")
     f_ff, g_ff = to_freefem("f", f_src), to_freefem("g", g_src)
     if exact:
         if not isinstance(exact, dict) or not exact.get("u"):
-            raise SolveError(f"{scene_path}: exact without 'u'")
+            raise SceneError(f"{scene_path}: exact without 'u'")
         for key in ("u", "px", "py", "jump"):  # report a bad expression before any solve
             if exact.get(key):
                 parse(f"exact.{key}", exact[key])
+    version = freefem_version(exe)
     with sdresults.staged_folder(out) as tmp:
         cases, fields_data = [], []
         for level in levels:
@@ -432,7 +472,7 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
                 lam_nodes = np.zeros(len(crack))
                 lam_nodes[crack[:, 0] != crack[:, 1]] = lam
                 fields_data.append((level, {
-                    "xy": lv["xy"], "tri": lv["tri"], "crack": crack,
+                    "xy": lv["xy"], "tri": lv["tri"], "crack": crack, "h": lv["meta"]["h"],
                     "point": {"u": u, "p": vertex_gradient(lv["xy"], lv["tri"], u)},
                     "crack_fields": {"jump": u[crack[:, 0]] - u[crack[:, 1]], "multiplier": lam_nodes}}))
             if not keep_work:
@@ -442,8 +482,8 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
                 import sdfields
             except ImportError as e:
                 raise SolveError(f"--fields needs h5py: apt-get install -y python3-h5py ({e})")
-            sdfields.write_fields(tmp, fields_data)
-        summary = sdresults.write_summary(tmp, name, "freefem", cases)
+            sdfields.write_fields(tmp, fields_data, "freefem")
+        summary = sdresults.write_summary(tmp, name, "freefem", cases, tool_version=version)
     return summary
 
 
@@ -454,16 +494,18 @@ def main(argv=None):
     ap.add_argument("--freefem", default="FreeFem++", help="FreeFem++ executable")
     ap.add_argument("--keep-work", action="store_true", help="keep FreeFEM inputs/logs in OUT")
     ap.add_argument("--overwrite", action="store_true", help="replace an existing OUT")
-    ap.add_argument("--fields", action="store_true", help="also write fields.h5 + fields.xdmf")
+    ap.add_argument("--fields", action="store_true", help="also write fields.h5 + fields/level{L}[.crack].xdmf")
     a = ap.parse_args(argv)
     try:
         # absolute paths: FreeFEM runs with its work folder as the current directory
         s = solve(Path(a.export).resolve(), Path(a.out).resolve(), a.freefem, a.keep_work, a.overwrite, a.fields)
     except SolveError as e:
-        print(f"solve.py: error: {e}", file=sys.stderr)
-        return 1
+        msg = str(e).replace("\n", " ")
+        print(f"solve.py: error: {msg}", file=sys.stderr)
+        return 2 if isinstance(e, SceneError) else 1
     except Exception as e:  # noqa: BLE001 — one line at the edge
-        print(f"solve.py: error: {type(e).__name__}: {e}", file=sys.stderr)
+        msg = str(e).replace("\n", " ")
+        print(f"solve.py: error: {type(e).__name__}: {msg}", file=sys.stderr)
         return 1
     for c in s["cases"]:
         err = c.get("errors", {})

@@ -1,4 +1,4 @@
-"""The two references solve the same discrete problem (BRIEF §3), so they must agree.
+"""The two references solve the same discrete problem (the reference problem of docs/design.md), so they must agree.
 
 For every repository scene (mixed: partly open; closed-exact: closes fully; open-exact: no
 contact), the meshes of all the scene's levels are exported with the real `sdcrack mesh` command, both

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("dolfinx")
+dolfinx = pytest.importorskip("dolfinx")
 pytest.importorskip("scipy")
 np = pytest.importorskip("numpy")
 
@@ -21,6 +21,7 @@ HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "dolfinx" / "solve.py"
 sys.path.insert(0, str(HERE))
 from fake_export import write_fake_export  # noqa: E402
+from output_checks import assert_fields_readable, assert_provenance  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("dolfinx_solve", SOLVE)
 solve = importlib.util.module_from_spec(_spec)
@@ -60,9 +61,11 @@ def closed_run(tmp_path_factory):
 
 
 def test_open_crack_converges(open_run):
-    _, s, _ = open_run
+    _, s, out = open_run
     cases = s["cases"]
     assert s["tool"] == "dolfinx" and s["scene"] == "open" and [c["level"] for c in cases] == [0, 1, 2]
+    prov = assert_provenance(json.loads((out / "summary.json").read_text()), "dolfinx")
+    assert prov["tool_version"] == dolfinx.__version__ and solve.dolfinx_version_problem() is None
     for c in cases:
         assert c["active"] == 0  # the exact jump is positive everywhere: the crack is open
         assert_kkt(c)
@@ -183,8 +186,9 @@ def test_vertex_renumbering_is_handled(tmp_path, closed_run):
 
 def test_fields_readable_by_meshio(open_run):
     meshio = pytest.importorskip("meshio")
-    _, s, out = open_run
-    assert (out / "fields.xdmf").exists() and (out / "fields.h5").exists()
+    exp, s, out = open_run
+    assert (out / "fields.h5").exists() and not (out / "fields.xdmf").exists()
+    assert_fields_readable(out, exp, s, "dolfinx")  # every *.xdmf under out, by meshio.read
     for c in s["cases"]:
         L = c["level"]
         m = meshio.read(out / "fields" / f"level{L}.xdmf")
@@ -215,5 +219,9 @@ def test_cli_errors_and_atomicity(tmp_path, closed_run):
     r = subprocess.run([py, str(SOLVE), str(exp), "--out", str(tmp_path / "ok"), "--fields"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    assert json.loads((tmp_path / "ok" / "summary.json").read_text())["tool"] == "dolfinx"
+    s = json.loads((tmp_path / "ok" / "summary.json").read_text())
+    assert s["tool"] == "dolfinx"
+    prov = assert_provenance(s, "dolfinx", script=SOLVE)
+    assert prov["command_line"][1:] == [str(exp), "--out", str(tmp_path / "ok"), "--fields"]
+    assert_fields_readable(tmp_path / "ok", exp, s, "dolfinx")
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []  # no temporaries left

@@ -6,6 +6,7 @@ Run: /usr/bin/python3 -m pytest references/tests/test_freefem_reference.py -q
 import importlib.util
 import json
 import math
+import re
 import shutil
 import subprocess
 import sys
@@ -18,6 +19,7 @@ HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "freefem" / "solve.py"
 sys.path.insert(0, str(HERE))
 from fake_export import write_fake_export  # noqa: E402
+from output_checks import assert_fields_readable, assert_provenance  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("freefem_solve", SOLVE)
 ffsolve = importlib.util.module_from_spec(_spec)
@@ -40,7 +42,9 @@ def solved(tmp_path, name, f, g, exact, levels=(0, 1, 2)):
     out = tmp_path / f"{name}-out"
     p = run_solve(export, out)
     assert p.returncode == 0, p.stderr
-    return export, out, json.loads((out / "summary.json").read_text())
+    s = json.loads((out / "summary.json").read_text())
+    assert_provenance(s, "freefem", script=SOLVE)
+    return export, out, s
 
 
 def rates(values):
@@ -145,6 +149,16 @@ def test_status_reports_non_convergence(tmp_path, monkeypatch, capsys):
     assert "not_converged" in capsys.readouterr().err
 
 
+def test_zero_multiplier_converges(tmp_path):
+    """u = x, f = 0: no jump and λ = 0 everywhere, so λ and w are round-off; the activity threshold's
+    floor (as in the dolfinx reference) must keep the active set from flickering."""
+    _, _, s = solved(tmp_path, "zero-lambda", "0", "x", {"u": "x"}, levels=(0, 1))
+    for case in s["cases"]:
+        assert_kkt(case)
+        assert case["iterations"] <= 3, case["iterations"]
+        assert case["errors"]["u_l2"] < 1e-12
+
+
 def test_mixed_crack_partially_active(tmp_path):
     export, out, s = solved(tmp_path, "mixed", "20*sin(2*pi*x)*sign(y)", "0", None, levels=(2,))
     (c,) = s["cases"]
@@ -154,6 +168,17 @@ def test_mixed_crack_partially_active(tmp_path):
     u = np.loadtxt(out / "u_level2.txt")
     cr = np.loadtxt(Path(export) / "level2" / "crack.txt", dtype=int)
     assert np.all(u[cr[:, 0]] - u[cr[:, 1]] >= -1e-13)
+
+
+def test_freefem_version(capsys):
+    """provenance.tool_version: the version in FreeFem++'s banner; "unknown" and one warning line when
+    the program prints none."""
+    v = ffsolve.freefem_version(shutil.which("FreeFem++"))
+    assert v != "unknown" and re.fullmatch(r"[0-9]+\.[0-9]+\S*", v), v
+    assert capsys.readouterr().err == ""
+    assert ffsolve.freefem_version(shutil.which("true")) == "unknown"
+    err = capsys.readouterr().err
+    assert "warning" in err and "unknown" in err and len(err.strip().splitlines()) == 1
 
 
 def test_errors_are_one_line(tmp_path):
@@ -202,8 +227,15 @@ def test_fields_written(tmp_path):
     export = write_fake_export(tmp_path / "e", "mixed", "20*sin(2*pi*x)*sign(y)", "0", None, levels=(0, 1))
     p = run_solve(export, tmp_path / "o", "--fields")
     assert p.returncode == 0, p.stderr
-    xdmf = (tmp_path / "o" / "fields.xdmf").read_text()
+    assert p.stderr == ""  # no warning: the FreeFEM version was read
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    prov = assert_provenance(s, "freefem", script=SOLVE)
+    assert prov["command_line"][1:] == [str(export), "--out", str(tmp_path / "o"), "--fields"]
+    assert prov["tool_version"] == ffsolve.freefem_version(shutil.which("FreeFem++"))
+    assert not (tmp_path / "o" / "fields.xdmf").exists()  # no spatial collection of overlapping levels
+    xdmf = (tmp_path / "o" / "fields" / "level1.crack.xdmf").read_text()
     assert 'Name="level1/crack"' in xdmf and 'Version="3.0"' in xdmf
+    assert_fields_readable(tmp_path / "o", export, s, "freefem")  # every *.xdmf under o, by meshio.read
     with h5py.File(tmp_path / "o" / "fields.h5") as f:
         u = f["cases/level1/u"][:]
         assert np.array_equal(u, np.loadtxt(tmp_path / "o" / "u_level1.txt"))

@@ -1,0 +1,80 @@
+"""Checks of a reference's result folder shared by the reference tests (not a test module):
+summary.json's provenance, and the field files (every *.xdmf readable by meshio, the HDF5
+attributes)."""
+
+import json
+import platform
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
+import sdresults  # noqa: E402
+
+
+def assert_provenance(summary, tool, script=None):
+    """summary["provenance"] has every key of sdresults.PROVENANCE_KEYS, none empty; `script`: the
+    solve.py the command line must name (a command-line run)."""
+    if not isinstance(summary, dict):
+        summary = json.loads(Path(summary).read_text())
+    prov = summary["provenance"]
+    assert set(prov) == set(sdresults.PROVENANCE_KEYS), prov
+    for key, value in prov.items():
+        assert value not in (None, "", [], {}), (key, value)
+    assert prov["tool"] == tool == summary["tool"]
+    assert isinstance(prov["tool_version"], str) and prov["tool_version"] != "unknown", prov
+    assert re.fullmatch(r"[0-9]+\.[0-9]+\S*", prov["tool_version"]), prov
+    assert prov["python"] == platform.python_version()
+    assert prov["numpy"] == np.__version__
+    assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", prov["date_utc"]), prov
+    assert isinstance(prov["command_line"], list) and all(isinstance(a, str) for a in prov["command_line"])
+    assert isinstance(prov["cores"], int) and prov["cores"] >= 1
+    if script is not None:
+        assert Path(prov["command_line"][0]).resolve() == Path(script).resolve(), prov["command_line"]
+    return prov
+
+
+def assert_fields_readable(out, export, summary, tool):
+    """Every *.xdmf under `out` is read by meshio.read: the per-level grid has finite point data of
+    the mesh's length (u among them), the crack grid finite jump and multiplier (the nodal λ) of the
+    crack's length; there is no top-level fields.xdmf; fields.h5's datasets carry level, h, tool."""
+    import h5py
+    import meshio
+
+    out, export = Path(out), Path(export)
+    levels = {c["level"]: c for c in summary["cases"]}
+    assert not (out / "fields.xdmf").exists()
+    found = sorted(p.relative_to(out).as_posix() for p in out.rglob("*.xdmf"))
+    assert found == sorted([f"fields/level{L}.xdmf" for L in levels] + [f"fields/level{L}.crack.xdmf" for L in levels])
+    for rel in found:
+        m = meshio.read(out / rel)
+        L = int(re.match(r"fields/level(\d+)", rel).group(1))
+        n = len(m.points)
+        assert n > 0 and np.isfinite(m.points).all()
+        if rel.endswith(".crack.xdmf"):
+            crack = np.loadtxt(export / f"level{L}" / "crack.txt", dtype=np.int64, ndmin=2)
+            assert n == len(crack)
+            assert [(b.type, len(b.data)) for b in m.cells] == [("line", n - 1)]
+            assert {"jump", "multiplier"} <= set(m.point_data), rel
+        else:
+            tri = np.loadtxt(export / f"level{L}" / "triangles.txt", dtype=np.int64, ndmin=2)
+            assert n == levels[L]["unknowns"]
+            assert [(b.type, len(b.data)) for b in m.cells] == [("triangle", len(tri))]
+            assert "u" in m.point_data, rel
+            np.testing.assert_array_equal(m.point_data["u"], np.loadtxt(out / f"u_level{L}.txt"))
+        for name, values in m.point_data.items():
+            assert values.shape[0] == n and np.isfinite(values).all(), (rel, name)
+        for name, blocks in m.cell_data.items():
+            for values, block in zip(blocks, m.cells):
+                assert len(values) == len(block.data) and np.isfinite(values).all(), (rel, name)
+    with h5py.File(out / "fields.h5", "r") as h5:
+        assert h5.attrs["tool"] == tool
+        datasets = []
+        h5.visititems(lambda name, obj: datasets.append((name, obj)) if isinstance(obj, h5py.Dataset) else None)
+        assert datasets
+        for name, ds in datasets:
+            L = int(re.search(r"level(\d+)", name).group(1))
+            assert ds.attrs["level"] == L and ds.attrs["tool"] == tool, name
+            assert ds.attrs["h"] == levels[L]["h"], name
