@@ -15,9 +15,37 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::output::{summary::Provenance, write_run, ResultsDir};
+use crate::output::summary::{delta_text, Provenance};
+use crate::output::{write_run, ResultsDir};
 use crate::scene::{MultiplierSpace, Scene, USpace};
 use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
+
+/// `println!` that survives a closed standard output: `sdcrack bench --json | head` must not
+/// panic, and a run whose reader went away must still finish and keep its results. A closed
+/// pipe (EPIPE) silences the rest of the output; any other write error is reported once on
+/// stderr.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        say_raw(&format!("{}\n", format_args!($($arg)*)))
+    };
+}
+
+/// Writes `text` to standard output (see [`say!`]).
+fn say_raw(text: &str) {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static CLOSED: AtomicBool = AtomicBool::new(false);
+    if CLOSED.load(Ordering::Relaxed) {
+        return;
+    }
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        CLOSED.store(true, Ordering::Relaxed);
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("sdcrack: warning: cannot write to standard output: {e}");
+        }
+    }
+}
 
 /// sdcrack: smooth-domain finite elements for cracks with unilateral contact.
 #[derive(Parser, Debug)]
@@ -41,11 +69,11 @@ pub enum Command {
         /// Only this refinement level (need not be listed in the scene).
         #[arg(long, value_parser = parse_level, allow_hyphen_values = true)]
         level: Option<u32>,
-        /// Only this u space.
-        #[arg(long, value_parser = parse_u_space)]
+        /// Only this u space: continuous or broken.
+        #[arg(long, value_parser = parse_u_space, value_name = "continuous|broken")]
         u_space: Option<USpace>,
-        /// Only this multiplier space.
-        #[arg(long, value_parser = parse_multiplier)]
+        /// Only this multiplier space: M0, M1 or M1star.
+        #[arg(long, value_parser = parse_multiplier, value_name = "M0|M1|M1star")]
         multiplier: Option<MultiplierSpace>,
         /// Only this δ (≥ 0).
         #[arg(long, value_parser = parse_delta, allow_hyphen_values = true)]
@@ -75,6 +103,12 @@ pub enum Command {
         /// Print one JSON object instead of the table.
         #[arg(long)]
         json: bool,
+    },
+    /// Print a commented scene template (every table and key with its type and default).
+    Scene {
+        /// Print the template (the only action so far).
+        #[arg(long, required = true)]
+        template: bool,
     },
     /// Validate a scene file (and its crack on every level's mesh) without solving.
     Check {
@@ -207,10 +241,14 @@ fn clap_one_line(e: &clap::Error) -> String {
 /// Runs a parsed command; `Ok(code)` is 0, or 3 when some case did not converge.
 pub fn execute(cli: Cli) -> Result<i32, Failure> {
     match cli.command {
+        Command::Scene { template: _ } => {
+            say_raw(crate::scene::SCENE_TEMPLATE);
+            Ok(0)
+        }
         Command::Check { scene } => {
             let s = Scene::from_file(&scene).map_err(usage)?;
             check_meshes(&s, &scene.display().to_string())?;
-            println!(
+            say!(
                 "{}: valid scene '{}' ({} cases)",
                 scene.display(),
                 s.name,
@@ -234,7 +272,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             let levels = level.map_or_else(|| scene.levels.clone(), |l| vec![l]);
             let path =
                 crate::output::mesh_export::export_meshes(&scene, &levels, &out).map_err(usage)?;
-            println!("meshes of levels {levels:?} written to {}", path.display());
+            say!("meshes of levels {levels:?} written to {}", path.display());
             Ok(0)
         }
         Command::Run {
@@ -273,9 +311,9 @@ fn bench(scene: &Scene, vertices: usize, json: bool) -> Result<i32, Failure> {
     progress.bar.finish_and_clear();
     if json {
         let text = serde_json::to_string_pretty(&report).map_err(runtime)?;
-        println!("{text}");
+        say!("{text}");
     } else {
-        print!("{}", report.table());
+        say_raw(&report.table());
     }
     Ok(if report.all_converged { 0 } else { 3 })
 }
@@ -322,11 +360,11 @@ impl Observer for Progress {
     fn case_done(&mut self, case: &CaseResult) {
         if !case.converged {
             self.bar.println(format!(
-                "warning: level {} {} {} δ={:e} did not converge ({})",
+                "warning: level {} {} {} δ = {} did not converge ({})",
                 case.level,
                 case.u_space,
                 case.multiplier,
-                case.delta,
+                delta_text(case.delta),
                 case.status.name()
             ));
         }
@@ -370,7 +408,7 @@ fn run(
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);
     let failed = study.cases.iter().filter(|c| !c.converged).count();
-    println!(
+    say!(
         "{} cases in {:.1} s; results in {}",
         study.cases.len(),
         wall,
@@ -419,7 +457,7 @@ fn run_references(
         )
         .map_err(runtime)?;
         spinner.finish_and_clear();
-        println!("reference {tool}: {:.1} s", run.seconds);
+        say!("reference {tool}: {:.1} s", run.seconds);
         all_converged &= run.all_converged;
     }
     Ok(all_converged)
@@ -438,19 +476,17 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
     let Some(delta) = cases.iter().map(|c| c.delta).min_by(f64::total_cmp) else {
         return;
     };
-    println!("scene '{}': δ = {delta:e}", scene.name);
+    say!("scene '{}': δ = {}", scene.name, delta_text(delta));
     let mut keys: Vec<(USpace, MultiplierSpace)> =
         cases.iter().map(|c| (c.u_space, c.multiplier)).collect();
     keys.sort();
     keys.dedup();
     for (u_space, multiplier) in keys {
-        println!("\n{u_space} u, {multiplier}");
+        say!("\n{u_space} u, {multiplier}");
         if scene.exact.is_some() {
-            println!(
-                "level        h  unknowns  iter     e_u  rate     e_p  rate     e_λ  rate   kkt"
-            );
+            say!("level        h  unknowns  iter     e_u  rate     e_p  rate     e_λ  rate   kkt");
         } else {
-            println!("level        h  unknowns  iter  active     kkt");
+            say!("level        h  unknowns  iter  active     kkt");
         }
         let mut prev: Option<(f64, f64, f64, f64)> = None;
         for c in cases
@@ -460,7 +496,7 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
             let flag = if c.converged { "" } else { "  NOT CONVERGED" };
             match c.errors {
                 Some(e) => {
-                    println!(
+                    say!(
                         "{:5} {:8.5} {:9} {:5} {:7.2e} {} {:7.2e} {} {:7.2e} {} {:7.1e}{flag}",
                         c.level,
                         c.h,
@@ -476,7 +512,7 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
                     );
                     prev = Some((c.h, e.u_l2, e.p_l2, e.lambda_l2));
                 }
-                None => println!(
+                None => say!(
                     "{:5} {:8.5} {:9} {:5} {:7} {:7.1e}{flag}",
                     c.level,
                     c.h,
@@ -488,5 +524,5 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
             }
         }
     }
-    println!();
+    say!("");
 }

@@ -206,3 +206,72 @@ fn bad_inputs_give_one_line_and_exit_2() {
     let o = sdcrack(&["check", &common::scene_path("mixed").display().to_string()]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
+
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    use std::process::{Command, Stdio};
+    // `sdcrack bench --json | head -0`: the reader is gone before anything is written.
+    for args in [
+        &["bench", "--json", "--vertices", "100"][..],
+        &["bench", "--vertices", "100"][..],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {err}");
+        assert!(
+            !err.contains("panicked") && err.is_empty(),
+            "{args:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn help_lists_the_allowed_values() {
+    let o = sdcrack(&["run", "--help"]);
+    assert_eq!(o.status.code(), Some(0));
+    let help = String::from_utf8_lossy(&o.stdout);
+    for word in ["continuous", "broken", "M0", "M1", "M1star"] {
+        assert!(help.contains(word), "{help}");
+    }
+}
+
+#[test]
+fn an_unsupported_dolfinx_is_refused_before_solving() {
+    // A reference script that reports an unsupported dolfinx, as references/dolfinx/solve.py
+    // does for anything but 0.5.x (tested in references/tests/test_dolfinx_version.py).
+    let dir = tempfile::tempdir().unwrap();
+    let refs = dir.path().join("refs");
+    std::fs::create_dir_all(refs.join("dolfinx")).unwrap();
+    std::fs::write(
+        refs.join("dolfinx/solve.py"),
+        "import sys\nprint('dolfinx reference: dolfinx 0.7.0 is not supported (supported: 0.5.x)', file=sys.stderr)\nsys.exit(2)\n",
+    )
+    .unwrap();
+    let text = SMALL.replace("references = []", "references = [\"dolfinx\"]");
+    let scene = write_scene(dir.path(), "small.toml", &text);
+    let out = dir.path().join("res");
+    let o = Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+        .args(["run", &scene, "--out", out.to_str().unwrap(), "--quiet"])
+        .env("SDCRACK_REFERENCES", &refs)
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    if err.contains("is not available") {
+        eprintln!("skipped: dolfinx is not installed here ({err})");
+        return;
+    }
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("reference 'dolfinx' cannot run here: dolfinx reference: dolfinx 0.7.0 is not supported"),
+        "{err}"
+    );
+    assert!(!out.join("small").exists());
+}

@@ -1,4 +1,4 @@
-//! `summary.json`: one entry per case with the keys of BRIEF §5 (level, h, u_space, multiplier,
+//! `summary.json`: one entry per case with the keys of README.md's results folder (level, h, u_space, multiplier,
 //! delta, unknowns, iterations, kkt, timings_s, errors when the scene has `[exact]`) plus the LCP
 //! status, the active-set size and the factorisation's regularised pivots.
 
@@ -163,12 +163,16 @@ pub struct CaseSummary {
 /// Name of a case in the field files: its `/cases/` group in `fields.h5` and its step grid,
 /// e.g. `level3-broken-M1-delta1e-2` (δ = 0 is written `delta0`).
 pub fn case_name(c: &CaseResult) -> String {
-    let delta = if c.delta == 0.0 {
+    format!("{}-delta{}", series_name(c), delta_text(c.delta))
+}
+
+/// δ as people write it: the shortest round-trip exponent form (`1e-2`, `1.5e-8`), `0` for zero.
+pub fn delta_text(delta: f64) -> String {
+    if delta == 0.0 {
         "0".to_string()
     } else {
-        format!("{:e}", c.delta)
-    };
-    format!("{}-delta{delta}", series_name(c))
+        format!("{delta:e}")
+    }
 }
 
 /// Name of the δ sweep a case belongs to in the field files, e.g. `level3-broken-M1`: the

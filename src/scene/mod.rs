@@ -1,4 +1,4 @@
-//! Scene files: the TOML description of one crack problem and its study (BRIEF §5).
+//! Scene files: the TOML description of one crack problem and its study (docs/scenes.md).
 //!
 //! Owns parsing and *validation* of a scene: unknown keys are rejected (with a "did you mean"
 //! suggestion), expressions are parsed once into [`Expr`] trees, and every number is checked
@@ -16,6 +16,9 @@ use serde::Deserialize;
 
 pub use expr::{Expr, ExprError, Var};
 pub use verification::{ExpectedFailure, Verification};
+
+/// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
+pub const SCENE_TEMPLATE: &str = include_str!("../../docs/scene-template.toml");
 
 /// The embedded default scene (`sdcrack run` without argument): a partly open, partly closed crack.
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/mixed.toml");
@@ -91,7 +94,7 @@ fn in_file_message(path: &str, error: &SceneError) -> String {
     }
 }
 
-/// How u is discretised (BRIEF §2).
+/// How u is discretised (docs/design.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum USpace {
     /// Continuous P1 on the uncracked mesh (the paper's §3 literally).
@@ -176,7 +179,7 @@ pub struct Rectangle {
     pub max: [f64; 2],
 }
 
-/// Straight crack from `a` to `b`; ν is (b − a)/|b − a| turned by +90° (BRIEF §1).
+/// Straight crack from `a` to `b`; ν is (b − a)/|b − a| turned by +90° (the problem, docs/scenes.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {
     /// First end point (a tip).
@@ -423,6 +426,9 @@ impl Scene {
         })
     }
 
+    /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
+    pub const SCENE_TEMPLATE: &str = include_str!("../../docs/scene-template.toml");
+
     /// The embedded default scene.
     pub fn default_scene() -> Scene {
         // The embedded text is validated by a unit test; failing here is a build defect.
@@ -604,7 +610,12 @@ fn toml_message(e: &toml::de::Error, text: &str) -> String {
             } else {
                 format!("{table}.{key}")
             };
-            format!("{path}: {msg} (at {at})")
+            match (key_type(&path), got(&msg)) {
+                (Some((path, words)), Some(got)) => {
+                    format!("{path} must be {words}, not {got} (at {at})")
+                }
+                _ => format!("{path}: {msg} (at {at})"),
+            }
         }
         None => {
             let line_text = text.lines().nth(line - 1).unwrap_or("").trim_start();
@@ -617,6 +628,110 @@ fn toml_message(e: &toml::de::Error, text: &str) -> String {
             }
         }
     }
+}
+
+/// What each key's value must be, in the words of docs/scenes.md, for type errors (serde says
+/// "expected i64"; a user wants "levels must be a list of integers"). Keyed by the last part of
+/// the key's path; the first string is the full path to show.
+const KEY_TYPES: &[(&str, &str, &str)] = &[
+    ("name", "name", "a string"),
+    ("description", "description", "a string"),
+    (
+        "rectangle",
+        "geometry.domain.rectangle",
+        "two corner points [[x0, y0], [x1, y1]] of numbers",
+    ),
+    (
+        "segment",
+        "geometry.crack.segment",
+        "two end points [[xa, ya], [xb, yb]] of numbers",
+    ),
+    ("f", "data.f", "an expression in quotes, e.g. \"sin(pi*x)\""),
+    ("g", "data.g", "an expression in quotes, e.g. \"0\""),
+    ("u", "exact.u", "an expression in quotes"),
+    ("px", "exact.px", "an expression in quotes"),
+    ("py", "exact.py", "an expression in quotes"),
+    ("jump", "exact.jump", "an expression in quotes"),
+    ("cells", "discretization.cells", "two integers [nx, ny]"),
+    ("levels", "discretization.levels", "a list of integers"),
+    (
+        "u_spaces",
+        "discretization.u_spaces",
+        "a list of names from \"continuous\", \"broken\"",
+    ),
+    (
+        "multipliers",
+        "discretization.multipliers",
+        "a list of names from \"M0\", \"M1\", \"M1star\"",
+    ),
+    ("deltas", "discretization.deltas", "a list of numbers ≥ 0"),
+    (
+        "fields",
+        "outputs.fields",
+        "a list of names from \"u\", \"p\", \"lambda\"",
+    ),
+    (
+        "references",
+        "outputs.references",
+        "a list of names from \"dolfinx\", \"freefem\"",
+    ),
+    ("smoke", "verification.smoke", "true or false"),
+    ("kkt_tolerance", "verification.kkt_tolerance", "a number"),
+    (
+        "reference_agreement",
+        "verification.reference_agreement",
+        "a number",
+    ),
+    (
+        "delta_slope_tolerance",
+        "verification.delta_slope_tolerance",
+        "a number",
+    ),
+    ("min_rate", "verification.min_rate", "a number"),
+    (
+        "u_space",
+        "verification.expected_failure.u_space",
+        "a string",
+    ),
+    (
+        "multiplier",
+        "verification.expected_failure.multiplier",
+        "a string",
+    ),
+    (
+        "quantity",
+        "verification.expected_failure.quantity",
+        "a string",
+    ),
+    ("reason", "verification.expected_failure.reason", "a string"),
+];
+
+/// The full path and the expected value in words of the key shown as `path`.
+fn key_type(path: &str) -> Option<(&'static str, &'static str)> {
+    let last = path.rsplit('.').next().unwrap_or(path);
+    KEY_TYPES
+        .iter()
+        .find(|(key, _, _)| *key == last)
+        .map(|&(_, full, words)| (full, words))
+}
+
+/// What was found, in words, from serde's "invalid type: string \"a\", expected i64".
+fn got(msg: &str) -> Option<String> {
+    let found = msg
+        .strip_prefix("invalid type: ")?
+        .split(", expected")
+        .next()?;
+    let (kind, value) = found.split_once(' ').unwrap_or((found, ""));
+    let value = value.trim_matches('`');
+    Some(match kind {
+        "string" => format!("the string {value}"),
+        "integer" => format!("the integer {value}"),
+        "floating" => format!("the number {}", value.trim_start_matches("point `")),
+        "boolean" => format!("the boolean {value}"),
+        "sequence" => "a list".to_string(),
+        "map" => "a table".to_string(),
+        _ => found.to_string(),
+    })
 }
 
 /// The closest known word within edit distance 2, if any.
@@ -993,6 +1108,40 @@ pub fn eval_on_face(e: &Expr, p: [f64; 2], normal: [f64; 2], side: f64) -> f64 {
 mod tests {
     use super::*;
 
+    /// The template is a valid scene, names every table and key (commented or not), and its
+    /// optional tables, uncommented, are valid too.
+    #[test]
+    fn template_is_a_valid_scene_naming_every_key() {
+        let scene = Scene::from_toml(SCENE_TEMPLATE).expect("template parses");
+        assert_eq!(scene.name, "my-crack");
+        for (table, keys) in TABLE_KEYS {
+            let last = table.rsplit('.').next().unwrap_or(table);
+            let named = SCENE_TEMPLATE.contains(&format!("[{table}]"))
+                || SCENE_TEMPLATE.contains(&format!("{last} = {{"));
+            assert!(table.is_empty() || named, "template lacks [{table}]");
+            for key in *keys {
+                assert!(
+                    SCENE_TEMPLATE.contains(&format!("{key} ="))
+                        || TABLE_KEYS.iter().any(|(t, _)| t.ends_with(key)),
+                    "template lacks `{key}` of [{table}]"
+                );
+            }
+        }
+        // Uncomment the optional [exact] and expected-failure blocks: still a valid scene.
+        let full = SCENE_TEMPLATE
+            .replace("# [exact]", "[exact]")
+            .replace("# u = \"...\"", "u = \"sin(pi*x)\"")
+            .replace("# [[verification", "[[verification")
+            .replace("# u_space = ", "u_space = ")
+            .replace(
+                "u_spaces = [\"broken\"]",
+                "u_spaces = [\"continuous\", \"broken\"]",
+            )
+            .replace("# reason = ", "reason = ");
+        let scene = Scene::from_toml(&full).expect("template with its options parses");
+        assert!(scene.exact.is_some());
+    }
+
     /// Peak resident memory measured with `/usr/bin/time -f %M` for
     /// `sdcrack run scenes/mixed.toml --level L --u-space broken --multiplier M1 --delta 0`
     /// (cells [8, 8]; docs/design.md): the estimate must stay above each.
@@ -1029,7 +1178,7 @@ mod tests {
         let scene = DEFAULT_SCENE.replacen("cells = [8, 8]", "cells = [8, \"8\"]", 1);
         let e = Scene::from_toml(&scene).unwrap_err().to_string();
         assert!(
-            e.contains("discretization.cells: invalid type: string \"8\""),
+            e.contains("discretization.cells must be two integers [nx, ny], not the string \"8\""),
             "{e}"
         );
         assert_eq!(line_column("ab\ncδe", 6), (2, 3));
