@@ -12,7 +12,7 @@
 //! lower-triangular CSC pattern with two value arrays — the δ-independent part and the part
 //! multiplying δ — so that K(δ) is one axpy and its symbolic factorisation is shared by every δ.
 //!
-//! Crack operators (BRIEF §2 table): N maps P to the nodal normal components (NP)_j = p(x_j)·ν at
+//! Crack operators (docs/design.md, Multipliers and the LCP): N maps P to the nodal normal components (NP)_j = p(x_j)·ν at
 //! the crack nodes x_0..x_I (p is continuous and the bubbles vanish on edges, so p·ν is P1 along
 //! Γc). Every multiplier's constraint operator is D = S N with S = segment averages ℓ_k/2 (M0),
 //! the crack mass matrix M_c (M1, so D_jJ = ∫ φ_j ψ_J·ν) or the identity (M1star).

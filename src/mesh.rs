@@ -1,5 +1,5 @@
 //! Structured triangulations of the rectangle, nested levels, the crack as a chain of mesh edges,
-//! and the two u-space topologies (BRIEF §2).
+//! and the two u-space topologies (docs/design.md).
 //!
 //! Level ℓ has `2^ℓ·nx × 2^ℓ·ny` cells, each split by its SW–NE diagonal into two counter-clockwise
 //! triangles, so levels are nested. The crack segment must join two level-0 vertices along a mesh
@@ -9,7 +9,7 @@
 //! Sides: ν is a→b turned by +90°; a triangle touching an interior crack node lies on the **+**
 //! side when its centroid c has (c − a)·ν > 0. For the `broken` u space every interior crack node
 //! (tips excluded) carries a second u degree of freedom, used by the triangles on the − side; the
-//! original vertex number serves the + side. That numbering *is* the cracked mesh of BRIEF §3.
+//! original vertex number serves the + side. That numbering *is* the cracked mesh of the references (docs/design.md).
 
 use crate::scene::{Rectangle, Segment, USpace};
 

@@ -1,4 +1,4 @@
-//! Error norms against an exact solution (BRIEF §4), with quadrature graded toward the crack tips.
+//! Error norms against an exact solution (docs/design.md, Error norms), with quadrature graded toward the crack tips.
 //!
 //! e_u = ‖u_h − u‖_{L²(Ω)}, e_p = ‖p_h − ∇u‖_{L²(Ω_c)} (p_h with its bubbles), e_λ = ‖λ_h − [u]‖_{L²(Γc)},
 //! and the paper's mesh-dependent X-norm of the p error (§4):

@@ -596,7 +596,7 @@ impl LevelContext<'_> {
         k
     }
 
-    /// λ_h from the LCP unknowns: Λ for M0/M1, M_c⁻¹ Λ̃ for M1star (BRIEF §2).
+    /// λ_h from the LCP unknowns: Λ for M0/M1, M_c⁻¹ Λ̃ for M1star (docs/design.md).
     fn lambda_field(&self, multiplier: MultiplierSpace, mu: &[f64]) -> CrackField {
         match multiplier {
             MultiplierSpace::M0 => CrackField::PerSegment(mu.to_vec()),

@@ -1,4 +1,4 @@
-//! Observed orders of accuracy at δ = 0 against the exact solutions (BRIEF §4), every case's KKT
+//! Observed orders of accuracy at δ = 0 against the exact solutions (docs/design.md, Error norms), every case's KKT
 //! residuals, and the quadrature of the error norms.
 //!
 //! Measured on levels 2, 3, 4 of the 8×8 scenes (h = 0.0884, 0.0442, 0.0221), rates log2 between
@@ -126,7 +126,7 @@ fn open_crack_broken_converges_continuous_does_not() {
             "broken {m}: λ rate {rl} below the paper's {paper}"
         );
     }
-    // Characterisation of the continuous u space on an open crack (BRIEF §2): the errors stall.
+    // Characterisation of the continuous u space on an open crack (docs/design.md): the errors stall.
     // Recorded at level 4: e_u = 2.69e-1, e_p = 9.30e-1, e_λ = 8.11e-1 (λ_h → 0, so e_λ tends
     // to ‖[u]‖ = sqrt(2/3) = 0.8165, the closed form of the norms' unit test).
     for m in MultiplierSpace::ALL {

@@ -1,4 +1,4 @@
-//! The exact solutions of the repository scenes satisfy the crack problem (BRIEF §1): −Δu = f off
+//! The exact solutions of the repository scenes satisfy the crack problem (the problem, docs/scenes.md): −Δu = f off
 //! the crack, u = g on Γ, and on Γc the face conditions [∂u/∂ν] = 0, [u] ≥ 0, ∂u/∂ν ≤ 0,
 //! [u] ∂u/∂ν = 0 — all checked by finite differences, independently of the solver.
 

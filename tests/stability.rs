@@ -576,7 +576,7 @@ fn anisotropic_meshes_solve_to_tolerance() {
 /// with the broken u space, errors decreasing at each level with the orders that the r^{1/2} tip
 /// singularity allows asymptotically (u ∈ H^{3/2−ε}: u rate → 1, p rate → ½; the nightly measures
 /// 1.13 and 0.46 at level 5 on isotropic meshes) and the paper's λ orders (½ for M0, M1; ¾ for
-/// M1star); for the continuous u space, no convergence (BRIEF §2).
+/// M1star); for the continuous u space, no convergence (docs/design.md).
 #[test]
 fn exact_solutions_converge_on_aspect_4_meshes() {
     for name in ["closed-exact", "open-exact"] {

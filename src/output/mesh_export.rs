@@ -1,5 +1,5 @@
 //! `sdcrack mesh SCENE --out DIR`: the meshes of every level of a scene, exported for the
-//! reference solvers (BRIEF §3), which never build their own mesh.
+//! reference solvers (the reference problem of docs/design.md), which never build their own mesh.
 //!
 //! Layout (plain text, one record a line, 0-based indices, coordinates printed with 17 significant
 //! digits so they read back bit for bit):
