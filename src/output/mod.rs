@@ -266,6 +266,7 @@ fn write_fields(
                     ("multiplier".into(), Meta::Text(c.multiplier.to_string())),
                     ("delta".into(), Meta::Float(c.delta)),
                 ],
+                constants: vec![("delta".into(), c.delta)],
             })
         })
         .collect();

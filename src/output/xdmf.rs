@@ -27,11 +27,17 @@
 //! /cases/CASE/crack/points         f64 (I+1, 3) crack nodes, z = 0
 //! /cases/CASE/crack/segments       i64 (I, 2)  [k, k+1]
 //! /cases/CASE/crack/lambda         f64 (I+1,) per node or (I,) per segment, optional
+//! /cases/CASE/NAME                 f64 (N,)    a constant field of [`CaseFields::constants`]
+//! /cases/CASE/crack/NAME           f64 (I+1,)  the same on the crack nodes
 //! ```
 //!
-//! The group `/cases/CASE` and every field dataset in it (`u`, `p`, `p_bubble`, `crack/lambda`)
-//! carry the case's [`CaseFields::metadata`] as HDF5 attributes (the solver's: `level`, `h`,
-//! `u_space`, `multiplier`, `delta`), plus `series` (text) and `step` (integer).
+//! The group `/cases/CASE` and every field dataset in it (`u`, `p`, `p_bubble`, `crack/lambda`,
+//! the constants) carry the case's [`CaseFields::metadata`] as HDF5 attributes (the solver's:
+//! `level`, `h`, `u_space`, `multiplier`, `delta`), plus `series` (text) and `step` (integer).
+//! The solver's only constant field is `delta`: ParaView ignores XDMF `Information` and shows no
+//! step names, so δ is also a point attribute whose value (its range in the information panel, or
+//! the "Annotate Attribute Data" filter) says which δ the time slider is on; meshio reads it as
+//! point data. (A `Center="Grid"` attribute would cost one number, but meshio rejects it.)
 //!
 //! Each mesh is stored once, however many cases use it; only meshes used by at least one case are
 //! written. A case whose `crack_points` is empty (and has no `lambda`) has no `crack` group and no
@@ -47,12 +53,12 @@
 //!         <Time Value="k"/>                         k = 0, 1, ...: the step's index
 //!         <Information Name="delta" Value="0.01"/>  the case's metadata, one element per key
 //!         Triangle topology, XYZ geometry,
-//!         Attributes u (Scalar), p (Vector), Center="Node"
+//!         Attributes u (Scalar), p (Vector), delta (Scalar), Center="Node"
 //!       ...
 //! ```
 //!
 //! The crack file has the same shape with Polyline topology (`NodesPerElement="2"`) and the
-//! attribute `lambda` (Scalar, `Center="Node"` or `"Cell"`). All `DataItem`s are `Format="HDF"`
+//! attributes `lambda` (Scalar, `Center="Node"` or `"Cell"`) and `delta` (Scalar, Node). All `DataItem`s are `Format="HDF"`
 //! and name the heavy file relative to the XDMF file (`../STEM.h5:/cases/CASE/u`); the steps of
 //! a series point at the same `/meshes/KEY/...` datasets.
 //!
@@ -147,7 +153,13 @@ pub struct CaseFields {
     /// Named values describing the case (the solver's: level, h, u space, multiplier, δ),
     /// written as HDF5 attributes and XDMF `Information` elements.
     pub metadata: Vec<(String, Meta)>,
+    /// Values also written as constant point fields of the mesh and crack grids (the solver's:
+    /// `delta`), so that a viewer that ignores `Information` (ParaView) shows them per step.
+    pub constants: Vec<(String, f64)>,
 }
+
+/// Dataset names of a case group that a constant field must not take.
+const RESERVED: [&str; 7] = ["u", "p", "p_bubble", "mesh", "crack", "points", "segments"];
 
 /// A metadata value of a case.
 #[derive(Clone, Debug, PartialEq)]
@@ -397,6 +409,15 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
             )));
         }
         check_name("series name", &case.series)?;
+        for (key, value) in &case.constants {
+            check_name("constant field name", key)?;
+            if RESERVED.contains(&key.as_str()) || !value.is_finite() {
+                return Err(OutputError::Invalid(format!(
+                    "case {name:?}: constant field {key:?} = {value} clashes with a stored field \
+                     or is not finite"
+                )));
+            }
+        }
         let Some(&m) = by_key.get(case.mesh_key.as_str()) else {
             return Err(OutputError::Invalid(format!(
                 "case {name:?}: mesh {:?} is not among the meshes given",
@@ -617,6 +638,11 @@ fn write_h5(
                     let ds = write_f64(&g, "p_bubble", &flat, vec![b.len(), 2])?;
                     write_attrs(&ds, &meta)?;
                 }
+                for (name, value) in &case.constants {
+                    let n = meshes[plan.case_mesh[c]].points.len();
+                    let ds = write_f64(&g, name, &vec![*value; n], vec![n])?;
+                    write_attrs(&ds, &meta)?;
+                }
                 if has_crack(case) {
                     let gk = g.create_group("crack")?;
                     let n = case.crack_points.len();
@@ -627,6 +653,10 @@ fn write_h5(
                     write_i64(&gk, "segments", &segs, vec![n - 1, 2])?;
                     if let Some((_, lambda)) = &case.lambda {
                         let ds = write_f64(&gk, "lambda", lambda, vec![lambda.len()])?;
+                        write_attrs(&ds, &meta)?;
+                    }
+                    for (name, value) in &case.constants {
+                        let ds = write_f64(&gk, name, &vec![*value; n], vec![n])?;
                         write_attrs(&ds, &meta)?;
                     }
                 }
@@ -747,6 +777,18 @@ fn step_head(name: &str, k: usize, metadata: &[(String, Meta)], indent: &str) ->
     s
 }
 
+/// The node attributes of `case.constants`, stored under `group` with `n` values each.
+fn constant_attributes(indent: &str, h5: &str, group: &str, n: usize, case: &CaseFields) -> String {
+    let inner = format!("{indent}  ");
+    case.constants
+        .iter()
+        .map(|(name, _)| {
+            let item = data_item(&inner, h5, &format!("{group}/{name}"), &[n], false);
+            attribute(indent, &xml_escape(name), "Scalar", "Node", item)
+        })
+        .collect()
+}
+
 fn mesh_grid_xml(h5: &str, mesh: &MeshData, case: &CaseFields, k: usize, indent: &str) -> String {
     let i2 = format!("{indent}  ");
     let i3 = format!("{indent}    ");
@@ -777,6 +819,7 @@ fn mesh_grid_xml(h5: &str, mesh: &MeshData, case: &CaseFields, k: usize, indent:
         let item = data_item(&i3, h5, &format!("{cp}/p"), &[n, 3], false);
         s.push_str(&attribute(&i2, "p", "Vector", "Node", item));
     }
+    s.push_str(&constant_attributes(&i2, h5, &cp, n, case));
     s.push_str(&format!("{indent}</Grid>\n"));
     s
 }
@@ -811,6 +854,7 @@ fn crack_grid_xml(h5: &str, case: &CaseFields, k: usize, indent: &str) -> String
         let item = data_item(&i3, h5, &format!("{kp}/lambda"), &[lambda.len()], false);
         s.push_str(&attribute(&i2, "lambda", "Scalar", center, item));
     }
+    s.push_str(&constant_attributes(&i2, h5, &kp, n, case));
     s.push_str(&format!("{indent}</Grid>\n"));
     s
 }
@@ -889,6 +933,7 @@ mod tests {
                 ("u_space".into(), Meta::Text("P1".into())),
                 ("delta".into(), Meta::Float(delta)),
             ],
+            constants: vec![("delta".into(), delta)],
         }
     }
 
@@ -1206,6 +1251,14 @@ mod tests {
         expect_invalid(&m, &cc, &["level2-P1-P1-delta1.5e-2", "mixes meshes"]);
 
         let mut cc = c.clone();
+        cc[0].constants = vec![("u".into(), 1.0)];
+        expect_invalid(&m, &cc, &[case0, "constant field \"u\""]);
+
+        let mut cc = c.clone();
+        cc[0].constants = vec![("delta".into(), f64::NAN)];
+        expect_invalid(&m, &cc, &[case0, "not finite"]);
+
+        let mut cc = c.clone();
         cc[0].series = "s:1".into();
         expect_invalid(&m, &cc, &["s:1", "not a valid name"]);
 
@@ -1241,6 +1294,7 @@ mod tests {
             lambda: None,
             series: "bare".into(),
             metadata: vec![],
+            constants: vec![],
         };
         write_fields(tmp.path(), "out", &[m], &[c]).unwrap();
         assert_eq!(listing(&tmp.path().join("out")), ["bare.xdmf"]);

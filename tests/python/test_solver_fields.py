@@ -81,6 +81,8 @@ def test_every_case_is_a_step_of_its_series(run_dir, summary):
                 grid = case["fields_grid"]
                 assert t == k and "0e0" not in grid
                 u, p = point_data["u"], point_data["p"]
+                # δ of the step as a constant point field: what ParaView shows of it
+                np.testing.assert_array_equal(point_data["delta"], np.full(n, case["delta"]))
                 assert u.shape == (n,) and p.shape == (n, 3)
                 assert np.allclose(p[:, 2], 0.0)
                 np.testing.assert_array_equal(u, h5[f"cases/{grid}/u"][...])

@@ -71,7 +71,7 @@ def expected(name):
     series, delta, key, n, s, has_p, centering = CASES[name]
     pts, tris = square_mesh(n)
     x, y = pts[:, 0], pts[:, 1]
-    point_data = {"u": s * (x + 2 * y)}
+    point_data = {"u": s * (x + 2 * y), "delta": np.full(len(x), delta)}
     if has_p:
         point_data["p"] = np.stack([s * x * y, s * (x - y), np.zeros_like(x)], axis=1)
     k = np.arange(n + 1)
@@ -128,6 +128,8 @@ def test_meshio_time_series_reads_crack_series(folder, series):
             e = expected(name)
             t, point_data, cell_data = r.read_data(k)
             assert t == k
+            # δ as a constant point field on the crack too (ParaView shows no Information)
+            np.testing.assert_array_equal(point_data.pop("delta"), np.full(len(points), e["delta"]))
             if e["centering"] == "Node":
                 np.testing.assert_allclose(point_data["lambda"], e["lam"], rtol=1e-15)
                 assert not cell_data
@@ -190,7 +192,10 @@ def test_h5_data_and_attributes(folder):
                 assert "lambda" not in g["crack"]
             else:
                 np.testing.assert_allclose(g["crack/lambda"][()], e["lam"], rtol=1e-15)
-            fields = [g] + [g[k] for k in ("u", "p", "p_bubble", "crack/lambda") if k in g]
+            np.testing.assert_array_equal(g["delta"][()], np.full(len(e["pts"]), e["delta"]))
+            np.testing.assert_array_equal(g["crack/delta"][()], np.full(len(e["crack"]), e["delta"]))
+            fields = [g] + [g[k] for k in ("u", "p", "p_bubble", "crack/lambda", "delta", "crack/delta")
+                            if k in g]
             for obj in fields:
                 a = obj.attrs
                 assert a["delta"] == e["delta"] and a["level"] == e["level"], (name, obj.name)
