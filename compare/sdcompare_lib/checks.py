@@ -8,6 +8,7 @@ import math
 
 from . import exact
 from .read import case_key, finite_number
+from .render import fmt_delta
 from .settings import QUANTITIES, scene_lists
 
 # The solver's errors against the compare tool's own (exact.py: another rule family, Duffy rules
@@ -18,6 +19,20 @@ SOLVER_ERRORS_RTOL = 1e-8
 REFERENCE_ERRORS_RTOL = 1e-6
 # Below this an error is zero to round-off (λ of a closed crack): compared absolutely.
 ERRORS_ATOL = 1e-13
+
+
+def _num(v, spec=".1e"):
+    """A number in a problem line: formatted when finite, else what it is (never None/nan/inf)."""
+    if finite_number(v):
+        return format(v, spec)
+    return "missing" if v is None else "missing or not finite" if isinstance(v, (int, float)) \
+        else repr(v)
+
+
+def _residuals(kkt):
+    if not isinstance(kkt, dict):
+        return "missing"
+    return ", ".join(f"{k} {_num(v)}" for k, v in kkt.items()) or "none"
 
 
 def _rel(a, b):
@@ -66,11 +81,11 @@ def completeness(res, scene_file):
     missing = sorted(want - set(have))
     if missing:
         problems.append(f"{len(missing)} case(s) asked for are missing from summary.json, e.g. "
-                        f"level {missing[0][0]} {missing[0][1]} {missing[0][2]} δ={missing[0][3]:g}")
+                        f"level {missing[0][0]} {missing[0][1]} {missing[0][2]} δ={fmt_delta(missing[0][3])}")
     extra = sorted(set(have) - want)
     if extra:
         problems.append(f"{len(extra)} case(s) in summary.json were not asked for, e.g. "
-                        f"level {extra[0][0]} {extra[0][1]} {extra[0][2]} δ={extra[0][3]:g}")
+                        f"level {extra[0][0]} {extra[0][1]} {extra[0][2]} δ={fmt_delta(extra[0][3])}")
     if len(set(have)) != len(have):
         problems.append("summary.json lists a case twice")
     if "exact" in scene_file:
@@ -129,8 +144,9 @@ def solver_values(kkt_rows, tol):
         return []
     k = bad[0]
     return [f"{len(bad)} solver case(s) not converged or with KKT residual > {tol:g}, e.g. level "
-            f"{k['level']} {k['u_space']} {k['multiplier']} δ={k['delta']:g} (status "
-            f"{k['status']}, converged {k['converged']}, residuals {k['kkt']})"]
+            f"{k['level']} {k['u_space']} {k['multiplier']} δ={fmt_delta(k['delta'])} (status "
+            f"{k['status'] or 'missing'}, converged {k['converged']}, residuals "
+            f"{_residuals(k['kkt'])})"]
 
 
 def reference_values(refs, tol):
@@ -142,16 +158,19 @@ def reference_values(refs, tol):
             status = c.get("status")
             worst = worst_residual(c.get("kkt"))
             if status != "converged" or not worst <= tol:
-                problems.append(f"reference {tool} level {c.get('level')}: status {status!r}, "
-                                f"largest KKT residual {worst:.1e} (must be 'converged' and "
-                                f"≤ {tol:g})")
+                problems.append(f"reference {tool} level {c.get('level')}: "
+                                + (f"status {status!r}" if status is not None else "no status")
+                                + f", largest KKT residual {_num(worst)} (must be 'converged' "
+                                f"and ≤ {tol:g})")
     return problems
 
 
 def reference_agreement(agreement, tol):
     rows = [a for a in agreement if a["kind"] == "reference_vs_reference"]
-    return [f"references {a['a']} and {a['b']} differ by {a['max_vertex_diff']} > {tol:g} at "
-            f"level {a['level']}" for a in rows
+    return [(f"references {a['a']} and {a['b']} differ by {a['max_vertex_diff']} > {tol:g} at "
+             f"level {a['level']}" if a["max_vertex_diff"] is not None else
+             f"references {a['a']} and {a['b']} could not be compared at level {a['level']}"
+             + (f" ({a['note']})" if a.get("note") else "")) for a in rows
             if a["max_vertex_diff"] is None or not a["max_vertex_diff"] <= tol]
 
 
@@ -183,8 +202,8 @@ def independent_errors(res, scene_file):
         rows.append(row)
         if not row["worst"] <= SOLVER_ERRORS_RTOL:
             problems.append(f"sdcrack's reported errors of level {c['level']} {c['u_space']} "
-                            f"{c['multiplier']} δ={float(c['delta']):g} differ from the "
-                            f"independent computation by {row['worst']:.1e} relative "
+                            f"{c['multiplier']} δ={fmt_delta(c['delta'])} differ from the "
+                            f"independent computation by {_num(row['worst'])} relative "
                             f"(> {SOLVER_ERRORS_RTOL:g})")
     reported = {}
     for tool, ref in sorted(res["refs"].items()):
@@ -200,7 +219,7 @@ def independent_errors(res, scene_file):
             reported.setdefault(lv, {})[tool] = c["errors"]
             if not row["worst"] <= REFERENCE_ERRORS_RTOL:
                 problems.append(f"{tool}'s reported errors of level {lv} differ from the "
-                                f"independent computation by {row['worst']:.1e} relative "
+                                f"independent computation by {_num(row['worst'])} relative "
                                 f"(> {REFERENCE_ERRORS_RTOL:g})")
     for lv, by_tool in sorted(reported.items()):
         if len(by_tool) == 2:
@@ -208,7 +227,7 @@ def independent_errors(res, scene_file):
             worst = max(_rel(ea.get(q), eb.get(q)) for q in ("u_l2", "p_l2", "lambda_l2"))
             if not worst <= REFERENCE_ERRORS_RTOL:
                 problems.append(f"the references' reported errors of level {lv} differ by "
-                                f"{worst:.1e} relative ({ta} vs {tb}; > {REFERENCE_ERRORS_RTOL:g})")
+                                f"{_num(worst)} relative ({ta} vs {tb}; > {REFERENCE_ERRORS_RTOL:g})")
     return rows, problems
 
 

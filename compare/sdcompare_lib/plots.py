@@ -5,10 +5,46 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
+
+from .render import fmt_delta  # noqa: E402
 
 QLABEL = {"u_l2": "‖u_h−u‖_L²", "p_l2": "‖p_h−∇u‖_L²", "p_x": "‖p_h−∇u‖_X", "lambda_l2": "‖λ_h−[u]‖_L²(Γc)"}
 STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
+# The references: told apart by marker, line style and label as well as colour (a grey-scale print
+# or a colour-blind reader still sees two), and unlike any solver variant's marker and line.
+REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "markersize": 9,
+                         "label": "reference dolfinx"},
+             "freefem": {"marker": "D", "linestyle": ":", "color": "tab:gray", "markersize": 6,
+                         "markerfacecolor": "none", "label": "reference FreeFEM"}}
+# Two lines whose points all agree to this relative distance (on a log axis) look like one line.
+OVERLAP_REL = 0.02
+
+
+def _delta_axis(ax):
+    """δ ticks written as the report writes δ (1e-2, not 10⁻² or 0.01)."""
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: fmt_delta(float(f"{x:.6g}"))))
+    ax.xaxis.set_minor_formatter(NullFormatter())
+
+
+def _single_x(ax, xs, note):
+    """One abscissa only: a decade either side, the ordinates padded by a factor 3 (matplotlib's
+    own limits put a lone point on the frame), and a note saying why there is no line or slope."""
+    x = xs[0]
+    ax.set_xlim(x / 10, x * 10)
+    ys = [y for line in ax.get_lines() for y in line.get_ydata() if y > 0]
+    if ys:
+        ax.set_ylim(min(ys) / 3, max(ys) * 3)
+    ax.text(0.03, 0.03, note, transform=ax.transAxes, fontsize=7, va="bottom", ha="left",
+            bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "0.7"})
+
+
+def _overlap(a, b):
+    """True when two point lists (x, y > 0) coincide to plotting accuracy."""
+    return len(a) == len(b) and all(abs(xa - xb) <= OVERLAP_REL * max(xa, xb)
+                                    and abs(ya - yb) <= OVERLAP_REL * max(ya, yb)
+                                    for (xa, ya), (xb, yb) in zip(a, b))
 
 
 def _legend(ax):
@@ -71,15 +107,24 @@ def delta_plot(folder, scene, delta_entries):
     qs = [q for q in ("u_l2", "p_l2", "lambda_l2") if any(d["quantity"] == q for d in delta_entries)]
     fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
     for ax, q in zip(axes[0], qs):
+        xs = set()
         for d in delta_entries:
             if d["quantity"] != q or d["level"] != lvl:
                 continue
             pts = [(x, y) for x, y in zip(d["deltas"], d["diffs"]) if x > 0 and y > 0]
             if pts:
                 s = d["slope"]
+                xs.update(x for x, _ in pts)
                 ax.loglog(*zip(*pts), STYLE.get(d["u_space"], ":"), marker=MARK.get(d["multiplier"], "x"),
-                          label=f"{d['u_space']}/{d['multiplier']} slope "
-                                + ("–" if s is None else f"{s:.2f}"))
+                          markersize=6, label=f"{d['u_space']}/{d['multiplier']}"
+                          + ("" if len(pts) < 2 else " slope –" if s is None else f" slope {s:.2f}"))
+        if len(xs) == 1:
+            _single_x(ax, sorted(xs), f"one δ > 0 (δ = {fmt_delta(min(xs))}): no slope")
+        elif not xs:
+            ax.text(0.5, 0.5, "no difference above zero", transform=ax.transAxes, ha="center",
+                    fontsize=8)
+        if xs:
+            _delta_axis(ax)
         ax.set_xlabel("δ")
         ax.set_title(f"{scene} level {lvl}: ‖{q.split('_')[0]}_δ − {q.split('_')[0]}_0‖")
         ax.grid(True, which="both", alpha=0.3)
@@ -100,10 +145,16 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
         if sel:
             ax.loglog([t["total_s"] for t in sel], [t["u_l2"] for t in sel], STYLE.get(u, ":"),
                       marker=MARK.get(m, "x"), label=f"{u}/{m}")
-    for tool in sorted({r["tool"] for r in rpts}):
-        sel = sorted((r for r in rpts if r["tool"] == tool), key=lambda r: r["level"])
-        ax.loglog([r["total_s"] for r in sel], [r["errors"]["u_l2"] for r in sel], "k-.",
-                  marker="*", label=f"reference {tool}")
+    ref_pts = {tool: [(r["total_s"], r["errors"]["u_l2"]) for r in sorted(
+        (r for r in rpts if r["tool"] == tool), key=lambda r: r["level"])]
+        for tool in sorted({r["tool"] for r in rpts})}
+    overlapping = len(ref_pts) == 2 and _overlap(*ref_pts.values())
+    for tool, xy in ref_pts.items():
+        style = dict(REF_STYLE.get(tool, {"marker": "x", "linestyle": "-.", "color": "black",
+                                          "label": f"reference {tool}"}))
+        if overlapping:
+            style["label"] += " (overlapping)"
+        ax.loglog(*zip(*xy), **style)
     ax.set_xlabel("total time per case [s] (sum of timings_s)")
     ax.set_ylabel("‖u − u_ex‖_L²")
     ax.set_title(f"{scene}: work–precision")
@@ -120,7 +171,9 @@ def delta_reference_plot(folder, scene, agreement):
         return None
     tool = sorted({a["reference"] for a in rows})[0]
     mult = sorted({a["multiplier"] for a in rows})[-1]
-    spaces = sorted({a["u_space"] for a in rows})
+    spaces = sorted({a["u_space"] for a in rows if a["delta"] > 0})
+    if not spaces:  # δ = 0 only: the reference tables say it all
+        return None
     fig, axes = plt.subplots(1, len(spaces), figsize=(5.2 * len(spaces), 4), squeeze=False)
     for ax, u in zip(axes[0], spaces):
         sel = [a for a in rows if a["reference"] == tool and a["multiplier"] == mult and a["u_space"] == u]
@@ -133,6 +186,9 @@ def delta_reference_plot(folder, scene, agreement):
             line = ax.loglog(*zip(*pts), marker="o", label=f"level {lvl}")[0] if pts else None
             if floor and line is not None:
                 ax.axhline(floor[0], color=line.get_color(), ls=":", lw=0.8)
+        if len(deltas) == 1:
+            _single_x(ax, deltas, f"one δ > 0 (δ = {fmt_delta(deltas[0])}): one point per level")
+        _delta_axis(ax)
         ax.set_xlabel("δ (dotted: δ = 0, the floor of the level)")
         ax.set_title(f"{scene}: ‖u_δh − u_{tool}‖_L², {u}/{mult}")
         ax.grid(True, which="both", alpha=0.3)

@@ -1,14 +1,24 @@
 """Report rendering (Markdown + self-contained HTML + JSON) and the atomic report folder write.
 
-A report is a list of sections: dict(title, paras=[str], tables=[(headers, rows)], images=[png],
-paras_after=[str]).
+A report is a list of sections: dict(title, paras=[str], tables=[(headers, rows) or (headers, rows,
+caption)], images=[png], paras_after=[str], fold=bool). Tables of more than FOLD_ROWS rows are
+folded in <details> (caption: what the table holds) unless the section says fold=False (the
+summary). A cell that is None or a float that is not finite is written "–" (never "None", "nan").
 """
 import base64
+import decimal
 import html
 import json
+import math
 import os
 import shutil
 import tempfile
+
+# Tables longer than this are folded (<details>) outside the summary section.
+FOLD_ROWS = 8
+# Modes of the published report folder and its files, whatever the umask (mkdtemp gives 0700).
+FOLDER_MODE = 0o755
+FILE_MODE = 0o644
 
 
 def fmt(v, spec=".3e"):
@@ -17,12 +27,50 @@ def fmt(v, spec=".3e"):
     if isinstance(v, bool):
         return "yes" if v else "**NO**"
     if isinstance(v, float):
-        return format(v, spec)
+        return format(v, spec) if math.isfinite(v) else "–"
     return str(v)
 
 
 def fmt_rate(v):
-    return "–" if v is None else f"{v:.2f}"
+    return "–" if v is None or not math.isfinite(v) else f"{v:.2f}"
+
+
+def fmt_delta(d):
+    """δ as `1e-2`, `1e-10`, `2.5e-3`, `1` or `0` (never `0e0`, `1.0e-02`, `0.0`, `0.01`): the
+    shortest digits that parse back to the same float64, so the text is also a valid command-line
+    value (`--delta 1e-2`). None or not finite: "–"."""
+    if d is None:
+        return "–"
+    d = float(d)
+    if not math.isfinite(d):
+        return "–"
+    if d == 0:
+        return "0"
+    sign, digits, exp = decimal.Decimal(repr(abs(d))).normalize().as_tuple()
+    m = "".join(map(str, digits))
+    e = exp + len(digits) - 1
+    mant = m[0] + ("." + m[1:] if len(m) > 1 else "")
+    return ("-" if d < 0 else "") + (mant if e == 0 else f"{mant}e{e}")
+
+
+def cell(c):
+    """A table cell as text: None and non-finite floats are "–"."""
+    if c is None:
+        return "–"
+    if isinstance(c, float) and not math.isfinite(c):
+        return "–"
+    return str(c)
+
+
+def _table_parts(t):
+    headers, rows = t[0], t[1]
+    caption = t[2] if len(t) > 2 else None
+    return headers, rows, caption
+
+
+def _fold_summary(headers, rows, caption):
+    what = caption or ("table: " + ", ".join(headers[:5]) + (", …" if len(headers) > 5 else ""))
+    return f"{what} ({len(rows)} rows, click to open)"
 
 
 def markdown(title, sections):
@@ -31,14 +79,23 @@ def markdown(title, sections):
         out += [f"## {s['title']}", ""]
         for p in s.get("paras", []):
             out += [p, ""]
-        for headers, rows in s.get("tables", []):
+        for t in s.get("tables", []):
+            headers, rows, caption = _table_parts(t)
             if not rows:
                 continue
+            fold = s.get("fold", True) and len(rows) > FOLD_ROWS
+            if fold:
+                out += [f"<details><summary>{html.escape(_fold_summary(headers, rows, caption))}"
+                        "</summary>", ""]
+            elif caption:
+                out += [f"*{caption}*", ""]
             out.append("| " + " | ".join(headers) + " |")
             out.append("|" + "---|" * len(headers))
             for r in rows:
-                out.append("| " + " | ".join(str(c) for c in r) + " |")
+                out.append("| " + " | ".join(cell(c) for c in r) + " |")
             out.append("")
+            if fold:
+                out += ["</details>", ""]
         for img in s.get("images", []):
             out += [f"![{img}]({img})", ""]
         for p in s.get("paras_after", []):
@@ -54,12 +111,24 @@ def _inline_md(text):
     return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
 
 
+# Cells up to this many characters do not wrap; longer ones (reasons, notes, commands) wrap and are
+# left-aligned.
+SHORT_CELL = 28
+
+
+def _td(text):
+    return f"<td class='{'s' if len(text) <= SHORT_CELL else 't'}'>{_inline_md(text)}</td>"
+
+
 def html_page(title, sections, folder):
     css = ("body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}"
            "table{border-collapse:collapse;margin:0.5em 0;font-size:13px}"
            "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
-           "th{background:#eee}.PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
-           "img{max-width:100%}code{font-size:11px;text-align:left}")
+           "th{background:#eee;text-align:center}.PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
+           "img{max-width:100%}code{font-size:11px;text-align:left}"
+           "td.s{white-space:nowrap}td.t{text-align:left}"
+           "details{margin:0.4em 0}summary{cursor:pointer;color:#035;font-size:14px}"
+           "p.caption{margin:0.6em 0 0;font-style:italic}")
     out = ["<!DOCTYPE html>", "<html><head><meta charset='utf-8'>",
            f"<title>{html.escape(title)}</title><style>{css}</style></head><body>",
            f"<h1>{html.escape(title)}</h1>"]
@@ -67,14 +136,23 @@ def html_page(title, sections, folder):
         out.append(f"<h2>{html.escape(s['title'])}</h2>")
         for p in s.get("paras", []):
             out.append(f"<p>{_inline_md(p)}</p>")
-        for headers, rows in s.get("tables", []):
+        for t in s.get("tables", []):
+            headers, rows, caption = _table_parts(t)
             if not rows:
                 continue
+            fold = s.get("fold", True) and len(rows) > FOLD_ROWS
+            if fold:
+                out.append(f"<details><summary>{_inline_md(_fold_summary(headers, rows, caption))}"
+                           "</summary>")
+            elif caption:
+                out.append(f"<p class='caption'>{_inline_md(caption)}</p>")
             out.append("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in headers)
                        + "</tr>")
             for r in rows:
-                out.append("<tr>" + "".join(f"<td>{_inline_md(str(c))}</td>" for c in r) + "</tr>")
+                out.append("<tr>" + "".join(_td(cell(c)) for c in r) + "</tr>")
             out.append("</table>")
+            if fold:
+                out.append("</details>")
         for img in s.get("images", []):
             with open(os.path.join(folder, img), "rb") as fh:
                 b64 = base64.b64encode(fh.read()).decode("ascii")
@@ -104,6 +182,16 @@ def new_tmp_folder(results_dir):
     return tempfile.mkdtemp(prefix=".report.partial-", dir=results_dir)
 
 
+def make_readable(folder):
+    """The report is for others to read: the folder 0755 (mkdtemp made it 0700) and its files 0644,
+    whatever the umask."""
+    os.chmod(folder, FOLDER_MODE)
+    for name in os.listdir(folder):
+        path = os.path.join(folder, name)
+        if os.path.isfile(path) and not os.path.islink(path):
+            os.chmod(path, FILE_MODE)
+
+
 def publish(tmp, results_dir, replace=False):
     """Move the finished temporary folder to RESULTS_DIR/report.
 
@@ -113,6 +201,7 @@ def publish(tmp, results_dir, replace=False):
     into place, then the old one is deleted (two atomic renames; report/ is never half-written,
     but it is absent for the instant between them)."""
     final = os.path.join(results_dir, "report")
+    make_readable(tmp)
     if os.path.lexists(final):
         if not replace:
             shutil.rmtree(tmp, ignore_errors=True)
@@ -124,3 +213,100 @@ def publish(tmp, results_dir, replace=False):
     else:
         os.rename(tmp, final)
     return final
+
+
+# ---------------------------------------------------------------- provenance, rerun commands
+NOT_RECORDED = "not recorded"
+REFERENCE_NAMES = {"dolfinx": "dolfinx", "freefem": "FreeFEM"}
+
+
+def _text(v):
+    """A provenance value as text; absent, null or empty: "not recorded"."""
+    if v is None or v == "" or v == []:
+        return NOT_RECORDED
+    if isinstance(v, float) and not math.isfinite(v):
+        return NOT_RECORDED
+    return str(v)
+
+
+def _command(argv, cwd=None):
+    if not isinstance(argv, list) or not argv:
+        return NOT_RECORDED
+    import shlex
+
+    out = "`" + shlex.join(str(a) for a in argv) + "`"
+    if isinstance(cwd, str) and cwd:
+        out += f" in `{cwd}`"
+    return out
+
+
+def provenance(summary, refs):
+    """(report.json's `provenance`, table headers, table rows) of a results folder: sdcrack's
+    `provenance` of summary.json and each reference's of its summary.json; a folder written before
+    provenance was recorded gives null in JSON and "not recorded" in the table."""
+    prov = summary.get("provenance")
+    prov = prov if isinstance(prov, dict) else None
+    ref_prov = {}
+    for tool in sorted(refs):
+        p = refs[tool]["summary"].get("provenance")
+        ref_prov[tool] = p if isinstance(p, dict) else None
+    headers = ["program", "version", "date (UTC)", "cores", "command line"]
+    if prov is None:
+        version = summary.get("sdcrack_version")
+        rows = [["sdcrack", (f"{version}, " if version else "") + "provenance " + NOT_RECORDED
+                 + " (summary.json written by an older sdcrack)", NOT_RECORDED, NOT_RECORDED,
+                 NOT_RECORDED]]
+    else:
+        commit = prov.get("git_commit")
+        version = _text(prov.get("sdcrack_version", summary.get("sdcrack_version")))
+        if isinstance(commit, str) and commit:
+            version += f", commit `{commit}`"
+            dirty = prov.get("git_dirty")
+            version += (" **(dirty: sources differ from the commit)**" if dirty is True
+                        else "" if dirty is False else " (dirty flag not recorded)")
+        else:
+            version += ", not a git checkout"
+        rows = [["sdcrack", version, _text(prov.get("date_utc")), _text(prov.get("cores")),
+                 _command(prov.get("command_line"), prov.get("working_directory"))]]
+    for tool, p in ref_prov.items():
+        name = REFERENCE_NAMES.get(tool, tool)
+        if p is None:
+            rows.append([name, "provenance " + NOT_RECORDED + f" ({tool}/summary.json written by "
+                         "an older reference script)", NOT_RECORDED, NOT_RECORDED, NOT_RECORDED])
+            continue
+        rows.append([name, f"{_text(p.get('tool') or tool)} {_text(p.get('tool_version'))} · "
+                     f"Python {_text(p.get('python'))} · numpy {_text(p.get('numpy'))}",
+                     _text(p.get("date_utc")), _text(p.get("cores")),
+                     _command(p.get("command_line"))])
+    return {"sdcrack": prov, "references": ref_prov}, headers, rows
+
+
+RERUN_FOLDER = "rerun"
+
+
+def rerun_command(results_dir, summary, scene_file, k):
+    """The shell command that reruns one case of this results folder from any working directory:
+    the binary that wrote it (provenance `executable`, absolute; `sdcrack` from PATH when not
+    recorded), the folder's own copy of the scene (RESULTS_DIR/scene.toml, absolute), the case's
+    level, u space and multiplier with the δ sweep of the run (each δ warm-started from the
+    previous one, as in the run, so the numbers come back exactly; `--delta` only when the run was
+    restricted to one δ), into ./rerun/<scene>-l<L>-<u>-<m>/ under the current directory."""
+    import shlex
+
+    from .settings import scene_lists
+
+    prov = summary.get("provenance")
+    exe = prov.get("executable") if isinstance(prov, dict) else None
+    if not (isinstance(exe, str) and os.path.isabs(exe)):
+        exe = "sdcrack"
+    scene = os.path.join(os.path.abspath(results_dir), "scene.toml")
+    args = [exe, "run", scene, "--level", str(k["level"]), "--u-space", str(k["u_space"]),
+            "--multiplier", str(k["multiplier"])]
+    name = f"{summary.get('scene', 'scene')}-l{k['level']}-{k['u_space']}-{k['multiplier']}"
+    plan_deltas = sorted({float(d) for d in ((summary.get("plan") or {}).get("deltas") or [])})
+    if plan_deltas != sorted(set(scene_lists(scene_file)[3])):
+        d = fmt_delta(k["delta"])
+        args += ["--delta", d]
+        name += f"-d{d}"
+    args += ["--out", f"./{RERUN_FOLDER}/{name}"]
+    return shlex.join(args)

@@ -432,7 +432,8 @@ def check_expectations(series, exps):
                     i = s["levels"].index(e["level"])
                     r = rates.rate(s["h"][i - 1], prev, s["h"][i], err)
                     if r is None or r < e["min_rate"]:
-                        problems.append(f"rate {r if r is None else round(r, 3)} < {e['min_rate']} "
+                        problems.append(f"rate {'not computable' if r is None else round(r, 3)} "
+                                        f"< {e['min_rate']} "
                                         f"from level {e['level'] - 1} to {e['level']}")
             status = "not evaluated" if missing else ("violated" if problems else "ok")
             res.update(measured_error=err, measured_rate=r, status=status,

@@ -495,7 +495,7 @@ DAMAGES = {
         "reference status: reference freefem level 3: status 'converged', largest KKT residual "
         "1.0e+00"]),
     "mixed: dolfinx case without status": (1, [
-        "reference status: reference dolfinx level 3: status None"]),
+        "reference status: reference dolfinx level 3: no status"]),
     "mixed: scene renamed in scene.toml": (1, [
         "completeness: summary.json is of scene 'mixed' but scene.toml of 'mixed-renamed'",
         "completeness: dolfinx/summary.json is of scene 'mixed', not 'mixed-renamed'"]),
@@ -512,6 +512,23 @@ DAMAGES = {
     "open: mesh/ of mixed": (1, [
         "completeness: the mesh export mesh/ the references solved on lacks level(s) [4]"]),
 }
+
+
+# Words no report may show, damaged input or not: Python's None, nan, inf (a missing or NaN value is
+# "–" in a table and said in words in a problem line), δ written 0e0, 0.0, 0.01 or 1.0e-02.
+FORBIDDEN = re.compile(r"\bNone\b|\bnan\b|\binf\b|δ ?=? ?(?:0e0|0\.0\b|\d\.\de-0\d|0\.0*1\b)")
+
+
+@pytest.mark.parametrize("case", list(CASES), ids=_slug)
+def test_reports_show_no_none_nan_or_badly_written_delta(judged, case):
+    r = result(judged, case)
+    if r["report"] is None:
+        return  # exit 2: no report
+    for name in ("report.md", "index.html"):
+        text = read_text(os.path.join(r["folder"], "report", name))
+        text = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", text)
+        bad = [text[max(0, m.start() - 80):m.end() + 40] for m in FORBIDDEN.finditer(text)]
+        assert not bad, (name, bad[:3])
 
 
 @pytest.mark.parametrize("case", list(DAMAGES), ids=_slug)

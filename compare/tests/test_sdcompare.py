@@ -2,6 +2,9 @@
 import json
 import math
 import os
+import re
+import shlex
+import stat
 import subprocess
 import sys
 
@@ -490,3 +493,253 @@ def test_bad_usage_exit_2(tmp_path):
     (tmp_path / "x" / "summary.json").write_text("{not json")
     rc, _, err = run_cli(str(tmp_path / "x"))
     assert rc == 2 and "malformed" in err
+
+
+# ------------------------------------------------------------------ report rules (issue 13)
+# Words a report must never show: Python's None and nan/inf, δ written as 0e0, 1.0e-02 or 0.0.
+FORBIDDEN = re.compile(r"\bNone\b|\bnan\b|\binf\b|δ ?=? ?(?:0e0|0\.0\b|\d\.\de-0\d|0\.0*1\b)")
+
+
+def assert_clean_report(folder):
+    """No "None", "nan", "inf" and no badly written δ in report.md and index.html (the base64 of
+    the PNGs left out)."""
+    for name in ("report.md", "index.html"):
+        text = open(os.path.join(folder, "report", name), encoding="utf-8").read()
+        text = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", text)
+        bad = [m.group(0) for m in FORBIDDEN.finditer(text)]
+        assert not bad, (name, bad[:5], [text[max(0, m.start() - 80):m.end() + 40]
+                                         for m in list(FORBIDDEN.finditer(text))[:3]])
+
+
+@pytest.mark.parametrize("d, text", [
+    (0.0, "0"), (0, "0"), (-0.0, "0"), (1.0, "1"), (1e-2, "1e-2"), (1e-10, "1e-10"),
+    (1e-4, "1e-4"), (1e-8, "1e-8"), (2.5e-3, "2.5e-3"), (0.5, "5e-1"), (1e2, "1e2"),
+    (1.23456789e-3, "1.23456789e-3"), (None, "–"), (math.nan, "–"), (math.inf, "–")])
+def test_delta_format(d, text):
+    from sdcompare_lib.render import fmt_delta
+
+    assert fmt_delta(d) == text
+    if text != "–":
+        assert float(text) == float(d), "parses back to the same float64 (a --delta value)"
+        assert not FORBIDDEN.search(f"δ = {text}")
+
+
+def test_cells_never_show_none_or_nan():
+    from sdcompare_lib import render
+
+    assert [render.cell(c) for c in (None, math.nan, math.inf, 0.5, 3, "x")] == \
+        ["–", "–", "–", "0.5", "3", "x"]
+    assert render.fmt(math.nan) == "–" and render.fmt(None) == "–"
+    assert render.fmt_rate(math.nan) == "–" and render.fmt_rate(None) == "–"
+    secs = [{"title": "t", "tables": [(["a", "b"], [[None, math.nan]])]}]
+    for text in (render.markdown("x", secs), render.html_page("x", secs, "/nonexistent")):
+        assert "None" not in text and "nan" not in text and "–" in text
+
+
+def test_long_tables_fold_except_in_the_summary():
+    from sdcompare_lib import render
+
+    long_rows = [[i, "x"] for i in range(render.FOLD_ROWS + 1)]
+    short_rows = long_rows[:render.FOLD_ROWS]
+    secs = [{"title": "Summary", "fold": False, "tables": [(["a", "b"], long_rows)]},
+            {"title": "More", "tables": [(["a", "b"], long_rows, "the long one"),
+                                         (["a", "b"], short_rows)]}]
+    md = render.markdown("x", secs)
+    html = render.html_page("x", secs, "/nonexistent")
+    for text in (md, html):
+        assert text.count("<details>") == 1
+        assert text.split("<details>")[0].count("More") == 1, "only the later section folds"
+        assert "the long one (9 rows, click to open)" in text
+
+
+def test_provenance_rows():
+    from sdcompare_lib import render
+
+    prov = {"command_line": ["target/release/sdcrack", "run", "scenes/mixed.toml", "--out", "results"],
+            "working_directory": "/abs/dir", "executable": "/abs/path/to/sdcrack",
+            "sdcrack_version": "0.1.0", "git_commit": "0123456789abcdef0123456789abcdef01234567",
+            "git_dirty": True, "date_utc": "2026-11-23T16:00:00Z", "cores": 2,
+            "scene_origin": "scenes/mixed.toml"}
+    ref = {"tool": "dolfinx", "tool_version": "0.9.0", "python": "3.13.5", "numpy": "2.2.4",
+           "date_utc": "2026-11-23T16:00:05Z", "command_line": ["python3", "solve.py"], "cores": 2}
+    refs = {"dolfinx": {"summary": {"provenance": ref}}, "freefem": {"summary": {}}}
+    js, headers, rows = render.provenance({"provenance": prov}, refs)
+    assert js == {"sdcrack": prov, "references": {"dolfinx": ref, "freefem": None}}
+    text = " | ".join(" | ".join(map(str, r)) for r in rows)
+    for needle in ("0.1.0, commit `0123456789abcdef0123456789abcdef01234567`", "dirty",
+                   "2026-11-23T16:00:00Z", "`target/release/sdcrack run scenes/mixed.toml --out "
+                   "results` in `/abs/dir`", "dolfinx 0.9.0 · Python 3.13.5 · numpy 2.2.4",
+                   "FreeFEM | provenance not recorded"):
+        assert needle in text, needle
+    # clean checkout, no git, nothing recorded at all: never "None"
+    _, _, rows = render.provenance({"provenance": dict(prov, git_dirty=False)}, {})
+    assert "dirty" not in rows[0][1]
+    _, _, rows = render.provenance({"provenance": dict(prov, git_commit=None, git_dirty=None)}, {})
+    assert rows[0][1] == "0.1.0, not a git checkout"
+    js, _, rows = render.provenance({"sdcrack_version": "0.1.0", "cases": []}, {})
+    assert js == {"sdcrack": None, "references": {}}
+    assert rows[0][2:] == ["not recorded"] * 3 and "None" not in str(rows)
+    _, _, rows = render.provenance({"provenance": {"cores": None, "date_utc": None}},
+                                   {"dolfinx": {"summary": {"provenance": {"python": None}}}})
+    assert "None" not in str(rows) and "not recorded" in rows[0][2] and "not recorded" in rows[1][1]
+
+
+def test_rerun_command_is_absolute():
+    from sdcompare_lib import render
+
+    scene = {"discretization": {"deltas": [1e-2, 0.0]}}
+    k = {"level": 1, "u_space": "broken", "multiplier": "M1", "delta": 1e-2}
+    summary = {"scene": "s", "plan": {"deltas": [1e-2, 0.0]},
+               "provenance": {"executable": "/opt/my sdcrack/bin/sdcrack"}}
+    cmd = render.rerun_command("/data/run 1/s", summary, scene, k)
+    assert cmd == ("'/opt/my sdcrack/bin/sdcrack' run '/data/run 1/s/scene.toml' --level 1 "
+                   "--u-space broken --multiplier M1 --out ./rerun/s-l1-broken-M1")
+    # a run restricted to one δ (--delta) is rerun so; no provenance: sdcrack from PATH
+    cmd = render.rerun_command("/r/s", {"scene": "s", "plan": {"deltas": [0.01]}}, scene, k)
+    assert cmd == ("sdcrack run /r/s/scene.toml --level 1 --u-space broken --multiplier M1 "
+                   "--delta 1e-2 --out ./rerun/s-l1-broken-M1-d1e-2")
+
+
+def _captured_figures(monkeypatch):
+    from sdcompare_lib import plots
+
+    figs = []
+
+    def save(fig, folder, name):
+        figs.append(fig)
+        return name
+    monkeypatch.setattr(plots, "_save", save)
+    return plots, figs
+
+
+def test_references_are_told_apart_in_plots(monkeypatch):
+    """dolfinx and FreeFEM differ in marker, line style and label, not only in colour; lines that
+    coincide say so in the legend."""
+    plots, figs = _captured_figures(monkeypatch)
+    d, f = plots.REF_STYLE["dolfinx"], plots.REF_STYLE["freefem"]
+    for key in ("marker", "linestyle", "label", "color"):
+        assert d[key] != f[key], key
+    solver = set(plots.MARK.values()) | set(plots.STYLE.values())
+    assert not {d["marker"], f["marker"], d["linestyle"], f["linestyle"]} & solver
+
+    def refs(scale):
+        return [{"tool": t, "level": lv, "total_s": (1 + lv) * (1 if t == "dolfinx" else scale),
+                 "errors": {"u_l2": 0.1 / (1 + lv)}} for t in ("dolfinx", "freefem") for lv in (0, 1)]
+    timings = [{"level": lv, "u_space": "broken", "multiplier": "M1", "delta": 0.0,
+                "total_s": 0.1 * (1 + lv), "u_l2": 0.2 / (1 + lv)} for lv in (0, 1)]
+    for scale, overlapping in ((3.0, False), (1.0, True)):
+        figs.clear()
+        assert plots.work_precision_plot("/nonexistent", "s", timings, refs(scale))
+        (ax,) = figs[0].axes
+        lines = {ln.get_label(): ln for ln in ax.get_lines()}
+        suffix = " (overlapping)" if overlapping else ""
+        ld, lf = lines["reference dolfinx" + suffix], lines["reference FreeFEM" + suffix]
+        assert ld.get_marker() != lf.get_marker() and ld.get_linestyle() != lf.get_linestyle()
+        assert {t.get_text() for t in ax.get_legend().get_texts()} >= {ld.get_label(), lf.get_label()}
+        plots.plt.close(figs[0])
+
+
+def test_a_single_delta_plots_visible_markers(monkeypatch):
+    """One δ > 0 (a sweep δ ∈ {1e-2, 0}): each variant is one marker inside sane limits, with a
+    note, and the δ ticks are written 1e-2."""
+    plots, figs = _captured_figures(monkeypatch)
+    entries = [{"level": 2, "u_space": u, "multiplier": "M1", "quantity": q, "deltas": [1e-2],
+                "diffs": [3e-4 if u == "broken" else 5e-5], "slope": None, "points_fitted": 1}
+               for u in ("broken", "continuous") for q in ("u_l2", "p_l2", "lambda_l2")]
+    assert plots.delta_plot("/nonexistent", "s", entries)
+    fig = figs[0]
+    fig.canvas.draw()
+    for ax in fig.axes:
+        lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == 1]
+        assert len(lines) == 2
+        for ln in lines:
+            assert ln.get_marker() not in (None, "None", "", " ") and ln.get_markersize() >= 4
+            x, y = ln.get_xdata()[0], ln.get_ydata()[0]
+            (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+            assert x0 < x / 2 and x1 > 2 * x and y0 < y / 2 and y1 > 2 * y, "inside, not on the frame"
+        assert any("one δ > 0 (δ = 1e-2)" in t.get_text() for t in ax.texts)
+        ticks = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
+        assert "1e-2" in ticks and not any("10^" in t or "0.01" in t for t in ticks), ticks
+        assert "slope" not in " ".join(ln.get_label() for ln in lines)
+    plots.plt.close(fig)
+
+
+def test_report_provenance_and_rerun_from_another_directory(open_run, empty_exps, tmp_path):
+    """The report shows where the results come from, and its rerun command of one case, run from
+    an unrelated working directory, gives back that case's numbers of summary.json exactly."""
+    exe = os.environ.get("SDCRACK_BIN", os.path.join(ROOT, "target", "release", "sdcrack"))
+    summary_path = open_run / "summary.json"
+    summary = json.load(open(summary_path))
+    if not isinstance(summary.get("provenance"), dict):  # an sdcrack older than provenance
+        summary["provenance"] = {"command_line": [exe, "run", "open.toml"], "working_directory": "/",
+                                 "executable": os.path.abspath(exe), "sdcrack_version": "0.1.0",
+                                 "git_commit": None, "git_dirty": None,
+                                 "date_utc": "2026-11-23T16:00:00Z", "cores": 1,
+                                 "scene_origin": "open.toml"}
+        json.dump(summary, open(summary_path, "w"))
+    rc, out, err = run_cli(str(open_run), "--expectations", empty_exps)
+    assert rc == 0, out + err
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert r["provenance"]["sdcrack"] == summary["provenance"]
+    assert set(r["provenance"]["references"]) == {"dolfinx", "freefem"}
+    md = open(open_run / "report" / "report.md").read()
+    prov = md.split("\n## Provenance\n")[1].split("\n## ")[0]
+    assert "| sdcrack | " in prov and "| dolfinx | " in prov and "| FreeFEM | " in prov
+    assert summary["provenance"]["sdcrack_version"] in prov
+    assert md.index("## Summary") < md.index("## Provenance") < md.index("## h → 0")
+    assert_clean_report(open_run)
+
+    k = next(k for k in r["kkt"] if (k["level"], k["u_space"], k["multiplier"]) == (1, "broken", "M1"))
+    cmd = k["rerun"]
+    assert cmd.startswith(shlex.quote(summary["provenance"]["executable"]) + " run "
+                          + shlex.quote(str(open_run / "scene.toml")) + " --level 1 ")
+    assert f"`{cmd}`" in md
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    env = dict(os.environ, FF_LOADPATH=os.environ.get("FF_LOADPATH", "/usr/lib/freefem++"))
+    p = subprocess.run(cmd + " --quiet", shell=True, cwd=elsewhere, capture_output=True, text=True,
+                       env=env)
+    assert p.returncode == 0, p.stderr
+    out_dir = shlex.split(cmd)[shlex.split(cmd).index("--out") + 1]
+    rerun = json.load(open(elsewhere / out_dir / "open-exact" / "summary.json"))
+    key = lambda c: (c["level"], c["u_space"], c["multiplier"], float(c["delta"]))  # noqa: E731
+    original = {key(c): c for c in summary["cases"]}
+    assert sorted(key(c) for c in rerun["cases"]) == sorted(
+        x for x in original if x[:3] == (1, "broken", "M1")), "the case's δ sweep"
+    for c in rerun["cases"]:
+        o = original[key(c)]
+        for name in ("h", "unknowns", "multipliers", "iterations", "converged", "kkt",
+                     "active_multipliers", "regularized_pivots", "errors", "condition_estimate"):
+            assert c.get(name) == o.get(name), (key(c), name, c.get(name), o.get(name))
+
+
+def test_report_without_provenance_says_not_recorded(open_run, empty_exps):
+    """Results written before provenance was recorded: "not recorded", never "None"; the rerun
+    commands take sdcrack from PATH. Judged under a umask of 077: mkdtemp makes the partial report
+    0700 and the umask its files 0600, yet the published report is 0755 with files 0644."""
+    summary = json.load(open(open_run / "summary.json"))
+    summary.pop("provenance", None)
+    json.dump(summary, open(open_run / "summary.json", "w"))
+    for tool in ("dolfinx", "freefem"):
+        path = open_run / tool / "summary.json"
+        s = json.load(open(path))
+        s.pop("provenance", None)
+        json.dump(s, open(path, "w"))
+    p = subprocess.run([sys.executable, SCRIPT, str(open_run), "--expectations", empty_exps],
+                       capture_output=True, text=True, preexec_fn=lambda: os.umask(0o077))
+    assert p.returncode == 0, p.stdout + p.stderr
+    rep = open_run / "report"
+    assert stat.S_IMODE(os.stat(rep).st_mode) == 0o755
+    names = os.listdir(rep)
+    assert "index.html" in names and any(n.endswith(".png") for n in names)
+    for n in names:
+        assert stat.S_IMODE(os.stat(rep / n).st_mode) == 0o644, n
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert r["provenance"] == {"sdcrack": None, "references": {"dolfinx": None, "freefem": None}}
+    md = open(open_run / "report" / "report.md").read()
+    prov = md.split("\n## Provenance\n")[1].split("\n## ")[0]
+    assert prov.count("not recorded") >= 6
+    assert all(k["rerun"].startswith("sdcrack run " + shlex.quote(str(open_run / "scene.toml")))
+               for k in r["kkt"])
+    assert "`sdcrack` is taken from PATH" in md
+    assert_clean_report(open_run)

@@ -2,7 +2,6 @@
 tests/expr_crosscheck.rs checks against src/scene/expr.rs)."""
 
 import json
-import math
 import pathlib
 import sys
 

@@ -30,6 +30,24 @@ def test_case_list_counts_every_case():
     assert {r[0] for r in rows} == {"closed-exact"}
     outs = [r[5].split("--out ")[1] for r in rows]
     assert len(set(outs)) == len(outs), "one folder per case"
+    # absolute binary and scene, from any working directory; a results folder reruns its scene copy
+    # and the cases of its plan
+    cmd = rows[0][5].split()
+    assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack")
+    assert cmd[2] == str(ROOT / "scenes" / "closed-exact.toml")
+
+
+def test_case_list_of_a_results_folder(tmp_path):
+    folder = tmp_path / "out" / "closed-exact"
+    folder.mkdir(parents=True)
+    (folder / "scene.toml").write_text((ROOT / "scenes" / "closed-exact.toml").read_text())
+    (folder / "summary.json").write_text(json.dumps({"plan": {
+        "levels": [2], "u_spaces": ["broken"], "multipliers": ["M0", "M1"], "deltas": [0.0]}}))
+    rows = cases("out/closed-exact", cwd=tmp_path)
+    assert [r[:5] for r in rows] == [["closed-exact", "2", "broken", m, "0.0"] for m in ("M0", "M1")]
+    cmd = rows[0][5].split()
+    assert cmd[:3] == [str(ROOT / "target" / "release" / "sdcrack"), "run", str(folder / "scene.toml")]
+    assert "--delta" not in cmd  # the scene's only δ: the run's δ sweep
 
 
 def test_rerun_reproduces_the_row(tmp_path):
@@ -50,7 +68,9 @@ def test_rerun_reproduces_the_row(tmp_path):
     rows = [r for r in cases(scene, cwd=tmp_path) if tuple(r[1:5]) in picked]
     assert len(rows) == 3
     for r in rows:
-        cmd = r[5].replace("target/release/sdcrack", str(EXE)).split() + ["--quiet"]
+        cmd = r[5].split() + ["--quiet"]
+        assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack") and cmd[2] == str(scene)
+        cmd[0] = str(EXE)  # SDCRACK_BIN may name another build
         subprocess.run(cmd, cwd=tmp_path, check=True, capture_output=True)
         folder = tmp_path / cmd[cmd.index("--out") + 1] / "mixed"
         one = json.loads((folder / "summary.json").read_text())["cases"]

@@ -4,7 +4,6 @@ the method comes from (Belhachmi, Sac-Epée, Sokolowski, C. R. Math. 338 (2004) 
 import pathlib
 import tomllib
 
-import pytest
 
 import yaml  # noqa: E402  python3-yaml, installed by ci/setup
 
