@@ -24,7 +24,7 @@ use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};
 use crate::linalg::SymCsc;
 use crate::mesh::{Mesh, UTopology};
-use crate::scene::{Expr, MultiplierSpace};
+use crate::scene::{Expr, MultiplierSpace, PMass};
 
 /// Errors while assembling.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -87,17 +87,21 @@ const LOAD_DEGREE: usize = 8;
 /// Gauss points per boundary edge for ∫_Γ g q·n (exact for g of degree ≤ 8).
 const BOUNDARY_POINTS: usize = 5;
 
-/// Assembles the condensed system for `mesh`, u space `topo`, data `f` (source) and `g` (Dirichlet).
+/// Assembles the condensed system for `mesh`, u space `topo`, data `f` (source) and `g`
+/// (Dirichlet), with the p–p block of `p_mass`: G̃, or for [`PMass::Lumped`] its row-sum diagonal
+/// D (element by element: the row sums of G̃_T are |T|/3 − 3·7|T|/90 = |T|/10), which leaves B̃,
+/// C, M and the right-hand side unchanged.
 pub fn assemble(
     mesh: &Mesh,
     topo: &UTopology,
     f: &Expr,
     g: &Expr,
+    p_mass: PMass,
 ) -> Result<System, AssemblyError> {
     let n_p = 2 * mesh.vertices.len();
     let n_u = topo.n_dofs;
     let n = n_p + n_u;
-    let (base, delta_values) = assemble_matrix(mesh, topo, n_p);
+    let (base, delta_values) = assemble_matrix(mesh, topo, n_p, p_mass);
     let mut rhs = vec![0.0; n];
     boundary_term(mesh, g, &mut rhs[..n_p])?;
     let load = load_vector(mesh, topo, f)?;
@@ -170,7 +174,7 @@ fn element_value(ce: &CondensedElement, a: usize, b: usize) -> (f64, f64) {
 
 /// Assembles K(0) and ∂K/∂δ (same pattern, lower triangle) element by element: the pattern
 /// from the element couplings, then the condensed element values scattered into it.
-fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize) -> (SymCsc, Vec<f64>) {
+fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> (SymCsc, Vec<f64>) {
     let n = n_p + topo.n_dofs;
     let (col_ptr, row_idx) = lower_pattern(n, mesh, topo, n_p);
     let mut values = vec![0.0; row_idx.len()];
@@ -184,7 +188,13 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize) -> (SymCsc, Vec<f6
     for (tris, dofs) in triangles {
         let elements: Vec<CondensedElement> = tris
             .par_iter()
-            .map(|t| condensed_element(&TriangleGeometry::new(t.map(|v| mesh.vertices[v]))))
+            .map(|t| {
+                let ce = condensed_element(&TriangleGeometry::new(t.map(|v| mesh.vertices[v])));
+                match p_mass {
+                    PMass::Consistent => ce,
+                    PMass::Lumped => ce.lumped(),
+                }
+            })
             .collect();
         for ((t, udofs), ce) in tris.iter().zip(dofs).zip(&elements) {
             let e = element_unknowns(t, udofs, n_p);
@@ -460,7 +470,14 @@ mod tests {
         for space in [USpace::Continuous, USpace::Broken] {
             let m = mesh(1);
             let topo = m.u_topology(space);
-            let sys = assemble(&m, &topo, &Expr::constant(0.0), &Expr::constant(0.0)).unwrap();
+            let sys = assemble(
+                &m,
+                &topo,
+                &Expr::constant(0.0),
+                &Expr::constant(0.0),
+                PMass::Consistent,
+            )
+            .unwrap();
             let n_p = sys.n_p;
             // Σ_ij M_ij = |Ω| = 4 (−∂K/∂δ on the u block)
             let total: f64 = {
@@ -488,7 +505,7 @@ mod tests {
                 x[n_p + dof] = m.vertices[v][0] + 2.0 * m.vertices[v][1];
             }
             let g = Expr::parse("x + 2*y").unwrap();
-            let sys_g = assemble(&m, &topo, &Expr::constant(0.0), &g).unwrap();
+            let sys_g = assemble(&m, &topo, &Expr::constant(0.0), &g, PMass::Consistent).unwrap();
             for r in 0..n_p {
                 let kx: f64 = (0..sys.n()).map(|c| k[r][c] * x[c]).sum();
                 assert!(

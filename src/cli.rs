@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::output::summary::{delta_text, Provenance};
 use crate::output::{write_run, ResultsDir};
-use crate::scene::{MultiplierSpace, Scene, USpace};
+use crate::scene::{MultiplierSpace, PMass, Scene, USpace};
 use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
 
 /// `println!` that survives a closed standard output: `sdcrack bench --json | head` must not
@@ -75,6 +75,10 @@ pub enum Command {
         /// Only this multiplier space: M0, M1 or M1star.
         #[arg(long, value_parser = parse_multiplier, value_name = "M0|M1|M1star")]
         multiplier: Option<MultiplierSpace>,
+        /// Only this p mass: consistent (the paper's) or lumped (p eliminated; need not be
+        /// listed in the scene).
+        #[arg(long, value_parser = parse_p_mass, value_name = "consistent|lumped")]
+        p_mass: Option<PMass>,
         /// Only this δ (≥ 0).
         #[arg(long, value_parser = parse_delta, allow_hyphen_values = true)]
         delta: Option<f64>,
@@ -130,6 +134,11 @@ fn parse_level(s: &str) -> Result<u32, String> {
 fn parse_u_space(s: &str) -> Result<USpace, String> {
     USpace::from_name(s)
         .ok_or_else(|| format!("unknown u space '{s}' (expected continuous or broken)"))
+}
+
+fn parse_p_mass(s: &str) -> Result<PMass, String> {
+    PMass::from_name(s)
+        .ok_or_else(|| format!("unknown p mass '{s}' (expected consistent or lumped)"))
 }
 
 fn parse_multiplier(s: &str) -> Result<MultiplierSpace, String> {
@@ -281,6 +290,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             level,
             u_space,
             multiplier,
+            p_mass,
             delta,
             quiet,
         } => {
@@ -291,6 +301,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                 level,
                 u_space,
                 multiplier,
+                p_mass,
                 delta,
             };
             run(&scene, &origin, &filter, &out, quiet)
@@ -477,22 +488,29 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
         return;
     };
     say!("scene '{}': δ = {}", scene.name, delta_text(delta));
-    let mut keys: Vec<(USpace, MultiplierSpace)> =
-        cases.iter().map(|c| (c.u_space, c.multiplier)).collect();
+    let mut keys: Vec<(USpace, MultiplierSpace, PMass)> = cases
+        .iter()
+        .map(|c| (c.u_space, c.multiplier, c.p_mass))
+        .collect();
     keys.sort();
     keys.dedup();
-    for (u_space, multiplier) in keys {
-        say!("\n{u_space} u, {multiplier}");
+    for (u_space, multiplier, p_mass) in keys {
+        match p_mass {
+            PMass::Consistent => say!("\n{u_space} u, {multiplier}"),
+            PMass::Lumped => say!("\n{u_space} u, {multiplier}, lumped p mass"),
+        }
         if scene.exact.is_some() {
             say!("level        h  unknowns  iter     e_u  rate     e_p  rate     e_λ  rate   kkt");
         } else {
             say!("level        h  unknowns  iter  active     kkt");
         }
         let mut prev: Option<(f64, f64, f64, f64)> = None;
-        for c in cases
-            .iter()
-            .filter(|c| c.u_space == u_space && c.multiplier == multiplier && c.delta == delta)
-        {
+        for c in cases.iter().filter(|c| {
+            c.u_space == u_space
+                && c.multiplier == multiplier
+                && c.p_mass == p_mass
+                && c.delta == delta
+        }) {
             let flag = if c.converged { "" } else { "  NOT CONVERGED" };
             match c.errors {
                 Some(e) => {

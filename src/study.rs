@@ -19,7 +19,7 @@ use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{componentwise_backward_error, Ldlt, LinalgError, SymbolicLdlt};
 use crate::mesh::{Mesh, MeshError, UTopology};
 use crate::norms::{error_norms, CrackField, DiscreteSolution, ErrorNorms, NormQuadrature};
-use crate::scene::{MultiplierSpace, Scene, USpace};
+use crate::scene::{MultiplierSpace, PMass, Scene, USpace};
 
 /// Right-hand sides solved together when reducing K⁻¹ to the crack (bounds memory to 32 n values).
 const REDUCTION_BLOCK: usize = 32;
@@ -56,6 +56,8 @@ pub struct CaseFilter {
     pub u_space: Option<USpace>,
     /// Only this multiplier space.
     pub multiplier: Option<MultiplierSpace>,
+    /// Only this p mass.
+    pub p_mass: Option<PMass>,
     /// Only this δ.
     pub delta: Option<f64>,
 }
@@ -69,6 +71,8 @@ pub struct CasePlan {
     pub u_spaces: Vec<USpace>,
     /// Multiplier spaces.
     pub multipliers: Vec<MultiplierSpace>,
+    /// p masses.
+    pub p_masses: Vec<PMass>,
     /// δ values, decreasing.
     pub deltas: Vec<f64>,
     /// Quadrature of the error norms.
@@ -88,6 +92,9 @@ impl CasePlan {
             multipliers: filter
                 .multiplier
                 .map_or_else(|| scene.multipliers.clone(), |m| vec![m]),
+            p_masses: filter
+                .p_mass
+                .map_or_else(|| scene.p_masses.clone(), |m| vec![m]),
             deltas: filter
                 .delta
                 .map_or_else(|| scene.deltas.clone(), |d| vec![d]),
@@ -97,7 +104,11 @@ impl CasePlan {
 
     /// Number of cases.
     pub fn len(&self) -> usize {
-        self.levels.len() * self.u_spaces.len() * self.multipliers.len() * self.deltas.len()
+        self.levels.len()
+            * self.u_spaces.len()
+            * self.multipliers.len()
+            * self.p_masses.len()
+            * self.deltas.len()
     }
 
     /// True when the plan has no case.
@@ -134,7 +145,8 @@ pub struct CaseFieldData {
     pub u: Vec<f64>,
     /// p at each dof's vertex.
     pub p: Vec<[f64; 2]>,
-    /// Bubble coefficients of p per triangle (see [`crate::fe::mini::mini_value`]).
+    /// Bubble coefficients of p per triangle (see [`crate::fe::mini::mini_value`]); empty for
+    /// the lumped p mass, whose p is P1 without bubble.
     pub p_bubble: Vec<[f64; 2]>,
     /// λ_h on the crack.
     pub lambda: CrackField,
@@ -151,6 +163,8 @@ pub struct CaseResult {
     pub u_space: USpace,
     /// Multiplier space.
     pub multiplier: MultiplierSpace,
+    /// p mass of the system solved.
+    pub p_mass: PMass,
     /// δ.
     pub delta: f64,
     /// Unknowns of the condensed system (p vertex values + u dofs) plus multipliers.
@@ -231,12 +245,7 @@ pub fn run_study(
             observer.phase(&format!("level {level}, {u_space}: assembling"));
             let t1 = Instant::now();
             let topo = mesh.u_topology(u_space);
-            let system = assemble(&mesh, &topo, &scene.f, &scene.g)?;
-            let assembly = mesh_time + t1.elapsed().as_secs_f64();
-            let t2 = Instant::now();
-            let order = elimination_order(&mesh, &topo, &ops, system.n_p);
-            let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order)?;
-            let symbolic_time = t2.elapsed().as_secs_f64();
+            let topo_time = mesh_time + t1.elapsed().as_secs_f64();
             if !scene.fields.is_empty() {
                 result.meshes.push(MeshRecord {
                     level,
@@ -246,20 +255,33 @@ pub fn run_study(
                     crack_points: ops.points.clone(),
                 });
             }
-            let ctx = LevelContext {
-                scene,
-                mesh: &mesh,
-                topo: &topo,
-                ops: &ops,
-                system: &system,
-                symbolic: &symbolic,
-                base_timings: Timings {
-                    assembly,
-                    symbolic: symbolic_time,
-                    ..Timings::default()
-                },
-            };
-            ctx.run_deltas(plan, observer, &mut result.cases)?;
+            for &p_mass in &plan.p_masses {
+                observer.phase(&format!(
+                    "level {level}, {u_space}, {p_mass} p mass: assembling"
+                ));
+                let t1 = Instant::now();
+                let system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass)?;
+                let assembly = topo_time + t1.elapsed().as_secs_f64();
+                let t2 = Instant::now();
+                let order = elimination_order(&mesh, &topo, &ops, system.n_p);
+                let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order)?;
+                let symbolic_time = t2.elapsed().as_secs_f64();
+                let ctx = LevelContext {
+                    scene,
+                    mesh: &mesh,
+                    topo: &topo,
+                    ops: &ops,
+                    system: &system,
+                    p_mass,
+                    symbolic: &symbolic,
+                    base_timings: Timings {
+                        assembly,
+                        symbolic: symbolic_time,
+                        ..Timings::default()
+                    },
+                };
+                ctx.run_deltas(plan, observer, &mut result.cases)?;
+            }
         }
     }
     Ok(result)
@@ -272,6 +294,7 @@ struct LevelContext<'a> {
     topo: &'a UTopology,
     ops: &'a CrackOperators,
     system: &'a System,
+    p_mass: PMass,
     symbolic: &'a SymbolicLdlt,
     base_timings: Timings,
 }
@@ -503,11 +526,22 @@ impl LevelContext<'_> {
         let (p, u) = x.split_at(n_p);
         let p_vertex: Vec<[f64; 2]> = p.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
         let t1 = Instant::now();
-        let needs_bubbles = self.scene.exact.is_some() || self.scene.fields.p;
+        // The lumped p is P1 without bubble: its "bubbles" are zero in the norms, absent in fields.
+        let needs_bubbles =
+            self.p_mass == PMass::Consistent && (self.scene.exact.is_some() || self.scene.fields.p);
         let bubbles = if needs_bubbles {
             self.bubbles(&p_vertex, u)
         } else {
             Vec::new()
+        };
+        let zero_bubbles = match self.p_mass {
+            PMass::Consistent => Vec::new(),
+            PMass::Lumped => vec![[0.0; 2]; self.mesh.triangles.len()],
+        };
+        let norm_bubbles = if self.p_mass == PMass::Lumped {
+            &zero_bubbles
+        } else {
+            &bubbles
         };
         let errors = self.scene.exact.as_ref().map(|exact| {
             error_norms(
@@ -517,7 +551,7 @@ impl LevelContext<'_> {
                 &DiscreteSolution {
                     u,
                     p: &p_vertex,
-                    bubbles: &bubbles,
+                    bubbles: norm_bubbles,
                     lambda: &lambda,
                     source: &self.scene.f,
                 },
@@ -539,6 +573,7 @@ impl LevelContext<'_> {
             h: self.mesh.h(),
             u_space: self.topo.space,
             multiplier,
+            p_mass: self.p_mass,
             delta,
             unknowns: self.system.n() + s.len(),
             multipliers: s.len(),
@@ -671,9 +706,13 @@ mod tests {
         let scene = Scene::default_scene();
         let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, 1).unwrap();
         let ops = CrackOperators::new(&mesh);
-        for space in [USpace::Continuous, USpace::Broken] {
+        for (space, p_mass) in [
+            (USpace::Continuous, PMass::Consistent),
+            (USpace::Broken, PMass::Consistent),
+            (USpace::Broken, PMass::Lumped),
+        ] {
             let topo = mesh.u_topology(space);
-            let system = assemble(&mesh, &topo, &scene.f, &scene.g).unwrap();
+            let system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass).unwrap();
             let order = elimination_order(&mesh, &topo, &ops, system.n_p);
             let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
             let ctx = LevelContext {
@@ -682,6 +721,7 @@ mod tests {
                 topo: &topo,
                 ops: &ops,
                 system: &system,
+                p_mass,
                 symbolic: &symbolic,
                 base_timings: Timings::default(),
             };
@@ -697,6 +737,153 @@ mod tests {
                 scale > 0.0 && diff <= 1e-12 * scale,
                 "{space}: {diff:e} vs {scale:e}"
             );
+        }
+    }
+
+    /// Dense symmetric matrix of a lower-triangular CSC.
+    fn dense(k: &crate::linalg::SymCsc) -> Vec<Vec<f64>> {
+        let mut a = vec![vec![0.0; k.n]; k.n];
+        for c in 0..k.n {
+            for idx in k.col_ptr[c]..k.col_ptr[c + 1] {
+                let r = k.row_idx[idx];
+                a[r][c] = k.values[idx];
+                a[c][r] = k.values[idx];
+            }
+        }
+        a
+    }
+
+    /// Dense Cholesky A = L Lᵀ; None when a pivot is not positive (A not SPD).
+    fn cholesky(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+        let n = a.len();
+        let mut l = vec![vec![0.0; n]; n];
+        for j in 0..n {
+            let d = a[j][j] - (0..j).map(|k| l[j][k] * l[j][k]).sum::<f64>();
+            if d <= 0.0 {
+                return None;
+            }
+            l[j][j] = d.sqrt();
+            for i in j + 1..n {
+                l[i][j] = (a[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>()) / l[j][j];
+            }
+        }
+        Some(l)
+    }
+
+    fn cholesky_solve(l: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
+        let n = l.len();
+        let mut y = b.to_vec();
+        for i in 0..n {
+            y[i] = (y[i] - (0..i).map(|k| l[i][k] * y[k]).sum::<f64>()) / l[i][i];
+        }
+        for i in (0..n).rev() {
+            y[i] = (y[i] - (i + 1..n).map(|k| l[k][i] * y[k]).sum::<f64>()) / l[i][i];
+        }
+        y
+    }
+
+    /// The lumped p mass eliminates p exactly (issue 14): the p–p block is the diagonal D with
+    /// row sums 0.1 Σ_{T∋i}|T|; S(δ) = C + δM + B̃D⁻¹B̃ᵀ is SPD, also at δ = 0; the solution of
+    /// S U = F + B̃D⁻¹G_Γ with P = D⁻¹(G_Γ − B̃ᵀU) is the solver's K⁻¹b; and H_N, the LCP matrix
+    /// the solver takes from its factor's trailing block, is N D⁻¹ Nᵀ − Wᵀ S⁻¹ W, W = B̃ D⁻¹ Nᵀ.
+    /// Everything on the right is computed densely, independently of the sparse LDLᵀ.
+    #[test]
+    fn lumped_p_mass_is_an_exact_elimination() {
+        let scene = Scene::default_scene();
+        let mesh = Mesh::structured(scene.domain, [4, 4], scene.crack, 1).unwrap();
+        let ops = CrackOperators::new(&mesh);
+        let topo = mesh.u_topology(USpace::Broken);
+        let system = assemble(&mesh, &topo, &scene.f, &scene.g, PMass::Lumped).unwrap();
+        let (n_p, n_u) = (system.n_p, system.n_u);
+        // D = 0.1 Σ_{T∋i} |T| per component
+        let mut patch = vec![0.0; mesh.vertices.len()];
+        for t in &mesh.triangles {
+            let area = TriangleGeometry::new(t.map(|v| mesh.vertices[v])).area;
+            for &v in t {
+                patch[v] += area;
+            }
+        }
+        let order = elimination_order(&mesh, &topo, &ops, n_p);
+        let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
+        for delta in [0.0, 1e-2] {
+            let k = dense(&system.matrix(delta));
+            for i in 0..n_p {
+                for j in 0..n_p {
+                    let want = if i == j { 0.1 * patch[i / 2] } else { 0.0 };
+                    assert!((k[i][j] - want).abs() <= 1e-15, "D[{i}][{j}] = {}", k[i][j]);
+                }
+            }
+            let d: Vec<f64> = (0..n_p).map(|i| k[i][i]).collect();
+            let bt = |i: usize, a: usize| k[i][n_p + a]; // B̃ᵀ[i][a]: p row i, u column a
+                                                         // S = A + B̃ D⁻¹ B̃ᵀ, A = −(u–u block) = C + δM
+            let mut s_mat = vec![vec![0.0; n_u]; n_u];
+            for a in 0..n_u {
+                for b in 0..n_u {
+                    let coupling: f64 = (0..n_p).map(|i| bt(i, a) * bt(i, b) / d[i]).sum();
+                    s_mat[a][b] = -k[n_p + a][n_p + b] + coupling;
+                }
+            }
+            let l = cholesky(&s_mat).expect("S(δ) is SPD");
+            let g = &system.rhs[..n_p];
+            let f: Vec<f64> = system.rhs[n_p..].iter().map(|v| -v).collect();
+            let rhs_u: Vec<f64> = (0..n_u)
+                .map(|a| f[a] + (0..n_p).map(|i| bt(i, a) * g[i] / d[i]).sum::<f64>())
+                .collect();
+            let u = cholesky_solve(&l, &rhs_u);
+            let p: Vec<f64> = (0..n_p)
+                .map(|i| (g[i] - (0..n_u).map(|a| bt(i, a) * u[a]).sum::<f64>()) / d[i])
+                .collect();
+            let ldlt = Ldlt::factor(&symbolic, &system.matrix(delta), &system.signs).unwrap();
+            let mut x = system.rhs.clone();
+            ldlt.solve_in_place(&mut x);
+            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (i, want) in p.iter().chain(&u).enumerate() {
+                assert!((x[i] - want).abs() <= 1e-10 * scale, "δ = {delta}: x[{i}]");
+            }
+            // H_N by the Schur formula against the solver's trailing block
+            let m = ops.nodes();
+            let n_cols: Vec<Vec<f64>> = (0..m)
+                .map(|j| {
+                    let mut e = vec![0.0; m];
+                    e[j] = 1.0;
+                    let mut col = vec![0.0; n_p];
+                    ops.add_nt(&e, &mut col);
+                    col
+                })
+                .collect();
+            let w: Vec<Vec<f64>> = n_cols
+                .iter()
+                .map(|c| {
+                    (0..n_u)
+                        .map(|a| (0..n_p).map(|i| bt(i, a) * c[i] / d[i]).sum())
+                        .collect()
+                })
+                .collect();
+            let s_inv_w: Vec<Vec<f64>> = w.iter().map(|wj| cholesky_solve(&l, wj)).collect();
+            let ctx = LevelContext {
+                scene: &scene,
+                mesh: &mesh,
+                topo: &topo,
+                ops: &ops,
+                system: &system,
+                p_mass: PMass::Lumped,
+                symbolic: &symbolic,
+                base_timings: Timings::default(),
+            };
+            let h_n = ctx.h_n_from_trailing_block(&ldlt).unwrap();
+            let h_scale = h_n.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for i in 0..m {
+                for j in 0..m {
+                    let ndn: f64 = (0..n_p).map(|r| n_cols[i][r] * n_cols[j][r] / d[r]).sum();
+                    let wsw: f64 = (0..n_u).map(|a| w[i][a] * s_inv_w[j][a]).sum();
+                    let want = ndn - wsw;
+                    assert!(
+                        (h_n[i * m + j] - want).abs() <= 1e-10 * h_scale,
+                        "δ = {delta}: H_N[{i}][{j}] = {} vs {want}",
+                        h_n[i * m + j]
+                    );
+                }
+            }
         }
     }
 }

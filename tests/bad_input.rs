@@ -205,7 +205,7 @@ fn catalogue() -> Vec<Case> {
             "unknown key in [discretization]",
             "cells =",
             "cels =",
-            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, levels, u_spaces, multipliers, deltas)",
+            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, levels, u_spaces, multipliers, p_mass, deltas)",
         ),
         edit(
             "unknown key in [geometry]",

@@ -275,3 +275,48 @@ fn an_unsupported_dolfinx_is_refused_before_solving() {
     );
     assert!(!out.join("small").exists());
 }
+
+#[test]
+fn lumped_p_mass_runs_alone_and_is_named_in_the_results() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "small.toml", SMALL);
+    let out = dir.path().join("res");
+    let o = sdcrack(&[
+        "run",
+        &scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--p-mass",
+        "lumped",
+        "--u-space",
+        "broken",
+        "--multiplier",
+        "M1",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let folder = out.join("small");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["plan"]["p_masses"], serde_json::json!(["lumped"]));
+    for c in summary["cases"].as_array().unwrap() {
+        assert_eq!(c["p_mass"], "lumped");
+        assert_eq!(c["converged"], true, "{c}");
+        let series = c["fields_series"].as_str().unwrap();
+        assert!(series.ends_with("-M1-lumped.xdmf"), "{series}");
+        assert!(folder.join(series).is_file());
+    }
+    let f = hdf5::File::open(folder.join("fields.h5")).unwrap();
+    let case = f.group("cases/level1-broken-M1-lumped-delta0").unwrap();
+    assert!(
+        case.link_exists("p") && !case.link_exists("p_bubble"),
+        "no bubble when lumped"
+    );
+    let o = sdcrack(&["run", &scene, "--p-mass", "diagonal"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("expected consistent or lumped"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -713,7 +713,14 @@ fn crack_reduction(
     let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, level).unwrap();
     let ops = CrackOperators::new(&mesh);
     let topo = mesh.u_topology(u);
-    let system = assemble(&mesh, &topo, &scene.f, &scene.g).unwrap();
+    let system = assemble(
+        &mesh,
+        &topo,
+        &scene.f,
+        &scene.g,
+        sdcrack::scene::PMass::Consistent,
+    )
+    .unwrap();
     let symbolic = SymbolicLdlt::analyze(&system.base).unwrap();
     let matrix = system.matrix(delta);
     let ldlt = Ldlt::factor(&symbolic, &matrix, &system.signs).unwrap();

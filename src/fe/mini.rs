@@ -43,6 +43,19 @@ pub struct CondensedElement {
     pub c: [[f64; 3]; 3],
 }
 
+impl CondensedElement {
+    /// The same element with G̃_T replaced by its row-sum diagonal (the lumped p mass, issue 14):
+    /// every row of G̃_T sums to |T|/3 − 3·(7|T|/90) = |T|/10 > 0. B̃, M and C are unchanged.
+    pub fn lumped(mut self) -> CondensedElement {
+        let sums = self.g.map(|row| row.iter().sum::<f64>());
+        self.g = [[0.0; 3]; 3];
+        for (i, s) in sums.into_iter().enumerate() {
+            self.g[i][i] = s;
+        }
+        self
+    }
+}
+
 /// The condensed element matrices of triangle `t`.
 pub fn condensed_element(t: &TriangleGeometry) -> CondensedElement {
     let area = t.area;
@@ -183,6 +196,21 @@ mod tests {
             }
             assert!((bc[d] + r / k[e][e]).abs() < 1e-12);
         }
+    }
+
+    /// The lumped p mass keeps B̃, M, C and puts |T|/10 (the row sums of G̃_T) on the diagonal.
+    #[test]
+    fn lumped_element_is_the_row_sum_diagonal() {
+        let t = TriangleGeometry::new([[0.1, 0.2], [1.3, -0.1], [0.4, 0.9]]);
+        let ce = condensed_element(&t);
+        let lumped = ce.lumped();
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { t.area / 10.0 } else { 0.0 };
+                assert!((lumped.g[i][j] - want).abs() <= 1e-15, "{i} {j}");
+            }
+        }
+        assert_eq!((lumped.b, lumped.m, lumped.c), (ce.b, ce.m, ce.c));
     }
 
     #[test]

@@ -252,7 +252,8 @@ fn write_fields(
                 mesh_key: mesh_key(c.level, c.u_space),
                 u: scene.fields.u.then(|| f.u.clone()),
                 p: scene.fields.p.then(|| f.p.clone()),
-                p_bubble: scene.fields.p.then(|| f.p_bubble.clone()),
+                // the lumped p mass has no bubble: no p_bubble dataset
+                p_bubble: (scene.fields.p && !f.p_bubble.is_empty()).then(|| f.p_bubble.clone()),
                 crack_points: crack_points(c.level),
                 lambda: scene.fields.lambda.then(|| match &f.lambda {
                     CrackField::PerSegment(v) => (xdmf::Centering::Cell, v.clone()),
@@ -264,6 +265,7 @@ fn write_fields(
                     ("h".into(), Meta::Float(c.h)),
                     ("u_space".into(), Meta::Text(c.u_space.to_string())),
                     ("multiplier".into(), Meta::Text(c.multiplier.to_string())),
+                    ("p_mass".into(), Meta::Text(c.p_mass.to_string())),
                     ("delta".into(), Meta::Float(c.delta)),
                 ],
                 constants: vec![("delta".into(), c.delta)],

@@ -98,6 +98,8 @@ pub struct PlanSummary {
     pub u_spaces: Vec<String>,
     /// Multiplier spaces.
     pub multipliers: Vec<String>,
+    /// p masses (`consistent`, `lumped`).
+    pub p_masses: Vec<String>,
     /// δ values, decreasing.
     pub deltas: Vec<f64>,
 }
@@ -109,6 +111,7 @@ impl PlanSummary {
             levels: plan.levels.clone(),
             u_spaces: plan.u_spaces.iter().map(ToString::to_string).collect(),
             multipliers: plan.multipliers.iter().map(ToString::to_string).collect(),
+            p_masses: plan.p_masses.iter().map(ToString::to_string).collect(),
             deltas: plan.deltas.clone(),
         }
     }
@@ -125,6 +128,8 @@ pub struct CaseSummary {
     pub u_space: String,
     /// `M0`, `M1` or `M1star`.
     pub multiplier: String,
+    /// `consistent` (the paper's MINI p, with bubble) or `lumped` (p = D⁻¹(…), P1, no bubble).
+    pub p_mass: String,
     /// δ.
     pub delta: f64,
     /// Unknowns (p vertex values, u dofs, multipliers).
@@ -175,10 +180,15 @@ pub fn delta_text(delta: f64) -> String {
     }
 }
 
-/// Name of the δ sweep a case belongs to in the field files, e.g. `level3-broken-M1`: the
-/// time series `fields/<series>.xdmf` whose steps are the sweep's δ.
+/// Name of the δ sweep a case belongs to in the field files, e.g. `level3-broken-M1` (and
+/// `level3-broken-M1-lumped` for the lumped p mass): the time series `fields/<series>.xdmf`
+/// whose steps are the sweep's δ.
 pub fn series_name(c: &CaseResult) -> String {
-    format!("level{}-{}-{}", c.level, c.u_space, c.multiplier)
+    let suffix = match c.p_mass {
+        crate::scene::PMass::Consistent => "",
+        crate::scene::PMass::Lumped => "-lumped",
+    };
+    format!("level{}-{}-{}{suffix}", c.level, c.u_space, c.multiplier)
 }
 
 impl CaseSummary {
@@ -189,6 +199,7 @@ impl CaseSummary {
             h: c.h,
             u_space: c.u_space.name().to_string(),
             multiplier: c.multiplier.name().to_string(),
+            p_mass: c.p_mass.name().to_string(),
             delta: c.delta,
             unknowns: c.unknowns,
             multipliers: c.multipliers,

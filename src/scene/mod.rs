@@ -114,6 +114,41 @@ pub enum MultiplierSpace {
     M1Star,
 }
 
+/// The p–p block of the condensed system (issue 14): the paper's consistent MINI mass, or its
+/// row-sum diagonal, which lets p be eliminated exactly (docs/design.md, The lumped p mass).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PMass {
+    /// G̃ = the P1 vector mass after the bubble condensation, M_T − (7|T|/90) 1 1ᵀ per element.
+    Consistent,
+    /// D = the row sums of G̃, 0.1 Σ_{T∋i} |T| per component: p is the recovered gradient
+    /// D⁻¹(G_Γ − B̃ᵀU − contact term), P1 without bubble.
+    Lumped,
+}
+
+impl PMass {
+    /// Name used in scene files, the CLI and result files.
+    pub fn name(self) -> &'static str {
+        match self {
+            PMass::Consistent => "consistent",
+            PMass::Lumped => "lumped",
+        }
+    }
+    /// Parses a scene/CLI name.
+    pub fn from_name(s: &str) -> Option<PMass> {
+        match s {
+            "consistent" => Some(PMass::Consistent),
+            "lumped" => Some(PMass::Lumped),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for PMass {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 impl USpace {
     /// Name used in scene files, the CLI and result files.
     pub fn name(self) -> &'static str {
@@ -256,6 +291,8 @@ pub struct Scene {
     pub u_spaces: Vec<USpace>,
     /// Multiplier spaces to run.
     pub multipliers: Vec<MultiplierSpace>,
+    /// p masses to run (default: the consistent one only).
+    pub p_masses: Vec<PMass>,
     /// Regularisation parameters δ ≥ 0 to run.
     pub deltas: Vec<f64>,
     /// Fields to write.
@@ -334,6 +371,8 @@ struct DiscretizationToml {
     levels: Vec<i64>,
     u_spaces: Vec<String>,
     multipliers: Vec<String>,
+    #[serde(default)]
+    p_mass: Option<Vec<String>>,
     deltas: Vec<f64>,
 }
 
@@ -367,7 +406,14 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
     ("exact", &["u", "px", "py", "jump"]),
     (
         "discretization",
-        &["cells", "levels", "u_spaces", "multipliers", "deltas"],
+        &[
+            "cells",
+            "levels",
+            "u_spaces",
+            "multipliers",
+            "p_mass",
+            "deltas",
+        ],
     ),
     ("outputs", &["fields", "references"]),
     ("verification", verification::VERIFICATION_KEYS),
@@ -457,7 +503,11 @@ impl Scene {
 
     /// Total number of cases (level × u space × multiplier × δ).
     pub fn case_count(&self) -> usize {
-        self.levels.len() * self.u_spaces.len() * self.multipliers.len() * self.deltas.len()
+        self.levels.len()
+            * self.u_spaces.len()
+            * self.multipliers.len()
+            * self.p_masses.len()
+            * self.deltas.len()
     }
 }
 
@@ -666,6 +716,11 @@ const KEY_TYPES: &[(&str, &str, &str)] = &[
     ),
     ("deltas", "discretization.deltas", "a list of numbers ≥ 0"),
     (
+        "p_mass",
+        "discretization.p_mass",
+        "a list of names from \"consistent\", \"lumped\"",
+    ),
+    (
         "fields",
         "outputs.fields",
         "a list of names from \"u\", \"p\", \"lambda\"",
@@ -843,6 +898,15 @@ impl SceneToml {
             MultiplierSpace::from_name,
             &["M0", "M1", "M1star"],
         )?;
+        let p_masses = match &d.p_mass {
+            None => vec![PMass::Consistent],
+            Some(names) => validate_names(
+                "discretization.p_mass",
+                names,
+                PMass::from_name,
+                &["consistent", "lumped"],
+            )?,
+        };
         let deltas = validate_deltas(&d.deltas)?;
         let (fields, references) = match self.outputs {
             None => (
@@ -874,6 +938,7 @@ impl SceneToml {
             levels,
             u_spaces,
             multipliers,
+            p_masses,
             deltas,
             fields,
             references,
