@@ -176,7 +176,7 @@ fn element_value(ce: &CondensedElement, a: usize, b: usize) -> (f64, f64) {
 /// from the element couplings, then the condensed element values scattered into it.
 fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> (SymCsc, Vec<f64>) {
     let n = n_p + topo.n_dofs;
-    let (col_ptr, row_idx) = lower_pattern(n, mesh, topo, n_p);
+    let (col_ptr, row_idx) = lower_pattern(n, mesh, topo, n_p, p_mass);
     let mut values = vec![0.0; row_idx.len()];
     let mut dvals = vec![0.0; row_idx.len()];
     // element matrices in parallel, a chunk at a time (bounded memory), scattered sequentially
@@ -198,7 +198,7 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> 
             .collect();
         for ((t, udofs), ce) in tris.iter().zip(dofs).zip(&elements) {
             let e = element_unknowns(t, udofs, n_p);
-            for &(a, b) in &ELEMENT_PAIRS {
+            for &(a, b) in element_pairs(p_mass) {
                 let (r, c) = (e[a], e[b]);
                 if r < c {
                     continue;
@@ -223,11 +223,43 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> 
     (base, dvals)
 }
 
+/// The local couplings of an element: all of [`ELEMENT_PAIRS`], or for the lumped p mass those
+/// without the off-diagonal p–p pairs (zero there, and left out of the pattern: a structural
+/// p–p coupling would make the p-first elimination of the lumped order fill the p block).
+fn element_pairs(p_mass: PMass) -> &'static [(usize, usize)] {
+    match p_mass {
+        PMass::Consistent => &ELEMENT_PAIRS,
+        PMass::Lumped => &LUMPED_ELEMENT_PAIRS,
+    }
+}
+
+/// [`ELEMENT_PAIRS`] without the off-diagonal p–p pairs (6 diagonal p pairs, then the 27 u rows).
+const LUMPED_ELEMENT_PAIRS: [(usize, usize); 33] = {
+    let mut pairs = [(0, 0); 33];
+    let mut n = 0;
+    let mut k = 0;
+    while k < 45 {
+        let (a, b) = ELEMENT_PAIRS[k];
+        if a >= 6 || b >= 6 || a == b {
+            pairs[n] = (a, b);
+            n += 1;
+        }
+        k += 1;
+    }
+    pairs
+};
+
 /// Column pointers and sorted row indices of the lower triangle coupled by the elements.
-fn lower_pattern(n: usize, mesh: &Mesh, topo: &UTopology, n_p: usize) -> (Vec<usize>, Vec<usize>) {
+fn lower_pattern(
+    n: usize,
+    mesh: &Mesh,
+    topo: &UTopology,
+    n_p: usize,
+    p_mass: PMass,
+) -> (Vec<usize>, Vec<usize>) {
     let lower_pairs = |t: &[usize; 3], udofs: &[usize; 3]| {
         let e = element_unknowns(t, udofs, n_p);
-        ELEMENT_PAIRS
+        element_pairs(p_mass)
             .iter()
             .map(move |&(a, b)| (e[a], e[b]))
             .filter(|(r, c)| r >= c)

@@ -15,7 +15,7 @@ use std::time::Instant;
 use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, MeshError};
-use crate::scene::{FieldSet, MultiplierSpace, Scene, USpace};
+use crate::scene::{FieldSet, MultiplierSpace, PMass, Scene, USpace};
 use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
 
 /// The δ values of the sweep (largest first, as every study runs them).
@@ -74,6 +74,16 @@ pub struct BenchReport {
     pub worst_kkt: f64,
     /// True when every case converged.
     pub all_converged: bool,
+    /// Wall time of the same case with the lumped p mass (p eliminated: one SPD system on u).
+    pub case_lumped_s: f64,
+    /// Phases of the lumped case.
+    pub case_lumped_phases: Timings,
+    /// Peak resident memory of the lumped case phase.
+    pub case_lumped_peak_rss_mb: f64,
+    /// Wall time of the sweep with the lumped p mass.
+    pub sweep_lumped_s: f64,
+    /// Numeric factorisations of the lumped sweep, summed over its δ.
+    pub sweep_lumped_factorization_s: f64,
     /// Peak resident memory of the yardstick phase.
     pub yardstick_peak_rss_mb: f64,
     /// Peak resident memory of the case phase.
@@ -149,6 +159,24 @@ impl BenchReport {
         out += &row("  crack reductions", q.crack_reduction);
         out += &row("  condition estimates", q.condition);
         out += &row("  contact (all cases)", q.contact);
+        let l = &self.case_lumped_phases;
+        out += &row("one case, lumped p mass, total", self.case_lumped_s);
+        out += &row("  mesh + assembly", l.assembly);
+        out += &row("  ordering + symbolic", l.symbolic);
+        out += &row("  numeric factorisation", l.factorization);
+        out += &row("  crack reduction (x₀, H_N)", l.crack_reduction);
+        out += &row("  contact (LCP, recovery, KKT)", l.contact);
+        out += &row("sweep, lumped p mass, total", self.sweep_lumped_s);
+        out += &row(
+            "  numeric factorisations",
+            self.sweep_lumped_factorization_s,
+        );
+        out += &format!(
+            "lumped case: {:.2} yardsticks, peak memory {:.0} MB ({:.2} × the yardstick's)\n",
+            self.case_lumped_s / y,
+            self.case_lumped_peak_rss_mb,
+            self.case_lumped_peak_rss_mb / self.yardstick_peak_rss_mb,
+        );
         out += &format!(
             "\nratios: case / yardstick {:.2}; sweep / ({} numeric factorisations) {:.2}; \
              case memory / yardstick memory {:.2}\n\
@@ -211,6 +239,7 @@ pub fn run_bench(
         levels: vec![0],
         u_spaces: vec![USpace::Broken],
         multipliers: vec![MultiplierSpace::M1],
+        p_masses: vec![PMass::Consistent],
         deltas: vec![0.0],
         ..CasePlan::new(&bench_scene, &CaseFilter::default())
     };
@@ -227,17 +256,37 @@ pub fn run_bench(
             MultiplierSpace::M1Star,
         ],
         deltas: SWEEP_DELTAS.to_vec(),
-        ..case_plan
+        ..case_plan.clone()
     };
     let t1 = Instant::now();
     let sweep = run_study(&bench_scene, &sweep_plan, observer)?;
     let sweep_s = t1.elapsed().as_secs_f64();
     let sweep_peak_rss_mb = peak_rss_mb();
 
+    observer.phase("lumped p mass: one case and the sweep");
+    reset_peak_rss();
+    let lumped_plan = CasePlan {
+        p_masses: vec![PMass::Lumped],
+        ..case_plan
+    };
+    let t2 = Instant::now();
+    let case_lumped = run_study(&bench_scene, &lumped_plan, observer)?;
+    let case_lumped_s = t2.elapsed().as_secs_f64();
+    let case_lumped_peak_rss_mb = peak_rss_mb();
+    let sweep_lumped_plan = CasePlan {
+        p_masses: vec![PMass::Lumped],
+        ..sweep_plan.clone()
+    };
+    let t3 = Instant::now();
+    let sweep_lumped = run_study(&bench_scene, &sweep_lumped_plan, observer)?;
+    let sweep_lumped_s = t3.elapsed().as_secs_f64();
+
     let first = &case.cases[0];
+    let sweep_lumped_factorization_s =
+        sweep_phases(&sweep_lumped, sweep_plan.multipliers.len()).factorization;
     let sweep_phases = sweep_phases(&sweep, sweep_plan.multipliers.len());
     let sweep_factorization_s = sweep_phases.factorization;
-    let (worst_kkt, all_converged) = summarize(&[&case, &sweep]);
+    let (worst_kkt, all_converged) = summarize(&[&case, &sweep, &case_lumped, &sweep_lumped]);
     Ok(BenchReport {
         scene: scene.name.clone(),
         vertices: n_vertices,
@@ -257,12 +306,18 @@ pub fn run_bench(
         sweep_phases,
         worst_kkt,
         all_converged,
+        case_lumped_s,
+        case_lumped_phases: case_lumped.cases[0].timings,
+        case_lumped_peak_rss_mb,
+        sweep_lumped_s,
+        sweep_lumped_factorization_s,
         yardstick_peak_rss_mb,
         case_peak_rss_mb,
         sweep_peak_rss_mb,
         peak_rss_mb: yardstick_peak_rss_mb
             .max(case_peak_rss_mb)
-            .max(sweep_peak_rss_mb),
+            .max(sweep_peak_rss_mb)
+            .max(case_lumped_peak_rss_mb),
         peak_reset_supported,
         threads: rayon::current_num_threads(),
     })

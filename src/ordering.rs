@@ -24,6 +24,24 @@ const LEAF_VERTICES: usize = 64;
 /// # Panics
 /// If a vertex index is outside the grid or `last.len() != vertex_of.len()` (caller bug).
 pub fn nested_dissection(nx: usize, ny: usize, vertex_of: &[usize], last: &[bool]) -> Vec<usize> {
+    nested_dissection_with_reach(nx, ny, vertex_of, last, 1)
+}
+
+/// As [`nested_dissection`] for a matrix whose entries couple vertices up to `reach` grid steps
+/// apart (`|Δi|, |Δj| ≤ reach`): separators are `reach` grid lines thick. `reach = 1` is
+/// [`nested_dissection`]; the lumped p mass's S(δ) = C + δM + B̃D⁻¹B̃ᵀ has `reach = 2` (two u
+/// dofs couple through a p vertex of both their patches).
+///
+/// # Panics
+/// As [`nested_dissection`], and if `reach == 0`.
+pub fn nested_dissection_with_reach(
+    nx: usize,
+    ny: usize,
+    vertex_of: &[usize],
+    last: &[bool],
+    reach: usize,
+) -> Vec<usize> {
+    assert!(reach >= 1, "nested_dissection: reach 0");
     assert_eq!(vertex_of.len(), last.len(), "nested_dissection: lengths");
     let n_vertices = (nx + 1) * (ny + 1);
     // unknowns of each vertex, in CSR form (kept in increasing unknown order)
@@ -49,6 +67,7 @@ pub fn nested_dissection(nx: usize, ny: usize, vertex_of: &[usize], last: &[bool
         }
     }
     let grid = Grid {
+        reach,
         stride: nx + 1,
         start: &start,
         unknowns: &unknowns,
@@ -84,6 +103,8 @@ impl Block {
 
 /// The grid's unknowns grouped by vertex.
 struct Grid<'a> {
+    /// Separator thickness in grid lines.
+    reach: usize,
     stride: usize,
     start: &'a [usize],
     unknowns: &'a [usize],
@@ -96,42 +117,33 @@ impl Grid<'_> {
             return;
         }
         let (ni, nj) = (block.i1 - block.i0, block.j1 - block.j0);
-        if block.vertices() <= LEAF_VERTICES || (ni < 3 && nj < 3) {
+        let r = self.reach;
+        if block.vertices() <= LEAF_VERTICES || (ni < 2 * r + 1 && nj < 2 * r + 1) {
             self.emit(block, order);
             return;
         }
         if ni >= nj {
             let mid = block.i0 + ni / 2;
+            let end = (mid + r).min(block.i1);
             self.dissect(Block { i1: mid, ..block }, order);
-            self.dissect(
-                Block {
-                    i0: mid + 1,
-                    ..block
-                },
-                order,
-            );
+            self.dissect(Block { i0: end, ..block }, order);
             self.emit(
                 Block {
                     i0: mid,
-                    i1: mid + 1,
+                    i1: end,
                     ..block
                 },
                 order,
             );
         } else {
             let mid = block.j0 + nj / 2;
+            let end = (mid + r).min(block.j1);
             self.dissect(Block { j1: mid, ..block }, order);
-            self.dissect(
-                Block {
-                    j0: mid + 1,
-                    ..block
-                },
-                order,
-            );
+            self.dissect(Block { j0: end, ..block }, order);
             self.emit(
                 Block {
                     j0: mid,
-                    j1: mid + 1,
+                    j1: end,
                     ..block
                 },
                 order,
@@ -172,6 +184,21 @@ mod tests {
         let flagged = last.iter().filter(|&&l| l).count();
         assert!(order[order.len() - flagged..].iter().all(|&k| last[k]));
         assert!(order[..order.len() - flagged].iter().all(|&k| !last[k]));
+    }
+
+    #[test]
+    fn a_reach_two_separator_is_two_lines_thick() {
+        // 40 × 2 cells, reach 2: the first cut is the lines i = 20, 21, eliminated last.
+        let (nx, ny) = (40, 2);
+        let vertex_of: Vec<usize> = (0..(nx + 1) * (ny + 1)).collect();
+        let last = vec![false; vertex_of.len()];
+        let order = nested_dissection_with_reach(nx, ny, &vertex_of, &last, 2);
+        let mut tail: Vec<usize> = order[order.len() - 6..].to_vec();
+        tail.sort_unstable();
+        assert_eq!(tail, vec![20, 21, 61, 62, 102, 103]);
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, vertex_of, "a permutation");
     }
 
     #[test]

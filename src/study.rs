@@ -263,7 +263,7 @@ pub fn run_study(
                 let system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass)?;
                 let assembly = topo_time + t1.elapsed().as_secs_f64();
                 let t2 = Instant::now();
-                let order = elimination_order(&mesh, &topo, &ops, system.n_p);
+                let order = elimination_order(&mesh, &topo, &ops, system.n_p, p_mass);
                 let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order)?;
                 let symbolic_time = t2.elapsed().as_secs_f64();
                 let ctx = LevelContext {
@@ -656,24 +656,51 @@ impl LevelContext<'_> {
     }
 }
 
-/// The elimination order of K: nested dissection of the vertex grid (p and u unknowns of a
-/// vertex together), with the crack nodes' p unknowns last so that the factor's trailing block
-/// yields H_N ([`crate::ordering`]).
+/// The elimination order of K, with the crack nodes' p unknowns last so that the factor's
+/// trailing block yields H_N ([`crate::ordering`]).
+///
+/// Consistent p mass: nested dissection of the vertex grid, p and u unknowns of a vertex
+/// together. Lumped p mass: the p–p block is diagonal, so the other p unknowns go first: each
+/// is a diagonal pivot whose elimination adds B̃D⁻¹B̃ᵀ to the u block and nothing else, so what
+/// the factor then does on the u unknowns (in nested-dissection order) is exactly the Cholesky
+/// of −S(δ) = −(C + δM + B̃D⁻¹B̃ᵀ), one unknown per dof instead of three (issue 14).
 fn elimination_order(
     mesh: &Mesh,
     topo: &UTopology,
     ops: &CrackOperators,
     n_p: usize,
+    p_mass: PMass,
 ) -> Vec<usize> {
-    let vertex_of: Vec<usize> = (0..n_p)
-        .map(|k| k / 2)
-        .chain(topo.dof_vertex.iter().copied())
-        .collect();
-    let mut last = vec![false; vertex_of.len()];
+    let mut crack_p = vec![false; n_p];
     for &k in ops.node_p_dofs.iter().flatten() {
-        last[k] = true;
+        crack_p[k] = true;
     }
-    crate::ordering::nested_dissection(mesh.nx, mesh.ny, &vertex_of, &last)
+    match p_mass {
+        PMass::Consistent => {
+            let vertex_of: Vec<usize> = (0..n_p)
+                .map(|k| k / 2)
+                .chain(topo.dof_vertex.iter().copied())
+                .collect();
+            let mut last = crack_p;
+            last.resize(vertex_of.len(), false);
+            crate::ordering::nested_dissection(mesh.nx, mesh.ny, &vertex_of, &last)
+        }
+        PMass::Lumped => {
+            // S couples u dofs two grid steps apart (through a p vertex of both patches)
+            let u_order = crate::ordering::nested_dissection_with_reach(
+                mesh.nx,
+                mesh.ny,
+                &topo.dof_vertex,
+                &vec![false; topo.dof_vertex.len()],
+                2,
+            );
+            (0..n_p)
+                .filter(|&k| !crack_p[k])
+                .chain(u_order.into_iter().map(|k| n_p + k))
+                .chain((0..n_p).filter(|&k| crack_p[k]))
+                .collect()
+        }
+    }
 }
 
 /// Solves a tridiagonal system given as a dense matrix (Thomas algorithm; M_c is SPD).
@@ -713,7 +740,7 @@ mod tests {
         ] {
             let topo = mesh.u_topology(space);
             let system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass).unwrap();
-            let order = elimination_order(&mesh, &topo, &ops, system.n_p);
+            let order = elimination_order(&mesh, &topo, &ops, system.n_p, p_mass);
             let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
             let ctx = LevelContext {
                 scene: &scene,
@@ -803,7 +830,7 @@ mod tests {
                 patch[v] += area;
             }
         }
-        let order = elimination_order(&mesh, &topo, &ops, n_p);
+        let order = elimination_order(&mesh, &topo, &ops, n_p, PMass::Lumped);
         let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
         for delta in [0.0, 1e-2] {
             let k = dense(&system.matrix(delta));

@@ -320,3 +320,25 @@ fn lumped_p_mass_runs_alone_and_is_named_in_the_results() {
         stderr(&o)
     );
 }
+
+#[test]
+fn bench_json_reports_the_lumped_case_beside_the_consistent_one() {
+    let o = sdcrack(&["bench", "--json", "--vertices", "400"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for key in [
+        "case_s",
+        "case_lumped_s",
+        "case_lumped_peak_rss_mb",
+        "sweep_lumped_s",
+        "sweep_lumped_factorization_s",
+    ] {
+        assert!(
+            r[key].as_f64().is_some_and(|v| v > 0.0),
+            "{key}: {}",
+            r[key]
+        );
+    }
+    assert!(r["case_lumped_phases"]["factorization"].as_f64().is_some());
+    assert_eq!(r["all_converged"], true);
+}
