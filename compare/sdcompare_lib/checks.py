@@ -7,9 +7,9 @@ Each check returns rows (for the report) and problems (one line each); any probl
 import math
 
 from . import exact
-from .read import case_key, finite_number
+from .read import DEFAULT_P_MASS, case_key, finite_number, p_mass, plan_p_masses, pm_suffix
 from .render import fmt_delta
-from .settings import QUANTITIES, scene_lists
+from .settings import QUANTITIES, scene_lists, scene_p_masses
 
 # The solver's errors against the compare tool's own (exact.py: another rule family, Duffy rules
 # at the tips). Both quadratures are converged to < 1e-10 relative (tests/convergence.rs,
@@ -69,23 +69,27 @@ def completeness(res, scene_file):
     if sorted(plan["levels"]) != levels and len(plan["levels"]) != 1:
         problems.append(f"the run's levels {plan['levels']} are neither the scene's {levels} "
                         "nor one level (--level)")
+    p_masses = plan_p_masses(plan)
     for key, mine, scene in (("u_spaces", plan["u_spaces"], u_spaces),
                              ("multipliers", plan["multipliers"], multipliers),
+                             ("p_masses", p_masses, scene_p_masses(scene_file)),
                              ("deltas", plan["deltas"], deltas)):
         extra = [v for v in mine if v not in scene]
         if extra:
             problems.append(f"the run's {key} {extra} are not in the scene file")
-    want = {(int(lv), u, m, float(d)) for lv in plan["levels"] for u in plan["u_spaces"]
-            for m in plan["multipliers"] for d in plan["deltas"]}
+    want = {(int(lv), u, m, float(d), pm) for lv in plan["levels"] for u in plan["u_spaces"]
+            for m in plan["multipliers"] for d in plan["deltas"] for pm in p_masses}
     have = [case_key(c) for c in s["cases"]]
     missing = sorted(want - set(have))
     if missing:
+        k = missing[0]
         problems.append(f"{len(missing)} case(s) asked for are missing from summary.json, e.g. "
-                        f"level {missing[0][0]} {missing[0][1]} {missing[0][2]} δ={fmt_delta(missing[0][3])}")
+                        f"level {k[0]} {k[1]} {k[2]}{pm_suffix(k[4])} δ={fmt_delta(k[3])}")
     extra = sorted(set(have) - want)
     if extra:
+        k = extra[0]
         problems.append(f"{len(extra)} case(s) in summary.json were not asked for, e.g. "
-                        f"level {extra[0][0]} {extra[0][1]} {extra[0][2]} δ={fmt_delta(extra[0][3])}")
+                        f"level {k[0]} {k[1]} {k[2]}{pm_suffix(k[4])} δ={fmt_delta(k[3])}")
     if len(set(have)) != len(have):
         problems.append("summary.json lists a case twice")
     if "exact" in scene_file:
@@ -94,7 +98,8 @@ def completeness(res, scene_file):
         if bad:
             k = case_key(bad[0])
             problems.append(f"{len(bad)} case(s) of an exact scene lack a finite error "
-                            f"({', '.join(QUANTITIES)}), e.g. level {k[0]} {k[1]} {k[2]}")
+                            f"({', '.join(QUANTITIES)}), e.g. level {k[0]} {k[1]} {k[2]}"
+                            f"{pm_suffix(k[4])}")
     if _fields_asked(scene_file):
         if res["fields"] is None:
             problems.append("the scene asks for fields but fields.h5 is missing")
@@ -144,7 +149,8 @@ def solver_values(kkt_rows, tol):
         return []
     k = bad[0]
     return [f"{len(bad)} solver case(s) not converged or with KKT residual > {tol:g}, e.g. level "
-            f"{k['level']} {k['u_space']} {k['multiplier']} δ={fmt_delta(k['delta'])} (status "
+            f"{k['level']} {k['u_space']} {k['multiplier']}"
+            f"{pm_suffix(k.get('p_mass', DEFAULT_P_MASS))} δ={fmt_delta(k['delta'])} (status "
             f"{k['status'] or 'missing'}, converged {k['converged']}, residuals "
             f"{_residuals(k['kkt'])})"]
 
@@ -177,16 +183,19 @@ def reference_agreement(agreement, tol):
 def delta_slopes(delta_limit, tol):
     """Problems: δ-limit slopes (fitted above round-off) farther than `tol` from 1."""
     return [f"δ → 0 slope {e['slope']:.3f} of level {e['level']} {e['u_space']} "
-            f"{e['multiplier']} {e['quantity']} is not 1 ± {tol:g}"
+            f"{e['multiplier']}{pm_suffix(e.get('p_mass', DEFAULT_P_MASS))} {e['quantity']} is not "
+            f"1 ± {tol:g}"
             for e in delta_limit if e["points_fitted"] >= 2 and e["slope"] is not None
             and not abs(e["slope"] - 1.0) <= tol]
 
 
 def independent_errors(res, scene_file):
     """Recomputes every reported error against the exact solution from the stored fields with the
-    compare tool's own quadrature (exact.py): the solver's cases with fields (p_h with its stored
-    bubble) and each reference's P1 field on the exported cracked mesh. Returns (rows, problems);
-    rows: dict(source, level, u_space, multiplier, delta, quantity → (reported, ours), worst)."""
+    compare tool's own quadrature (exact.py): the solver's cases with fields (the consistent p_h
+    with its stored bubble, which must be there; the lumped p_h, P1 without bubble, with bubble 0)
+    and each reference's P1 field on the exported cracked mesh. Returns (rows, problems);
+    rows: dict(source, level, u_space, multiplier, p_mass, delta, quantity → (reported, ours),
+    worst)."""
     if "exact" not in scene_file:
         return [], []
     ex = exact.ExactSolution.from_scene(scene_file)
@@ -196,13 +205,25 @@ def independent_errors(res, scene_file):
         if fields is None or not fields.has_case(c.get("fields_grid")) \
                 or not isinstance(c.get("errors"), dict):
             continue
-        ours = exact.solver_case_errors_h5(fields.h5, c["fields_grid"], ex)
+        pm = p_mass(c)
+        what = (f"level {c['level']} {c['u_space']} {c['multiplier']}{pm_suffix(pm)} "
+                f"δ={fmt_delta(c['delta'])}")
+        stored = fields.h5[f"cases/{c['fields_grid']}"].attrs.get("p_mass")
+        if isinstance(stored, bytes):
+            stored = stored.decode()
+        if stored is not None and str(stored) != pm:
+            problems.append(f"sdcrack's case {what} is of p mass {pm} in summary.json but "
+                            f"{stored} in fields.h5 (/cases/{c['fields_grid']})")
+        try:
+            ours = exact.solver_case_errors_h5(fields.h5, c["fields_grid"], ex, p_mass=pm)
+        except exact.ExactError as exc:
+            ours = {"bubble": None}
+            problems.append(f"sdcrack's errors of {what} cannot be recomputed: {exc}")
         row = _error_row("sdcrack", c, c["errors"], ours)
         row["bubble"] = ours.get("bubble")
         rows.append(row)
-        if not row["worst"] <= SOLVER_ERRORS_RTOL:
-            problems.append(f"sdcrack's reported errors of level {c['level']} {c['u_space']} "
-                            f"{c['multiplier']} δ={fmt_delta(c['delta'])} differ from the "
+        if "u_l2" in ours and not row["worst"] <= SOLVER_ERRORS_RTOL:
+            problems.append(f"sdcrack's reported errors of {what} differ from the "
                             f"independent computation by {_num(row['worst'])} relative "
                             f"(> {SOLVER_ERRORS_RTOL:g})")
     reported = {}
@@ -234,6 +255,8 @@ def independent_errors(res, scene_file):
 def _error_row(source, c, reported, ours, quantities=QUANTITIES):
     row = {"source": source, "level": int(c["level"]), "u_space": c.get("u_space"),
            "multiplier": c.get("multiplier"), "delta": c.get("delta")}
+    if source == "sdcrack":
+        row["p_mass"] = p_mass(c)
     worst = 0.0
     for q in quantities:
         a, b = reported.get(q), ours.get(q)

@@ -3,7 +3,8 @@
 What is computed (the quantities of summary.json's ``errors``)
 -----------------------------------------------------------
 * ``u_l2``      = ‖u_h − u‖_{L²(Ω)}
-* ``p_l2``      = ‖p_h − ∇u‖_{L²(Ω_c)}           (p_h MINI: P1 vertex part + bubble 27 λ0 λ1 λ2)
+* ``p_l2``      = ‖p_h − ∇u‖_{L²(Ω_c)}           (p_h MINI: P1 vertex part + bubble 27 λ0 λ1 λ2;
+                                                   the lumped p mass's p_h is P1 without bubble)
 * ``p_x``       = sqrt(p_l2² + Σ_T h_T² ‖div p_h + f‖²_T),  h_T the longest edge of T
 * ``lambda_l2`` = ‖λ_h − [u]‖_{L²(Γc)}            (λ_h P0 per segment or P1 per node)
 
@@ -554,7 +555,8 @@ def _tips_and_normal(crack_points, exact):
     return [a, b], crack_normal(a, b)
 
 
-def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exact, quad=None):
+def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exact, quad=None,
+                       p_mass=None):
     """Errors of one solver case against ``exact`` (an ExactSolution).
 
     points (N,2|3), triangles (T,3) of the case mesh (the cracked mesh for the broken u space, the
@@ -562,18 +564,30 @@ def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exa
     of p_h, p_bubble (T,2) its bubble coefficients (b_T = 27 λ0λ1λ2, triangle order of the mesh;
     None: recovered from u and p by ``recover_bubble``), crack_points (I+1,2|3) from tip A to tip B,
     lam (I,) per segment or (I+1,) per node. Any of u, p, lam may be None (its errors are None).
+    p_mass: "consistent" (p_bubble required: ExactError without it), "lumped" (p_h is P1 without
+    bubble: bubble 0, and a stored p_bubble is an ExactError) or None (as stored, else recovered).
 
     Returns {"u_l2", "p_l2", "p_x", "lambda_l2"} (floats or None) and "bubble": "stored",
-    "recovered" or None."""
+    "recovered", "none (lumped)" or None."""
     quad = quad or Quadrature()
     P = np.asarray(points, dtype=float)[:, :2]
     t = np.asarray(triangles, dtype=np.int64)
     tips, normal = _tips_and_normal(crack_points, exact)
     u_tri = None if u is None else np.asarray(u, dtype=float)[t]
     p_tri, bub, bsrc = None, None, None
+    if p_mass not in (None, "consistent", "lumped"):
+        raise ExactError(f"unknown p mass {p_mass!r}")
     if p is not None:
         p_tri = np.asarray(p, dtype=float)[:, :2][t]
-        if p_bubble is not None:
+        if p_mass == "lumped":
+            if p_bubble is not None:
+                raise ExactError("the case has a p_bubble dataset, but the lumped p is P1 without "
+                                 "bubble")
+            bub, bsrc = np.zeros((t.shape[0], 2)), "none (lumped)"
+        elif p_mass == "consistent" and p_bubble is None:
+            raise ExactError("no p_bubble in fields.h5: the consistent p is MINI, its bubble "
+                             "coefficients must be stored with it")
+        elif p_bubble is not None:
             bub, bsrc = np.asarray(p_bubble, dtype=float)[:, :2], "stored"
             if bub.shape[0] != t.shape[0]:
                 raise ExactError(f"p_bubble has {bub.shape[0]} rows for {t.shape[0]} triangles")
@@ -613,11 +627,11 @@ def read_h5_case(h5, case):
             f.close()
 
 
-def solver_case_errors_h5(h5, case, exact, quad=None):
+def solver_case_errors_h5(h5, case, exact, quad=None, p_mass=None):
     """``solver_case_errors`` of the case CASE of fields.h5 (open h5py File or path)."""
     d = read_h5_case(h5, case)
     return solver_case_errors(d["points"], d["triangles"], d["u"], d["p"], d["p_bubble"], d["crack_points"],
-                              d["lam"], exact, quad)
+                              d["lam"], exact, quad, p_mass=p_mass)
 
 
 def p1_field_errors(points, triangles, u, crack_pairs, exact, quad=None):

@@ -20,6 +20,28 @@ REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "ma
                          "markerfacecolor": "none", "label": "reference FreeFEM"}}
 # Two lines whose points all agree to this relative distance (on a log axis) look like one line.
 OVERLAP_REL = 0.02
+# A run with the lumped p mass: colour and marker per multiplier, the consistent p mass solid and
+# the lumped one dashed, hollow markers for the continuous u space, labels broken/M1/lumped (the
+# references' dash-dot and dotted lines stay theirs). A consistent-only run keeps the plots of
+# before p masses (STYLE per u space, MARK, the colour cycle).
+MULT_COLOR = {"M0": "tab:blue", "M1": "tab:orange", "M1star": "tab:green"}
+PM_STYLE = {"consistent": "-", "lumped": "--"}
+
+
+def _has_lumped(entries):
+    return any(e.get("p_mass", "consistent") != "consistent" for e in entries)
+
+
+def _variant_style(e, lumped_run):
+    """(kwargs of plot(), label) of a series / δ-limit / timing entry."""
+    u, m, pm = e["u_space"], e["multiplier"], e.get("p_mass", "consistent")
+    if not lumped_run:
+        return {"linestyle": STYLE.get(u, ":"), "marker": MARK.get(m, "x")}, f"{u}/{m}"
+    kw = {"linestyle": PM_STYLE.get(pm, "--"), "marker": MARK.get(m, "x"),
+          "color": MULT_COLOR.get(m, "black")}
+    if u != "broken":
+        kw["markerfacecolor"] = "none"
+    return kw, f"{u}/{m}" + ("" if pm == "consistent" else f"/{pm}")
 
 
 def _delta_axis(ax):
@@ -73,15 +95,16 @@ def rate_plot(folder, scene, rate_entries):
     if not ents:
         return None
     qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
+    lumped_run = _has_lumped(ents)
     fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
     for ax, q in zip(axes[0], qs):
         for r in (r for r in ents if r["quantity"] == q):
             pts = [(h, e) for h, e in zip(r["h"], r["errors"]) if _positive(e)]
             if not pts:
                 continue
-            ax.loglog(*zip(*pts), STYLE.get(r["u_space"], ":"), marker=MARK.get(r["multiplier"], "x"),
-                      label=f"{r['u_space']}/{r['multiplier']}"
-                      + ("" if r["status"] == "converges" else f" ({r['status']})"))
+            kw, label = _variant_style(r, lumped_run)
+            ax.loglog(*zip(*pts), **kw,
+                      label=label + ("" if r["status"] == "converges" else f" ({r['status']})"))
         h = [x for r in ents for x in r["h"]]
         if h:
             h0, h1 = max(h), min(h)
@@ -105,6 +128,7 @@ def delta_plot(folder, scene, delta_entries):
     levels = sorted({d["level"] for d in delta_entries})
     lvl = levels[-1]
     qs = [q for q in ("u_l2", "p_l2", "lambda_l2") if any(d["quantity"] == q for d in delta_entries)]
+    lumped_run = _has_lumped(delta_entries)
     fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
     for ax, q in zip(axes[0], qs):
         xs = set()
@@ -115,8 +139,8 @@ def delta_plot(folder, scene, delta_entries):
             if pts:
                 s = d["slope"]
                 xs.update(x for x, _ in pts)
-                ax.loglog(*zip(*pts), STYLE.get(d["u_space"], ":"), marker=MARK.get(d["multiplier"], "x"),
-                          markersize=6, label=f"{d['u_space']}/{d['multiplier']}"
+                kw, label = _variant_style(d, lumped_run)
+                ax.loglog(*zip(*pts), **kw, markersize=6, label=label
                           + ("" if len(pts) < 2 else " slope –" if s is None else f" slope {s:.2f}"))
         if len(xs) == 1:
             _single_x(ax, sorted(xs), f"one δ > 0 (δ = {fmt_delta(min(xs))}): no slope")
@@ -138,13 +162,15 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
     if not pts and not rpts:
         return None
     fig, ax = plt.subplots(figsize=(6, 4.5))
-    variants = sorted({(t["u_space"], t["multiplier"]) for t in pts})
-    for u, m in variants:
+    lumped_run = _has_lumped(pts)
+    variants = sorted({(t["u_space"], t["multiplier"], t.get("p_mass", "consistent")) for t in pts})
+    for u, m, pm in variants:
         sel = sorted((t for t in pts if t["u_space"] == u and t["multiplier"] == m
+                      and t.get("p_mass", "consistent") == pm
                       and t["delta"] == min(x["delta"] for x in pts)), key=lambda t: t["level"])
         if sel:
-            ax.loglog([t["total_s"] for t in sel], [t["u_l2"] for t in sel], STYLE.get(u, ":"),
-                      marker=MARK.get(m, "x"), label=f"{u}/{m}")
+            kw, label = _variant_style(sel[0], lumped_run)
+            ax.loglog([t["total_s"] for t in sel], [t["u_l2"] for t in sel], **kw, label=label)
     ref_pts = {tool: [(r["total_s"], r["errors"]["u_l2"]) for r in sorted(
         (r for r in rpts if r["tool"] == tool), key=lambda r: r["level"])]
         for tool in sorted({r["tool"] for r in rpts})}
@@ -171,12 +197,14 @@ def delta_reference_plot(folder, scene, agreement):
         return None
     tool = sorted({a["reference"] for a in rows})[0]
     mult = sorted({a["multiplier"] for a in rows})[-1]
-    spaces = sorted({a["u_space"] for a in rows if a["delta"] > 0})
+    spaces = sorted({(a["u_space"], a.get("p_mass", "consistent")) for a in rows if a["delta"] > 0},
+                    key=lambda k: (k[0], k[1] != "consistent", k[1]))
     if not spaces:  # δ = 0 only: the reference tables say it all
         return None
     fig, axes = plt.subplots(1, len(spaces), figsize=(5.2 * len(spaces), 4), squeeze=False)
-    for ax, u in zip(axes[0], spaces):
-        sel = [a for a in rows if a["reference"] == tool and a["multiplier"] == mult and a["u_space"] == u]
+    for ax, (u, pm) in zip(axes[0], spaces):
+        sel = [a for a in rows if a["reference"] == tool and a["multiplier"] == mult
+               and a["u_space"] == u and a.get("p_mass", "consistent") == pm]
         deltas = sorted({a["delta"] for a in sel if a["delta"] > 0})
         if not deltas:
             continue
@@ -190,7 +218,8 @@ def delta_reference_plot(folder, scene, agreement):
             _single_x(ax, deltas, f"one δ > 0 (δ = {fmt_delta(deltas[0])}): one point per level")
         _delta_axis(ax)
         ax.set_xlabel("δ (dotted: δ = 0, the floor of the level)")
-        ax.set_title(f"{scene}: ‖u_δh − u_{tool}‖_L², {u}/{mult}")
+        ax.set_title(f"{scene}: ‖u_δh − u_{tool}‖_L², {u}/{mult}"
+                     + ("" if pm == "consistent" else f"/{pm}"))
         ax.grid(True, which="both", alpha=0.3)
         _legend(ax)
     return _save(fig, folder, f"delta-reference-{scene}.png")

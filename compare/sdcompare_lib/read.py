@@ -27,8 +27,38 @@ def finite_number(v):
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+# The p masses of `sdcrack run` (summary.json: each case's `p_mass`, the plan's `p_masses`); a case
+# without the key (an sdcrack older than the lumped p mass) is consistent.
+P_MASSES = ("consistent", "lumped")
+DEFAULT_P_MASS = "consistent"
+
+
+def p_mass(c):
+    """The case's p mass: its `p_mass` ("consistent" when absent)."""
+    v = c.get("p_mass")
+    return DEFAULT_P_MASS if v is None else str(v)
+
+
+def variant_label(u_space, multiplier, pm=DEFAULT_P_MASS):
+    """"broken/M1" (consistent p mass, as before the lumped one existed), "broken/M1/lumped"."""
+    return f"{u_space}/{multiplier}" + ("" if pm == DEFAULT_P_MASS else f"/{pm}")
+
+
+def pm_suffix(pm):
+    """" lumped" after a case's "level L u m" in a problem line; nothing for consistent."""
+    return "" if pm == DEFAULT_P_MASS else f" {pm}"
+
+
 def case_key(c):
-    return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), float(c["delta"]))
+    """(level, u space, multiplier, δ, p mass): the p mass last, so k[:4] reads as before."""
+    return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), float(c["delta"]),
+            p_mass(c))
+
+
+def plan_p_masses(plan):
+    """The plan's p masses (["consistent"] for a plan written before the lumped p mass)."""
+    v = plan.get("p_masses") if isinstance(plan, dict) else None
+    return list(v) if isinstance(v, list) else [DEFAULT_P_MASS]
 
 
 def total_time(c):
@@ -125,6 +155,8 @@ def load_results(folder):
     if not (isinstance(plan, dict) and all(isinstance(plan.get(k), list) for k in PLAN_KEYS)):
         raise InputError(f"{folder}/summary.json has no 'plan' ({', '.join(PLAN_KEYS)}): it was "
                          "written by an sdcrack older than the scene copy; rerun the scene")
+    if "p_masses" in plan and not isinstance(plan["p_masses"], list):
+        raise InputError(f"{folder}/summary.json: plan.p_masses is not a list")
     mesh_scene = os.path.join(folder, "mesh", "scene.json")
     fpath = os.path.join(folder, "fields.h5")
     fields = Fields(fpath) if os.path.exists(fpath) else None

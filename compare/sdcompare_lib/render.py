@@ -288,9 +288,10 @@ def rerun_command(results_dir, summary, scene_file, k):
     """The shell command that reruns one case of this results folder from any working directory:
     the binary that wrote it (provenance `executable`, absolute; `sdcrack` from PATH when not
     recorded), the folder's own copy of the scene (RESULTS_DIR/scene.toml, absolute), the case's
-    level, u space and multiplier with the δ sweep of the run (each δ warm-started from the
-    previous one, as in the run, so the numbers come back exactly; `--delta` only when the run was
-    restricted to one δ), into ./rerun/<scene>-l<L>-<u>-<m>/ under the current directory."""
+    level, u space and multiplier (and `--p-mass lumped` for a lumped case) with the δ sweep of
+    the run (each δ warm-started from the previous one, as in the run, so the numbers come back
+    exactly; `--delta` only when the run was restricted to one δ), into
+    ./rerun/<scene>-l<L>-<u>-<m>[-lumped]/ under the current directory."""
     import shlex
 
     from .settings import scene_lists
@@ -303,6 +304,10 @@ def rerun_command(results_dir, summary, scene_file, k):
     args = [exe, "run", scene, "--level", str(k["level"]), "--u-space", str(k["u_space"]),
             "--multiplier", str(k["multiplier"])]
     name = f"{summary.get('scene', 'scene')}-l{k['level']}-{k['u_space']}-{k['multiplier']}"
+    pm = k.get("p_mass", "consistent")
+    if pm != "consistent":  # the consistent command is the one of a run without p masses
+        args += ["--p-mass", str(pm)]
+        name += f"-{pm}"
     plan_deltas = sorted({float(d) for d in ((summary.get("plan") or {}).get("deltas") or [])})
     if plan_deltas != sorted(set(scene_lists(scene_file)[3])):
         d = fmt_delta(k["delta"])

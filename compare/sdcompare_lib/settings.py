@@ -32,6 +32,12 @@ def scene_lists(scene):
                                                    reverse=True))
 
 
+def scene_p_masses(scene):
+    """The p masses the scene file asks for ([discretization] p_mass, default ["consistent"])."""
+    d = scene.get("discretization") or {}
+    return list(d.get("p_mass", ["consistent"]))
+
+
 def verification(scene, where):
     """The scene's [verification] with defaults: dict(smoke, kkt_tolerance, reference_agreement,
     delta_slope_tolerance, min_rate, expected_failures=[dict(u_space, multiplier, quantity, reason)]).
@@ -67,7 +73,8 @@ def verification(scene, where):
 
 
 def expected_failure(settings, u_space, multiplier, quantity):
-    """The reason a series is declared not to converge, or None."""
+    """The reason a series is declared not to converge, or None. A declaration names no p mass:
+    it applies to the series of both p masses."""
     for f in settings["expected_failures"]:
         if all(f[k] in ("*", v) for k, v in (("u_space", u_space), ("multiplier", multiplier),
                                               ("quantity", quantity))):

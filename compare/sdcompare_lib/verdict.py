@@ -8,7 +8,7 @@ from collections import defaultdict
 import numpy as np
 
 from . import norms, rates
-from .read import case_key, finite_number, total_time
+from .read import DEFAULT_P_MASS, case_key, finite_number, p_mass, total_time, variant_label
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.
@@ -22,7 +22,8 @@ ROUNDOFF_REL = 1e-12
 
 
 def _variants(cases):
-    return sorted({(c["u_space"], c["multiplier"]) for c in cases})
+    """(u space, multiplier, p mass) of the cases."""
+    return sorted({(c["u_space"], c["multiplier"], p_mass(c)) for c in cases})
 
 
 def ref_delta(cases):
@@ -32,12 +33,14 @@ def ref_delta(cases):
 
 
 def series_by_variant(cases, delta):
+    """{(u space, multiplier, p mass): the cases of δ = delta, coarse to fine}."""
     out = {}
-    for u, m in _variants(cases):
+    for u, m, pm in _variants(cases):
         cs = sorted((c for c in cases if c["u_space"] == u and c["multiplier"] == m
-                     and float(c["delta"]) == delta), key=lambda c: int(c["level"]))
+                     and p_mass(c) == pm and float(c["delta"]) == delta),
+                    key=lambda c: int(c["level"]))
         if cs:
-            out[(u, m)] = cs
+            out[(u, m, pm)] = cs
     return out
 
 
@@ -51,13 +54,13 @@ FAILING = ("does not converge", "unexpected pass", "incomplete")
 
 
 def _measured_series(cases, agreement, has_exact):
-    """{(u, m, q): (against, reference, [(level, h, error or None)])} at δ = ref_delta."""
+    """{(u, m, p mass, q): (against, reference, [(level, h, error or None)])} at δ = ref_delta."""
     delta = ref_delta(cases)
     out = {}
     if has_exact:
-        for (u, m), cs in series_by_variant(cases, delta).items():
+        for (u, m, pm), cs in series_by_variant(cases, delta).items():
             for q in QUANTITIES:
-                out[(u, m, q)] = ("exact", None, [
+                out[(u, m, pm, q)] = ("exact", None, [
                     (int(c["level"]), float(c["h"]),
                      (c.get("errors") or {}).get(q) if isinstance(c.get("errors"), dict) else None)
                     for c in cs])
@@ -65,30 +68,34 @@ def _measured_series(cases, agreement, has_exact):
     rows = [r for r in agreement if r["kind"] == "solver_vs_reference" and "level" in r]
     tools = [t for t in PREFERRED_REFERENCE if any(r["reference"] == t for r in rows)]
     h_of = {(int(c["level"])): float(c["h"]) for c in cases}
-    for (u, m), cs in series_by_variant(cases, delta).items():
+    for (u, m, pm), cs in series_by_variant(cases, delta).items():
         for q, key in REFERENCE_QUANTITIES.items():
             if not tools:
-                out[(u, m, q)] = (None, None, [(int(c["level"]), float(c["h"]), None) for c in cs])
+                out[(u, m, pm, q)] = (None, None, [(int(c["level"]), float(c["h"]), None)
+                                                   for c in cs])
                 continue
             tool = tools[0]
             by_level = {r["level"]: r.get(key) for r in rows if r["reference"] == tool
-                        and r["u_space"] == u and r["multiplier"] == m and r["delta"] == delta}
-            out[(u, m, q)] = ("reference", tool, [(int(c["level"]), h_of[int(c["level"])],
+                        and r["u_space"] == u and r["multiplier"] == m
+                        and r.get("p_mass", DEFAULT_P_MASS) == pm and r["delta"] == delta}
+            out[(u, m, pm, q)] = ("reference", tool, [(int(c["level"]), h_of[int(c["level"])],
                                                    by_level.get(int(c["level"]))) for c in cs])
     return delta, out
 
 
 def compute_series(scene, cases, agreement, has_exact, settings):
-    """One entry per (u space, multiplier, quantity): the errors against the exact solution (scenes
-    with [exact]) or against the reference of the same level, their rates, the measured status
-    (rates.series_status) and the status after the scene's expected failures."""
+    """One entry per (u space, multiplier, p mass, quantity): the errors against the exact solution
+    (scenes with [exact]) or against the reference of the same level, their rates, the measured
+    status (rates.series_status) and the status after the scene's expected failures (which apply
+    to both p masses)."""
     out = []
     if not cases:
         return out
     delta, measured = _measured_series(cases, agreement, has_exact)
     order = {q: i for i, q in enumerate(QUANTITIES)}
-    for (u, m, q), (against, tool, pts) in sorted(measured.items(),
-                                                  key=lambda kv: (kv[0][:2], order[kv[0][2]])):
+    for (u, m, pm, q), (against, tool, pts) in sorted(
+            measured.items(), key=lambda kv: (kv[0][:2], kv[0][2] != DEFAULT_P_MASS, kv[0][2],
+                                              order[kv[0][3]])):
         levels = [p[0] for p in pts]
         h = [p[1] for p in pts]
         e = [p[2] for p in pts]
@@ -109,7 +116,7 @@ def compute_series(scene, cases, agreement, has_exact, settings):
         elif xfail is not None and status == "does not converge":
             status, reason = "expected failure", f"declared in the scene; measured: {reason}"
         ok_e = [v if finite_number(v) else None for v in e]
-        out.append({"scene": scene, "u_space": u, "multiplier": m, "quantity": q,
+        out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "quantity": q,
                     "against": against, "reference": tool, "delta": delta, "levels": levels,
                     "h": h, "errors": ok_e,
                     "rates": rates.successive_rates(h, ok_e) if not bad else [None] * (len(e) - 1),
@@ -132,8 +139,8 @@ def compute_delta_limit(scene, cases, fields):
     groups = defaultdict(list)
     for c in cases:
         if fields.has_case(c.get("fields_grid")):
-            groups[(int(c["level"]), c["u_space"], c["multiplier"])].append(c)
-    for (lvl, u, m), cs in sorted(groups.items()):
+            groups[(int(c["level"]), c["u_space"], c["multiplier"], p_mass(c))].append(c)
+    for (lvl, u, m, pm), cs in sorted(groups.items()):
         if len(cs) < 2:
             continue
         cs.sort(key=lambda c: float(c["delta"]))
@@ -158,7 +165,7 @@ def compute_delta_limit(scene, cases, fields):
             floor = ROUNDOFF_REL * max(scale, 1e-300)
             fit_d = [d for d, e in zip(ds, diffs) if e > floor]
             fit_e = [e for e in diffs if e > floor]
-            out.append({"scene": scene, "u_space": u, "multiplier": m, "level": lvl,
+            out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "level": lvl,
                         "quantity": q, "delta_ref": d0, "deltas": ds, "diffs": diffs,
                         "norm_ref": scale, "slope": rates.fit_slope(fit_d, fit_e),
                         "points_fitted": len(fit_d)})
@@ -195,8 +202,8 @@ def compute_agreement(scene, cases, fields, refs):
 
 
 def _solver_vs_reference(scene, cases, fields, ref, tool):
-    """e_u, e_p (p with its bubble), e_λ of every solver case against the reference of the same
-    level, and e_u, e_p (P1 part of p) against the reference's finest level (nested meshes: the
+    """e_u, e_p (p with its bubble; the lumped p has none), e_λ of every solver case against the
+    reference of the same level, and e_u, e_p (P1 part of p) against the reference's finest level (nested meshes: the
     coarse field is evaluated exactly at the fine triangles' corners), all exact on shared
     (sub)triangles."""
     out = []
@@ -216,8 +223,8 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
         pts, tris, crack = meshes[lvl]
         uref = ref["u"][lvl]
         row = {"scene": scene, "kind": "solver_vs_reference", "reference": tool, "level": lvl,
-               "u_space": c["u_space"], "multiplier": c["multiplier"], "delta": float(c["delta"]),
-               "finest_level": finest, "note": ""}
+               "u_space": c["u_space"], "multiplier": c["multiplier"], "p_mass": p_mass(c),
+               "delta": float(c["delta"]), "finest_level": finest, "note": ""}
         try:
             if c["u_space"] == "broken" and f["points"].shape[0] == pts.shape[0]:
                 row["e_u"] = norms.p1_l2_diff(pts, tris, f["u"], uref)
@@ -227,6 +234,8 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
             grad = norms.p1_gradients(pts, tris, uref)
             if p is None:
                 row["e_p"] = None
+            elif row["p_mass"] == "lumped":  # P1 without bubble
+                row["e_p"] = norms.p1_vs_piecewise_constant_l2(f["points"], f["tris"], p, grad)
             elif f.get("p_bubble") is not None:
                 row["e_p"] = norms.mini_vs_piecewise_constant_l2(f["points"], f["tris"], p,
                                                                  f["p_bubble"], grad)
@@ -266,10 +275,11 @@ def compute_gci(scene, cases, fields, has_exact):
     if fields is None or not cases:
         return out
     delta = ref_delta(cases)
-    for (u, m), cs in series_by_variant(cases, delta).items():
+    for (u, m, pm), cs in series_by_variant(cases, delta).items():
         cs = [c for c in cs if fields.has_case(c.get("fields_grid"))]
-        if len(cs) < 3:
-            continue
+        hs = [float(c["h"]) for c in cs]
+        if len(cs) < 3 or any(not b < a for a, b in zip(hs, hs[1:])):
+            continue  # (a level listed twice, e.g. a case without its p mass: completeness fails)
         h, unorm, lint = [], [], []
         for c in cs:
             f = fields.case(c["fields_grid"])
@@ -284,7 +294,7 @@ def compute_gci(scene, cases, fields, has_exact):
             g = rates.gci(h, vals)
             if g is None:
                 continue
-            g.update(scene=scene, u_space=u, multiplier=m, delta=delta, output=name,
+            g.update(scene=scene, u_space=u, multiplier=m, p_mass=pm, delta=delta, output=name,
                      levels=[int(c["level"]) for c in cs][-3:], scene_has_exact=has_exact)
             out.append(g)
     return out
@@ -296,7 +306,7 @@ def kkt_rows(scene, cases):
     for c in cases:
         k = c.get("kkt") or {}
         rows.append({"scene": scene, "level": int(c["level"]), "u_space": c["u_space"],
-                     "multiplier": c["multiplier"], "delta": float(c["delta"]),
+                     "multiplier": c["multiplier"], "p_mass": p_mass(c), "delta": float(c["delta"]),
                      "converged": c.get("converged") is True, "status": c.get("status"),
                      "iterations": c.get("iterations"), "kkt": k,
                      "kkt_max": max([float(v) for v in k.values() if v is not None], default=None),
@@ -305,7 +315,7 @@ def kkt_rows(scene, cases):
                      "regularized_pivots": c.get("regularized_pivots"),
                      "condition_estimate": c.get("condition_estimate")})
     rows.sort(key=lambda r: (r["converged"], r["level"], r["u_space"], r["multiplier"],
-                             -r["delta"]))
+                             r["p_mass"] != DEFAULT_P_MASS, r["p_mass"], -r["delta"]))
     return rows
 
 
@@ -314,7 +324,7 @@ def timing_rows(scene, cases):
     for c in sorted(cases, key=case_key):
         e = c.get("errors") if isinstance(c.get("errors"), dict) else {}
         rows.append({"scene": scene, "level": int(c["level"]), "u_space": c["u_space"],
-                     "multiplier": c["multiplier"], "delta": float(c["delta"]),
+                     "multiplier": c["multiplier"], "p_mass": p_mass(c), "delta": float(c["delta"]),
                      "unknowns": c.get("unknowns"), "total_s": total_time(c),
                      "timings_s": c.get("timings_s"), "u_l2": e.get("u_l2")})
     return rows
@@ -324,11 +334,12 @@ def timing_rows(scene, cases):
 # An expectation of scenes/expectations.toml bounds one series at one level of one scene:
 # max_error (the error at `level`) and min_rate (the rate from level − 1 to `level`). Every name in
 # it must exist: the scene among the scene files beside the expectations file (or the judged
-# scene), the u space, multiplier and level among those the judged scene's file lists, the
-# quantity among QUANTITIES; otherwise exit 2. Known failures are declared in the scene file
+# scene), the u space, multiplier, p mass and level among those the judged scene's file lists, the
+# quantity among QUANTITIES; otherwise exit 2. `p_mass` is optional: without it the expectation
+# bounds the consistent p mass ("*": both). Known failures are declared in the scene file
 # ([[verification.expected_failure]]), not here.
-EXPECTATION_KEYS = {"scene", "u_space", "multiplier", "quantity", "level", "min_rate", "max_error",
-                    "note"}
+EXPECTATION_KEYS = {"scene", "u_space", "multiplier", "p_mass", "quantity", "level", "min_rate",
+                    "max_error", "note"}
 MOVED_KEYS = {
     "converges": "declare a known failure in the scene file's [[verification.expected_failure]] "
                  "(every series is expected to converge)",
@@ -379,10 +390,11 @@ def load_expectations(path):
 
 def validate_expectations(exps, path, scene, scene_file):
     """The expectations that apply to `scene`; a name that matches nothing is a ValueError."""
-    from .settings import scene_lists
+    from .settings import scene_lists, scene_p_masses
 
     known_scenes = _scene_names_beside(path) | {scene}
     levels, u_spaces, multipliers, _ = scene_lists(scene_file)
+    p_masses = scene_p_masses(scene_file)
     mine = []
     for i, e in enumerate(exps):
         if e["scene"] != "*" and e["scene"] not in known_scenes:
@@ -390,7 +402,10 @@ def validate_expectations(exps, path, scene, scene_file):
                              f"results folder's scene nor a scene file beside {path}")
         if e["scene"] not in ("*", scene):
             continue
-        for key, values in (("u_space", u_spaces), ("multiplier", multipliers)):
+        for key, values in (("u_space", u_spaces), ("multiplier", multipliers),
+                            ("p_mass", p_masses)):
+            if key == "p_mass" and key not in e:
+                continue  # consistent, also in a scene that runs only the lumped p mass: no match
             if e[key] != "*" and e[key] not in values:
                 raise ValueError(f"expectation {i}: {key} {e[key]!r} is not run by scene "
                                  f"{scene!r} (its scene file lists {values})")
@@ -410,13 +425,15 @@ def check_expectations(series, exps):
     results = []
     for e in exps:
         matched = [s for s in series if _match(e["u_space"], s["u_space"])
-                   and _match(e["multiplier"], s["multiplier"]) and _match(e["quantity"], s["quantity"])]
+                   and _match(e["multiplier"], s["multiplier"]) and _match(e["quantity"], s["quantity"])
+                   and _match(e.get("p_mass", DEFAULT_P_MASS), s.get("p_mass", DEFAULT_P_MASS))]
         if not matched:
             results.append({**e, "variant": None, "status": "not evaluated",
                             "reason": "no series of this run matches it"})
         for s in matched:
-            res = {**e, "u_space": s["u_space"], "multiplier": s["multiplier"],
-                   "quantity": s["quantity"], "variant": f"{s['u_space']}/{s['multiplier']}"}
+            pm = s.get("p_mass", DEFAULT_P_MASS)
+            res = {**e, "u_space": s["u_space"], "multiplier": s["multiplier"], "p_mass": pm,
+                   "quantity": s["quantity"], "variant": variant_label(s["u_space"], s["multiplier"], pm)}
             at = dict(zip(s["levels"], s["errors"]))
             err, prev = at.get(e["level"]), at.get(e["level"] - 1)
             problems, missing = [], []
@@ -453,6 +470,11 @@ def _rel(a, b):
     return abs(a - b) / max(abs(a), abs(b), 1e-300)
 
 
+def _case_list(k):
+    """A case key as written in a baseline flag: [level, u, m, δ], with the p mass only if lumped."""
+    return list(k[:4]) if k[4] == DEFAULT_P_MASS else list(k)
+
+
 def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
     """Flags of a rerun against an earlier results folder of the same scene: error norms, rates
     and statuses of the series against the exact solution, and grown timings."""
@@ -470,29 +492,33 @@ def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
                 continue
             rd = _rel(float(ce[q]), float(oe[q]))
             if rd > BASELINE_ERROR_RTOL:
-                flags.append({"scene": scene, "kind": "error", "case": list(k), "quantity": q,
+                flags.append({"scene": scene, "kind": "error", "case": _case_list(k), "quantity": q,
                               "old": oe[q], "new": ce[q], "rel_change": rd})
         tn, to = total_time(c), total_time(o)
         if to >= BASELINE_TIME_MIN_S and tn > (1 + BASELINE_TIME_GROWTH) * to:
-            flags.append({"scene": scene, "kind": "timing", "case": list(k), "old": to,
+            flags.append({"scene": scene, "kind": "timing", "case": _case_list(k), "old": to,
                           "new": tn, "rel_change": tn / to - 1})
-    oldr = {(r["u_space"], r["multiplier"], r["quantity"]): r for r in base_rates}
+    def skey(r):
+        return r["u_space"], r["multiplier"], r.get("p_mass", DEFAULT_P_MASS), r["quantity"]
+
+    oldr = {skey(r): r for r in base_rates}
     for r in rate_entries:
-        o = oldr.get((r["u_space"], r["multiplier"], r["quantity"]))
+        o = oldr.get(skey(r))
         if o is None:
             continue
+        label = variant_label(r["u_space"], r["multiplier"], r.get("p_mass", DEFAULT_P_MASS))
         for lv, rn, ro in zip(r["levels"][1:], r["rates"], o["rates"]):
             if rn is None or ro is None:
                 continue
             if abs(rn - ro) > BASELINE_RATE_ATOL:
-                flags.append({"scene": scene, "kind": "rate", "variant": f"{r['u_space']}/"
-                              f"{r['multiplier']}", "quantity": r["quantity"], "level": lv,
+                flags.append({"scene": scene, "kind": "rate", "variant": label,
+                              "quantity": r["quantity"], "level": lv,
                               "old": ro, "new": rn, "abs_change": abs(rn - ro)})
         # The baseline's series are computed without its reference comparisons (against None:
         # inconclusive), so only series measured against the exact solution compare statuses.
         if o["against"] == "exact" and o["status"] != r["status"]:
-            flags.append({"scene": scene, "kind": "status", "variant": f"{r['u_space']}/"
-                          f"{r['multiplier']}", "quantity": r["quantity"],
+            flags.append({"scene": scene, "kind": "status", "variant": label,
+                          "quantity": r["quantity"],
                           "old": o["status"], "new": r["status"]})
     return flags
 

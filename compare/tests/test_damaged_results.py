@@ -74,15 +74,19 @@ def _set(text, key, value):
 XFAIL = "[[verification.expected_failure]]"
 
 
-def small_scene(scene, *, levels, deltas=None, references=True, xfail="keep", smoke=False):
-    """The repository scene `scene` with cells = [4, 4], these levels (and δ), with or without its
-    references; xfail: "keep" its [[verification.expected_failure]], "drop" it, or a u space to
-    declare instead."""
+def small_scene(scene, *, levels, deltas=None, references=True, xfail="keep", smoke=False,
+                p_mass=None):
+    """The repository scene `scene` with cells = [4, 4], these levels (and δ, and p masses), with or
+    without its references; xfail: "keep" its [[verification.expected_failure]], "drop" it, or a u
+    space to declare instead."""
     text = read_text(os.path.join(SCENES, f"{scene}.toml"))
     text = _set(text, "cells", "[4, 4]")
     text = _set(text, "levels", levels)
     if deltas is not None:
         text = _set(text, "deltas", deltas)
+    if p_mass is not None:
+        text, n = re.subn(r"(?m)^(deltas = .*)$", rf"\1\np_mass = {p_mass}", text)
+        assert n == 1
     if not references:
         text = _set(text, "references", "[]")
     head, sep, decl = text.partition(XFAIL)
@@ -108,6 +112,9 @@ BASES = {
     "broken declared": ("open-exact", dict(OPEN_NOREF, xfail="broken"), ["--u-space", "broken"]),
     "two levels": ("open-exact", dict(levels="[0, 1]", references=False), []),
     "two levels smoke": ("open-exact", dict(levels="[0, 1]", references=False, smoke=True), []),
+    # both p masses (issue 14), multiplier M1: 12 cases
+    "lumped": ("open-exact", dict(OPEN_NOREF, p_mass='["consistent", "lumped"]'),
+               ["--multiplier", "M1"]),
 }
 
 
@@ -134,10 +141,11 @@ def save(folder, data, name="summary.json"):
         json.dump(data, fh, indent=1)  # NaN is written as the token NaN (allow_nan)
 
 
-def case_of(summary, level, u_space, multiplier, delta=0.0):
-    key = (level, u_space, multiplier, delta)
+def case_of(summary, level, u_space, multiplier, delta=0.0, p_mass="consistent"):
+    key = (level, u_space, multiplier, delta, p_mass)
     found = [c for c in summary["cases"]
-             if (c["level"], c["u_space"], c["multiplier"], float(c["delta"])) == key]
+             if (c["level"], c["u_space"], c["multiplier"], float(c["delta"]),
+                 c.get("p_mass", "consistent")) == key]
     assert len(found) == 1
     return found[0]
 
@@ -146,12 +154,42 @@ def finest(summary):
     return max(c["level"] for c in summary["cases"])
 
 
-def errors_grow(folder, others):
+def errors_grow(folder, others, p_mass="consistent"):
     s = load(folder)
     lv = finest(s)
-    prev = case_of(s, lv - 1, "broken", "M1")["errors"]["u_l2"]
-    case_of(s, lv, "broken", "M1")["errors"]["u_l2"] = 1.5 * prev
+    prev = case_of(s, lv - 1, "broken", "M1", p_mass=p_mass)["errors"]["u_l2"]
+    case_of(s, lv, "broken", "M1", p_mass=p_mass)["errors"]["u_l2"] = 1.5 * prev
     save(folder, s)
+
+
+def lumped_case_without_p_mass(folder, others):
+    """The finest broken lumped case loses its `p_mass`: it reads as a second consistent case."""
+    s = load(folder)
+    del case_of(s, finest(s), "broken", "M1", p_mass="lumped")["p_mass"]
+    save(folder, s)
+
+
+def plan_without_p_masses(folder, others):
+    s = load(folder)
+    del s["plan"]["p_masses"]
+    save(folder, s)
+
+
+def p_bubble(p_mass, present):
+    """Removes the finest broken consistent case's p_bubble, or gives the lumped one a p_bubble."""
+    def damage(folder, others):
+        import h5py
+
+        s = load(folder)
+        c = case_of(s, finest(s), "broken", "M1", p_mass=p_mass)
+        with h5py.File(os.path.join(folder, "fields.h5"), "r+") as h5:
+            g = h5[f"cases/{c['fields_grid']}"]
+            assert ("p_bubble" in g) != present
+            if present:
+                g["p_bubble"] = np.zeros((g["mesh/triangles"].shape[0], 2))
+            else:
+                del g["p_bubble"]
+    return damage
 
 
 def drop_finest(folder, others, plan_too=False):
@@ -290,11 +328,27 @@ max_error = 2.8e-3
 """
 # Measured on the small open-exact (cells [4, 4], level 4): broken u_l2 2.54e-3 to 2.56e-3,
 # rates 1.39-1.40.
+# With both p masses: the lumped p_x (no bubble: 0.409 at level 4, rate 0.49 on the small open-exact),
+# and u_l2 of both p masses ("*": 2.54e-3 consistent, 2.40e-3 lumped, rates 1.39).
+LUMPED_EXPECTATION = """[[expectation]]
+scene = "open-exact"
+u_space = "broken"
+multiplier = "M1"
+p_mass = "lumped"
+quantity = "p_x"
+level = 4
+min_rate = 0.45
+max_error = 0.45
+"""
+BOTH_P_MASSES_EXPECTATION = GOOD_EXPECTATION.replace('multiplier = "*"', 'multiplier = "M1"\np_mass = "*"')
 EXPECTATIONS = {
     "empty": "",
     "good": GOOD_EXPECTATION,
     "misspelt scene": GOOD_EXPECTATION.replace('"open-exact"', '"open-exat"'),
     "misspelt quantity": GOOD_EXPECTATION.replace('"u_l2"', '"u_L2"'),
+    "p masses": GOOD_EXPECTATION + "\n" + LUMPED_EXPECTATION + "\n" + BOTH_P_MASSES_EXPECTATION,
+    "lumped too tight": LUMPED_EXPECTATION.replace("max_error = 0.45", "max_error = 0.3"),
+    "misspelt p mass": LUMPED_EXPECTATION.replace('"lumped"', '"lumpd"'),
 }
 
 
@@ -350,6 +404,18 @@ CASES = {
     "broken only, declared an expected failure": ("broken declared", nothing, "empty", ()),
     "two levels": ("two levels", nothing, "empty", ()),
     "two levels, smoke run": ("two levels smoke", nothing, "empty", ()),
+    "lumped undamaged": ("lumped", nothing, "p masses", ()),
+    "lumped: errors of the lumped p mass grow":
+        ("lumped", lambda f, o: errors_grow(f, o, p_mass="lumped"), "empty", ()),
+    "lumped: p_mass removed from a lumped case": ("lumped", lumped_case_without_p_mass, "empty", ()),
+    "lumped: lumped cases removed": ("lumped", drop_cases("p_mass", "lumped"), "empty", ()),
+    "lumped: plan.p_masses removed": ("lumped", plan_without_p_masses, "empty", ()),
+    "lumped: p_bubble removed from a consistent case":
+        ("lumped", p_bubble("consistent", present=False), "empty", ()),
+    "lumped: p_bubble added to a lumped case":
+        ("lumped", p_bubble("lumped", present=True), "empty", ()),
+    "lumped: lumped expectation violated": ("lumped", nothing, "lumped too tight", ()),
+    "lumped: expectation of a misspelt p mass": ("lumped", nothing, "misspelt p mass", ()),
 }
 
 
@@ -511,6 +577,38 @@ DAMAGES = {
     # the verdict was PASS (checks.py fix).
     "open: mesh/ of mixed": (1, [
         "completeness: the mesh export mesh/ the references solved on lacks level(s) [4]"]),
+    # the p mass axis (issue 14)
+    "lumped: errors of the lumped p mass grow": (1, [
+        "series: broken/M1/lumped u_l2: does not converge: the error grows from level 3 to 4",
+        "independent errors: sdcrack's reported errors of level 4 broken M1 lumped δ=0 differ from "
+        "the independent computation"]),
+    # without its key the lumped case reads as a second consistent one, of a consistent p lacking
+    # its bubble, where fields.h5 says lumped
+    "lumped: p_mass removed from a lumped case": (1, [
+        "completeness: 1 case(s) asked for are missing from summary.json, e.g. level 4 broken M1 "
+        "lumped δ=0",
+        "completeness: summary.json lists a case twice",
+        "independent errors: sdcrack's case level 4 broken M1 δ=0 is of p mass consistent in "
+        "summary.json but lumped in fields.h5",
+        "independent errors: sdcrack's errors of level 4 broken M1 δ=0 cannot be recomputed: no "
+        "p_bubble in fields.h5",
+        "series: broken/M1/lumped u_l2: inconclusive: 2 level(s)"]),
+    "lumped: lumped cases removed": (1, [
+        "completeness: 6 case(s) asked for are missing from summary.json, e.g. level 2 broken M1 "
+        "lumped δ=0"]),
+    "lumped: plan.p_masses removed": (1, [
+        "completeness: 6 case(s) in summary.json were not asked for, e.g. level 2 broken M1 lumped "
+        "δ=0"]),
+    "lumped: p_bubble removed from a consistent case": (1, [
+        "independent errors: sdcrack's errors of level 4 broken M1 δ=0 cannot be recomputed: no "
+        "p_bubble in fields.h5: the consistent p is MINI"]),
+    "lumped: p_bubble added to a lumped case": (1, [
+        "independent errors: sdcrack's errors of level 4 broken M1 lumped δ=0 cannot be "
+        "recomputed: the case has a p_bubble dataset, but the lumped p is P1 without bubble"]),
+    "lumped: lumped expectation violated": (1, [
+        "expectations: broken/M1/lumped p_x (expectation 0): violated: error 4.0"]),
+    "lumped: expectation of a misspelt p mass": (2, "expectation 0: p_mass 'lumpd' is not run by "
+                                                    "scene 'open-exact'"),
 }
 
 
@@ -601,3 +699,21 @@ def test_two_levels_of_a_smoke_run_pass(judged, case):
     rep = assert_passes(result(judged, case))
     assert rep["settings"]["smoke"] is True
     assert {s["status"] for s in rep["series"]} == {"inconclusive"}
+
+
+@pytest.mark.parametrize("case", ["lumped undamaged"], ids=_slug)
+def test_both_p_masses_pass_with_p_mass_expectations(judged, case):
+    """Both p masses: a series per p mass, the continuous u space's declared failure applies to
+    both, every lumped error recomputed with bubble 0; expectations without p_mass bound the
+    consistent series, p_mass = "lumped" the lumped one, "*" both."""
+    rep = assert_passes(result(judged, case))
+    status = {(s["u_space"], s["p_mass"], s["quantity"]): s["status"] for s in rep["series"]}
+    assert len(status) == len(rep["series"]) == 2 * 2 * 4
+    assert {st for (u, _, _), st in status.items() if u == "broken"} == {"converges"}
+    assert {st for (u, _, _), st in status.items() if u == "continuous"} == {"expected failure"}
+    assert [(e["index"], e["variant"], e["quantity"], e["status"]) for e in rep["expectations"]] == [
+        (0, "broken/M1", "u_l2", "ok"), (1, "broken/M1/lumped", "p_x", "ok"),
+        (2, "broken/M1", "u_l2", "ok"), (2, "broken/M1/lumped", "u_l2", "ok")]
+    solver = [x for x in rep["independent_errors"] if x["source"] == "sdcrack"]
+    assert len(solver) == 12 and all(x["worst"] <= 1e-8 for x in solver)
+    assert {x["bubble"] for x in solver if x["p_mass"] == "lumped"} == {"none (lumped)"}

@@ -347,6 +347,27 @@ def test_bubble_is_included_exactly():
     assert r["p_x"] > r["p_l2"]
 
 
+def test_p_mass_decides_the_bubble():
+    """The lumped p (issue 14) is P1 without bubble: its errors are those with bubble 0, and a stored
+    p_bubble is inconsistent; the consistent p is MINI: without its stored p_bubble its errors cannot
+    be recomputed (no silent recovery); p_mass None keeps the stored-else-recovered behaviour."""
+    P, t, pairs, u, p, c, jump = _synthetic_fields(0)
+    C = P[pairs[:, 0]]
+    ex = open_exact()
+    lumped = E.solver_case_errors(P, t, u, p, None, C, jump, ex, p_mass="lumped")
+    zero = E.solver_case_errors(P, t, u, p, np.zeros((len(t), 2)), C, jump, ex)
+    assert lumped["bubble"] == "none (lumped)"
+    for k in ("u_l2", "p_l2", "p_x", "lambda_l2"):
+        assert lumped[k] == zero[k], k
+    with_bubble = E.solver_case_errors(P, t, u, p, c, C, jump, ex, p_mass="consistent")
+    assert with_bubble["bubble"] == "stored" and with_bubble["p_l2"] != lumped["p_l2"]
+    with pytest.raises(E.ExactError, match="lumped p is P1 without bubble"):
+        E.solver_case_errors(P, t, u, p, c, C, jump, ex, p_mass="lumped")
+    with pytest.raises(E.ExactError, match="no p_bubble"):
+        E.solver_case_errors(P, t, u, p, None, C, jump, ex, p_mass="consistent")
+    assert E.solver_case_errors(P, t, u, p, None, C, jump, ex)["bubble"] == "recovered"
+
+
 # ---------------------------------------------------------------------------------------------
 # quadrature convergence on a non-trivial field
 # ---------------------------------------------------------------------------------------------

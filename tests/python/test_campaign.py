@@ -1,4 +1,4 @@
-"""ci/cases lists the campaign, and its commands rerun single cases reproducibly.
+"""ci/cases lists the campaign, and its commands rerun single cases reproducibly (both p masses).
 
 A rerun command of ci/cases (the case's level, u space and multiplier with its δ sweep, warm-started
 δ after δ as in the full run) gives bitwise the same u, p, λ and exactly the same KKT residuals,
@@ -82,6 +82,86 @@ def test_rerun_reproduces_the_row(tmp_path):
             assert c[k] == f[k], (r[:5], k)
         with h5py.File(folder / "fields.h5") as a, h5py.File(tmp_path / "full" / "mixed" / "fields.h5") as b:
             g = c["fields_grid"]
+            for name in ("u", "p", "crack/lambda"):
+                assert np.array_equal(a[f"cases/{g}/{name}"][()], b[f"cases/{g}/{name}"][()]), (r[:5], name)
+
+
+def test_case_list_of_both_p_masses(tmp_path):
+    """A scene with p_mass = ["consistent", "lumped"]: one row per p mass, the same columns; the
+    lumped rows' commands add `--p-mass lumped` and write to their own `-lumped` folder, the
+    consistent ones are those of a scene without p masses. A results folder's plan decides."""
+    text = (ROOT / "scenes" / "closed-exact.toml").read_text()
+    assert text.count("deltas = [0.0]") == 1
+    scene = tmp_path / "closed-exact.toml"
+    scene.write_text(text.replace("deltas = [0.0]", 'deltas = [0.0]\np_mass = ["consistent", "lumped"]'))
+    plain = cases(ROOT / "scenes" / "closed-exact.toml")
+    rows = cases(scene)
+    assert len(rows) == 2 * len(plain) == 2 * 5 * 2 * 3
+    lumped = [r for r in rows if "--p-mass" in r[5]]
+    consistent = [r for r in rows if "--p-mass" not in r[5]]
+    assert [r[:5] for r in lumped] == [r[:5] for r in consistent] == [r[:5] for r in plain]
+    assert [r[5].replace(str(scene), "S") for r in consistent] == \
+        [r[5].replace(str(ROOT / "scenes" / "closed-exact.toml"), "S") for r in plain]
+    for r in lumped:
+        cmd = r[5].split()
+        assert cmd[cmd.index("--p-mass") + 1] == "lumped" and cmd.index("--p-mass") < cmd.index("--out")
+        assert cmd[-1] == f"results/rerun/closed-exact-l{r[1]}-{r[2]}-{r[3]}-lumped-d{r[4]}"
+    outs = [r[5].split("--out ")[1] for r in rows]
+    assert len(set(outs)) == len(outs), "one folder per case"
+    # a results folder of a --p-mass lumped run: its plan's p masses
+    folder = tmp_path / "out" / "closed-exact"
+    folder.mkdir(parents=True)
+    (folder / "scene.toml").write_text(scene.read_text())
+    (folder / "summary.json").write_text(json.dumps({"plan": {
+        "levels": [2], "u_spaces": ["broken"], "multipliers": ["M1"], "p_masses": ["lumped"],
+        "deltas": [0.0]}}))
+    rows = cases("out/closed-exact", cwd=tmp_path)
+    assert len(rows) == 1 and rows[0][:5] == ["closed-exact", "2", "broken", "M1", "0.0"]
+    assert "--multiplier M1 --p-mass lumped --out" in rows[0][5]
+
+
+def test_rerun_of_a_lumped_case_reproduces_the_row(tmp_path):
+    if not EXE.is_file():
+        pytest.skip("sdcrack binary not built")
+    text = (ROOT / "scenes" / "open-exact.toml").read_text()
+    for old, new in (("levels = [0, 1, 2, 3, 4]", "levels = [1, 2]"),
+                     ('multipliers = ["M0", "M1", "M1star"]', 'multipliers = ["M0", "M1"]'),
+                     ("deltas = [0.0]", 'deltas = [1e-2, 0.0]\np_mass = ["consistent", "lumped"]'),
+                     ('references = ["dolfinx", "freefem"]', "references = []")):
+        assert text.count(old) == 1, old
+        text = text.replace(old, new)
+    scene = tmp_path / "open.toml"
+    scene.write_text(text)
+    subprocess.run([str(EXE), "run", str(scene), "--out", str(tmp_path / "full"), "--quiet"],
+                   check=True, capture_output=True)
+    full_dir = tmp_path / "full" / "open-exact"
+    full = json.loads((full_dir / "summary.json").read_text())
+    key = lambda c: (c["level"], c["u_space"], c["multiplier"], c["p_mass"], c["delta"])  # noqa: E731
+    by_key = {key(c): c for c in full["cases"]}
+    rows = [r for r in cases(full_dir, cwd=tmp_path)
+            if tuple(r[1:5]) in {("2", "broken", "M1", "0.0"), ("1", "continuous", "M0", "0.01")}]
+    assert len(rows) == 4
+    for r in rows:
+        cmd = r[5].split() + ["--quiet"]
+        pm = "lumped" if "--p-mass" in cmd else "consistent"
+        assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack")
+        cmd[0] = str(EXE)  # SDCRACK_BIN may name another build
+        subprocess.run(cmd, cwd=tmp_path, check=True, capture_output=True)
+        folder = tmp_path / cmd[cmd.index("--out") + 1] / "open-exact"
+        one = json.loads((folder / "summary.json").read_text())["cases"]
+        assert {c["p_mass"] for c in one} == ({"lumped"} if pm == "lumped" else {"consistent", "lumped"})
+        c = next(x for x in one if repr(float(x["delta"])) == r[4] and x["p_mass"] == pm)
+        f = by_key[key(c)]
+        for k in ("unknowns", "multipliers", "kkt", "active_multipliers", "converged", "h",
+                  "regularized_pivots", "iterations", "fields_grid", "condition_estimate"):
+            assert c[k] == f[k], (r[:5], pm, k)
+        # the lumped case's error norms, alone and after the consistent one, once differed by
+        # 1 ulp (the fields are bitwise equal)
+        for q, v in f["errors"].items():
+            assert c["errors"][q] == pytest.approx(v, rel=1e-14, abs=1e-300), (r[:5], pm, q)
+        with h5py.File(folder / "fields.h5") as a, h5py.File(full_dir / "fields.h5") as b:
+            g = c["fields_grid"]
+            assert ("-lumped-delta" in g) == (pm == "lumped")
             for name in ("u", "p", "crack/lambda"):
                 assert np.array_equal(a[f"cases/{g}/{name}"][()], b[f"cases/{g}/{name}"][()]), (r[:5], name)
 
