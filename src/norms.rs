@@ -130,58 +130,72 @@ pub fn error_norms(
         }
     }
     let plain = graded_pieces(None, 0);
+    // One triangle's contributions (∫ (u_h − u)², ∫ |p_h − ∇u|², h_T² ∫ (div p_h + f)²).
+    let element = |ti: usize, t: &[usize; 3]| -> (f64, f64, f64) {
+        let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
+        let corner = (0..3).find(|&k| tips.contains(&t[k]));
+        let near_tip = t.iter().any(|&v| tip_patch[v]);
+        let rule = if near_tip { &tip_rule } else { &rule };
+        let graded;
+        let pieces = match corner {
+            Some(_) => {
+                graded = graded_pieces(corner, quad.tip_depth);
+                &graded
+            }
+            None => &plain,
+        };
+        let dofs = topo.triangle_dofs[ti];
+        let pv = t.map(|v| sol.p[v]);
+        let bc = sol.bubbles[ti];
+        // div of the P1 part (constant) and h_T (the longest edge)
+        let div_linear: f64 = (0..3)
+            .map(|k| pv[k][0] * geo.grad[k][0] + pv[k][1] * geo.grad[k][1])
+            .sum();
+        let [a, b, c] = geo.vertices;
+        let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+        let h_t = d(a, b).max(d(b, c)).max(d(a, c));
+        let (mut su, mut sp, mut sd) = (0.0, 0.0, 0.0);
+        for piece in pieces {
+            for q in physical_points(rule, geo.vertices, *piece) {
+                let (l, x, w) = (TriangleGeometry::barycentric(q.xi), q.x, q.weight);
+                let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
+                let ph = mini_value(&pv, bc, l);
+                let du = uh - exact.u.eval(x[0], x[1]);
+                let dpx = ph[0] - exact.px.eval(x[0], x[1]);
+                let dpy = ph[1] - exact.py.eval(x[0], x[1]);
+                // ∇b_T = 27 (∇λ0 λ1 λ2 + λ0 ∇λ1 λ2 + λ0 λ1 ∇λ2)
+                let grad_b = [0, 1].map(|k| {
+                    27.0 * (geo.grad[0][k] * l[1] * l[2]
+                        + geo.grad[1][k] * l[0] * l[2]
+                        + geo.grad[2][k] * l[0] * l[1])
+                });
+                let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
+                let ddiv = div_h + sol.source.eval(x[0], x[1]);
+                su += w * du * du;
+                sp += w * (dpx * dpx + dpy * dpy);
+                sd += w * h_t * h_t * ddiv * ddiv;
+            }
+        }
+        (su, sp, sd)
+    };
+    // Fixed chunks summed in order, then the chunk sums in order: the same additions in the same
+    // order whatever the threads do, so a case gives the same norms bit for bit in any run
+    // (rayon's adaptive `reduce` splits differently from run to run).
+    const CHUNK: usize = 4096;
+    let add = |a: (f64, f64, f64), b: (f64, f64, f64)| (a.0 + b.0, a.1 + b.1, a.2 + b.2);
     let (eu, ep, ediv) = mesh
         .triangles
-        .par_iter()
+        .par_chunks(CHUNK)
         .enumerate()
-        .map(|(ti, t)| {
-            let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
-            let corner = (0..3).find(|&k| tips.contains(&t[k]));
-            let near_tip = t.iter().any(|&v| tip_patch[v]);
-            let rule = if near_tip { &tip_rule } else { &rule };
-            let graded;
-            let pieces = match corner {
-                Some(_) => {
-                    graded = graded_pieces(corner, quad.tip_depth);
-                    &graded
-                }
-                None => &plain,
-            };
-            let dofs = topo.triangle_dofs[ti];
-            let pv = t.map(|v| sol.p[v]);
-            let bc = sol.bubbles[ti];
-            // div of the P1 part (constant) and h_T (the longest edge)
-            let div_linear: f64 = (0..3)
-                .map(|k| pv[k][0] * geo.grad[k][0] + pv[k][1] * geo.grad[k][1])
-                .sum();
-            let [a, b, c] = geo.vertices;
-            let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
-            let h_t = d(a, b).max(d(b, c)).max(d(a, c));
-            let (mut su, mut sp, mut sd) = (0.0, 0.0, 0.0);
-            for piece in pieces {
-                for q in physical_points(rule, geo.vertices, *piece) {
-                    let (l, x, w) = (TriangleGeometry::barycentric(q.xi), q.x, q.weight);
-                    let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
-                    let ph = mini_value(&pv, bc, l);
-                    let du = uh - exact.u.eval(x[0], x[1]);
-                    let dpx = ph[0] - exact.px.eval(x[0], x[1]);
-                    let dpy = ph[1] - exact.py.eval(x[0], x[1]);
-                    // ∇b_T = 27 (∇λ0 λ1 λ2 + λ0 ∇λ1 λ2 + λ0 λ1 ∇λ2)
-                    let grad_b = [0, 1].map(|k| {
-                        27.0 * (geo.grad[0][k] * l[1] * l[2]
-                            + geo.grad[1][k] * l[0] * l[2]
-                            + geo.grad[2][k] * l[0] * l[1])
-                    });
-                    let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
-                    let ddiv = div_h + sol.source.eval(x[0], x[1]);
-                    su += w * du * du;
-                    sp += w * (dpx * dpx + dpy * dpy);
-                    sd += w * h_t * h_t * ddiv * ddiv;
-                }
-            }
-            (su, sp, sd)
+        .map(|(c, tris)| {
+            tris.iter()
+                .enumerate()
+                .map(|(j, t)| element(c * CHUNK + j, t))
+                .fold((0.0, 0.0, 0.0), add)
         })
-        .reduce(|| (0.0, 0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold((0.0, 0.0, 0.0), add);
     let el = lambda_error(mesh, exact, sol.lambda, quad);
     ErrorNorms {
         u_l2: eu.sqrt(),
