@@ -31,17 +31,19 @@ fn nothing_refers_to_a_path_outside_the_repository() {
         eprintln!("skipped: not a git checkout");
         return;
     };
-    let forbidden = ["../shared", "BRIEF.md", "BRIEF §"];
+    // written in pieces so that this file does not contain what it looks for
+    let forbidden = [
+        ["..", "shared"].join("/"),
+        ["BRIEF", "md"].join("."),
+        ["BRIEF", "§"].join(" "),
+    ];
     let mut hits = Vec::new();
     for file in String::from_utf8_lossy(&out.stdout).lines() {
-        if file == "tests/docs.rs" {
-            continue;
-        }
         let Ok(text) = std::fs::read_to_string(root.join(file)) else {
             continue; // binary or vanished
         };
-        for f in forbidden {
-            if text.contains(f) {
+        for f in &forbidden {
+            if text.contains(f.as_str()) {
                 hits.push(format!("{file}: {f}"));
             }
         }
