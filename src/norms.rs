@@ -14,9 +14,11 @@
 
 use crate::fe::mini::mini_value;
 use crate::fe::p1::TriangleGeometry;
-use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};
+use crate::fe::quadrature::{
+    gauss_legendre, physical_points, triangle_rule, PhysicalPoint, REFERENCE_TRIANGLE,
+};
 use crate::mesh::{Mesh, UTopology};
-use crate::scene::{eval_on_face, Exact};
+use crate::scene::{eval_on_face, BatchScratch, Exact, ExprBatch};
 
 /// The three error norms of a case.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
@@ -104,6 +106,17 @@ fn graded_pieces(corner: Option<usize>, depth: usize) -> Vec<[[f64; 2]; 3]> {
     pieces
 }
 
+/// Buffers of one thread's triangles: their quadrature points and the exact data there.
+#[derive(Default)]
+struct ElementWork {
+    points: Vec<PhysicalPoint>,
+    xs: Vec<f64>,
+    ys: Vec<f64>,
+    /// u, ∂u/∂x, ∂u/∂y, f at the points, one after the other.
+    values: Vec<f64>,
+    scratch: BatchScratch,
+}
+
 /// Computes e_u, e_p, e_λ of `sol` against `exact`.
 pub fn error_norms(
     mesh: &Mesh,
@@ -130,8 +143,10 @@ pub fn error_norms(
         }
     }
     let plain = graded_pieces(None, 0);
+    // u, ∂u/∂x, ∂u/∂y and f evaluated together, a triangle's points at once.
+    let program = ExprBatch::new(&[&exact.u, &exact.px, &exact.py, sol.source]);
     // One triangle's contributions (∫ (u_h − u)², ∫ |p_h − ∇u|², h_T² ∫ (div p_h + f)²).
-    let element = |ti: usize, t: &[usize; 3]| -> (f64, f64, f64) {
+    let element = |ti: usize, t: &[usize; 3], work: &mut ElementWork| -> (f64, f64, f64) {
         let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
         let corner = (0..3).find(|&k| tips.contains(&t[k]));
         let near_tip = t.iter().any(|&v| tip_patch[v]);
@@ -144,6 +159,21 @@ pub fn error_norms(
             }
             None => &plain,
         };
+        work.points.clear();
+        for piece in pieces {
+            work.points
+                .extend(physical_points(rule, geo.vertices, *piece));
+        }
+        let n = work.points.len();
+        work.xs.clear();
+        work.xs.extend(work.points.iter().map(|q| q.x[0]));
+        work.ys.clear();
+        work.ys.extend(work.points.iter().map(|q| q.x[1]));
+        work.values.resize(4 * n, 0.0);
+        program.eval(&work.xs, &work.ys, &mut work.scratch, &mut work.values);
+        let (u, rest) = work.values.split_at(n);
+        let (px, rest) = rest.split_at(n);
+        let (py, f) = rest.split_at(n);
         let dofs = topo.triangle_dofs[ti];
         let pv = t.map(|v| sol.p[v]);
         let bc = sol.bubbles[ti];
@@ -155,26 +185,24 @@ pub fn error_norms(
         let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
         let h_t = d(a, b).max(d(b, c)).max(d(a, c));
         let (mut su, mut sp, mut sd) = (0.0, 0.0, 0.0);
-        for piece in pieces {
-            for q in physical_points(rule, geo.vertices, *piece) {
-                let (l, x, w) = (TriangleGeometry::barycentric(q.xi), q.x, q.weight);
-                let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
-                let ph = mini_value(&pv, bc, l);
-                let du = uh - exact.u.eval(x[0], x[1]);
-                let dpx = ph[0] - exact.px.eval(x[0], x[1]);
-                let dpy = ph[1] - exact.py.eval(x[0], x[1]);
-                // ∇b_T = 27 (∇λ0 λ1 λ2 + λ0 ∇λ1 λ2 + λ0 λ1 ∇λ2)
-                let grad_b = [0, 1].map(|k| {
-                    27.0 * (geo.grad[0][k] * l[1] * l[2]
-                        + geo.grad[1][k] * l[0] * l[2]
-                        + geo.grad[2][k] * l[0] * l[1])
-                });
-                let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
-                let ddiv = div_h + sol.source.eval(x[0], x[1]);
-                su += w * du * du;
-                sp += w * (dpx * dpx + dpy * dpy);
-                sd += w * h_t * h_t * ddiv * ddiv;
-            }
+        for (j, q) in work.points.iter().enumerate() {
+            let (l, w) = (TriangleGeometry::barycentric(q.xi), q.weight);
+            let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
+            let ph = mini_value(&pv, bc, l);
+            let du = uh - u[j];
+            let dpx = ph[0] - px[j];
+            let dpy = ph[1] - py[j];
+            // ∇b_T = 27 (∇λ0 λ1 λ2 + λ0 ∇λ1 λ2 + λ0 λ1 ∇λ2)
+            let grad_b = [0, 1].map(|k| {
+                27.0 * (geo.grad[0][k] * l[1] * l[2]
+                    + geo.grad[1][k] * l[0] * l[2]
+                    + geo.grad[2][k] * l[0] * l[1])
+            });
+            let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
+            let ddiv = div_h + f[j];
+            su += w * du * du;
+            sp += w * (dpx * dpx + dpy * dpy);
+            sd += w * h_t * h_t * ddiv * ddiv;
         }
         (su, sp, sd)
     };
@@ -188,9 +216,10 @@ pub fn error_norms(
         .par_chunks(CHUNK)
         .enumerate()
         .map(|(c, tris)| {
+            let mut work = ElementWork::default();
             tris.iter()
                 .enumerate()
-                .map(|(j, t)| element(c * CHUNK + j, t))
+                .map(|(j, t)| element(c * CHUNK + j, t, &mut work))
                 .fold((0.0, 0.0, 0.0), add)
         })
         .collect::<Vec<_>>()

@@ -42,6 +42,9 @@
 
 use std::sync::Arc;
 
+mod batch;
+pub use batch::{BatchScratch, ExprBatch};
+
 /// Maximum accepted input length, in characters.
 const MAX_LEN: usize = 10_000;
 /// Maximum nesting depth (parentheses, function arguments, exponents).
@@ -179,7 +182,7 @@ impl Expr {
 // Tree
 // ---------------------------------------------------------------------------------------------
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 enum Fn1 {
     Sin,
     Cos,
@@ -230,7 +233,7 @@ impl Fn1 {
     }
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 enum Fn2 {
     Atan2,
     Min,

@@ -14,7 +14,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-pub use expr::{Expr, ExprError, Var};
+pub use expr::{BatchScratch, Expr, ExprBatch, ExprError, Var};
 pub use verification::{ExpectedFailure, Verification};
 
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
