@@ -5,7 +5,10 @@
 //!    Laplacian on the interior vertices of the same structured mesh;
 //! 2. one complete case (broken u, M1, δ = 0): mesh, assembly, ordering and symbolic analysis,
 //!    numeric factorisation, crack reduction, contact solve; no field, no error norm, no reference;
-//! 3. a sweep of 6 δ × 3 multipliers (18 cases, 6 numeric factorisations) on the same mesh.
+//! 3. a sweep of 6 δ × 3 multipliers (18 cases, 6 numeric factorisations) on the same mesh;
+//! 4. the same case and sweep with the lumped p mass (issue #14), and that variant's goals
+//!    ([`GoalCheck`]: one case ≤ 3 yardsticks, peak memory ≤ 3 × the yardstick's, sweep ≤ 1.3 × its
+//!    own factorisations), each with the factor by which it is missed and the phases carrying it.
 //!
 //! Peak resident memory is read from `/proc/self/status` (`VmHWM`) and reset between the phases
 //! through `/proc/self/clear_refs` where the kernel allows it.
@@ -84,6 +87,10 @@ pub struct BenchReport {
     pub sweep_lumped_s: f64,
     /// Numeric factorisations of the lumped sweep, summed over its δ.
     pub sweep_lumped_factorization_s: f64,
+    /// Phases of the lumped sweep, counted as in `sweep_phases`.
+    pub sweep_lumped_phases: Timings,
+    /// The performance goals of the lumped variant (issue #14), measured.
+    pub goals: Vec<GoalCheck>,
     /// Peak resident memory of the yardstick phase.
     pub yardstick_peak_rss_mb: f64,
     /// Peak resident memory of the case phase.
@@ -96,6 +103,120 @@ pub struct BenchReport {
     pub peak_reset_supported: bool,
     /// Threads in the rayon pool.
     pub threads: usize,
+}
+
+/// One performance goal against what was measured: a ratio and its bound.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GoalCheck {
+    /// The goal in words.
+    pub goal: String,
+    /// The bound on the ratio.
+    pub bound: f64,
+    /// The measured ratio.
+    pub measured: f64,
+    /// `measured ≤ bound`.
+    pub met: bool,
+    /// measured / bound: by how much the goal is missed (≤ 1 when met).
+    pub missed_by: f64,
+    /// The phases that carry the measured quantity, in the goal's unit, largest first.
+    pub phases: Vec<(String, f64)>,
+}
+
+impl GoalCheck {
+    fn new(goal: &str, bound: f64, measured: f64, mut phases: Vec<(String, f64)>) -> GoalCheck {
+        phases.sort_by(|a, b| b.1.total_cmp(&a.1));
+        GoalCheck {
+            goal: goal.to_string(),
+            bound,
+            measured,
+            met: measured <= bound,
+            missed_by: measured / bound,
+            phases,
+        }
+    }
+}
+
+/// The phases of a case or sweep, named as in the table, in seconds.
+fn named_phases(t: &Timings) -> Vec<(String, f64)> {
+    [
+        ("mesh + assembly", t.assembly),
+        ("ordering + symbolic", t.symbolic),
+        ("numeric factorisation", t.factorization),
+        ("crack reduction (x₀, H_N)", t.crack_reduction),
+        ("condition estimate of K(δ)", t.condition),
+        ("contact (LCP, recovery, KKT)", t.contact),
+    ]
+    .into_iter()
+    .map(|(n, s)| (n.to_string(), s))
+    .collect()
+}
+
+/// The goals of issue #14 for the lumped p mass: one case ≤ 3 yardsticks, its peak memory ≤ 3 ×
+/// the yardstick's, the 18-case sweep ≤ 1.3 × its own numeric factorisations.
+fn lumped_goals(r: &BenchReport) -> Vec<GoalCheck> {
+    let y = r.bare_cholesky_s;
+    let in_yardsticks = |t: &Timings| {
+        named_phases(t)
+            .into_iter()
+            .map(|(n, s)| (n, s / y))
+            .collect()
+    };
+    let f = r.sweep_lumped_factorization_s;
+    let sweep_rest = named_phases(&r.sweep_lumped_phases)
+        .into_iter()
+        .map(|(n, s)| (n, s / f))
+        .collect();
+    vec![
+        GoalCheck::new(
+            "one lumped case (broken, M1, δ = 0) / yardstick",
+            3.0,
+            r.case_lumped_s / y,
+            in_yardsticks(&r.case_lumped_phases),
+        ),
+        GoalCheck::new(
+            "peak memory of the lumped case / the yardstick's",
+            3.0,
+            r.case_lumped_peak_rss_mb / r.yardstick_peak_rss_mb,
+            Vec::new(),
+        ),
+        GoalCheck::new(
+            "lumped sweep / its own numeric factorisations",
+            1.3,
+            r.sweep_lumped_s / f,
+            sweep_rest,
+        ),
+    ]
+}
+
+/// The goals as table lines: bound, measured, met or missed by how much, and the phases.
+fn goal_lines(goals: &[GoalCheck]) -> String {
+    let mut out = String::from(
+        "
+goals of the lumped p mass (issue #14):
+",
+    );
+    for g in goals {
+        let verdict = if g.met {
+            "met".to_string()
+        } else {
+            format!("MISSED by {:.2} ×", g.missed_by)
+        };
+        out += &format!(
+            "  {:<50} ≤ {:.1}: {:.2}  {verdict}
+",
+            g.goal, g.bound, g.measured
+        );
+        if !g.met && !g.phases.is_empty() {
+            let parts: Vec<String> = g
+                .phases
+                .iter()
+                .filter(|(_, v)| *v >= 0.005)
+                .map(|(n, v)| format!("{n} {v:.2}"))
+                .collect();
+            out += &format!("    by phase (same unit): {}\n", parts.join(", "));
+        }
+    }
+    out
 }
 
 impl BenchReport {
@@ -140,12 +261,13 @@ impl BenchReport {
         out += &row("  numeric", self.yardstick.numeric_s);
         out += &row("  one solve", self.yardstick.solve_s);
         out += &row("one case (broken, M1, δ = 0), total", self.case_s);
-        out += &row("  mesh + assembly", p.assembly);
-        out += &row("  ordering + symbolic", p.symbolic);
-        out += &row("  numeric factorisation", p.factorization);
-        out += &row("  crack reduction (x₀, H_N)", p.crack_reduction);
-        out += &row("  condition estimate of K(δ)", p.condition);
-        out += &row("  contact (LCP, recovery, KKT)", p.contact);
+        let phase_rows = |t: &Timings| -> String {
+            named_phases(t)
+                .iter()
+                .map(|(n, v)| row(&format!("  {n}"), *v))
+                .collect()
+        };
+        out += &phase_rows(p);
         out += &row(
             &format!("sweep {} δ × 3 multipliers, total", self.sweep_deltas.len()),
             self.sweep_s,
@@ -161,16 +283,9 @@ impl BenchReport {
         out += &row("  contact (all cases)", q.contact);
         let l = &self.case_lumped_phases;
         out += &row("one case, lumped p mass, total", self.case_lumped_s);
-        out += &row("  mesh + assembly", l.assembly);
-        out += &row("  ordering + symbolic", l.symbolic);
-        out += &row("  numeric factorisation", l.factorization);
-        out += &row("  crack reduction (x₀, H_N)", l.crack_reduction);
-        out += &row("  contact (LCP, recovery, KKT)", l.contact);
+        out += &phase_rows(l);
         out += &row("sweep, lumped p mass, total", self.sweep_lumped_s);
-        out += &row(
-            "  numeric factorisations",
-            self.sweep_lumped_factorization_s,
-        );
+        out += &phase_rows(&self.sweep_lumped_phases);
         out += &format!(
             "lumped case: {:.2} yardsticks, peak memory {:.0} MB ({:.2} × the yardstick's)\n",
             self.case_lumped_s / y,
@@ -197,6 +312,7 @@ impl BenchReport {
             self.worst_kkt,
             self.all_converged,
         );
+        out += &goal_lines(&self.goals);
         out
     }
 }
@@ -282,12 +398,12 @@ pub fn run_bench(
     let sweep_lumped_s = t3.elapsed().as_secs_f64();
 
     let first = &case.cases[0];
-    let sweep_lumped_factorization_s =
-        sweep_phases(&sweep_lumped, sweep_plan.multipliers.len()).factorization;
+    let sweep_lumped_phases = sweep_phases(&sweep_lumped, sweep_plan.multipliers.len());
+    let sweep_lumped_factorization_s = sweep_lumped_phases.factorization;
     let sweep_phases = sweep_phases(&sweep, sweep_plan.multipliers.len());
     let sweep_factorization_s = sweep_phases.factorization;
     let (worst_kkt, all_converged) = summarize(&[&case, &sweep, &case_lumped, &sweep_lumped]);
-    Ok(BenchReport {
+    let mut report = BenchReport {
         scene: scene.name.clone(),
         vertices: n_vertices,
         cells,
@@ -311,6 +427,8 @@ pub fn run_bench(
         case_lumped_peak_rss_mb,
         sweep_lumped_s,
         sweep_lumped_factorization_s,
+        sweep_lumped_phases,
+        goals: Vec::new(),
         yardstick_peak_rss_mb,
         case_peak_rss_mb,
         sweep_peak_rss_mb,
@@ -320,7 +438,9 @@ pub fn run_bench(
             .max(case_lumped_peak_rss_mb),
         peak_reset_supported,
         threads: rayon::current_num_threads(),
-    })
+    };
+    report.goals = lumped_goals(&report);
+    Ok(report)
 }
 
 /// The sweep's phases: mesh-level ones once, δ-level ones once per δ, the rest summed over cases.
@@ -414,6 +534,26 @@ pub fn peak_rss_mb() -> f64 {
 mod tests {
     use super::*;
     use crate::study::Silent;
+
+    /// A missed goal says by how much and lists its phases, largest first; a met one says "met".
+    #[test]
+    fn goal_lines_say_how_much_and_where_a_goal_is_missed() {
+        let phases = vec![("contact".to_string(), 0.5), ("factor".to_string(), 4.0)];
+        let missed = GoalCheck::new("case / yardstick", 3.0, 4.5, phases.clone());
+        assert!(!missed.met);
+        assert_eq!(missed.missed_by, 1.5);
+        assert_eq!(missed.phases[0].0, "factor");
+        let met = GoalCheck::new("sweep / factorisations", 1.3, 1.2, phases);
+        assert!(met.met);
+        let text = goal_lines(&[missed, met]);
+        assert!(text.contains("≤ 3.0: 4.50  MISSED by 1.50 ×"), "{text}");
+        assert!(
+            text.contains("by phase (same unit): factor 4.00, contact 0.50"),
+            "{text}"
+        );
+        assert!(text.contains("≤ 1.3: 1.20  met"), "{text}");
+        assert_eq!(text.matches("by phase").count(), 1, "{text}");
+    }
 
     #[test]
     fn cells_are_multiples_of_the_scene_cells_near_the_target() {

@@ -341,4 +341,36 @@ fn bench_json_reports_the_lumped_case_beside_the_consistent_one() {
     }
     assert!(r["case_lumped_phases"]["factorization"].as_f64().is_some());
     assert_eq!(r["all_converged"], true);
+    // the three goals of issue #14, each with its bound and the measured ratio recomputed here
+    let y = r["bare_cholesky_s"].as_f64().unwrap();
+    let goals = r["goals"].as_array().expect("goals");
+    let ratio = |k: &str, d: f64| r[k].as_f64().unwrap() / d;
+    let expected = [
+        (3.0, ratio("case_lumped_s", y)),
+        (
+            3.0,
+            ratio(
+                "case_lumped_peak_rss_mb",
+                r["yardstick_peak_rss_mb"].as_f64().unwrap(),
+            ),
+        ),
+        (
+            1.3,
+            ratio(
+                "sweep_lumped_s",
+                r["sweep_lumped_factorization_s"].as_f64().unwrap(),
+            ),
+        ),
+    ];
+    assert_eq!(goals.len(), expected.len());
+    for (g, (bound, measured)) in goals.iter().zip(expected) {
+        assert_eq!(g["bound"].as_f64(), Some(bound), "{g}");
+        // serde_json's default float parsing may be 1 ulp off the printed value
+        let got = g["measured"].as_f64().expect("measured");
+        assert!(
+            (got - measured).abs() <= 1e-12 * measured,
+            "{g}: {measured}"
+        );
+        assert_eq!(g["met"].as_bool(), Some(measured <= bound), "{g}");
+    }
 }
