@@ -526,22 +526,12 @@ impl LevelContext<'_> {
         let (p, u) = x.split_at(n_p);
         let p_vertex: Vec<[f64; 2]> = p.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
         let t1 = Instant::now();
-        // The lumped p is P1 without bubble: its "bubbles" are zero in the norms, absent in fields.
-        let needs_bubbles =
-            self.p_mass == PMass::Consistent && (self.scene.exact.is_some() || self.scene.fields.p);
-        let bubbles = if needs_bubbles {
-            self.bubbles(&p_vertex, u)
-        } else {
-            Vec::new()
-        };
-        let zero_bubbles = match self.p_mass {
-            PMass::Consistent => Vec::new(),
-            PMass::Lumped => vec![[0.0; 2]; self.mesh.triangles.len()],
-        };
-        let norm_bubbles = if self.p_mass == PMass::Lumped {
-            &zero_bubbles
-        } else {
-            &bubbles
+        // The lumped p is P1 without bubble: zero bubbles in the norms, none in the fields.
+        let exact = self.scene.exact.is_some();
+        let bubbles = match self.p_mass {
+            PMass::Consistent if exact || self.scene.fields.p => self.bubbles(&p_vertex, u),
+            PMass::Lumped if exact => vec![[0.0; 2]; self.mesh.triangles.len()],
+            _ => Vec::new(),
         };
         let errors = self.scene.exact.as_ref().map(|exact| {
             error_norms(
@@ -551,7 +541,7 @@ impl LevelContext<'_> {
                 &DiscreteSolution {
                     u,
                     p: &p_vertex,
-                    bubbles: norm_bubbles,
+                    bubbles: &bubbles,
                     lambda: &lambda,
                     source: &self.scene.f,
                 },
@@ -563,7 +553,10 @@ impl LevelContext<'_> {
         let fields = (!self.scene.fields.is_empty()).then(|| CaseFieldData {
             u: u.to_vec(),
             p: self.topo.dof_vertex.iter().map(|&v| p_vertex[v]).collect(),
-            p_bubble: bubbles,
+            p_bubble: match self.p_mass {
+                PMass::Consistent => bubbles,
+                PMass::Lumped => Vec::new(),
+            },
             lambda: lambda.clone(),
         });
         timings.fields = t2.elapsed().as_secs_f64();

@@ -13,6 +13,9 @@ use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// Stem of the field files in a results folder: `fields.h5` and the series under `fields/`.
+pub const FIELDS_STEM: &str = "fields";
+
 /// Errors of the results folder.
 #[derive(Debug, thiserror::Error)]
 pub enum ResultsError {
@@ -272,6 +275,6 @@ fn write_fields(
             })
         })
         .collect();
-    xdmf::write_fields(dir, "fields", &meshes, &cases)?;
+    xdmf::write_fields(dir, FIELDS_STEM, &meshes, &cases)?;
     Ok(())
 }

@@ -222,7 +222,8 @@ impl CaseSummary {
             timings_s: c.timings,
             errors: c.errors,
             fields_grid: with_fields.then(|| case_name(c)),
-            fields_series: with_fields.then(|| format!("fields/{}.xdmf", series_name(c))),
+            fields_series: with_fields
+                .then(|| format!("{}/{}.xdmf", super::FIELDS_STEM, series_name(c))),
         }
     }
 }
