@@ -4,7 +4,9 @@
 For one scene with an `[exact]` solution and each level, runs (one process per tool and level,
 timed from outside with a wall clock):
 
-* sdcrack: `sdcrack run` of one case (broken u, M1, δ = 0; no fields, no reference run);
+* sdcrack: `sdcrack run` of one case (broken u, M1, δ = 0; no fields, no reference run), once per
+  p mass of `--p-masses`: row key `sdcrack` (`--p-mass consistent`, the paper's) and row key
+  `sdcrack-lumped` (`--p-mass lumped`);
 * dolfinx / FreeFEM: `sdcrack mesh` (not timed: it is shared input), then the reference script.
 
 Each tool reports its own ‖u_h − u‖_{L²} against the exact solution, each with a tip-graded
@@ -13,9 +15,26 @@ collapsed at the tips; FreeFEM's script: numpy rules graded toward the tips on t
 error evaluation), and the solve time by each tool's own timer without start-up and without the
 error evaluation (sdcrack: its phases but `norms`; dolfinx: assembly + solve; FreeFEM: the
 FreeFem++ run). The speed-up at equal error interpolates each reference's (error, time) curve
-log-log at sdcrack's errors and divides by sdcrack's time of the same kind.
+log-log at each sdcrack variant's errors and divides by that variant's time of the same kind; the
+lumped variant is also compared with the consistent one the same way (consistent's time at
+lumped's error / lumped's time).
 
-Writes OUT/work_precision.{json,md,png} and prints the Markdown table.
+Load control: before each measurement (one tool at one level) the script waits until the machine
+is idle (1-min load average < 1.0 and other processes < 0.1 core over 2 s; it gives up after
+`--idle-timeout` s, measures anyway and marks it IDLE-TIMEOUT). During the measurement it takes
+foreign cores = (busy time of /proc/stat's `cpu` line − CPU time of this process and its children,
+from os.times()) / wall; at ≥ 0.2 core the measurement is rejected and repeated, at most
+`--max-tries` times (the last try is kept, marked REJECTED-KEPT). `--no-idle-wait` disables both.
+One line per try goes to OUT/work_precision.load.txt.
+
+Writes OUT/work_precision.{json,md,png} and prints the Markdown table. The JSON has
+`scene`, `p_masses`, `levels` (one object per level: `level` and, per tool present at that level,
+an object with wall_s, solver_s, u_l2, unknowns, kkt, the load check `load` {status, tries,
+foreign_cores} and, for sdcrack, norms_s; tool keys `sdcrack`, `sdcrack-lumped`, `dolfinx`,
+`freefem`), `speedup_solver_time` and `speedup_wall_time` (dicts keyed by sdcrack variant,
+`sdcrack` / `sdcrack-lumped`, each a list of {level, u_l2, dolfinx, freefem}, the ratios or null
+outside the reference's range) and `lumped_vs_consistent` (a list of {level, u_l2, solve, wall}:
+consistent's time at lumped's error / lumped's time, null outside consistent's range).
 """
 
 import argparse
@@ -23,6 +42,7 @@ import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -32,6 +52,21 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 SDCRACK = ROOT / "target" / "release" / "sdcrack"
 TOOLS = ("dolfinx", "freefem")
+# sdcrack's p masses → row key and label
+VARIANTS = {"consistent": "sdcrack", "lumped": "sdcrack-lumped"}
+LABELS = {"sdcrack": "sdcrack", "sdcrack-lumped": "sdcrack (lumped p)"}
+IDLE_LOAD = 1.0  # 1-min load average below which the machine counts as idle
+IDLE_FOREIGN = 0.1  # cores used by other processes below which the machine counts as idle
+REJECT_FOREIGN = 0.2  # cores used by other processes during a measurement that reject it
+LOAD_HEADER = """\
+# Load during each measurement (ci/bench_references.py). One line per try:
+#   time tool level try n: wall (s of the try) own cpu (s of CPU used by this script and its
+#   children) foreign (cores used by other processes: /proc/stat busy time minus own cpu, over
+#   wall) steal (cores stolen by the hypervisor) load (1-min load average before->after) verdict
+# Verdicts: OK; REJECTED (foreign >= 0.2 core, repeated); REJECTED-KEPT (the last try, kept);
+# UNCHECKED (foreign >= 0.2 core under --no-idle-wait); IDLE-TIMEOUT appended when the wait for
+# an idle machine (load < 1.0, foreign < 0.1 core over 2 s) gave up.
+"""
 
 
 def run_timed(cmd, env=None):
@@ -50,10 +85,93 @@ def sdcrack_only_scene(scene_text):
     return re.sub(r"(?m)^fields\s*=.*$", "fields = []", text)
 
 
-def run_sdcrack(scene_file, level, work):
-    out = work / f"sd{level}"
+def parse_loadavg(text):
+    """The 1-min load average from the text of /proc/loadavg."""
+    return float(text.split()[0])
+
+
+def parse_proc_stat(text, hz):
+    """(busy s, steal s) of all CPUs together from the text of /proc/stat's `cpu` line.
+
+    Busy: user + nice + system + irq + softirq (guest time is already in user and nice); idle,
+    iowait and steal are not busy."""
+    line = next(x for x in text.splitlines() if x.split()[0] == "cpu")
+    v = [int(x) for x in line.split()[1:]] + [0] * 10
+    user, nice, system, _idle, _iowait, irq, softirq, steal = v[:8]
+    return (user + nice + system + irq + softirq) / hz, steal / hz
+
+
+def snapshot():
+    """Monotonic time, busy and steal CPU s of the machine, own CPU s and the 1-min load."""
+    busy, steal = parse_proc_stat(Path("/proc/stat").read_text(), os.sysconf("SC_CLK_TCK"))
+    t = os.times()
+    return {"t": time.monotonic(), "busy_s": busy, "steal_s": steal,
+            "own_s": t.user + t.system + t.children_user + t.children_system,
+            "load": parse_loadavg(Path("/proc/loadavg").read_text())}
+
+
+def foreign_cores(s0, s1):
+    """Cores used by other processes between two snapshots: (busy − own CPU time) / wall."""
+    return ((s1["busy_s"] - s0["busy_s"]) - (s1["own_s"] - s0["own_s"])) / (s1["t"] - s0["t"])
+
+
+def idle_sample(seconds=2.0):
+    """(1-min load average, foreign cores over the next `seconds`)."""
+    s0 = snapshot()
+    time.sleep(seconds)
+    return s0["load"], foreign_cores(s0, snapshot())
+
+
+def wait_idle(timeout, sample=idle_sample, clock=time.monotonic):
+    """Waits until the machine is idle; False if it still is not after `timeout` s."""
+    start = clock()
+    while True:
+        load, foreign = sample()
+        if load < IDLE_LOAD and foreign < IDLE_FOREIGN:
+            return True
+        if clock() - start >= timeout:
+            return False
+
+
+def verdict(foreign, tries, max_tries, check):
+    """OK, REJECTED (to repeat), REJECTED-KEPT (the last try) or UNCHECKED (no check)."""
+    if foreign < REJECT_FOREIGN:
+        return "OK"
+    if not check:
+        return "UNCHECKED"
+    return "REJECTED" if tries < max_tries else "REJECTED-KEPT"
+
+
+def measure(label, fn, log, check=True, idle_timeout=300.0, max_tries=3):
+    """Runs `fn()` (one tool at one level) under load control, logs each try to `log` (an open
+    file; `label` like 'sdcrack L0'), returns fn's dict with the load check under `load`."""
+    max_tries = max(1, max_tries)
+    for tries in range(1, max_tries + 1):
+        idle = wait_idle(idle_timeout) if check else True
+        s0 = snapshot()
+        result = fn()
+        s1 = snapshot()
+        wall = s1["t"] - s0["t"]
+        foreign = foreign_cores(s0, s1)
+        status = verdict(foreign, tries, max_tries, check)
+        log.write(f"{time.strftime('%H:%M:%S')} {label} try {tries}: wall {wall:.2f} s own cpu "
+                  f"{s1['own_s'] - s0['own_s']:.2f} foreign {foreign:.2f} steal "
+                  f"{(s1['steal_s'] - s0['steal_s']) / wall:.2f} load {s0['load']:.2f}->"
+                  f"{s1['load']:.2f} {status}{'' if idle else ' IDLE-TIMEOUT'}\n")
+        log.flush()
+        if status != "REJECTED":
+            break
+    result["load"] = {"status": status + ("" if idle else " IDLE-TIMEOUT"), "tries": tries,
+                      "foreign_cores": foreign}
+    return result
+
+
+def run_sdcrack(scene_file, level, work, p_mass="consistent"):
+    out = work / f"sd{level}-{p_mass}"
+    shutil.rmtree(out, ignore_errors=True)  # a repeated try writes afresh
     wall = run_timed([SDCRACK, "run", scene_file, "--level", str(level), "--u-space", "broken",
-                      "--multiplier", "M1", "--delta", "0", "--out", out, "--quiet"])
+                      "--multiplier", "M1", "--p-mass", p_mass, "--delta", "0", "--out", out,
+                      "--quiet"])
     (summary,) = out.glob("*/summary.json")
     case = json.loads(summary.read_text())["cases"][0]
     return {
@@ -72,6 +190,7 @@ def run_reference(tool, scene_file, level, work):
     if not mesh.exists():
         run_timed([SDCRACK, "mesh", scene_file, "--level", str(level), "--out", mesh])
     out = work / f"{tool}{level}"
+    shutil.rmtree(out, ignore_errors=True)  # a repeated try writes afresh
     env = dict(os.environ, FF_LOADPATH=os.environ.get("FF_LOADPATH", "/usr/lib/freefem++"))
     wall = run_timed(["/usr/bin/python3", ROOT / "references" / tool / "solve.py", mesh,
                       "--out", out], env=env)
@@ -99,58 +218,97 @@ def time_at_error(curve, error):
     return None
 
 
-def speedups(rows, key):
-    """For each sdcrack row: time of each reference at sdcrack's error / sdcrack's time."""
+def ratio_at_error(rows, tool, key, e, t):
+    """`tool`'s time (`key`) interpolated at error `e`, divided by `t`; None outside its range."""
+    tr = time_at_error([(x[tool]["u_l2"], x[tool][key]) for x in rows if tool in x], e)
+    return None if tr is None else tr / t
+
+
+def speedups(rows, key, variant="sdcrack"):
+    """For each row of sdcrack `variant` (a row key): time of each reference at the variant's
+    error / the variant's time."""
     out = []
-    for r in (r for r in rows if "sdcrack" in r):
-        e, t = r["sdcrack"]["u_l2"], r["sdcrack"][key]
-        entry = {"level": r["level"], "u_l2": e}
-        for tool in TOOLS:
-            curve = [(x[tool]["u_l2"], x[tool][key]) for x in rows if tool in x]
-            tr = time_at_error(curve, e)
-            entry[tool] = None if tr is None else tr / t
-        out.append(entry)
+    for r in (r for r in rows if variant in r):
+        e, t = r[variant]["u_l2"], r[variant][key]
+        out.append({"level": r["level"], "u_l2": e,
+                    **{tool: ratio_at_error(rows, tool, key, e, t) for tool in TOOLS}})
     return out
 
 
-def markdown(scene, rows, fast_internal, fast_wall):
+def lumped_vs_consistent(rows):
+    """For each lumped row: consistent's time at lumped's error / lumped's time (both timers)."""
+    lumped = VARIANTS["lumped"]
+    return [{"level": r["level"], "u_l2": r[lumped]["u_l2"],
+             **{name: ratio_at_error(rows, "sdcrack", key, r[lumped]["u_l2"], r[lumped][key])
+                for name, key in (("solve", "solver_s"), ("wall", "wall_s"))}}
+            for r in rows if lumped in r]
+
+
+def fmt_x(v):
+    """A ratio as '12.3×', '–' for None."""
+    return "–" if v is None else f"{v:.1f}×"
+
+
+def level_line(level, tool, x):
+    """One row of the level table; the norms columns for sdcrack only."""
+    norms = "–" if "norms_s" not in x else f"{x['norms_s']:.2f}"
+    ratio = ("–" if "norms_s" not in x or x["solver_s"] <= 0
+             else f"{x['norms_s'] / x['solver_s']:.1f}")
+    return (f"| {level} | {LABELS.get(tool, tool)} | {x['unknowns']} | {x['u_l2']:.3e} | "
+            f"{x['wall_s']:.2f} | {x['solver_s']:.2f} | {norms} | {ratio} |")
+
+
+def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=()):
+    """The report; `fast_internal` / `fast_wall`: speedups() per sdcrack variant (row key)."""
     lines = [f"# Work-precision: scene `{scene}` (broken u, M1, δ = 0 for sdcrack)", "",
              "Times in seconds, one process per tool and level on this machine. `wall`: the whole "
              "process (start-up, imports, solve and error evaluation); `solve`: the tool's own "
              "timer without start-up and without error evaluation (sdcrack: its phases but the "
-             "error norms; dolfinx: assembly + solve; FreeFEM: the FreeFem++ run).", "",
-             "| level | tool | unknowns | ‖u_h − u‖_L² | wall s | solve s |",
-             "|---|---|---|---|---|---|"]
+             "error norms; dolfinx: assembly + solve; FreeFEM: the FreeFem++ run); `norms`: "
+             "sdcrack's error-norm evaluation. `sdcrack`: consistent p mass (the paper's); "
+             "`sdcrack (lumped p)`: lumped p mass.", "",
+             "| level | tool | unknowns | ‖u_h − u‖_L² | wall s | solve s | norms s "
+             "| norms / solve |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        for tool in ("sdcrack",) + TOOLS:
-            if tool in r:
-                x = r[tool]
-                lines.append(f"| {r['level']} | {tool} | {x['unknowns']} | {x['u_l2']:.3e} | "
-                             f"{x['wall_s']:.2f} | {x['solver_s']:.2f} |")
+        lines += [level_line(r["level"], tool, r[tool])
+                  for tool in (*VARIANTS.values(), *TOOLS) if tool in r]
     lines += ["", "Speed-up of sdcrack at equal error (reference time interpolated log-log at "
               "sdcrack's error, divided by sdcrack's time of the same kind; – where sdcrack's error is "
               "outside the reference's range):", "",
-              "| level | sdcrack ‖u_h − u‖ | vs dolfinx (solve) | vs FreeFEM (solve) "
-              "| vs dolfinx (wall) | vs FreeFEM (wall) |", "|---|---|---|---|---|---|"]
-    fmt = lambda v: "–" if v is None else f"{v:.1f}×"  # noqa: E731
-    for a, b in zip(fast_internal, fast_wall):
-        lines.append(f"| {a['level']} | {a['u_l2']:.3e} | {fmt(a['dolfinx'])} | "
-                     f"{fmt(a['freefem'])} | {fmt(b['dolfinx'])} | {fmt(b['freefem'])} |")
+              "| level | variant | sdcrack ‖u_h − u‖ | vs dolfinx (solve) "
+              "| vs FreeFEM (solve) | vs dolfinx (wall) | vs FreeFEM (wall) |",
+              "|---|---|---|---|---|---|---|"]
+    entries = sorted(((a["level"], mass, a, b) for mass, key in VARIANTS.items()
+                      for a, b in zip(fast_internal.get(key, []), fast_wall.get(key, []))),
+                     key=lambda x: (x[0], list(VARIANTS).index(x[1])))
+    for level, mass, a, b in entries:
+        lines.append(f"| {level} | {mass} | {a['u_l2']:.3e} | {fmt_x(a['dolfinx'])} | "
+                     f"{fmt_x(a['freefem'])} | {fmt_x(b['dolfinx'])} | {fmt_x(b['freefem'])} |")
+    if lumped_fast:
+        lines += ["", "Lumped against consistent p mass at equal error (consistent's time "
+                  "interpolated log-log at lumped's error, divided by lumped's time; – outside "
+                  "consistent's range):", "",
+                  "| level | lumped ‖u_h − u‖ | solve | wall |", "|---|---|---|---|"]
+        lines += [f"| {x['level']} | {x['u_l2']:.3e} | {fmt_x(x['solve'])} | {fmt_x(x['wall'])} |"
+                  for x in lumped_fast]
     return "\n".join(lines) + "\n"
 
 
 def plot(rows, path, scene):
+    """Error against wall time and solve time against unknowns, one line per tool and variant."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for tool, style in (("sdcrack", "o-"), ("dolfinx", "s--"), ("freefem", "^-.")):
+    for tool, style in (("sdcrack", "o-"), ("sdcrack-lumped", "D:"), ("dolfinx", "s--"),
+                        ("freefem", "^-.")):
         pts = [(r[tool]["wall_s"], r[tool]["u_l2"], r[tool].get("solver_s"), r[tool]["unknowns"])
                for r in rows if tool in r]
         if not pts:
             continue
-        axes[0].loglog([p[0] for p in pts], [p[1] for p in pts], style, label=f"{tool} (wall)")
-        axes[1].loglog([p[3] for p in pts], [p[2] for p in pts], style, label=tool)
+        label = LABELS.get(tool, tool)
+        axes[0].loglog([p[0] for p in pts], [p[1] for p in pts], style, label=f"{label} (wall)")
+        axes[1].loglog([p[3] for p in pts], [p[2] for p in pts], style, label=label)
     axes[0].set_xlabel("wall time [s]")
     axes[0].set_ylabel("‖u_h − u‖_L²")
     axes[0].set_title(f"work-precision, {scene}")
@@ -162,6 +320,7 @@ def plot(rows, path, scene):
         ax.legend()
     fig.tight_layout()
     fig.savefig(path, dpi=110)
+    return fig
 
 
 def parse_levels(text):
@@ -172,6 +331,28 @@ def parse_levels(text):
     return [int(x) for x in text.split(",")]
 
 
+def parse_p_masses(text):
+    """'consistent,lumped' → a list of p masses (keys of VARIANTS)."""
+    masses = [m for m in text.split(",") if m]
+    bad = [m for m in masses if m not in VARIANTS]
+    if bad or not masses:
+        raise argparse.ArgumentTypeError(f"p masses must be among {', '.join(VARIANTS)}: {text!r}")
+    return masses
+
+
+def run_level(level, measured, log, **control):
+    """One row: `measured` is a list of (row key, function running it), each measured under load
+    control (`control`: measure()'s check, idle_timeout and max_tries)."""
+    row = {"level": level}
+    for key, fn in measured:
+        row[key] = measure(f"{key} L{level}", fn, log, **control)
+    msg = " ".join(f"{k} {row[k]['u_l2']:.3e}/{row[k]['wall_s']:.2f}s/{row[k]['solver_s']:.2f}s"
+                   for k, _ in measured)
+    print(f"level {level}: {msg}", file=sys.stderr, flush=True)
+    log.write(f"level {level}: {msg}\n")
+    return row
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scene", default=str(ROOT / "scenes" / "open-exact.toml"))
@@ -179,13 +360,27 @@ def main(argv=None):
     ap.add_argument("--ref-levels", default=None,
                     help="the references' levels (default: sdcrack's and three more, so that their "
                          "errors reach sdcrack's)")
-    ap.add_argument("--tools", default="dolfinx,freefem", help="references to time")
-    ap.add_argument("--out", required=True, help="folder for work_precision.{json,md,png}")
+    ap.add_argument("--tools", default="dolfinx,freefem",
+                    help="references to time ('' for sdcrack alone)")
+    ap.add_argument("--p-masses", type=parse_p_masses, default="consistent,lumped",
+                    help="sdcrack's p masses to time, e.g. consistent,lumped or lumped")
+    ap.add_argument("--idle-timeout", type=float, default=300.0,
+                    help="seconds to wait for an idle machine before each measurement, then "
+                         "measure anyway (marked IDLE-TIMEOUT)")
+    ap.add_argument("--max-tries", type=int, default=3,
+                    help="tries of a measurement rejected for other processes' load (the last "
+                         "one is kept, marked REJECTED-KEPT)")
+    ap.add_argument("--no-idle-wait", action="store_true",
+                    help="neither wait for an idle machine nor reject loaded measurements")
+    ap.add_argument("--out", required=True,
+                    help="folder for work_precision.{json,md,png} and work_precision.load.txt")
     a = ap.parse_args(argv)
     levels = parse_levels(a.levels)
     ref_levels = (parse_levels(a.ref_levels) if a.ref_levels
                   else list(range(min(levels), max(levels) + 4)))
     tools = [t for t in a.tools.split(",") if t]
+    if not tools:
+        ref_levels = []
     if not SDCRACK.exists():
         sys.exit(f"bench-references: {SDCRACK} not built (run `cargo build --release`)")
     scene_path = Path(a.scene)
@@ -196,27 +391,29 @@ def main(argv=None):
     text = scene_path.read_text()
     name = re.search(r'(?m)^name\s*=\s*"([^"]+)"', text).group(1)
     rows = []
-    with tempfile.TemporaryDirectory(prefix="sdcrack-wp-") as tmp:
+    with tempfile.TemporaryDirectory(prefix="sdcrack-wp-") as tmp, \
+            open(out / "work_precision.load.txt", "w") as log:
+        log.write(LOAD_HEADER)
         work = Path(tmp)
         solo = work / "scene.toml"
         solo.write_text(sdcrack_only_scene(text))
         for level in sorted(set(levels) | set(ref_levels)):
-            row = {"level": level}
-            if level in levels:
-                row["sdcrack"] = run_sdcrack(solo, level, work)
-            for tool in tools if level in ref_levels else []:
-                row[tool] = run_reference(tool, scene_path, level, work)
-            rows.append(row)
-            msg = " ".join(f"{t} {row[t]['u_l2']:.2e}/{row[t]['wall_s']:.2f}s"
-                           for t in ("sdcrack", *tools) if t in row)
-            print(f"level {level}: {msg}", file=sys.stderr, flush=True)
-    fast_internal = speedups(rows, "solver_s")
-    fast_wall = speedups(rows, "wall_s")
-    md = markdown(name, rows, fast_internal, fast_wall)
+            measured = [(VARIANTS[m], lambda m=m: run_sdcrack(solo, level, work, m))
+                        for m in a.p_masses if level in levels]
+            measured += [(t, lambda t=t: run_reference(t, scene_path, level, work))
+                         for t in tools if level in ref_levels]
+            rows.append(run_level(level, measured, log, check=not a.no_idle_wait,
+                                  idle_timeout=a.idle_timeout, max_tries=a.max_tries))
+    keys = [VARIANTS[m] for m in a.p_masses]
+    fast_internal = {k: speedups(rows, "solver_s", k) for k in keys}
+    fast_wall = {k: speedups(rows, "wall_s", k) for k in keys}
+    lumped_fast = lumped_vs_consistent(rows) if len(keys) == 2 else []
+    md = markdown(name, rows, fast_internal, fast_wall, lumped_fast)
     (out / "work_precision.md").write_text(md)
     (out / "work_precision.json").write_text(json.dumps(
-        {"scene": name, "levels": rows, "speedup_solver_time": fast_internal,
-         "speedup_wall_time": fast_wall}, indent=2))
+        {"scene": name, "p_masses": a.p_masses, "levels": rows,
+         "speedup_solver_time": fast_internal, "speedup_wall_time": fast_wall,
+         "lumped_vs_consistent": lumped_fast}, indent=2))
     plot(rows, out / "work_precision.png", name)
     print(md)
 
