@@ -3,7 +3,7 @@
 
 mod common;
 
-use sdcrack::scene::{FieldSet, MultiplierSpace, USpace};
+use sdcrack::scene::{FieldSet, MultiplierSpace, PMass, USpace};
 use sdcrack::study::CaseFilter;
 
 #[test]
@@ -16,13 +16,18 @@ fn distance_to_delta_zero_is_linear_in_delta() {
         p: true,
         lambda: true,
     };
-    for u_space in [USpace::Continuous, USpace::Broken] {
+    for (u_space, p_mass) in [
+        (USpace::Continuous, PMass::Consistent),
+        (USpace::Broken, PMass::Consistent),
+        (USpace::Broken, PMass::Lumped),
+    ] {
         for m in MultiplierSpace::ALL {
             let cases = common::solve(
                 &scene,
                 CaseFilter {
                     u_space: Some(u_space),
                     multiplier: Some(m),
+                    p_mass: Some(p_mass),
                     ..CaseFilter::default()
                 },
             );
@@ -60,7 +65,7 @@ fn distance_to_delta_zero_is_linear_in_delta() {
             let slope = num / den;
             assert!(
                 (slope - 1.0).abs() <= 0.1,
-                "{u_space} {m}: slope {slope}, distances {dist:?}"
+                "{u_space} {m} {p_mass:?}: slope {slope}, distances {dist:?}"
             );
         }
     }

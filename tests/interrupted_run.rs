@@ -187,7 +187,8 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
     let summary: serde_json::Value =
         serde_json::from_slice(&std::fs::read(final_path.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["scene"], "mixed");
-    assert_eq!(summary["cases"].as_array().unwrap().len(), 2 * 3 * 6);
+    // 2 u spaces × 3 multipliers × 2 p masses × 6 δ
+    assert_eq!(summary["cases"].as_array().unwrap().len(), 2 * 3 * 2 * 6);
     assert!(final_path.join("fields.h5").is_file());
     assert_eq!(snapshot(&earlier), before, "earlier results unchanged");
     let after = snapshot(&out);

@@ -40,7 +40,7 @@ use sdcrack::contact::{Lcp, LcpOptions, LcpStatus};
 use sdcrack::linalg::{Ldlt, SymbolicLdlt};
 use sdcrack::mesh::Mesh;
 use sdcrack::norms::CrackField;
-use sdcrack::scene::{Expr, FieldSet, MultiplierSpace, Scene, USpace};
+use sdcrack::scene::{Expr, FieldSet, MultiplierSpace, PMass, Scene, USpace};
 use sdcrack::study::{CaseFilter, CaseResult};
 
 const ALL_FIELDS: FieldSet = FieldSet {
@@ -208,7 +208,7 @@ fn delta_sweep(name: &str) {
     let cases = common::solve(&scene, CaseFilter::default());
     assert_eq!(
         cases.len(),
-        2 * scene.u_spaces.len() * scene.multipliers.len() * deltas.len()
+        2 * scene.u_spaces.len() * scene.multipliers.len() * scene.p_masses.len() * deltas.len()
     );
     for &d in &deltas {
         let w = cases
@@ -220,10 +220,16 @@ fn delta_sweep(name: &str) {
     assert_solved(&cases, name);
     for level in [1, 3] {
         for &u in &scene.u_spaces {
-            for &m in &scene.multipliers {
+            for (&m, &pm) in scene
+                .multipliers
+                .iter()
+                .flat_map(|m| scene.p_masses.iter().map(move |pm| (m, pm)))
+            {
                 let series: Vec<&CaseResult> = cases
                     .iter()
-                    .filter(|c| c.level == level && c.u_space == u && c.multiplier == m)
+                    .filter(|c| {
+                        c.level == level && c.u_space == u && c.multiplier == m && c.p_mass == pm
+                    })
                     .collect();
                 let zero = *series.last().unwrap();
                 assert_eq!(zero.delta, 0.0);
@@ -234,7 +240,7 @@ fn delta_sweep(name: &str) {
                         (c.delta, du.max(dp))
                     })
                     .collect();
-                let id = format!("{name} level {level} {u} {m}");
+                let id = format!("{name} level {level} {u} {m} {pm:?}");
                 let fit: Vec<(f64, f64)> =
                     dist.iter().copied().filter(|&(_, e)| e >= 1e-10).collect();
                 assert!(fit.len() >= 8, "{id}: only {} δ above 1e-10", fit.len());
@@ -547,7 +553,8 @@ fn anisotropic_meshes_solve_to_tolerance() {
             for cells in shapes {
                 let scene = anisotropic_scene(dir, cells);
                 let cases = common::solve(&scene, CaseFilter::default());
-                assert_eq!(cases.len(), 2 * 2 * 2 * 3);
+                // levels × u spaces × δ × multipliers × p masses
+                assert_eq!(cases.len(), 2 * 2 * 2 * 3 * 2);
                 let what = format!("{dir:?} crack, cells {cells:?}");
                 let kkt = cases.iter().fold(0.0f64, |a, c| a.max(c.kkt.max()));
                 let it = cases.iter().map(|c| c.iterations).max().unwrap();
@@ -586,6 +593,9 @@ fn exact_solutions_converge_on_aspect_4_meshes() {
             scene.levels = vec![0, 1, 2];
             scene.deltas = vec![0.0];
             scene.fields = FieldSet::default();
+            // the rates below are the consistent mass's; the lumped one on these meshes is
+            // solved by `anisotropic_meshes_solve_to_tolerance`
+            scene.p_masses = vec![PMass::Consistent];
             let cases = common::solve(&scene, CaseFilter::default());
             assert_solved(&cases, name);
             for u in [USpace::Continuous, USpace::Broken] {
@@ -694,7 +704,8 @@ fn stress_scene_alternates_open_and_closed_many_times() {
     scene.levels = vec![2, 3, 4];
     scene.fields = ALL_FIELDS;
     let cases = common::solve(&scene, CaseFilter::default());
-    assert_eq!(cases.len(), 3 * 2 * 3 * 3);
+    // levels × u spaces × multipliers × δ × p masses
+    assert_eq!(cases.len(), 3 * 2 * 3 * 3 * 2);
     for c in &cases {
         assert_alternates(c, scene.crack.length(), "δ sweep");
     }

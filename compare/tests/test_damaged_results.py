@@ -75,18 +75,17 @@ XFAIL = "[[verification.expected_failure]]"
 
 
 def small_scene(scene, *, levels, deltas=None, references=True, xfail="keep", smoke=False,
-                p_mass=None):
-    """The repository scene `scene` with cells = [4, 4], these levels (and δ, and p masses), with or
-    without its references; xfail: "keep" its [[verification.expected_failure]], "drop" it, or a u
-    space to declare instead."""
+                p_mass='["consistent"]'):
+    """The repository scene `scene` with cells = [4, 4], these levels (and δ), these p masses (the
+    consistent one unless told: the scene's own `p_mass` line is replaced), with or without its
+    references; xfail: "keep" its [[verification.expected_failure]], "drop" it, or a u space to
+    declare instead."""
     text = read_text(os.path.join(SCENES, f"{scene}.toml"))
     text = _set(text, "cells", "[4, 4]")
     text = _set(text, "levels", levels)
     if deltas is not None:
         text = _set(text, "deltas", deltas)
-    if p_mass is not None:
-        text, n = re.subn(r"(?m)^(deltas = .*)$", rf"\1\np_mass = {p_mass}", text)
-        assert n == 1
+    text = _set(text, "p_mass", p_mass)
     if not references:
         text = _set(text, "references", "[]")
     head, sep, decl = text.partition(XFAIL)

@@ -359,15 +359,23 @@ def test_gradient_and_crack_difference_formulas():
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
 
+def _set(text, key, value):
+    """Replaces the one line `key = ...` of a repository scene (fails loudly if it moved)."""
+    new, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
+    assert n == 1, f"scene line `{key} = ...` not found once"
+    return new
+
+
 @pytest.fixture(scope="module")
 def small_open_run(tmp_path_factory):
-    """`sdcrack run` on the repo's open-exact scene at levels 1-3 (δ = 1e-2, 1e-4, 0, fields, both
-    references); returns the results folder, to be copied by each test."""
+    """`sdcrack run` on the repo's open-exact scene at levels 1-3 (δ = 1e-2, 1e-4, 0, the consistent
+    p mass only, fields, both references); returns the results folder, to be copied by each test."""
     exe = os.environ.get("SDCRACK_BIN", os.path.join(ROOT, "target", "release", "sdcrack"))
     if not os.path.isfile(exe):
         pytest.skip("sdcrack binary not built")
     tmp = tmp_path_factory.mktemp("open")
     text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
+    text = _set(text, "p_mass", '["consistent"]')
     text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2, 3]")
     text = text.replace("deltas = [0.0]", "deltas = [1e-2, 1e-4, 0.0]")
     assert "levels = [1, 2, 3]" in text and 'fields = ["u", "p", "lambda"]' in text
@@ -840,10 +848,11 @@ def small_lumped_run(tmp_path_factory):
     text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
     for old, new in (("levels = [0, 1, 2, 3, 4]", "levels = [1, 2, 3]"),
                      ('multipliers = ["M0", "M1", "M1star"]', 'multipliers = ["M1"]'),
-                     ("deltas = [0.0]", 'deltas = [1e-2, 1e-4, 0.0]\np_mass = ["consistent", "lumped"]'),
+                     ("deltas = [0.0]", "deltas = [1e-2, 1e-4, 0.0]"),
                      ('references = ["dolfinx", "freefem"]', "references = []")):
         assert text.count(old) == 1, old
         text = text.replace(old, new)
+    text = _set(text, "p_mass", '["consistent", "lumped"]')
     scene = tmp / "open.toml"
     scene.write_text(text)
     p = subprocess.run([exe, "run", str(scene), "--out", str(tmp / "r"), "--quiet"],
@@ -947,7 +956,7 @@ def test_consistent_and_lumped_are_separate_series(lumped_run, empty_exps, tmp_p
 
 
 def test_a_consistent_only_run_shows_no_p_mass(open_run, empty_exps):
-    """A run of the consistent p mass alone (every repository scene today) is reported as before
+    """A run of the consistent p mass alone (p_mass = ["consistent"]) is reported as before
     p masses: no p mass column, no /consistent label, no lumped sentence."""
     rc, out, err = run_cli(str(open_run), "--expectations", empty_exps)
     assert rc == 0, out + err

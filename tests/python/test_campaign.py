@@ -8,6 +8,7 @@ active set, unknowns and LCP iterations as the same case inside a full run.
 import json
 import os
 import pathlib
+import re
 import subprocess
 
 import numpy as np
@@ -18,6 +19,13 @@ EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "
 h5py = pytest.importorskip("h5py")
 
 
+def _set(text, key, value):
+    """Replaces the one line `key = ...` of a repository scene (fails loudly if it moved)."""
+    new, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
+    assert n == 1, f"scene line `{key} = ...` not found once"
+    return new
+
+
 def cases(*scenes, cwd=ROOT):
     out = subprocess.run([str(ROOT / "ci" / "cases"), *map(str, scenes)], cwd=cwd, check=True,
                          capture_output=True, text=True).stdout
@@ -26,7 +34,8 @@ def cases(*scenes, cwd=ROOT):
 
 def test_case_list_counts_every_case():
     rows = cases(ROOT / "scenes" / "closed-exact.toml")
-    assert len(rows) == 5 * 2 * 3 * 1
+    # levels × u spaces × multipliers × p masses × δ
+    assert len(rows) == 5 * 2 * 3 * 2 * 1
     assert {r[0] for r in rows} == {"closed-exact"}
     outs = [r[5].split("--out ")[1] for r in rows]
     assert len(set(outs)) == len(outs), "one folder per case"
@@ -54,6 +63,7 @@ def test_rerun_reproduces_the_row(tmp_path):
     if not EXE.is_file():
         pytest.skip("sdcrack binary not built")
     text = (ROOT / "scenes" / "mixed.toml").read_text()
+    text = _set(text, "p_mass", '["consistent"]')
     text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2]")
     text = text.replace('references = ["dolfinx", "freefem"]', "references = []")
     scene = tmp_path / "mixed.toml"
@@ -91,17 +101,19 @@ def test_case_list_of_both_p_masses(tmp_path):
     lumped rows' commands add `--p-mass lumped` and write to their own `-lumped` folder, the
     consistent ones are those of a scene without p masses. A results folder's plan decides."""
     text = (ROOT / "scenes" / "closed-exact.toml").read_text()
-    assert text.count("deltas = [0.0]") == 1
     scene = tmp_path / "closed-exact.toml"
-    scene.write_text(text.replace("deltas = [0.0]", 'deltas = [0.0]\np_mass = ["consistent", "lumped"]'))
-    plain = cases(ROOT / "scenes" / "closed-exact.toml")
+    scene.write_text(_set(text, "p_mass", '["consistent", "lumped"]'))
+    plain_scene = tmp_path / "consistent" / "closed-exact.toml"
+    plain_scene.parent.mkdir()
+    plain_scene.write_text(_set(text, "p_mass", '["consistent"]'))
+    plain = cases(plain_scene)
     rows = cases(scene)
     assert len(rows) == 2 * len(plain) == 2 * 5 * 2 * 3
     lumped = [r for r in rows if "--p-mass" in r[5]]
     consistent = [r for r in rows if "--p-mass" not in r[5]]
     assert [r[:5] for r in lumped] == [r[:5] for r in consistent] == [r[:5] for r in plain]
     assert [r[5].replace(str(scene), "S") for r in consistent] == \
-        [r[5].replace(str(ROOT / "scenes" / "closed-exact.toml"), "S") for r in plain]
+        [r[5].replace(str(plain_scene), "S") for r in plain]
     for r in lumped:
         cmd = r[5].split()
         assert cmd[cmd.index("--p-mass") + 1] == "lumped" and cmd.index("--p-mass") < cmd.index("--out")
@@ -126,10 +138,11 @@ def test_rerun_of_a_lumped_case_reproduces_the_row(tmp_path):
     text = (ROOT / "scenes" / "open-exact.toml").read_text()
     for old, new in (("levels = [0, 1, 2, 3, 4]", "levels = [1, 2]"),
                      ('multipliers = ["M0", "M1", "M1star"]', 'multipliers = ["M0", "M1"]'),
-                     ("deltas = [0.0]", 'deltas = [1e-2, 0.0]\np_mass = ["consistent", "lumped"]'),
+                     ("deltas = [0.0]", "deltas = [1e-2, 0.0]"),
                      ('references = ["dolfinx", "freefem"]', "references = []")):
         assert text.count(old) == 1, old
         text = text.replace(old, new)
+    text = _set(text, "p_mass", '["consistent", "lumped"]')
     scene = tmp_path / "open.toml"
     scene.write_text(text)
     subprocess.run([str(EXE), "run", str(scene), "--out", str(tmp_path / "full"), "--quiet"],
