@@ -35,6 +35,8 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
+from scene_text import set_key  # noqa: E402
 SCRIPT = os.path.join(ROOT, "compare", "sdcompare")
 SCENES = os.path.join(ROOT, "scenes")
 # The expectations argument of a case that passes no --expectations (scenes/expectations.toml).
@@ -64,13 +66,6 @@ def write_text(path, text):
 
 
 # ------------------------------------------------------------------ the small scenes
-def _set(text, key, value):
-    """Replaces the one line `key = ...` of a repository scene (fails loudly if it moved)."""
-    new, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
-    assert n == 1, f"scene line `{key} = ...` not found once"
-    return new
-
-
 XFAIL = "[[verification.expected_failure]]"
 
 
@@ -81,20 +76,20 @@ def small_scene(scene, *, levels, deltas=None, references=True, xfail="keep", sm
     references; xfail: "keep" its [[verification.expected_failure]], "drop" it, or a u space to
     declare instead."""
     text = read_text(os.path.join(SCENES, f"{scene}.toml"))
-    text = _set(text, "cells", "[4, 4]")
-    text = _set(text, "levels", levels)
+    text = set_key(text, "cells", "[4, 4]")
+    text = set_key(text, "levels", levels)
     if deltas is not None:
-        text = _set(text, "deltas", deltas)
-    text = _set(text, "p_mass", p_mass)
+        text = set_key(text, "deltas", deltas)
+    text = set_key(text, "p_mass", p_mass)
     if not references:
-        text = _set(text, "references", "[]")
+        text = set_key(text, "references", "[]")
     head, sep, decl = text.partition(XFAIL)
     assert sep, f"scenes/{scene}.toml declares no expected failure"
     if xfail == "drop":
         text = head
     elif xfail != "keep":
-        decl = _set(decl, "u_space", json.dumps(xfail))
-        decl = _set(decl, "reason", '"declared here to see the verdict call it an unexpected pass"')
+        decl = set_key(decl, "u_space", json.dumps(xfail))
+        decl = set_key(decl, "reason", '"declared here to see the verdict call it an unexpected pass"')
         text = head + sep + decl
     if smoke:
         text = head + "[verification]\nsmoke = true\n\n" + text[len(head):]

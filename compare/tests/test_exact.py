@@ -5,7 +5,6 @@ The agreement test with the solver runs target/release/sdcrack (skipped when it 
 """
 import json
 import math
-import re
 import subprocess
 import sys
 import tomllib
@@ -21,6 +20,9 @@ sys.path.insert(0, str(ROOT / "compare"))
 from sdcompare_lib import exact as E  # noqa: E402
 from sdcompare_lib import norms  # noqa: E402
 import sdexpr  # noqa: E402  (put on sys.path by exact)
+
+sys.path.insert(0, str(ROOT / "tests" / "python"))
+from scene_text import set_key  # noqa: E402
 
 SCENES = ROOT / "scenes"
 BINARY = ROOT / "target" / "release" / "sdcrack"
@@ -420,17 +422,10 @@ def test_doubling_the_quadrature_changes_open_exact_errors_below_1e10(level):
 # agreement with the solver (target/release/sdcrack): summary.json's errors vs this module
 # ---------------------------------------------------------------------------------------------
 
-def _set(text, key, value):
-    """Replaces the one line `key = ...` of a repository scene (fails loudly if it moved)."""
-    new, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
-    assert n == 1, f"scene line `{key} = ...` not found once"
-    return new
-
-
 def _run_solver(workdir, scene, level):
     """`sdcrack run` on a copy of scenes/SCENE.toml with fields u, p, lambda, no references and the
     consistent p mass only (MINI p, its bubble stored)."""
-    text = _set((SCENES / f"{scene}.toml").read_text(), "p_mass", '["consistent"]')
+    text = set_key((SCENES / f"{scene}.toml").read_text(), "p_mass", '["consistent"]')
     data = tomllib.loads(text)
     lines, section = [], None
     for line in text.splitlines():

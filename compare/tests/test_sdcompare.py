@@ -18,6 +18,9 @@ sys.path.insert(0, COMPARE)
 
 from sdcompare_lib import norms, rates, verdict  # noqa: E402
 
+sys.path.insert(0, os.path.join(os.path.dirname(COMPARE), "tests", "python"))
+from scene_text import set_key  # noqa: E402
+
 
 # ------------------------------------------------------------------ exact P1 L² norms
 def grid_mesh(n, x0=0.0, x1=1.0):
@@ -359,13 +362,6 @@ def test_gradient_and_crack_difference_formulas():
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
 
-def _set(text, key, value):
-    """Replaces the one line `key = ...` of a repository scene (fails loudly if it moved)."""
-    new, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
-    assert n == 1, f"scene line `{key} = ...` not found once"
-    return new
-
-
 @pytest.fixture(scope="module")
 def small_open_run(tmp_path_factory):
     """`sdcrack run` on the repo's open-exact scene at levels 1-3 (δ = 1e-2, 1e-4, 0, the consistent
@@ -375,7 +371,7 @@ def small_open_run(tmp_path_factory):
         pytest.skip("sdcrack binary not built")
     tmp = tmp_path_factory.mktemp("open")
     text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
-    text = _set(text, "p_mass", '["consistent"]')
+    text = set_key(text, "p_mass", '["consistent"]')
     text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2, 3]")
     text = text.replace("deltas = [0.0]", "deltas = [1e-2, 1e-4, 0.0]")
     assert "levels = [1, 2, 3]" in text and 'fields = ["u", "p", "lambda"]' in text
@@ -852,7 +848,7 @@ def small_lumped_run(tmp_path_factory):
                      ('references = ["dolfinx", "freefem"]', "references = []")):
         assert text.count(old) == 1, old
         text = text.replace(old, new)
-    text = _set(text, "p_mass", '["consistent", "lumped"]')
+    text = set_key(text, "p_mass", '["consistent", "lumped"]')
     scene = tmp / "open.toml"
     scene.write_text(text)
     p = subprocess.run([exe, "run", str(scene), "--out", str(tmp / "r"), "--quiet"],

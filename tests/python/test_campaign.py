@@ -8,22 +8,15 @@ active set, unknowns and LCP iterations as the same case inside a full run.
 import json
 import os
 import pathlib
-import re
 import subprocess
 
 import numpy as np
 import pytest
+from scene_text import set_key
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack"))
 h5py = pytest.importorskip("h5py")
-
-
-def _set(text, key, value):
-    """Replaces the one line `key = ...` of a repository scene (fails loudly if it moved)."""
-    new, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
-    assert n == 1, f"scene line `{key} = ...` not found once"
-    return new
 
 
 def cases(*scenes, cwd=ROOT):
@@ -63,7 +56,7 @@ def test_rerun_reproduces_the_row(tmp_path):
     if not EXE.is_file():
         pytest.skip("sdcrack binary not built")
     text = (ROOT / "scenes" / "mixed.toml").read_text()
-    text = _set(text, "p_mass", '["consistent"]')
+    text = set_key(text, "p_mass", '["consistent"]')
     text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2]")
     text = text.replace('references = ["dolfinx", "freefem"]', "references = []")
     scene = tmp_path / "mixed.toml"
@@ -102,10 +95,10 @@ def test_case_list_of_both_p_masses(tmp_path):
     consistent ones are those of a scene without p masses. A results folder's plan decides."""
     text = (ROOT / "scenes" / "closed-exact.toml").read_text()
     scene = tmp_path / "closed-exact.toml"
-    scene.write_text(_set(text, "p_mass", '["consistent", "lumped"]'))
+    scene.write_text(set_key(text, "p_mass", '["consistent", "lumped"]'))
     plain_scene = tmp_path / "consistent" / "closed-exact.toml"
     plain_scene.parent.mkdir()
-    plain_scene.write_text(_set(text, "p_mass", '["consistent"]'))
+    plain_scene.write_text(set_key(text, "p_mass", '["consistent"]'))
     plain = cases(plain_scene)
     rows = cases(scene)
     assert len(rows) == 2 * len(plain) == 2 * 5 * 2 * 3
@@ -142,7 +135,7 @@ def test_rerun_of_a_lumped_case_reproduces_the_row(tmp_path):
                      ('references = ["dolfinx", "freefem"]', "references = []")):
         assert text.count(old) == 1, old
         text = text.replace(old, new)
-    text = _set(text, "p_mass", '["consistent", "lumped"]')
+    text = set_key(text, "p_mass", '["consistent", "lumped"]')
     scene = tmp_path / "open.toml"
     scene.write_text(text)
     subprocess.run([str(EXE), "run", str(scene), "--out", str(tmp_path / "full"), "--quiet"],
