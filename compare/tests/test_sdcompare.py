@@ -371,10 +371,10 @@ def small_open_run(tmp_path_factory):
         pytest.skip("sdcrack binary not built")
     tmp = tmp_path_factory.mktemp("open")
     text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
-    text = set_key(text, "p_mass", '["consistent"]')
-    text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2, 3]")
-    text = text.replace("deltas = [0.0]", "deltas = [1e-2, 1e-4, 0.0]")
-    assert "levels = [1, 2, 3]" in text and 'fields = ["u", "p", "lambda"]' in text
+    for key, value in (("p_mass", '["consistent"]'), ("levels", "[1, 2, 3]"),
+                       ("deltas", "[1e-2, 1e-4, 0.0]")):
+        text = set_key(text, key, value)
+    assert 'fields = ["u", "p", "lambda"]' in text
     scene = tmp / "open.toml"
     scene.write_text(text)
     env = dict(os.environ, FF_LOADPATH="/usr/lib/freefem++")
@@ -842,13 +842,10 @@ def small_lumped_run(tmp_path_factory):
         pytest.skip("sdcrack binary not built")
     tmp = tmp_path_factory.mktemp("lumped")
     text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
-    for old, new in (("levels = [0, 1, 2, 3, 4]", "levels = [1, 2, 3]"),
-                     ('multipliers = ["M0", "M1", "M1star"]', 'multipliers = ["M1"]'),
-                     ("deltas = [0.0]", "deltas = [1e-2, 1e-4, 0.0]"),
-                     ('references = ["dolfinx", "freefem"]', "references = []")):
-        assert text.count(old) == 1, old
-        text = text.replace(old, new)
-    text = set_key(text, "p_mass", '["consistent", "lumped"]')
+    for key, value in (("levels", "[1, 2, 3]"), ("multipliers", '["M1"]'),
+                       ("deltas", "[1e-2, 1e-4, 0.0]"), ("references", "[]"),
+                       ("p_mass", '["consistent", "lumped"]')):
+        text = set_key(text, key, value)
     scene = tmp / "open.toml"
     scene.write_text(text)
     p = subprocess.run([exe, "run", str(scene), "--out", str(tmp / "r"), "--quiet"],

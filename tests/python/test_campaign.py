@@ -56,9 +56,8 @@ def test_rerun_reproduces_the_row(tmp_path):
     if not EXE.is_file():
         pytest.skip("sdcrack binary not built")
     text = (ROOT / "scenes" / "mixed.toml").read_text()
-    text = set_key(text, "p_mass", '["consistent"]')
-    text = text.replace("levels = [0, 1, 2, 3, 4]", "levels = [1, 2]")
-    text = text.replace('references = ["dolfinx", "freefem"]', "references = []")
+    for key, value in (("p_mass", '["consistent"]'), ("levels", "[1, 2]"), ("references", "[]")):
+        text = set_key(text, key, value)
     scene = tmp_path / "mixed.toml"
     scene.write_text(text)
     subprocess.run([str(EXE), "run", str(scene), "--out", str(tmp_path / "full"), "--quiet"],
@@ -129,13 +128,10 @@ def test_rerun_of_a_lumped_case_reproduces_the_row(tmp_path):
     if not EXE.is_file():
         pytest.skip("sdcrack binary not built")
     text = (ROOT / "scenes" / "open-exact.toml").read_text()
-    for old, new in (("levels = [0, 1, 2, 3, 4]", "levels = [1, 2]"),
-                     ('multipliers = ["M0", "M1", "M1star"]', 'multipliers = ["M0", "M1"]'),
-                     ("deltas = [0.0]", "deltas = [1e-2, 0.0]"),
-                     ('references = ["dolfinx", "freefem"]', "references = []")):
-        assert text.count(old) == 1, old
-        text = text.replace(old, new)
-    text = set_key(text, "p_mass", '["consistent", "lumped"]')
+    for key, value in (("levels", "[1, 2]"), ("multipliers", '["M0", "M1"]'),
+                       ("deltas", "[1e-2, 0.0]"), ("references", "[]"),
+                       ("p_mass", '["consistent", "lumped"]')):
+        text = set_key(text, key, value)
     scene = tmp_path / "open.toml"
     scene.write_text(text)
     subprocess.run([str(EXE), "run", str(scene), "--out", str(tmp_path / "full"), "--quiet"],
