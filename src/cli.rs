@@ -85,6 +85,36 @@ pub enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Solve only: no mesh export and no reference run (a shard of a campaign, whose
+        /// references run as `sdcrack reference`; see `sdcrack merge`).
+        #[arg(long)]
+        solver_only: bool,
+    },
+    /// Run one reference solver on one level of a scene: a shard of a campaign (see `merge`).
+    /// Writes OUT/<scene name>/ with scene.toml, mesh/ (the level's export) and <tool>/.
+    Reference {
+        /// Scene file (TOML); omit for the embedded default scene.
+        scene: Option<PathBuf>,
+        /// The reference tool, one of the scene's `[outputs] references`.
+        #[arg(long, value_name = "dolfinx|freefem")]
+        tool: String,
+        /// The level to solve (need not be listed in the scene).
+        #[arg(long, value_parser = parse_level, allow_hyphen_values = true)]
+        level: u32,
+        /// Folder under which the results folder `<scene name>/` is created.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
+    },
+    /// Merge shards (results folders of `run --solver-only` with filters and of `reference`) of
+    /// one scene into OUT/<scene name>/, the folder a single `sdcrack run` of the scene writes:
+    /// same files, same numbers, fields bit for bit; every case of the scene exactly once.
+    Merge {
+        /// The shards: `<scene name>/` folders written by `run` and `reference`.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// Folder under which the merged results folder `<scene name>/` is created.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
     },
     /// Export the meshes of a scene's levels for the reference solvers (see docs/design.md).
     Mesh {
@@ -118,6 +148,11 @@ pub enum Command {
     Check {
         /// Scene file (TOML).
         scene: PathBuf,
+        /// Print the scene's plan as one JSON object (name, cases, levels, u_spaces,
+        /// multipliers, p_masses, deltas, references, fields, memory_mb per level: sdcrack's
+        /// peak-memory estimate in MiB), for workflow engines.
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -254,9 +289,13 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             say_raw(crate::scene::SCENE_TEMPLATE);
             Ok(0)
         }
-        Command::Check { scene } => {
+        Command::Check { scene, json } => {
             let s = Scene::from_file(&scene).map_err(usage)?;
             check_meshes(&s, &scene.display().to_string())?;
+            if json {
+                say!("{}", plan_json(&s));
+                return Ok(0);
+            }
             say!(
                 "{}: valid scene '{}' ({} cases)",
                 scene.display(),
@@ -293,6 +332,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             p_mass,
             delta,
             quiet,
+            solver_only,
         } => {
             let (scene, origin) = load(scene)?;
             check_meshes(&scene, &origin)?;
@@ -304,9 +344,120 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                 p_mass,
                 delta,
             };
-            run(&scene, &origin, &filter, &out, quiet)
+            run(&scene, &origin, &filter, &out, quiet, solver_only)
         }
+        Command::Reference {
+            scene,
+            tool,
+            level,
+            out,
+        } => {
+            let (scene, origin) = load(scene)?;
+            check_meshes(&scene, &origin)?;
+            check_level_option(&scene, Some(level))?;
+            reference(&scene, &tool, level, &out)
+        }
+        Command::Merge { shards, out } => merge(&shards, &out),
     }
+}
+
+/// The JSON object of `sdcrack check --json`.
+fn plan_json(scene: &Scene) -> String {
+    let names = |v: Vec<String>| serde_json::Value::from(v);
+    let memory: serde_json::Map<String, serde_json::Value> = scene
+        .levels
+        .iter()
+        .map(|&l| {
+            let mib = crate::scene::estimated_memory_bytes(scene.cells, l).div_ceil(1 << 20);
+            (l.to_string(), serde_json::Value::from(mib))
+        })
+        .collect();
+    let value = serde_json::json!({
+        "name": scene.name,
+        "cases": scene.case_count(),
+        "levels": scene.levels,
+        "u_spaces": names(scene.u_spaces.iter().map(ToString::to_string).collect()),
+        "multipliers": names(scene.multipliers.iter().map(ToString::to_string).collect()),
+        "p_masses": names(scene.p_masses.iter().map(ToString::to_string).collect()),
+        "deltas": scene.deltas,
+        "references": scene.references,
+        "fields": !scene.fields.is_empty(),
+        "memory_mb": memory,
+    });
+    value.to_string()
+}
+
+/// `sdcrack reference`: one tool on one level, into OUT/<scene name>/.
+fn reference(scene: &Scene, tool: &str, level: u32, out: &Path) -> Result<i32, Failure> {
+    if !scene.references.iter().any(|t| t == tool) {
+        return Err(usage(format!(
+            "--tool {tool}: the scene '{}' lists the references {:?}",
+            scene.name, scene.references
+        )));
+    }
+    crate::references::check_available(tool).map_err(usage)?;
+    let results = ResultsDir::create(out, &scene.name).map_err(usage)?;
+    let dir = results.work_path();
+    let copy = dir.join(crate::output::SCENE_COPY);
+    crate::output::atomic_write(&copy, scene.source.as_bytes()).map_err(runtime)?;
+    let mesh_dir = dir.join("mesh");
+    crate::output::mesh_export::export_meshes(scene, &[level], &mesh_dir).map_err(runtime)?;
+    let run = crate::references::run_reference(
+        tool,
+        &mesh_dir,
+        &dir.join(tool),
+        !scene.fields.is_empty(),
+    )
+    .map_err(runtime)?;
+    let path = results.commit().map_err(runtime)?;
+    say!(
+        "reference {tool} level {level}: {:.1} s; results in {}",
+        run.seconds,
+        path.display()
+    );
+    if !run.all_converged {
+        eprintln!("sdcrack: some reference case did not converge; see {tool}/summary.json");
+        return Ok(3);
+    }
+    Ok(0)
+}
+
+/// `sdcrack merge`: shards into OUT/<scene name>/.
+fn merge(shards: &[PathBuf], out: &Path) -> Result<i32, Failure> {
+    let start = std::time::SystemTime::now();
+    let outcome = crate::output::merge::merge_shards(shards, out, |origin| {
+        Provenance::of_this_process(origin, start)
+    })
+    .map_err(|e| {
+        if e.is_input_error() {
+            usage(e)
+        } else {
+            runtime(e)
+        }
+    })?;
+    say!(
+        "{} cases of scene '{}' merged from {} shards; results in {}",
+        outcome.cases,
+        outcome.scene.name,
+        shards.len(),
+        outcome.path.display()
+    );
+    if outcome.not_converged > 0 {
+        eprintln!(
+            "sdcrack: {} case(s) did not converge; see summary.json",
+            outcome.not_converged
+        );
+    }
+    if outcome.references_not_converged > 0 {
+        eprintln!("sdcrack: some reference case did not converge; see <tool>/summary.json");
+    }
+    Ok(
+        if outcome.not_converged > 0 || outcome.references_not_converged > 0 {
+            3
+        } else {
+            0
+        },
+    )
 }
 
 /// Runs `sdcrack bench` and prints its table or JSON object on stdout (progress on stderr).
@@ -389,8 +540,10 @@ fn run(
     filter: &CaseFilter,
     out: &Path,
     quiet: bool,
+    solver_only: bool,
 ) -> Result<i32, Failure> {
-    for tool in &scene.references {
+    let references: &[String] = if solver_only { &[] } else { &scene.references };
+    for tool in references {
         crate::references::check_available(tool).map_err(usage)?;
     }
     let plan = CasePlan::new(scene, filter);
@@ -415,7 +568,11 @@ fn run(
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     write_run(results.work_path(), scene, &plan, &study, wall, &provenance).map_err(runtime)?;
-    let references_converged = run_references(scene, &plan, results.work_path(), quiet)?;
+    let references_converged = if solver_only {
+        true
+    } else {
+        run_references(scene, &plan, results.work_path(), quiet)?
+    };
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);
     let failed = study.cases.iter().filter(|c| !c.converged).count();

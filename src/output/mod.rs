@@ -5,6 +5,7 @@
 //! and an existing `OUT/NAME` is never touched: a run refuses to start when it exists. Single files
 //! are written under a temporary name, flushed and renamed ([`atomic_write`]).
 
+pub mod merge;
 pub mod mesh_export;
 pub mod summary;
 pub mod xdmf;

@@ -1,0 +1,672 @@
+//! Shards merged into one results folder: what `sdcrack merge` does.
+//!
+//! A campaign spread over many jobs (docs/workflow.md) runs each (level, u space, multiplier,
+//! p mass) of a scene as `sdcrack run --solver-only` with filters and each (level, reference
+//! tool) as `sdcrack reference`; every job writes a results folder of its own, a *shard*. This
+//! module puts the shards of one scene together into the folder a single `sdcrack run` of the
+//! scene writes: the same files, the cases in the same order, the numbers the same (summary
+//! values are parsed back to the same `f64` and written by the same serializer), the field
+//! datasets copied bit for bit (HDF5's `H5Ocopy`), the series files and reference outputs copied
+//! byte for byte, the mesh export written afresh by the same code. What differs from a single run
+//! is what describes the process: the timings of each case are those of its shard, `wall_s` is
+//! the sum of the shards' solve times, `provenance` is the merge's (the shards' own are kept
+//! under `shards`), and each reference's summary keeps its first shard's provenance with every
+//! shard's under `shards`.
+//!
+//! Before anything is written, the shards are checked: one scene (their `scene.toml` byte for
+//! byte), one sdcrack build, every case of the scene's plan present exactly once and no other,
+//! every reference level present exactly once per tool. The result is committed like a run's
+//! (a hidden folder renamed at the end): an interrupted merge leaves nothing under the final name.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde_json::{Map, Value};
+
+use super::summary::{PlanSummary, Provenance};
+use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY};
+use crate::scene::Scene;
+use crate::study::{CaseFilter, CasePlan};
+
+/// Errors of a merge.
+#[derive(Debug, thiserror::Error)]
+pub enum MergeError {
+    /// A shard cannot be read or does not fit the others (nothing is written).
+    #[error("shard {path}: {reason}")]
+    Shard {
+        /// The shard folder.
+        path: PathBuf,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The shards together do not make up the scene's plan (nothing is written).
+    #[error("{0}")]
+    Incomplete(String),
+    /// The merged folder cannot be created (it exists, or its parent cannot be written).
+    #[error(transparent)]
+    Results(#[from] super::ResultsError),
+    /// Writing the merged folder failed (nothing is left under the final name).
+    #[error("cannot write {path}: {reason}")]
+    Write {
+        /// File or folder concerned.
+        path: PathBuf,
+        /// Reason.
+        reason: String,
+    },
+}
+
+impl MergeError {
+    /// True when the fault is in the input (the shards or the output location), not in the
+    /// writing: the CLI's exit code 2 rather than 1.
+    pub fn is_input_error(&self) -> bool {
+        !matches!(self, MergeError::Write { .. })
+    }
+}
+
+/// What a merge wrote.
+#[derive(Debug)]
+pub struct MergeOutcome {
+    /// The merged results folder, `OUT/<scene name>`.
+    pub path: PathBuf,
+    /// The scene, parsed from the shards' `scene.toml`.
+    pub scene: Scene,
+    /// Solver cases merged.
+    pub cases: usize,
+    /// Solver cases that did not converge.
+    pub not_converged: usize,
+    /// Reference cases (all tools) whose `status` is not `converged`.
+    pub references_not_converged: usize,
+}
+
+/// One shard as read from disk.
+struct Shard {
+    path: PathBuf,
+    scene_text: String,
+    /// `summary.json` of a solver shard.
+    summary: Option<Value>,
+    /// `(tool, <tool>/summary.json)` of a reference shard.
+    tools: Vec<(String, Value)>,
+}
+
+fn shard_err(path: &Path, reason: impl std::fmt::Display) -> MergeError {
+    MergeError::Shard {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+fn write_err(path: &Path, reason: impl std::fmt::Display) -> MergeError {
+    MergeError::Write {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+fn read_json(path: &Path, shard: &Path) -> Result<Value, MergeError> {
+    let text = fs::read_to_string(path)
+        .map_err(|e| shard_err(shard, format!("cannot read {}: {e}", path.display())))?;
+    serde_json::from_str(&text)
+        .map_err(|e| shard_err(shard, format!("{} is not JSON: {e}", path.display())))
+}
+
+impl Shard {
+    /// Reads `dir` (a `<scene name>/` folder written by `sdcrack run` or `sdcrack reference`).
+    fn read(dir: &Path) -> Result<Shard, MergeError> {
+        if !dir.is_dir() {
+            return Err(shard_err(dir, "no such folder"));
+        }
+        let scene_path = dir.join(SCENE_COPY);
+        let scene_text = fs::read_to_string(&scene_path)
+            .map_err(|e| shard_err(dir, format!("cannot read {SCENE_COPY}: {e}")))?;
+        let summary_path = dir.join("summary.json");
+        let summary = if summary_path.is_file() {
+            Some(read_json(&summary_path, dir)?)
+        } else {
+            None
+        };
+        let mut tools = Vec::new();
+        for tool in crate::scene::KNOWN_REFERENCES {
+            let path = dir.join(tool).join("summary.json");
+            if path.is_file() {
+                tools.push((tool.to_string(), read_json(&path, dir)?));
+            }
+        }
+        if summary.is_none() && tools.is_empty() {
+            return Err(shard_err(
+                dir,
+                "holds no results (neither summary.json nor a reference's <tool>/summary.json)",
+            ));
+        }
+        Ok(Shard {
+            path: dir.to_path_buf(),
+            scene_text,
+            summary,
+            tools,
+        })
+    }
+}
+
+/// The position of a solver case in a single run's order (level, u space, p mass, δ,
+/// multiplier: the loops of [`crate::study::run_study`]).
+type CaseKey = (usize, usize, usize, usize, usize);
+
+/// Where the case `c` (a `summary.json` case) sits in `plan`; `None` when it is not a case of it.
+fn case_key(plan: &PlanSummary, c: &Value) -> Option<CaseKey> {
+    let text = |k: &str| c.get(k).and_then(Value::as_str);
+    let level = c.get("level").and_then(Value::as_u64)?;
+    let delta = c.get("delta").and_then(Value::as_f64)?;
+    Some((
+        plan.levels.iter().position(|&l| u64::from(l) == level)?,
+        plan.u_spaces
+            .iter()
+            .position(|s| Some(s.as_str()) == text("u_space"))?,
+        plan.p_masses
+            .iter()
+            .position(|s| Some(s.as_str()) == text("p_mass"))?,
+        plan.deltas
+            .iter()
+            .position(|&d| d.to_bits() == delta.to_bits())?,
+        plan.multipliers
+            .iter()
+            .position(|s| Some(s.as_str()) == text("multiplier"))?,
+    ))
+}
+
+/// The case `c` in words, for messages.
+fn case_words(c: &Value) -> String {
+    let get = |k: &str| c.get(k).map(ToString::to_string).unwrap_or_default();
+    format!(
+        "level {} {} {} {} δ = {}",
+        get("level"),
+        get("u_space"),
+        get("multiplier"),
+        get("p_mass"),
+        get("delta")
+    )
+    .replace('"', "")
+}
+
+/// The provenance keys that identify the build: shards of one merge must agree on them.
+const BUILD_KEYS: [&str; 3] = ["sdcrack_version", "git_commit", "git_dirty"];
+
+/// Merges the shard folders `shards` into `out/<scene name>`; `provenance` is the merge's own.
+pub fn merge_shards(
+    shards: &[PathBuf],
+    out: &Path,
+    provenance: impl FnOnce(&str) -> Provenance,
+) -> Result<MergeOutcome, MergeError> {
+    let shards: Vec<Shard> = shards
+        .iter()
+        .map(|p| Shard::read(p))
+        .collect::<Result<_, _>>()?;
+    let Some(first) = shards.first() else {
+        return Err(MergeError::Incomplete("no shard to merge".into()));
+    };
+    for s in &shards[1..] {
+        if s.scene_text != first.scene_text {
+            return Err(shard_err(
+                &s.path,
+                format!(
+                    "its {SCENE_COPY} differs from that of {}: shards of different scenes (or of an edited scene) cannot be merged",
+                    first.path.display()
+                ),
+            ));
+        }
+    }
+    let scene = Scene::from_toml(&first.scene_text)
+        .map_err(|e| shard_err(&first.path, format!("invalid {SCENE_COPY}: {e}")))?;
+    let plan = CasePlan::new(&scene, &CaseFilter::default());
+    let plan_summary = PlanSummary::from_plan(&plan);
+
+    let solver: Vec<&Shard> = shards.iter().filter(|s| s.summary.is_some()).collect();
+    let Some(&lead) = solver.first() else {
+        return Err(MergeError::Incomplete(
+            "no solver shard (summary.json) among the shards".into(),
+        ));
+    };
+    check_one_build(&solver)?;
+    let cases = ordered_cases(&solver, &plan_summary)?;
+    let references = ordered_references(&shards, &scene, &plan.levels)?;
+
+    let results = ResultsDir::create(out, &scene.name)?;
+    let dir = results.work_path().to_path_buf();
+    let scene_copy = dir.join(SCENE_COPY);
+    atomic_write(&scene_copy, first.scene_text.as_bytes())
+        .map_err(|e| write_err(&scene_copy, e))?;
+
+    let t0 = std::time::Instant::now();
+    if !scene.fields.is_empty() {
+        let sources: Vec<&Path> = solver.iter().map(|s| s.path.as_path()).collect();
+        merge_field_files(&sources, &dir, &["summary.json", SCENE_COPY])?;
+    }
+    let fields_write_s = t0.elapsed().as_secs_f64();
+
+    let lead_summary = lead.summary.as_ref().expect("solver shards have a summary");
+    let origin = lead_summary
+        .pointer("/provenance/scene_origin")
+        .and_then(Value::as_str)
+        .unwrap_or("(unknown)")
+        .to_string();
+    let not_converged = cases
+        .iter()
+        .filter(|c| c.get("converged") != Some(&Value::Bool(true)))
+        .count();
+    let n_cases = cases.len();
+    let wall_s: f64 = solver
+        .iter()
+        .filter_map(|s| s.summary.as_ref()?.get("wall_s")?.as_f64())
+        .sum();
+    let mut summary = lead_summary.clone();
+    let object = summary
+        .as_object_mut()
+        .ok_or_else(|| shard_err(&lead.path, "summary.json is not an object"))?;
+    object.insert("provenance".into(), json(&provenance(&origin)));
+    object.insert("plan".into(), json(&plan_summary));
+    object.insert("all_converged".into(), Value::Bool(not_converged == 0));
+    object.insert("wall_s".into(), Value::from(wall_s));
+    object.insert("fields_write_s".into(), Value::from(fields_write_s));
+    object.insert("cases".into(), Value::Array(cases));
+    object.insert("shards".into(), shard_list(&solver, |s| s.summary.as_ref()));
+    write_json(&dir.join("summary.json"), &summary)?;
+
+    let mut references_not_converged = 0;
+    if !scene.references.is_empty() {
+        let mesh_dir = dir.join("mesh");
+        super::mesh_export::export_meshes(&scene, &plan.levels, &mesh_dir)
+            .map_err(|e| write_err(&mesh_dir, e))?;
+        for (tool, parts) in &references {
+            references_not_converged += merge_reference(tool, parts, &dir.join(tool))?;
+        }
+    }
+    let path = results.commit()?;
+    Ok(MergeOutcome {
+        path,
+        scene,
+        cases: n_cases,
+        not_converged,
+        references_not_converged,
+    })
+}
+
+/// `value` as JSON (the summary types merged in always serialize).
+fn json<T: serde::Serialize>(value: &T) -> Value {
+    serde_json::to_value(value).unwrap_or(Value::Null)
+}
+
+/// Refuses shards written by different sdcrack builds: their union would not be one run's.
+fn check_one_build(solver: &[&Shard]) -> Result<(), MergeError> {
+    let build = |s: &Shard| -> Vec<Value> {
+        let summary = s.summary.as_ref();
+        BUILD_KEYS
+            .iter()
+            .map(|k| {
+                summary
+                    .and_then(|v| v.get("provenance"))
+                    .and_then(|p| p.get(*k))
+                    .cloned()
+                    .unwrap_or(Value::Null)
+            })
+            .collect()
+    };
+    let reference = build(solver[0]);
+    for s in &solver[1..] {
+        if build(s) != reference {
+            return Err(shard_err(
+                &s.path,
+                format!(
+                    "written by another sdcrack build than {} (version, commit, dirty: {:?} vs {:?})",
+                    solver[0].path.display(),
+                    build(s),
+                    reference
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every case of the plan, exactly once, in a single run's order.
+fn ordered_cases(solver: &[&Shard], plan: &PlanSummary) -> Result<Vec<Value>, MergeError> {
+    let mut found: BTreeMap<CaseKey, (Value, &Path)> = BTreeMap::new();
+    for s in solver {
+        let cases = s
+            .summary
+            .as_ref()
+            .and_then(|v| v.get("cases"))
+            .and_then(Value::as_array)
+            .ok_or_else(|| shard_err(&s.path, "summary.json has no cases list"))?;
+        for c in cases {
+            let key = case_key(plan, c).ok_or_else(|| {
+                shard_err(
+                    &s.path,
+                    format!("case {} is not a case of the scene's plan", case_words(c)),
+                )
+            })?;
+            if let Some((_, other)) = found.get(&key) {
+                return Err(shard_err(
+                    &s.path,
+                    format!(
+                        "case {} is also in shard {}",
+                        case_words(c),
+                        other.display()
+                    ),
+                ));
+            }
+            found.insert(key, (c.clone(), &s.path));
+        }
+    }
+    let expected = plan.levels.len()
+        * plan.u_spaces.len()
+        * plan.p_masses.len()
+        * plan.deltas.len()
+        * plan.multipliers.len();
+    if found.len() != expected {
+        let missing = first_missing(plan, &found);
+        return Err(MergeError::Incomplete(format!(
+            "the shards hold {} of the scene's {expected} cases; missing e.g. {missing}",
+            found.len()
+        )));
+    }
+    Ok(found.into_values().map(|(c, _)| c).collect())
+}
+
+/// The first case of `plan` (in run order) that `found` lacks, in words.
+fn first_missing(plan: &PlanSummary, found: &BTreeMap<CaseKey, (Value, &Path)>) -> String {
+    for (l, level) in plan.levels.iter().enumerate() {
+        for (u, u_space) in plan.u_spaces.iter().enumerate() {
+            for (p, p_mass) in plan.p_masses.iter().enumerate() {
+                for (d, delta) in plan.deltas.iter().enumerate() {
+                    for (m, multiplier) in plan.multipliers.iter().enumerate() {
+                        if !found.contains_key(&(l, u, p, d, m)) {
+                            return format!(
+                                "level {level} {u_space} {multiplier} {p_mass} δ = {delta}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+    "none".into()
+}
+
+/// One reference tool's shards: `(level, shard folder, <tool>/summary.json)` by level.
+type ReferenceParts<'a> = Vec<(u32, &'a Path, &'a Value)>;
+
+/// For each reference the scene lists, its shards by level: every plan level exactly once.
+fn ordered_references<'a>(
+    shards: &'a [Shard],
+    scene: &Scene,
+    levels: &[u32],
+) -> Result<Vec<(String, ReferenceParts<'a>)>, MergeError> {
+    let mut out = Vec::new();
+    for tool in &scene.references {
+        let mut parts: ReferenceParts = Vec::new();
+        for s in shards {
+            for (t, summary) in &s.tools {
+                if t != tool {
+                    continue;
+                }
+                let cases = summary
+                    .get("cases")
+                    .and_then(Value::as_array)
+                    .ok_or_else(|| {
+                        shard_err(&s.path, format!("{tool}/summary.json has no cases"))
+                    })?;
+                for c in cases {
+                    let level = c
+                        .get("level")
+                        .and_then(Value::as_u64)
+                        .and_then(|l| u32::try_from(l).ok())
+                        .ok_or_else(|| {
+                            shard_err(&s.path, format!("{tool}/summary.json: a case has no level"))
+                        })?;
+                    if !levels.contains(&level) {
+                        return Err(shard_err(
+                            &s.path,
+                            format!("{tool} level {level} is not a level of the scene's plan"),
+                        ));
+                    }
+                    if let Some((_, other, _)) = parts.iter().find(|(l, _, _)| *l == level) {
+                        return Err(shard_err(
+                            &s.path,
+                            format!("{tool} level {level} is also in shard {}", other.display()),
+                        ));
+                    }
+                    parts.push((level, &s.path, summary));
+                }
+            }
+        }
+        if let Some(missing) = levels
+            .iter()
+            .find(|l| !parts.iter().any(|(p, _, _)| p == *l))
+        {
+            return Err(MergeError::Incomplete(format!(
+                "no shard holds reference {tool} level {missing}"
+            )));
+        }
+        parts.sort_by_key(|(l, _, _)| *l);
+        out.push((tool.clone(), parts));
+    }
+    Ok(out)
+}
+
+/// Writes one reference's merged folder `dir` from its shards; returns the number of its cases
+/// whose status is not `converged`.
+fn merge_reference(tool: &str, parts: &ReferenceParts, dir: &Path) -> Result<usize, MergeError> {
+    fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
+    let mut sources: Vec<&Path> = Vec::new();
+    let mut cases = Vec::new();
+    let mut shard_provenance = Vec::new();
+    for (level, shard, summary) in parts {
+        if !sources.contains(shard) {
+            sources.push(shard);
+            shard_provenance.push(summary.get("provenance").cloned().unwrap_or(Value::Null));
+        }
+        let case = summary
+            .get("cases")
+            .and_then(Value::as_array)
+            .and_then(|cs| {
+                cs.iter()
+                    .find(|c| c.get("level").and_then(Value::as_u64) == Some(u64::from(*level)))
+            })
+            .cloned()
+            .unwrap_or(Value::Null);
+        cases.push(case);
+    }
+    let tool_dirs: Vec<PathBuf> = sources.iter().map(|s| s.join(tool)).collect();
+    let tool_refs: Vec<&Path> = tool_dirs.iter().map(PathBuf::as_path).collect();
+    merge_field_files(&tool_refs, dir, &["summary.json"])?;
+    let not_converged = cases
+        .iter()
+        .filter(|c| c.get("status").and_then(Value::as_str) != Some("converged"))
+        .count();
+    let mut summary = parts[0].2.clone();
+    if let Some(object) = summary.as_object_mut() {
+        object.insert("cases".into(), Value::Array(cases));
+        object.insert("shards".into(), Value::Array(shard_provenance));
+    }
+    write_json(&dir.join("summary.json"), &summary)?;
+    Ok(not_converged)
+}
+
+/// `[{"folder", "provenance", "wall_s"}]` of the solver shards.
+fn shard_list(shards: &[&Shard], summary: impl Fn(&Shard) -> Option<&Value>) -> Value {
+    Value::Array(
+        shards
+            .iter()
+            .map(|s| {
+                let mut entry = Map::new();
+                entry.insert("folder".into(), Value::from(s.path.display().to_string()));
+                for key in ["provenance", "wall_s"] {
+                    let v = summary(s).and_then(|v| v.get(key)).cloned();
+                    entry.insert(key.into(), v.unwrap_or(Value::Null));
+                }
+                Value::Object(entry)
+            })
+            .collect(),
+    )
+}
+
+fn write_json(path: &Path, value: &Value) -> Result<(), MergeError> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| write_err(path, e))?;
+    atomic_write(path, text.as_bytes()).map_err(|e| write_err(path, e))
+}
+
+/// Copies into `dir` every file of the folders `sources` (recursively) except `skip` (names at
+/// their top level) and `fields.h5`, which is merged: the union of the sources' HDF5 trees. A
+/// file present in several sources must be the same bytes in each.
+fn merge_field_files(sources: &[&Path], dir: &Path, skip: &[&str]) -> Result<(), MergeError> {
+    let h5_name = format!("{FIELDS_STEM}.h5");
+    let mut h5_sources = Vec::new();
+    for src in sources {
+        let h5 = src.join(&h5_name);
+        if h5.is_file() {
+            h5_sources.push(h5);
+        }
+        copy_files(src, dir, src, &|rel: &Path| {
+            rel == Path::new(&h5_name) || skip.iter().any(|s| rel == Path::new(s))
+        })?;
+    }
+    if !h5_sources.is_empty() {
+        hdf5_union(&h5_sources, &dir.join(&h5_name))?;
+    }
+    Ok(())
+}
+
+/// Copies the files under `src` into `dst` (same relative paths), skipping hidden entries and
+/// those `skip` names; `root` is the shard folder, for messages.
+fn copy_files(
+    src: &Path,
+    dst: &Path,
+    root: &Path,
+    skip: &dyn Fn(&Path) -> bool,
+) -> Result<(), MergeError> {
+    let mut stack = vec![PathBuf::new()];
+    while let Some(rel) = stack.pop() {
+        let entries = fs::read_dir(src.join(&rel)).map_err(|e| shard_err(root, e))?;
+        let mut names: Vec<_> = entries
+            .filter_map(Result::ok)
+            .map(|e| e.file_name())
+            .collect();
+        names.sort();
+        for name in names {
+            if name.to_string_lossy().starts_with('.') {
+                continue;
+            }
+            let rel_path = rel.join(&name);
+            if skip(&rel_path) {
+                continue;
+            }
+            let from = src.join(&rel_path);
+            let to = dst.join(&rel_path);
+            if from.is_dir() {
+                fs::create_dir_all(&to).map_err(|e| write_err(&to, e))?;
+                stack.push(rel_path);
+            } else if to.exists() {
+                let same = fs::read(&from).ok() == fs::read(&to).ok();
+                if !same {
+                    return Err(shard_err(
+                        root,
+                        format!(
+                            "{} differs from the same file of another shard",
+                            rel_path.display()
+                        ),
+                    ));
+                }
+            } else {
+                fs::copy(&from, &to).map_err(|e| write_err(&to, e))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Writes `dst` as the union of the HDF5 files `sources`: a copy of the first, then every group
+/// or dataset of the others that it lacks, copied with `H5Ocopy` (data, attributes and soft links
+/// as they are). Groups present in several files are merged member by member; a dataset present
+/// in several must hold the same values (a mesh shared by shards), otherwise the merge stops.
+fn hdf5_union(sources: &[PathBuf], dst: &Path) -> Result<(), MergeError> {
+    fs::copy(&sources[0], dst).map_err(|e| write_err(dst, e))?;
+    let h5 = |e: hdf5::Error| write_err(dst, e);
+    let out = hdf5::File::open_rw(dst).map_err(h5)?;
+    for src_path in &sources[1..] {
+        let src = hdf5::File::open(src_path).map_err(|e| shard_err(src_path, e))?;
+        union_group(&src, &out, "/", src_path)?;
+    }
+    out.close().map_err(h5)
+}
+
+fn union_group(
+    src: &hdf5::File,
+    dst: &hdf5::File,
+    group: &str,
+    src_path: &Path,
+) -> Result<(), MergeError> {
+    let read_err = |e: hdf5::Error| shard_err(src_path, e);
+    let names = src
+        .group(group)
+        .map_err(read_err)?
+        .member_names()
+        .map_err(read_err)?;
+    let dst_group = dst.group(group).map_err(|e| write_err(src_path, e))?;
+    for name in names {
+        let path = if group == "/" {
+            format!("/{name}")
+        } else {
+            format!("{group}/{name}")
+        };
+        if !dst_group.link_exists(&name) {
+            h5_copy(src, &path, dst, &path).map_err(|e| write_err(src_path, e))?;
+        } else if src.group(&path).is_ok() {
+            union_group(src, dst, &path, src_path)?;
+        } else if !same_values(src, dst, &path) {
+            return Err(shard_err(
+                src_path,
+                format!("dataset {path} differs from the same dataset of another shard"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// True when the datasets `path` of `a` and `b` hold the same values (as f64: mesh points and
+/// triangle indices, all below 2⁵³).
+fn same_values(a: &hdf5::File, b: &hdf5::File, path: &str) -> bool {
+    let read = |f: &hdf5::File| f.dataset(path).and_then(|d| d.read_raw::<f64>()).ok();
+    match (read(a), read(b)) {
+        (Some(x), Some(y)) => {
+            x.len() == y.len() && x.iter().zip(&y).all(|(p, q)| p.to_bits() == q.to_bits())
+        }
+        _ => false,
+    }
+}
+
+/// `H5Ocopy` of the object `src_path` of `src` to `dst_path` of `dst` (default copy properties:
+/// data, attributes, soft links kept as soft links).
+fn h5_copy(
+    src: &hdf5::File,
+    src_path: &str,
+    dst: &hdf5::File,
+    dst_path: &str,
+) -> Result<(), String> {
+    let s = std::ffi::CString::new(src_path).map_err(|e| e.to_string())?;
+    let d = std::ffi::CString::new(dst_path).map_err(|e| e.to_string())?;
+    // SAFETY: both ids are open files, both names NUL-terminated; H5P_DEFAULT property lists.
+    let status = hdf5::sync::sync(|| unsafe {
+        hdf5_sys::h5o::H5Ocopy(
+            src.id(),
+            s.as_ptr(),
+            dst.id(),
+            d.as_ptr(),
+            hdf5_sys::h5p::H5P_DEFAULT,
+            hdf5_sys::h5p::H5P_DEFAULT,
+        )
+    });
+    if status < 0 {
+        Err(format!("H5Ocopy of {src_path} failed"))
+    } else {
+        Ok(())
+    }
+}

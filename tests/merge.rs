@@ -1,0 +1,301 @@
+//! `sdcrack merge`: shards of a scene (one `run --solver-only` per level, u space, multiplier and
+//! p mass) merged into one folder equal to a single `sdcrack run` of the scene — every summary
+//! value but the timings and the provenance, every field dataset bit for bit, every series file
+//! byte for byte — and shards that do not make up the scene refused in one line, exit 2, with
+//! nothing written.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn sdcrack(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The small scene with both p masses: 2 levels × 2 u spaces × 3 multipliers × 2 p masses × 2 δ.
+fn scene_text() -> String {
+    common::SMALL_SCENE.replace(
+        "deltas = [1e-2, 0.0]",
+        "deltas = [1e-2, 0.0]\np_mass = [\"consistent\", \"lumped\"]",
+    )
+}
+
+/// Writes the scene, runs it whole into `dir/single` and as one shard per (level, u space,
+/// multiplier, p mass) into `dir/shards/<k>`; returns the shard folders.
+fn single_and_shards(dir: &Path) -> (PathBuf, Vec<PathBuf>) {
+    let scene = dir.join("small.toml");
+    std::fs::write(&scene, scene_text()).unwrap();
+    let scene = scene.to_str().unwrap();
+    let single = dir.join("single");
+    let o = sdcrack(&["run", scene, "--out", single.to_str().unwrap(), "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let mut shards = Vec::new();
+    for level in ["0", "1"] {
+        for u in ["continuous", "broken"] {
+            for m in ["M0", "M1", "M1star"] {
+                for pm in ["consistent", "lumped"] {
+                    let out = dir.join("shards").join(format!("{level}-{u}-{m}-{pm}"));
+                    let o = sdcrack(&[
+                        "run",
+                        scene,
+                        "--level",
+                        level,
+                        "--u-space",
+                        u,
+                        "--multiplier",
+                        m,
+                        "--p-mass",
+                        pm,
+                        "--solver-only",
+                        "--quiet",
+                        "--out",
+                        out.to_str().unwrap(),
+                    ]);
+                    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+                    shards.push(out.join("small"));
+                }
+            }
+        }
+    }
+    (single.join("small"), shards)
+}
+
+fn merge(shards: &[PathBuf], out: &Path) -> Output {
+    let mut args = vec!["merge".to_string()];
+    args.extend(shards.iter().map(|s| s.display().to_string()));
+    args.extend(["--out".to_string(), out.display().to_string()]);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    sdcrack(&args)
+}
+
+fn summary(folder: &Path) -> Value {
+    serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap()
+}
+
+/// The summary without what describes the process rather than the results.
+fn numbers(mut s: Value) -> Value {
+    let o = s.as_object_mut().unwrap();
+    for key in ["provenance", "wall_s", "fields_write_s", "shards"] {
+        o.remove(key);
+    }
+    for c in o["cases"].as_array_mut().unwrap() {
+        c.as_object_mut().unwrap().remove("timings_s");
+    }
+    s
+}
+
+/// Every dataset of `/cases` and `/meshes` of `fields.h5`: (path, raw values as bits).
+fn datasets(folder: &Path) -> Vec<(String, Vec<u64>)> {
+    let file = hdf5::File::open(folder.join("fields.h5")).unwrap();
+    let mut out = Vec::new();
+    for top in ["meshes", "cases"] {
+        let group = file.group(top).unwrap();
+        for name in group.member_names().unwrap() {
+            let g = group.group(&name).unwrap();
+            let mut members: Vec<String> = g
+                .member_names()
+                .unwrap()
+                .into_iter()
+                .filter(|m| m != "mesh")
+                .collect();
+            if g.link_exists("crack") {
+                members.retain(|m| m != "crack");
+                for m in g.group("crack").unwrap().member_names().unwrap() {
+                    members.push(format!("crack/{m}"));
+                }
+            }
+            for m in members {
+                let ds = g.dataset(&m).unwrap();
+                let values: Vec<u64> = ds
+                    .read_raw::<f64>()
+                    .unwrap()
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect();
+                out.push((format!("/{top}/{name}/{m}"), values));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn series_files(folder: &Path) -> Vec<(String, String)> {
+    let mut out: Vec<(String, String)> = std::fs::read_dir(folder.join("fields"))
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path();
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read_to_string(&p).unwrap(),
+            )
+        })
+        .collect();
+    out.sort();
+    out
+}
+
+#[test]
+fn merged_shards_equal_a_single_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let (single, mut shards) = single_and_shards(dir.path());
+    // the order of the shards on the command line does not matter
+    shards.reverse();
+    let out = dir.path().join("merged");
+    let o = merge(&shards, &out);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let merged = out.join("small");
+
+    let (a, b) = (summary(&single), summary(&merged));
+    assert_eq!(b["cases"].as_array().unwrap().len(), 48);
+    assert_eq!(numbers(a.clone()), numbers(b.clone()));
+    // the same keys in the same order, plus the shards' provenance
+    let keys = |v: &Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    let mut expected = keys(&a);
+    expected.push("shards".into());
+    assert_eq!(keys(&b), expected);
+    assert_eq!(b["shards"].as_array().unwrap().len(), 24);
+    assert_eq!(b["provenance"]["command_line"][1], "merge");
+
+    let (da, db) = (datasets(&single), datasets(&merged));
+    assert_eq!(da.len(), db.len());
+    assert!(da.len() > 48 * 3, "u, p, λ of every case and the meshes");
+    for ((pa, va), (pb, vb)) in da.iter().zip(&db) {
+        assert_eq!(pa, pb);
+        assert!(va == vb, "{pa} differs");
+    }
+    assert_eq!(series_files(&single), series_files(&merged));
+    assert_eq!(
+        std::fs::read(single.join("scene.toml")).unwrap(),
+        std::fs::read(merged.join("scene.toml")).unwrap()
+    );
+}
+
+/// A failed merge: exit 2, one line containing `needle`, nothing under `out`.
+fn refused(shards: &[PathBuf], out: &Path, needle: &str) {
+    let o = merge(shards, out);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains(needle), "{err}");
+    assert!(!out.join("small").exists());
+    if out.exists() {
+        assert_eq!(std::fs::read_dir(out).unwrap().count(), 0, "nothing left");
+    }
+}
+
+#[test]
+fn shards_that_do_not_make_up_the_scene_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (_, shards) = single_and_shards(dir.path());
+    let out = dir.path().join("merged");
+
+    // a job missing
+    refused(
+        &shards[1..],
+        &out,
+        "the shards hold 46 of the scene's 48 cases; missing e.g. level 0 continuous M0 consistent",
+    );
+    // a job twice
+    let mut twice = shards.clone();
+    twice.push(shards[3].clone());
+    refused(&twice, &out, "is also in shard");
+    // a shard of an edited scene
+    let edited = dir.path().join("edited");
+    copy_dir(&shards[0], &edited);
+    let text = scene_text().replace("g = \"0\"", "g = \"0.0\"");
+    std::fs::write(edited.join("scene.toml"), text).unwrap();
+    let mut mixed = shards[1..].to_vec();
+    mixed.push(edited);
+    refused(&mixed, &out, "differs from that of");
+    // two shards that disagree on a mesh they share (level 0, continuous u)
+    let damaged = dir.path().join("damaged");
+    copy_dir(&shards[1], &damaged);
+    {
+        let file = hdf5::File::open_rw(damaged.join("fields.h5")).unwrap();
+        let points = file.dataset("meshes/level0-continuous/points").unwrap();
+        let mut values = points.read_raw::<f64>().unwrap();
+        values[0] += 1e-12;
+        points.write_raw(&values).unwrap();
+    }
+    let mut with_damaged = shards.clone();
+    with_damaged[1] = damaged;
+    refused(
+        &with_damaged,
+        &out,
+        "dataset /meshes/level0-continuous/points differs from the same dataset of another shard",
+    );
+    // not a shard
+    refused(&[dir.path().to_path_buf()], &out, "cannot read scene.toml");
+
+    // an existing merged folder is never overwritten
+    assert_eq!(merge(&shards, &out).status.code(), Some(0));
+    let o = merge(&shards, &out);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("already exists"), "{}", stderr(&o));
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        let target = to.join(e.file_name());
+        if e.path().is_dir() {
+            copy_dir(&e.path(), &target);
+        } else {
+            std::fs::copy(e.path(), target).unwrap();
+        }
+    }
+}
+
+#[test]
+fn reference_needs_a_listed_tool_and_check_json_gives_the_plan() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("small.toml");
+    std::fs::write(&scene, scene_text()).unwrap();
+    let scene = scene.to_str().unwrap();
+    let o = sdcrack(&[
+        "reference",
+        scene,
+        "--tool",
+        "dolfinx",
+        "--level",
+        "0",
+        "--out",
+        "x",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("lists the references []"),
+        "{}",
+        stderr(&o)
+    );
+
+    let o = sdcrack(&["check", scene, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let plan: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(plan["name"], "small");
+    assert_eq!(plan["cases"], 48);
+    assert_eq!(plan["levels"], serde_json::json!([0, 1]));
+    assert_eq!(
+        plan["p_masses"],
+        serde_json::json!(["consistent", "lumped"])
+    );
+    assert_eq!(plan["references"], serde_json::json!([]));
+    assert_eq!(plan["fields"], true);
+    // the estimate of src/scene: 128 MiB + 600 B per cell per log2(cells), in whole MiB
+    let mib =
+        |cells: f64| ((128u64 << 20) as f64 + 600.0 * cells * cells.log2()) / (1u64 << 20) as f64;
+    assert_eq!(plan["memory_mb"]["0"], mib(16.0).ceil() as u64);
+    assert_eq!(plan["memory_mb"]["1"], mib(64.0).ceil() as u64);
+}
