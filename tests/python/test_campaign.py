@@ -19,10 +19,21 @@ EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "
 h5py = pytest.importorskip("h5py")
 
 
-def cases(*scenes, cwd=ROOT):
-    out = subprocess.run([str(ROOT / "ci" / "cases"), *map(str, scenes)], cwd=cwd, check=True,
+def cases_with_targets(*args, cwd=ROOT):
+    """(row, target): the row's six columns, and the campaign job folder of its trailing
+    `# target: ...` comment."""
+    out = subprocess.run([str(ROOT / "ci" / "cases"), *map(str, args)], cwd=cwd, check=True,
                          capture_output=True, text=True).stdout
-    return [line.split(" ", 5) for line in out.splitlines()]
+    rows = []
+    for line in out.splitlines():
+        line, sep, target = line.partition(" # target: ")
+        assert sep, f"no target comment in {line!r}"
+        rows.append((line.split(" ", 5), target))
+    return rows
+
+
+def cases(*scenes, cwd=ROOT):
+    return [row for row, _ in cases_with_targets(*scenes, cwd=cwd)]
 
 
 def test_case_list_counts_every_case():
@@ -37,6 +48,27 @@ def test_case_list_counts_every_case():
     cmd = rows[0][5].split()
     assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack")
     assert cmd[2] == str(ROOT / "scenes" / "closed-exact.toml")
+
+
+def test_case_list_names_the_campaign_jobs(tmp_path):
+    """Each line ends in a shell comment naming the campaign's solver shard that computes the case
+    (ci/workflow/Snakefile), under --out (default results/campaign of the checkout); the columns
+    and COMMAND are unchanged, so `cut -d' ' -f6- | sh` still runs the command alone."""
+    rows = cases_with_targets(ROOT / "scenes" / "mixed.toml")
+    assert len(rows) == 5 * 2 * 3 * 2 * 6
+    for (scene, level, u, m, _delta, cmd), target in rows:
+        pm = "lumped" if "--p-mass lumped" in cmd else "consistent"
+        assert target == str(ROOT / "results" / "campaign" / "shards" / scene / "solver"
+                             / f"l{level}-{u}-{m}-{pm}")
+    assert len({t for _, t in rows}) == 5 * 2 * 3 * 2, "one shard per level, u, m, p mass"
+    rows = cases_with_targets("--out", "camp", ROOT / "scenes" / "closed-exact.toml", cwd=tmp_path)
+    assert rows[0][1] == str(tmp_path / "camp" / "shards" / "closed-exact" / "solver"
+                             / "l0-continuous-M0-consistent")
+    # the comment is a shell comment: the command part of the line runs without it
+    out = subprocess.run(["bash", "-c", "ci/cases scenes/closed-exact.toml | head -1 | cut -d' ' -f6- "
+                          "| sed 's/^[^ ]*/echo/' | sh"], cwd=ROOT, check=True,
+                         capture_output=True, text=True).stdout
+    assert out.strip().endswith("--out results/rerun/closed-exact-l0-continuous-M0-d0.0")
 
 
 def test_case_list_of_a_results_folder(tmp_path):

@@ -1,0 +1,106 @@
+#!/usr/bin/python3
+"""The campaign's wall time on a cluster with one node per job, from measured job durations.
+
+    ci/workflow/critical_path.py OUT [--json]
+
+Reads Snakemake's measurement of every job of the campaign folder OUT (the `benchmark:` files
+OUT/benchmarks/<scene>/<job>.tsv of ci/workflow/Snakefile: column `s`, wall seconds). In the
+workflow a scene's `report` job waits for all its shards (solver and reference jobs) and nothing
+else, and scenes are independent, so with one node per job (and no queueing) the campaign takes
+
+    critical path = max over scenes (longest shard job of the scene + its report job)
+
+and the scene and jobs on that path are printed. Also printed: the sum of all job durations (the
+campaign's wall time on one core, without the engine's overhead) and the totals per rule.
+Standard library only. Exit 2 (one line) when OUT has no measurements.
+"""
+
+import argparse
+import json
+import os
+import sys
+
+
+def read_seconds(path):
+    """Wall seconds of a Snakemake benchmark file (header line, then one row per repeat: the
+    first column `s`); None when unreadable."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            header = fh.readline().split("\t")
+            row = fh.readline().split("\t")
+        return float(row[header.index("s")])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def rule_of(job):
+    """The rule of a job file stem: solver-l…, report, else the reference tool (dolfinx-l…)."""
+    return "report" if job == "report" else job.split("-l")[0] if "-l" in job else job
+
+
+def measure(out):
+    """{scene: {job: seconds}} of the campaign folder `out`."""
+    root = os.path.join(out, "benchmarks")
+    scenes = {}
+    for scene in sorted(os.listdir(root)) if os.path.isdir(root) else []:
+        jobs = {}
+        for f in sorted(os.listdir(os.path.join(root, scene))):
+            if f.endswith(".tsv"):
+                s = read_seconds(os.path.join(root, scene, f))
+                if s is not None:
+                    jobs[f[:-4]] = s
+        if jobs:
+            scenes[scene] = jobs
+    return scenes
+
+
+def critical_path(scenes):
+    """{"critical_s", "scene", "shard", "shard_s", "report_s", "sum_s", "per_rule_s", "jobs",
+    "per_scene"} of `scenes` (see the module documentation); a scene without a measured report
+    counts its report as 0 s."""
+    per_scene = {}
+    per_rule = {}
+    for scene, jobs in scenes.items():
+        shards = {j: s for j, s in jobs.items() if j != "report"}
+        longest = max(shards, key=shards.get) if shards else None
+        report = jobs.get("report", 0.0)
+        per_scene[scene] = {"path_s": (shards[longest] if longest else 0.0) + report,
+                            "shard": longest, "shard_s": shards.get(longest, 0.0),
+                            "report_s": report}
+        for j, s in jobs.items():
+            per_rule[rule_of(j)] = per_rule.get(rule_of(j), 0.0) + s
+    scene = max(per_scene, key=lambda k: per_scene[k]["path_s"])
+    return {"critical_s": per_scene[scene]["path_s"], "scene": scene,
+            "shard": per_scene[scene]["shard"], "shard_s": per_scene[scene]["shard_s"],
+            "report_s": per_scene[scene]["report_s"],
+            "sum_s": sum(s for jobs in scenes.values() for s in jobs.values()),
+            "per_rule_s": dict(sorted(per_rule.items())),
+            "jobs": sum(len(j) for j in scenes.values()), "per_scene": per_scene}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out", help="campaign folder (ci/campaign --out)")
+    ap.add_argument("--json", action="store_true", help="print one JSON object")
+    args = ap.parse_args(argv)
+    scenes = measure(args.out)
+    if not scenes:
+        print(f"critical_path: no job measurements under {args.out}/benchmarks/", file=sys.stderr)
+        return 2
+    cp = critical_path(scenes)
+    if args.json:
+        print(json.dumps(cp, indent=2))
+        return 0
+    print(f"{'scene':20} {'longest shard':34} {'shard s':>8} {'report s':>9} {'path s':>8}")
+    for scene, p in sorted(cp["per_scene"].items(), key=lambda kv: -kv[1]["path_s"]):
+        print(f"{scene:20} {str(p['shard']):34} {p['shard_s']:8.1f} {p['report_s']:9.1f} "
+              f"{p['path_s']:8.1f}")
+    print(f"\ncritical path (one node per job): {cp['critical_s']:.1f} s "
+          f"({cp['scene']}: {cp['shard']} {cp['shard_s']:.1f} s + report {cp['report_s']:.1f} s)")
+    print(f"sum of all {cp['jobs']} jobs: {cp['sum_s']:.1f} s ("
+          + ", ".join(f"{r} {s:.1f}" for r, s in cp["per_rule_s"].items()) + ")")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

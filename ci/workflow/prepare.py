@@ -1,0 +1,228 @@
+#!/usr/bin/python3
+"""Prepares a campaign folder's inputs/ for ci/workflow/Snakefile (called by ci/campaign).
+
+    prepare.py --out DIR --bin SDCRACK --repo ROOT [--levels A-B] [--threads N]
+               [--baseline OLD_DIR] [--expectations FILE] [--dry-run] SCENE.toml...
+
+Writes, under DIR/inputs/:
+  sdcrack, sdcrack.sha256  a copy of the binary and its sha256, replaced only when the sha256
+                           differs (every job depends on sdcrack.sha256: a rebuilt binary reruns all)
+  <name>.toml              each scene file, its `levels = [...]` line replaced when --levels is
+                           given; rewritten only when its bytes change (mtimes move on real change)
+  config.json              the workflow's config: repo, scenes, each scene's plan (`sdcrack check
+                           --json`), expectations, baselines, solver threads
+and removes leftovers of killed merges (DIR/.<name>.partial-<pid>/; the caller holds the lock).
+
+--dry-run writes only what is missing (so that a dry run does not move the mtimes a later run
+compares) and its config as config.dry-run.json; an existing input whose bytes would change is
+left alone and the outputs depending on it are listed in that config's `forcerun` for
+`snakemake --forcerun`.
+
+Prints the number of jobs of the whole campaign on stdout. Bad input: one line on stderr, exit 2.
+Standard library only (/usr/bin/python3).
+"""
+
+import argparse
+import hashlib
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+RESERVED = {"inputs", "shards", "logs", "benchmarks", "index.html", "index.json"}
+NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")
+LEVELS_RE = re.compile(r"(?m)^levels[ \t]*=[ \t]*\[[^\]\n]*\][ \t]*$")
+
+
+class Refused(Exception):
+    """A one-line error for the user (exit 2)."""
+
+
+def sha256(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def read_bytes(path):
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except FileNotFoundError:
+        return None
+
+
+def write_atomic(path, data, mode=None):
+    tmp = f"{os.path.dirname(path)}/.{os.path.basename(path)}.tmp-{os.getpid()}"
+    with open(tmp, "wb") as fh:
+        fh.write(data)
+    if mode is not None:
+        os.chmod(tmp, mode)
+    os.replace(tmp, path)
+
+
+def parse_levels(text):
+    m = re.fullmatch(r"(\d+)(?:-(\d+))?", text)
+    if not m:
+        raise Refused(f"--levels {text}: expected A-B (e.g. 0-5) or one level")
+    a = int(m.group(1))
+    b = int(m.group(2)) if m.group(2) is not None else a
+    if b < a:
+        raise Refused(f"--levels {text}: the first level is larger than the last")
+    return list(range(a, b + 1))
+
+
+def jobs_of(plan):
+    """(solver shard folders, reference shard folders, report folder) of one scene's plan."""
+    name = plan["name"]
+    solver = [f"shards/{name}/solver/l{lv}-{u}-{m}-{pm}"
+              for lv in plan["levels"] for u in plan["u_spaces"]
+              for m in plan["multipliers"] for pm in plan["p_masses"]]
+    refs = [f"shards/{name}/{tool}/l{lv}" for tool in plan["references"] for lv in plan["levels"]]
+    return solver, refs, name
+
+
+def check_scene(exe, path):
+    r = subprocess.run([exe, "check", path, "--json"], capture_output=True, text=True)
+    if r.returncode != 0:
+        lines = [x for x in (r.stderr or r.stdout).splitlines() if x.strip()]
+        raise Refused(lines[-1] if lines else f"sdcrack check exited {r.returncode}")
+    try:
+        plan = json.loads(r.stdout)
+    except ValueError as exc:
+        raise Refused(f"sdcrack check --json printed no JSON object: {exc}") from None
+    for key in ("name", "levels", "u_spaces", "multipliers", "p_masses", "references", "memory_mb"):
+        if key not in plan:
+            raise Refused(f"sdcrack check --json lacks `{key}` (binary too old?)")
+    return plan
+
+
+def prepare(args):
+    out = os.path.abspath(args.out)
+    inputs = os.path.join(out, "inputs")
+    os.makedirs(inputs, exist_ok=True)
+    forcerun = []
+
+    # the binary: copied (the jobs run inputs/sdcrack, so a rebuild during a campaign cannot mix
+    # binaries) and replaced only when its sha256 differs
+    if not os.access(args.bin, os.X_OK) or os.path.isdir(args.bin):
+        raise Refused(f"{args.bin}: no sdcrack binary there (build it, or set SDCRACK_BIN)")
+    digest = sha256(args.bin)
+    exe = os.path.join(inputs, "sdcrack")
+    sha_file = os.path.join(inputs, "sdcrack.sha256")
+    have = read_bytes(sha_file)
+    binary_changed = False
+    if have is None or have.decode(errors="replace").split()[:1] != [digest] \
+            or not os.path.isfile(exe) or sha256(exe) != digest:
+        if args.dry_run and have is not None:
+            binary_changed = True  # left alone: the dry run forces everything instead
+        else:
+            tmp = os.path.join(inputs, f".sdcrack.tmp-{os.getpid()}")
+            shutil.copyfile(args.bin, tmp)
+            os.chmod(tmp, 0o755)
+            os.replace(tmp, exe)
+            write_atomic(sha_file, f"{digest}  sdcrack\n".encode())
+    check_exe = exe if os.path.isfile(exe) and not binary_changed else os.path.abspath(args.bin)
+
+    levels = parse_levels(args.levels) if args.levels else None
+    plans, sources, changed = {}, {}, set()
+    for scene in args.scenes:
+        data = read_bytes(scene)
+        if data is None:
+            raise Refused(f"{scene}: no such scene file")
+        text = data.decode("utf-8", errors="replace")
+        if levels is not None:
+            text, n = LEVELS_RE.subn(f"levels = [{', '.join(map(str, levels))}]", text)
+            if n != 1:
+                raise Refused(f"{scene}: no single `levels = [...]` line to replace for --levels")
+            data = text.encode("utf-8")
+        tmp = os.path.join(inputs, f".check-{os.getpid()}.toml")
+        write_atomic(tmp, data)
+        try:
+            plan = check_scene(check_exe, tmp)
+        except Refused as exc:  # sdcrack names the file it checked: name the user's instead
+            raise Refused(f"{scene}: {str(exc).replace(tmp, scene)}") from None
+        finally:
+            os.unlink(tmp)
+        name = plan["name"]
+        if not NAME_RE.match(name) or name in RESERVED:
+            raise Refused(f"{scene}: scene name '{name}' cannot name a campaign folder "
+                          f"(letters, digits, . _ + - only; not {', '.join(sorted(RESERVED))})")
+        if name in plans:
+            raise Refused(f"{scene}: two scenes named '{name}' ({sources[name]} and {scene})")
+        plans[name], sources[name] = plan, scene
+        target = os.path.join(inputs, f"{name}.toml")
+        old = read_bytes(target)
+        if old != data:
+            if args.dry_run and old is not None:
+                changed.add(name)
+            else:
+                write_atomic(target, data)
+    if not plans:
+        raise Refused("no scene to run")
+
+    total = 0
+    for name, plan in plans.items():
+        solver, refs, report = jobs_of(plan)
+        total += len(solver) + len(refs) + 1
+        if binary_changed or name in changed:
+            forcerun += solver + refs + [report]
+
+    baselines = {}
+    if args.baseline:
+        for name in plans:
+            b = os.path.join(os.path.abspath(args.baseline), name)
+            if os.path.isdir(b):
+                baselines[name] = b
+    expectations = os.path.abspath(args.expectations or
+                                   os.path.join(args.repo, "scenes", "expectations.toml"))
+    if not os.path.isfile(expectations):
+        raise Refused(f"{expectations}: no expectations file")
+    config = {
+        "repo": os.path.abspath(args.repo),
+        "scenes": list(plans),
+        "scene_files": {n: os.path.abspath(s) for n, s in sources.items()},
+        "plans": plans,
+        "expectations": expectations,
+        "baselines": baselines,
+        "threads": args.threads,
+        "jobs": total,
+        "forcerun": forcerun,
+    }
+    write_atomic(os.path.join(inputs, "config.dry-run.json" if args.dry_run else "config.json"),
+                 (json.dumps(config, indent=1) + "\n").encode())
+
+    # merges killed before their rename leave DIR/.<name>.partial-<pid>/; nothing reads them
+    if not args.dry_run:
+        for entry in os.listdir(out):
+            if re.fullmatch(r"\..+\.partial-\d+", entry):
+                shutil.rmtree(os.path.join(out, entry), ignore_errors=True)
+    return total
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("scenes", nargs="+")
+    p.add_argument("--out", required=True)
+    p.add_argument("--bin", required=True)
+    p.add_argument("--repo", required=True)
+    p.add_argument("--levels")
+    p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--baseline")
+    p.add_argument("--expectations")
+    p.add_argument("--dry-run", action="store_true")
+    args = p.parse_args()
+    try:
+        print(prepare(args))
+    except Refused as exc:
+        print(f"campaign: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,441 @@
+"""ci/campaign as a Snakemake workflow (ci/workflow/Snakefile): job list, same numbers as one
+process, incremental reruns, resuming a killed campaign, failing jobs in the index.
+
+Runs on two small scenes derived from the repository's (closed-exact and mixed at levels 0-2,
+mixed with two δ), so that the whole file takes about two minutes on 2 cores. Needs the workflow
+venv of ci/setup (.venv-workflow/) and an sdcrack binary with `merge` (SDCRACK_BIN, else
+target/release/sdcrack); skipped with the reason otherwise.
+"""
+
+import fcntl
+import filecmp
+import json
+import os
+import pathlib
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from scene_text import set_key
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack")).resolve()
+SNAKEMAKE = ROOT / ".venv-workflow" / "bin" / "snakemake"
+CAMPAIGN = ROOT / "ci" / "campaign"
+h5py = pytest.importorskip("h5py")
+
+LEVELS = [0, 1, 2]
+U_SPACES, MULTIPLIERS, P_MASSES, TOOLS = 2, 3, 2, 2
+SOLVER_JOBS = len(LEVELS) * U_SPACES * MULTIPLIERS * P_MASSES  # per scene
+REFERENCE_JOBS = len(LEVELS) * TOOLS
+
+
+def _skip_reason():
+    if not SNAKEMAKE.is_file():
+        return f"no workflow venv ({SNAKEMAKE}): run ci/setup"
+    if not EXE.is_file():
+        return f"no sdcrack binary at {EXE} (cargo build --release, or set SDCRACK_BIN)"
+    if subprocess.run([str(EXE), "merge", "--help"], capture_output=True).returncode != 0:
+        return f"{EXE} has no `merge` subcommand (an older build)"
+    return None
+
+
+pytestmark = pytest.mark.skipif(_skip_reason() is not None, reason=str(_skip_reason()))
+
+
+def campaign(*args, binary=EXE, check=None, **kw):
+    env = dict(os.environ, SDCRACK_BIN=str(binary))
+    r = subprocess.run([str(CAMPAIGN), *map(str, args)], env=env, capture_output=True, text=True,
+                       timeout=600, **kw)
+    if check is not None:
+        assert r.returncode == check, r.stdout[-4000:] + r.stderr[-4000:]
+    return r
+
+
+@pytest.fixture(scope="module")
+def scenes(tmp_path_factory):
+    """Two small scenes, and an expectations file for them (the repository's bounds are at
+    level 4, which these scenes do not have)."""
+    d = tmp_path_factory.mktemp("scenes")
+    out = []
+    for name in ("closed-exact", "mixed"):
+        text = set_key((ROOT / "scenes" / f"{name}.toml").read_text(), "levels",
+                       "[" + ", ".join(map(str, LEVELS)) + "]")
+        if name == "mixed":
+            text = set_key(text, "deltas", "[1e-2, 0.0]")
+        (d / f"{name}.toml").write_text(text)
+        out.append(d / f"{name}.toml")
+    (d / "expectations.toml").write_text(
+        "# test bounds at level 2 of the small exact closed crack\n"
+        '[[expectation]]\nscene = "closed-exact"\nu_space = "*"\nmultiplier = "*"\n'
+        'quantity = "u_l2"\nlevel = 2\nmax_error = 1e-1\n')
+    return out, d / "expectations.toml"
+
+
+@pytest.fixture(scope="module")
+def full_run(scenes, tmp_path_factory):
+    """One uninterrupted campaign on both scenes, --cores 2."""
+    files, expectations = scenes
+    out = tmp_path_factory.mktemp("campaign") / "out"
+    t = time.monotonic()
+    r = campaign(*files, "--out", out, "--cores", 2, "--expectations", expectations)
+    print(f"campaign: {time.monotonic() - t:.1f} s", file=sys.stderr)
+    return out, r
+
+
+@pytest.fixture(scope="module")
+def single_run(scenes, tmp_path_factory):
+    """The single-process path: `sdcrack run SCENE --out X`, then compare/sdcompare."""
+    files, expectations = scenes
+    out = tmp_path_factory.mktemp("single")
+    for f in files:
+        r = subprocess.run([str(EXE), "run", str(f), "--out", str(out), "--quiet"],
+                           capture_output=True, text=True)
+        assert r.returncode in (0, 3), r.stderr
+        name = f.stem
+        r = subprocess.run(["/usr/bin/python3", str(ROOT / "compare" / "sdcompare"), str(out / name),
+                            "--quiet", "--expectations", str(expectations)],
+                           capture_output=True, text=True)
+        assert r.returncode in (0, 1), r.stderr
+    return out
+
+
+def strip_timings(cases):
+    return [{k: v for k, v in c.items() if k != "timings_s"} for c in cases]
+
+
+def h5_items(path):
+    items = {}
+    with h5py.File(path, "r") as f:
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                items[name] = (obj[()], {k: obj.attrs[k] for k in obj.attrs})
+        f.visititems(visit)
+    return items
+
+
+def assert_same_fields(a, b):
+    ia, ib = h5_items(a), h5_items(b)
+    assert sorted(ia) == sorted(ib), (a, b)
+    for name in ia:
+        (da, attrs_a), (db, attrs_b) = ia[name], ib[name]
+        assert da.dtype == db.dtype and np.array_equal(da, db), (a, name)
+        assert sorted(attrs_a) == sorted(attrs_b), (a, name)
+        for k in attrs_a:
+            assert np.array_equal(attrs_a[k], attrs_b[k]), (a, name, k)
+
+
+def assert_same_results(a, b):
+    """Two results folders of one scene hold the same numbers (timings and provenance aside)."""
+    sa, sb = (json.loads((x / "summary.json").read_text()) for x in (a, b))
+    assert sa["plan"] == sb["plan"]
+    assert strip_timings(sa["cases"]) == strip_timings(sb["cases"])
+    assert (a / "scene.toml").read_bytes() == (b / "scene.toml").read_bytes()
+    assert_same_fields(a / "fields.h5", b / "fields.h5")
+    xa = sorted(p.name for p in (a / "fields").glob("*.xdmf"))
+    assert xa and xa == sorted(p.name for p in (b / "fields").glob("*.xdmf"))
+    for name in xa:
+        assert (a / "fields" / name).read_text() == (b / "fields" / name).read_text(), name
+    tools = sorted(t for t in ("dolfinx", "freefem") if (b / t).is_dir())
+    assert tools == sorted(t for t in ("dolfinx", "freefem") if (a / t).is_dir()) == \
+        sorted(sa["plan"].get("references", tools))
+    for tool in tools:
+        ra, rb = (json.loads((x / tool / "summary.json").read_text()) for x in (a, b))
+        assert strip_timings(ra["cases"]) == strip_timings(rb["cases"]), tool
+        if (b / tool / "fields.h5").is_file():
+            assert_same_fields(a / tool / "fields.h5", b / tool / "fields.h5")
+        texts = sorted(p.name for p in (b / tool).glob("*.txt"))
+        assert texts == sorted(p.name for p in (a / tool).glob("*.txt"))
+        for name in texts:  # u per cracked-mesh vertex
+            assert (a / tool / name).read_bytes() == (b / tool / name).read_bytes(), (tool, name)
+    if tools:  # the meshes the references ran on
+        ma = sorted(p.relative_to(a) for p in (a / "mesh").rglob("*") if p.is_file())
+        assert ma and ma == sorted(p.relative_to(b) for p in (b / "mesh").rglob("*") if p.is_file())
+        for rel in ma:
+            assert (a / rel).read_bytes() == (b / rel).read_bytes(), rel
+    va, vb = (json.loads((x / "report" / "report.json").read_text()) for x in (a, b))
+    assert va["verdict"] == vb["verdict"]
+
+
+def expected_jobs(out, names):
+    jobs = set()
+    for name in names:
+        for lv in LEVELS:
+            for u in ("continuous", "broken"):
+                for m in ("M0", "M1", "M1star"):
+                    for pm in ("consistent", "lumped"):
+                        jobs.add(("solver", f"shards/{name}/solver/l{lv}-{u}-{m}-{pm}"))
+            for tool in ("dolfinx", "freefem"):
+                jobs.add(("reference", f"shards/{name}/{tool}/l{lv}"))
+        jobs.add(("report", name))
+    return jobs
+
+
+def dry_run_jobs(stdout):
+    return {tuple(line.split()[:2]) for line in stdout.splitlines()
+            if re.match(r"^  (solver|reference|report) ", line)}
+
+
+def test_bad_arguments_one_line_exit_2(tmp_path):
+    for args in (["--cores", "x"], ["--bogus"], ["--levels", "5-x"], [tmp_path / "missing.toml"],
+                 ["--profile", "nosuch"]):
+        r = campaign(*args, "--out", tmp_path / "o")
+        assert r.returncode == 2, (args, r.stderr)
+        assert len(r.stderr.strip().splitlines()) == 1 and r.stderr.startswith("campaign: "), r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_dry_run_lists_every_job(scenes, tmp_path):
+    files, expectations = scenes
+    r = campaign(*files, "--out", tmp_path / "out", "--dry-run", "--expectations", expectations,
+                 check=0)
+    jobs = dry_run_jobs(r.stdout)
+    assert jobs == expected_jobs(tmp_path / "out", ["closed-exact", "mixed"])
+    total = 2 * (SOLVER_JOBS + REFERENCE_JOBS + 1)
+    assert len(jobs) == total == 86
+    assert (f"campaign: dry run: {total} of {total} jobs would run "
+            f"(solver {2 * SOLVER_JOBS}, reference {2 * REFERENCE_JOBS}, report 2)") in r.stdout
+    # the Slurm profile parses under the pinned Snakemake and plans the same jobs
+    r = campaign(*files, "--out", tmp_path / "out", "--dry-run", "--expectations", expectations,
+                 "--profile", "slurm", check=0)
+    assert dry_run_jobs(r.stdout) == jobs
+    # nothing ran: only the inputs are there
+    assert not (tmp_path / "out" / "shards").exists() and not (tmp_path / "out" / "mixed").exists()
+    assert (tmp_path / "out" / "inputs" / "mixed.toml").read_bytes() == files[1].read_bytes()
+
+
+def test_same_numbers_as_one_process(full_run, single_run):
+    out, r = full_run
+    assert r.returncode in (0, 1), r.stdout[-3000:] + r.stderr[-3000:]
+    for name in ("closed-exact", "mixed"):
+        assert_same_results(out / name, single_run / name)
+        verdict = json.loads((single_run / name / "report" / "report.json").read_text())["verdict"]
+        assert f"  {verdict}  {out / name / 'report' / 'index.html'}" in r.stdout
+    verdicts = [json.loads((single_run / n / "report" / "report.json").read_text())["verdict"]
+                for n in ("closed-exact", "mixed")]
+    assert r.returncode == (0 if verdicts == ["PASS", "PASS"] else 1)
+    index = json.loads((out / "index.json").read_text())
+    assert [(s["name"], s["verdict"]) for s in index["scenes"]] == \
+        list(zip(("closed-exact", "mixed"), verdicts))
+    assert f"index: {out / 'index.html'}" in r.stdout
+    html = (out / "index.html").read_text()
+    assert 'href="mixed/report/index.html"' in html
+    # every job has its log, ending in its status line
+    logs = sorted(p.name for p in (out / "logs" / "mixed").glob("*.log"))
+    assert len(logs) == SOLVER_JOBS + REFERENCE_JOBS + 1
+    assert re.search(r"campaign: sdcompare done \(exit [01]\)$",
+                     (out / "logs" / "mixed" / "report.log").read_text().strip())
+
+
+def test_second_run_reruns_nothing(full_run, scenes):
+    out, _ = full_run
+    files, expectations = scenes
+    summaries = sorted(out.glob("shards/*/*/*/*/summary.json")) + \
+        sorted(out.glob("shards/*/*/*/*/*/summary.json")) + sorted(out.glob("*/summary.json"))
+    assert len(summaries) == 2 * (SOLVER_JOBS + REFERENCE_JOBS + 1)
+    before = {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in summaries}
+    r = campaign(*files, "--out", out, "--cores", 2, "--expectations", expectations)
+    assert r.returncode in (0, 1), r.stderr[-3000:]
+    assert "campaign: nothing to rerun, all 86 jobs up to date" in r.stdout
+    assert before == {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in summaries}
+    # and a dry run says the same
+    r = campaign(*files, "--out", out, "--dry-run", "--expectations", expectations, check=0)
+    assert "campaign: dry run: nothing to rerun, all 86 jobs up to date" in r.stdout
+
+
+def test_dry_run_after_changes_lists_what_depends_on_them(full_run, scenes, tmp_path):
+    """An edited scene reruns that scene's jobs only, a rebuilt binary every job; a dry run says
+    so without touching the campaign's inputs."""
+    out, _ = full_run
+    files, expectations = scenes
+    scene_copy = out / "inputs" / "mixed.toml"
+    stamp = (scene_copy.read_bytes(), scene_copy.stat().st_mtime_ns)
+    edited = tmp_path / "mixed.toml"
+    edited.write_text(set_key(files[1].read_text(), "deltas", "[1e-1, 0.0]"))
+    r = campaign(files[0], edited, "--out", out, "--dry-run", "--expectations", expectations,
+                 check=0)
+    assert dry_run_jobs(r.stdout) == expected_jobs(out, ["mixed"])
+    assert (scene_copy.read_bytes(), scene_copy.stat().st_mtime_ns) == stamp
+    rebuilt = tmp_path / "sdcrack"
+    shutil.copyfile(EXE, rebuilt)
+    with open(rebuilt, "ab") as fh:
+        fh.write(b"\0")  # other bytes, same program
+    rebuilt.chmod(0o755)
+    r = campaign(*files, "--out", out, "--dry-run", "--expectations", expectations,
+                 binary=rebuilt, check=0)
+    assert dry_run_jobs(r.stdout) == expected_jobs(out, ["closed-exact", "mixed"])
+    assert filecmp.cmp(out / "inputs" / "sdcrack", EXE, shallow=False)
+
+
+def test_index_of_downloaded_scene_folders(full_run, tmp_path):
+    """ci/campaign_index.py DIR on scene folders put together (the GitHub nightly's last job)."""
+    out, _ = full_run
+    for name in ("closed-exact", "mixed"):
+        shutil.copytree(out / name / "report", tmp_path / name / "report")
+    shutil.copytree(out / "logs" / "mixed", tmp_path / "logs" / "mixed")
+    r = subprocess.run(["/usr/bin/python3", str(ROOT / "ci" / "campaign_index.py"), str(tmp_path)],
+                       capture_output=True, text=True)
+    index = json.loads((tmp_path / "index.json").read_text())
+    want = {s["name"]: s["verdict"] for s in json.loads((out / "index.json").read_text())["scenes"]}
+    assert {s["name"]: s["verdict"] for s in index["scenes"]} == want
+    assert r.returncode == (0 if set(want.values()) == {"PASS"} else 1)
+    # an expected scene without a folder is FAIL
+    r = subprocess.run(["/usr/bin/python3", str(ROOT / "ci" / "campaign_index.py"), str(tmp_path),
+                        "--scene", "mixed", "--scene", "absent"], capture_output=True, text=True)
+    assert r.returncode == 1
+    assert "  FAIL  absent: no report" in r.stdout
+
+
+def test_second_campaign_on_the_same_folder_is_refused(tmp_path, scenes):
+    files, _ = scenes
+    (tmp_path / "out").mkdir()
+    with open(tmp_path / "out" / ".campaign.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        r = campaign(files[0], "--out", tmp_path / "out", "--dry-run")
+    assert r.returncode == 2
+    assert r.stderr.count("\n") == 1 and "in use by another campaign" in r.stderr
+    assert not (tmp_path / "out" / "inputs").exists()
+
+
+def completed_shards(out):
+    """Shard folders Snakemake has finished (it touches .snakemake_timestamp at the end)."""
+    return {p.parent for p in out.glob("shards/*/*/*/.snakemake_timestamp")}
+
+
+def test_killed_campaign_resumes(full_run, scenes, tmp_path):
+    out = tmp_path / "out"
+    files, expectations = scenes
+    cmd = [str(CAMPAIGN), *map(str, files), "--out", str(out), "--cores", "2",
+           "--expectations", str(expectations)]
+    env = dict(os.environ, SDCRACK_BIN=str(EXE))
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 300
+        while len(completed_shards(out)) < 12:
+            assert proc.poll() is None, "the campaign ended before it could be killed"
+            assert time.monotonic() < deadline
+            time.sleep(0.1)
+        done = completed_shards(out)
+        # let Snakemake record these as finished, and more jobs start
+        while len(completed_shards(out)) < len(done) + 4:
+            assert proc.poll() is None, "the campaign ended before it could be killed"
+            time.sleep(0.1)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    assert not (out / "mixed" / "report").exists() or not (out / "closed-exact" / "report").exists()
+    stamps = {}
+    for shard in done:
+        for summary in [*shard.glob("*/summary.json"), *shard.glob("*/*/summary.json")]:
+            stamps[summary] = (summary.stat().st_ino, summary.stat().st_mtime_ns)
+    assert len(stamps) == len(done)
+    r = campaign(*files, "--out", out, "--cores", 2, "--expectations", expectations)
+    assert r.returncode in (0, 1), r.stdout[-3000:] + r.stderr[-3000:]
+    assert "nothing to rerun" not in r.stdout
+    assert stamps == {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in stamps}, \
+        "finished shards were rerun"
+    full, _ = full_run
+    for name in ("closed-exact", "mixed"):
+        assert_same_results(out / name, full / name)
+    assert json.loads((out / "index.json").read_text())["verdict"] == \
+        json.loads((full / "index.json").read_text())["verdict"]
+
+
+def test_failed_job_shows_in_the_index(scenes, tmp_path):
+    """A solver job that fails (exit 1) leaves no shard folder; its scene is FAIL in the index,
+    with the job's log; the campaign exits non-zero. The other jobs still run (--keep-going)."""
+    files, expectations = scenes
+    wrapper = tmp_path / "sdcrack-failing"
+    wrapper.write_text(
+        "#!/bin/sh\n"
+        '# exits 1 for the solver shards of level 1, runs the real binary otherwise\n'
+        'if [ "$1" = run ]; then prev=""\n'
+        '  for a in "$@"; do\n'
+        '    if [ "$prev" = --level ] && [ "$a" = 1 ]; then echo "wrapper: failing <level 1> on purpose" >&2; exit 1; fi\n'
+        '    prev="$a"\n'
+        "  done\n"
+        "fi\n"
+        f'exec "{EXE}" "$@"\n')
+    wrapper.chmod(0o755)
+    scene = tmp_path / "closed-exact.toml"
+    scene.write_text(set_key(files[0].read_text(), "levels", "[0, 1]"))
+    out = tmp_path / "out"
+    r = campaign(scene, "--out", out, "--cores", 2, "--expectations", expectations,
+                 binary=wrapper)
+    assert r.returncode != 0
+    failed = sorted(out.glob("shards/closed-exact/solver/l1-*"))
+    assert failed == [], "a failed job leaves no shard folder"
+    assert len(list(out.glob("shards/closed-exact/solver/l0-*"))) == SOLVER_JOBS // len(LEVELS)
+    assert len(list(out.glob("shards/closed-exact/*/l1"))) == TOOLS  # the references ran
+    assert not (out / "closed-exact").exists()
+    index = json.loads((out / "index.json").read_text())
+    (row,) = index["scenes"]
+    assert row["name"] == "closed-exact" and row["verdict"] == "FAIL" and index["verdict"] == "FAIL"
+    jobs = {j["job"] for j in row["failed_jobs"]}
+    assert jobs == {f"solver-l1-{u}-{m}-{pm}" for u in ("continuous", "broken")
+                    for m in ("M0", "M1", "M1star") for pm in ("consistent", "lumped")}
+    job = row["failed_jobs"][0]
+    assert "failing <level 1> on purpose" in job["tail"] and "failed (exit 1)" in job["tail"]
+    html = (out / "index.html").read_text()
+    assert f'href="{job["log"]}"' in html
+    assert "failing &lt;level 1&gt; on purpose" in html
+    assert "  FAIL  closed-exact: no report" in r.stdout
+
+
+def critical_path(out, *extra):
+    return subprocess.run(["/usr/bin/python3", str(ROOT / "ci" / "workflow" / "critical_path.py"),
+                           str(out), *extra], capture_output=True, text=True)
+
+
+def test_critical_path_of_known_durations(tmp_path):
+    """Scene a: shards 1 s and 5 s, report 2 s (path 7 s); scene b: shard 3 s, report 6 s (9 s)."""
+    header = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
+    for scene, jobs in (("a", {"solver-l0-broken-M1-consistent": 1, "dolfinx-l1": 5, "report": 2}),
+                        ("b", {"freefem-l0": 3, "report": 6})):
+        (tmp_path / "benchmarks" / scene).mkdir(parents=True)
+        for job, s in jobs.items():
+            (tmp_path / "benchmarks" / scene / f"{job}.tsv").write_text(
+                header + f"{s}\t0:00:0{s}\t1\t1\t1\t1\t0\t0\t0\t0.1\n")
+    r = critical_path(tmp_path, "--json")
+    assert r.returncode == 0, r.stderr
+    cp = json.loads(r.stdout)
+    assert (cp["critical_s"], cp["scene"], cp["shard"]) == (9.0, "b", "freefem-l0")
+    assert cp["sum_s"] == 17.0 and cp["jobs"] == 5
+    assert cp["per_rule_s"] == {"dolfinx": 5.0, "freefem": 3.0, "report": 8.0, "solver": 1.0}
+    assert cp["per_scene"]["a"]["path_s"] == 7.0
+    r = critical_path(tmp_path / "nothing")
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_every_job_is_measured(full_run):
+    """Snakemake measures every job (benchmark files), and the critical path is the longest
+    shard plus the report of one scene, at most the sum of all jobs."""
+    out, _ = full_run
+    r = critical_path(out, "--json")
+    assert r.returncode == 0, r.stderr
+    cp = json.loads(r.stdout)
+    assert cp["jobs"] == 2 * (SOLVER_JOBS + REFERENCE_JOBS + 1)
+    assert 0 < cp["critical_s"] < cp["sum_s"]
+    assert cp["scene"] in ("closed-exact", "mixed") and cp["report_s"] > 0
+
+
+def test_the_pinned_engine_is_installed():
+    """ci/setup's pins are what the venv holds: Snakemake and its Slurm executor plugin."""
+    setup = (ROOT / "ci" / "setup").read_text()
+    pins = dict(re.findall(r"^(SNAKEMAKE_VERSION|SLURM_PLUGIN_VERSION)=(\S+)$", setup, re.M))
+    assert set(pins) == {"SNAKEMAKE_VERSION", "SLURM_PLUGIN_VERSION"}
+    r = subprocess.run([str(SNAKEMAKE), "--version"], capture_output=True, text=True)
+    assert r.stdout.strip() == pins["SNAKEMAKE_VERSION"]
+    r = subprocess.run([str(SNAKEMAKE.parent / "python"), "-c",
+                        "import importlib.metadata as m; "
+                        "print(m.version('snakemake-executor-plugin-slurm'))"],
+                       capture_output=True, text=True)
+    assert r.stdout.strip() == pins["SLURM_PLUGIN_VERSION"], r.stderr
+    constraints = (ROOT / "ci" / "workflow" / "constraints.txt").read_text()
+    assert f"snakemake=={pins['SNAKEMAKE_VERSION']}" in constraints
