@@ -19,12 +19,13 @@
 
 use rayon::prelude::*;
 
+use crate::expr::Expr;
 use crate::fe::mini::{condensed_element, CondensedElement};
 use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};
 use crate::linalg::SymCsc;
 use crate::mesh::{Mesh, UTopology};
-use crate::scene::{Expr, MultiplierSpace, PMass};
+use crate::problem::{MultiplierSpace, PMass};
 
 /// Errors while assembling.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -465,7 +466,7 @@ impl CrackOperators {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Rectangle, Segment, USpace};
+    use crate::problem::{Rectangle, Segment, USpace};
 
     fn mesh(level: u32) -> Mesh {
         Mesh::structured(

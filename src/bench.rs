@@ -18,7 +18,8 @@ use std::time::Instant;
 use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, MeshError};
-use crate::scene::{FieldSet, MultiplierSpace, PMass, Scene, USpace};
+use crate::problem::{MultiplierSpace, PMass, USpace};
+use crate::scene::{FieldSet, Scene};
 use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
 
 /// The δ values of the sweep (largest first, as every study runs them).

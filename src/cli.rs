@@ -17,7 +17,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::output::summary::{delta_text, Provenance};
 use crate::output::{write_run, ResultsDir};
-use crate::scene::{MultiplierSpace, PMass, Scene, USpace};
+use crate::problem::{MultiplierSpace, PMass, USpace};
+use crate::scene::Scene;
 use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
 
 /// `println!` that survives a closed standard output: `sdcrack bench --json | head` must not

@@ -11,7 +11,7 @@
 //! (tips excluded) carries a second u degree of freedom, used by the triangles on the − side; the
 //! original vertex number serves the + side. That numbering *is* the cracked mesh of the references (docs/design.md).
 
-use crate::scene::{Rectangle, Segment, USpace};
+use crate::problem::{Rectangle, Segment, USpace};
 
 /// Errors in building a mesh for a scene.
 #[derive(Debug, thiserror::Error, PartialEq)]

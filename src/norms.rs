@@ -10,15 +10,16 @@
 //! `tip_degree`, the other triangles that of degree `degree` ([`NormQuadrature`]); their points are
 //! interior, so data are never evaluated on Γc. Cross-checked by the compare tool's independent
 //! computation from the stored fields (compare/sdcompare_lib/exact.py): agreement ≤ 1e-10 relative. On Γc the exact jump is the scene's `jump`
-//! expression or u⁺ − u⁻ evaluated with the signed-zero side convention of [`crate::scene::eval_on_face`].
+//! expression or u⁺ − u⁻ evaluated with the signed-zero side convention of [`crate::problem::eval_on_face`].
 
+use crate::expr::{BatchScratch, ExprBatch};
 use crate::fe::mini::mini_value;
 use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{
     gauss_legendre, physical_points, triangle_rule, PhysicalPoint, REFERENCE_TRIANGLE,
 };
 use crate::mesh::{Mesh, UTopology};
-use crate::scene::{eval_on_face, BatchScratch, Exact, ExprBatch};
+use crate::problem::{eval_on_face, Exact};
 
 /// The three error norms of a case.
 #[derive(Clone, Copy, Debug, serde::Serialize)]
@@ -80,7 +81,7 @@ pub struct DiscreteSolution<'a> {
     /// λ_h.
     pub lambda: &'a CrackField,
     /// The source f (−Δu = f), for the divergence part of the X-norm.
-    pub source: &'a crate::scene::Expr,
+    pub source: &'a crate::expr::Expr,
 }
 
 /// Sub-triangles (in reference coordinates of the parent) graded toward the local vertex `corner`.
@@ -301,7 +302,8 @@ mod tests {
         }
     }
 
-    use crate::scene::{Scene, USpace};
+    use crate::problem::USpace;
+    use crate::scene::Scene;
     use std::f64::consts::PI;
 
     /// The error norms of the zero discrete solution of a repository scene at `level`.

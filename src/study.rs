@@ -19,7 +19,8 @@ use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{componentwise_backward_error, Ldlt, LinalgError, SymbolicLdlt};
 use crate::mesh::{Mesh, MeshError, UTopology};
 use crate::norms::{error_norms, CrackField, DiscreteSolution, ErrorNorms, NormQuadrature};
-use crate::scene::{MultiplierSpace, PMass, Scene, USpace};
+use crate::problem::{MultiplierSpace, PMass, USpace};
+use crate::scene::Scene;
 
 /// Right-hand sides solved together when reducing K⁻¹ to the crack (bounds memory to 32 n values).
 const REDUCTION_BLOCK: usize = 32;

@@ -1,6 +1,6 @@
 """sdexpr — the sdcrack scene expression grammar in Python: ONE parser, three back-ends.
 
-This is a port of ``src/scene/expr.rs`` (grammar, precedence and error messages/columns), used by
+This is a port of ``src/expr.rs`` (grammar, precedence and error messages/columns), used by
 the reference solvers so that a scene string means the same function everywhere (translate, never
 re-type).
 
@@ -764,7 +764,7 @@ def _deriv_f2(name, a, b, var):
 def derivative(tree, var):
     """The symbolic derivative of ``tree`` (a tree or a source string) by ``var`` ("x" or "y"),
     as a tree of the same forms, lightly simplified (0*a -> 0, 1*a -> a, a+0 -> a, folding of
-    finite constants). Conventions of ``Expr::derivative`` in src/scene/expr.rs:
+    finite constants). Conventions of ``Expr::derivative`` in src/expr.rs:
     sign' = 0 everywhere, abs(a)' = sign(a)*a', min/max take the derivative of the active
     argument (``a < b`` decides; ties: the second argument's for min, the first's for max),
     (a^b)' = b*a^(b-1)*a' when b is constant, a^b*log(a)*b' when a is constant, else

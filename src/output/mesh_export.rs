@@ -24,7 +24,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::mesh::{Mesh, MeshError, Side};
-use crate::scene::{Scene, USpace};
+use crate::problem::USpace;
+use crate::scene::Scene;
 
 /// Errors of the mesh export.
 #[derive(Debug, thiserror::Error)]

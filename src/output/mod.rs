@@ -218,7 +218,7 @@ pub fn write_run(
     })
 }
 
-fn mesh_key(level: u32, u_space: crate::scene::USpace) -> String {
+fn mesh_key(level: u32, u_space: crate::problem::USpace) -> String {
     format!("level{level}-{u_space}")
 }
 

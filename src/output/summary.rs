@@ -185,8 +185,8 @@ pub fn delta_text(delta: f64) -> String {
 /// whose steps are the sweep's δ.
 pub fn series_name(c: &CaseResult) -> String {
     let suffix = match c.p_mass {
-        crate::scene::PMass::Consistent => "",
-        crate::scene::PMass::Lumped => "-lumped",
+        crate::problem::PMass::Consistent => "",
+        crate::problem::PMass::Lumped => "-lumped",
     };
     format!("level{}-{}-{}{suffix}", c.level, c.u_space, c.multiplier)
 }

@@ -6,15 +6,16 @@
 //! mesh lines, inside Ω) is checked by [`crate::mesh`]. Everything downstream works on the
 //! validated [`Scene`], never on raw TOML.
 
-pub mod expr;
 pub mod verification;
 
-use std::fmt;
 use std::path::Path;
 
 use serde::Deserialize;
 
-pub use expr::{BatchScratch, Expr, ExprBatch, ExprError, Var};
+pub use crate::expr::{BatchScratch, Expr, ExprBatch, ExprError, Var};
+// The problem's vocabulary lives in crate::problem (the maths modules use it without this
+// parser); re-exported so that a scene's users find it here too.
+pub use crate::problem::{eval_on_face, Exact, MultiplierSpace, PMass, Rectangle, Segment, USpace};
 pub use verification::{ExpectedFailure, Verification};
 
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
@@ -92,160 +93,6 @@ fn in_file_message(path: &str, error: &SceneError) -> String {
         }
         SceneError::Read { .. } | SceneError::InFile { .. } => error.to_string(),
     }
-}
-
-/// How u is discretised (docs/design.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum USpace {
-    /// Continuous P1 on the uncracked mesh (the paper's §3 literally).
-    Continuous,
-    /// P1 on each side of the crack: interior crack vertices carry one u value per face.
-    Broken,
-}
-
-/// The discrete multiplier cone on the crack (paper (12)–(14)).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum MultiplierSpace {
-    /// P0 per crack segment, Λ_k ≥ 0, ∫_{t_k} p·ν ≤ 0 (paper (12)).
-    M0,
-    /// Continuous P1, nodal Λ_j ≥ 0, hat-weighted ∫ φ_j p·ν ≤ 0 (paper (13)).
-    M1,
-    /// Continuous P1 in the dual cone ∫ λ φ_j ≥ 0, nodal p·ν(x_j) ≤ 0 (paper (14)).
-    M1Star,
-}
-
-/// The p–p block of the condensed system (issue 14): the paper's consistent MINI mass, or its
-/// row-sum diagonal, which lets p be eliminated exactly (docs/design.md, The lumped p mass).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum PMass {
-    /// G̃ = the P1 vector mass after the bubble condensation, M_T − (7|T|/90) 1 1ᵀ per element.
-    Consistent,
-    /// D = the row sums of G̃, 0.1 Σ_{T∋i} |T| per component: p is the recovered gradient
-    /// D⁻¹(G_Γ − B̃ᵀU − contact term), P1 without bubble.
-    Lumped,
-}
-
-impl PMass {
-    /// Name used in scene files, the CLI and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            PMass::Consistent => "consistent",
-            PMass::Lumped => "lumped",
-        }
-    }
-    /// Parses a scene/CLI name.
-    pub fn from_name(s: &str) -> Option<PMass> {
-        match s {
-            "consistent" => Some(PMass::Consistent),
-            "lumped" => Some(PMass::Lumped),
-            _ => None,
-        }
-    }
-}
-
-impl fmt::Display for PMass {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl USpace {
-    /// Name used in scene files, the CLI and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            USpace::Continuous => "continuous",
-            USpace::Broken => "broken",
-        }
-    }
-    /// Parses a scene/CLI name.
-    pub fn from_name(s: &str) -> Option<USpace> {
-        match s {
-            "continuous" => Some(USpace::Continuous),
-            "broken" => Some(USpace::Broken),
-            _ => None,
-        }
-    }
-}
-
-impl MultiplierSpace {
-    /// All variants in their canonical order.
-    pub const ALL: [MultiplierSpace; 3] = [
-        MultiplierSpace::M0,
-        MultiplierSpace::M1,
-        MultiplierSpace::M1Star,
-    ];
-    /// Name used in scene files, the CLI and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            MultiplierSpace::M0 => "M0",
-            MultiplierSpace::M1 => "M1",
-            MultiplierSpace::M1Star => "M1star",
-        }
-    }
-    /// Parses a scene/CLI name.
-    pub fn from_name(s: &str) -> Option<MultiplierSpace> {
-        match s {
-            "M0" => Some(MultiplierSpace::M0),
-            "M1" => Some(MultiplierSpace::M1),
-            "M1star" => Some(MultiplierSpace::M1Star),
-            _ => None,
-        }
-    }
-}
-
-impl fmt::Display for USpace {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl fmt::Display for MultiplierSpace {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// Axis-aligned rectangle Ω = [x0, x1] × [y0, y1].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Rectangle {
-    /// Lower-left corner.
-    pub min: [f64; 2],
-    /// Upper-right corner.
-    pub max: [f64; 2],
-}
-
-/// Straight crack from `a` to `b`; ν is (b − a)/|b − a| turned by +90° (the problem, docs/scenes.md).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Segment {
-    /// First end point (a tip).
-    pub a: [f64; 2],
-    /// Second end point (a tip).
-    pub b: [f64; 2],
-}
-
-impl Segment {
-    /// Length |b − a|.
-    pub fn length(&self) -> f64 {
-        (self.b[0] - self.a[0]).hypot(self.b[1] - self.a[1])
-    }
-    /// Unit normal ν: the direction a→b turned by +90°. The + face is the side ν points into.
-    pub fn normal(&self) -> [f64; 2] {
-        let l = self.length();
-        [-(self.b[1] - self.a[1]) / l, (self.b[0] - self.a[0]) / l]
-    }
-}
-
-/// The exact solution of a scene, when it has one: u, its gradient and its jump on Γc.
-#[derive(Clone, Debug)]
-pub struct Exact {
-    /// u(x, y).
-    pub u: Expr,
-    /// ∂u/∂x (given, or the symbolic derivative of `u`).
-    pub px: Expr,
-    /// ∂u/∂y (given, or the symbolic derivative of `u`).
-    pub py: Expr,
-    /// [u] = u⁺ − u⁻ on Γc, when given explicitly; otherwise it is evaluated from `u` on each face.
-    pub jump: Option<Expr>,
 }
 
 /// Which fields are written to `fields.h5`/`fields.xdmf`.
@@ -1149,24 +996,6 @@ fn validate_references(refs: &[String]) -> Result<Vec<String>, SceneError> {
         out.push(r.clone());
     }
     Ok(out)
-}
-
-/// Evaluates `e` at a point `p` of the crack as the limit from one face.
-///
-/// `side` is +1 for the + face (the side ν points into) and −1 for the − face. Coordinates of `p`
-/// that are exactly zero are given the sign of `side·ν` in that direction (+0.0 or −0.0), so the
-/// IEEE signed zero selects the branch of `sign`, `atan2` and `abs`-kinks lying on the coordinate
-/// axes: for a crack on y = 0 with ν = (0, 1), `atan2(y, x − 1)` is +π on the + face and −π on the
-/// − face. Branch cuts along other lines are not resolved by this rule; scenes with an exact
-/// solution should then give `[exact] jump` explicitly.
-pub fn eval_on_face(e: &Expr, p: [f64; 2], normal: [f64; 2], side: f64) -> f64 {
-    let mut q = p;
-    for d in 0..2 {
-        if q[d] == 0.0 && normal[d] != 0.0 {
-            q[d] = 0.0f64.copysign(side * normal[d]);
-        }
-    }
-    e.eval(q[0], q[1])
 }
 
 #[cfg(test)]

@@ -249,7 +249,7 @@ impl ExprBatch {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::expr::Var;
+    use crate::expr::Var;
 
     const OPEN: &str =
         "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)";
