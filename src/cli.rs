@@ -401,26 +401,10 @@ fn reference(scene: &Scene, tool: &str, level: u32, out: &Path) -> Result<i32, F
     let dir = results.work_path();
     let copy = dir.join(crate::output::SCENE_COPY);
     crate::output::atomic_write(&copy, scene.source.as_bytes()).map_err(runtime)?;
-    let mesh_dir = dir.join("mesh");
-    crate::output::mesh_export::export_meshes(scene, &[level], &mesh_dir).map_err(runtime)?;
-    let run = crate::references::run_reference(
-        tool,
-        &mesh_dir,
-        &dir.join(tool),
-        !scene.fields.is_empty(),
-    )
-    .map_err(runtime)?;
+    let converged = run_references(scene, &[tool.to_string()], &[level], dir, true)?;
     let path = results.commit().map_err(runtime)?;
-    say!(
-        "reference {tool} level {level}: {:.1} s; results in {}",
-        run.seconds,
-        path.display()
-    );
-    if !run.all_converged {
-        eprintln!("sdcrack: some reference case did not converge; see {tool}/summary.json");
-        return Ok(3);
-    }
-    Ok(0)
+    say!("results in {}", path.display());
+    Ok(convergence_status(0, converged))
 }
 
 /// `sdcrack merge`: shards into OUT/<scene name>/.
@@ -443,22 +427,10 @@ fn merge(shards: &[PathBuf], out: &Path) -> Result<i32, Failure> {
         shards.len(),
         outcome.path.display()
     );
-    if outcome.not_converged > 0 {
-        eprintln!(
-            "sdcrack: {} case(s) did not converge; see summary.json",
-            outcome.not_converged
-        );
-    }
-    if outcome.references_not_converged > 0 {
-        eprintln!("sdcrack: some reference case did not converge; see <tool>/summary.json");
-    }
-    Ok(
-        if outcome.not_converged > 0 || outcome.references_not_converged > 0 {
-            3
-        } else {
-            0
-        },
-    )
+    Ok(convergence_status(
+        outcome.not_converged,
+        outcome.references_not_converged == 0,
+    ))
 }
 
 /// Runs `sdcrack bench` and prints its table or JSON object on stdout (progress on stderr).
@@ -569,11 +541,8 @@ fn run(
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     write_run(results.work_path(), scene, &plan, &study, wall, &provenance).map_err(runtime)?;
-    let references_converged = if solver_only {
-        true
-    } else {
-        run_references(scene, &plan, results.work_path(), quiet)?
-    };
+    let references_converged =
+        run_references(scene, references, &plan.levels, results.work_path(), quiet)?;
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);
     let failed = study.cases.iter().filter(|c| !c.converged).count();
@@ -583,40 +552,47 @@ fn run(
         wall,
         path.display()
     );
+    Ok(convergence_status(failed, references_converged))
+}
+
+/// The exit code of a command that wrote its results: 0, or 3 (with a line on stderr for each
+/// kind) when `failed` solver cases or some reference case did not converge.
+fn convergence_status(failed: usize, references_converged: bool) -> i32 {
     if failed > 0 {
         eprintln!("sdcrack: {failed} case(s) did not converge; see summary.json");
     }
     if !references_converged {
         eprintln!("sdcrack: some reference case did not converge; see <tool>/summary.json");
     }
-    Ok(if failed > 0 || !references_converged {
+    if failed > 0 || !references_converged {
         3
     } else {
         0
-    })
+    }
 }
 
-/// Exports the plan's meshes and runs every reference the scene lists, into `dir/<tool>/`;
-/// returns false when some reference case did not converge (its results are kept).
+/// Exports the meshes of `levels` into `dir/mesh/` and runs each of `tools` on them, into
+/// `dir/<tool>/`; returns false when some reference case did not converge (its results are kept).
 fn run_references(
     scene: &Scene,
-    plan: &CasePlan,
+    tools: &[String],
+    levels: &[u32],
     dir: &Path,
     quiet: bool,
 ) -> Result<bool, Failure> {
-    if scene.references.is_empty() {
+    if tools.is_empty() {
         return Ok(true);
     }
     let mut all_converged = true;
     let mesh_dir = dir.join("mesh");
-    crate::output::mesh_export::export_meshes(scene, &plan.levels, &mesh_dir).map_err(runtime)?;
-    for tool in &scene.references {
+    crate::output::mesh_export::export_meshes(scene, levels, &mesh_dir).map_err(runtime)?;
+    for tool in tools {
         let spinner = if quiet || !std::io::stderr().is_terminal() {
             ProgressBar::hidden()
         } else {
             ProgressBar::new_spinner()
         };
-        spinner.set_message(format!("reference {tool}: levels {:?}", plan.levels));
+        spinner.set_message(format!("reference {tool}: levels {levels:?}"));
         spinner.enable_steady_tick(std::time::Duration::from_millis(200));
         let run = crate::references::run_reference(
             tool,

@@ -4,18 +4,9 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn sdcrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sdcrack"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{sdcrack, stderr};
 
 fn write_scene(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);

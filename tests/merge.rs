@@ -7,20 +7,11 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use serde_json::Value;
 
-fn sdcrack(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sdcrack"))
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use common::{sdcrack, stderr};
 
 /// The small scene with both p masses: 2 levels × 2 u spaces × 3 multipliers × 2 p masses × 2 δ.
 fn scene_text() -> String {

@@ -24,6 +24,19 @@ fields = ["u", "p", "lambda"]
 references = []
 "#;
 
+/// Runs this build's `sdcrack` binary with `args` and waits for it.
+pub fn sdcrack(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+/// A process's stderr as text.
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
 /// Path of a repository scene.
 pub fn scene_path(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
