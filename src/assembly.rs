@@ -12,10 +12,7 @@
 //! lower-triangular CSC pattern with two value arrays — the δ-independent part and the part
 //! multiplying δ — so that K(δ) is one axpy and its symbolic factorisation is shared by every δ.
 //!
-//! Crack operators (docs/design.md, Multipliers and the LCP): N maps P to the nodal normal components (NP)_j = p(x_j)·ν at
-//! the crack nodes x_0..x_I (p is continuous and the bubbles vanish on edges, so p·ν is P1 along
-//! Γc). Every multiplier's constraint operator is D = S N with S = segment averages ℓ_k/2 (M0),
-//! the crack mass matrix M_c (M1, so D_jJ = ∫ φ_j ψ_J·ν) or the identity (M1star).
+//! The crack operators N and D = S N of the multipliers live in [`crate::multiplier`].
 
 use rayon::prelude::*;
 
@@ -25,7 +22,7 @@ use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};
 use crate::linalg::SymCsc;
 use crate::mesh::{Mesh, UTopology};
-use crate::problem::{MultiplierSpace, PMass};
+use crate::problem::PMass;
 
 /// Errors while assembling.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -372,113 +369,23 @@ fn load_vector(mesh: &Mesh, topo: &UTopology, f: &Expr) -> Result<Vec<f64>, Asse
     Ok(load)
 }
 
-/// The crack operators shared by the three multiplier spaces.
-#[derive(Clone, Debug)]
-pub struct CrackOperators {
-    /// For each crack node j: the p unknowns (2v, 2v + 1) of its vertex v.
-    pub node_p_dofs: Vec<[usize; 2]>,
-    /// The unit normal ν.
-    pub normal: [f64; 2],
-    /// Segment lengths ℓ_k, k = 0..I−1.
-    pub lengths: Vec<f64>,
-    /// Crack node coordinates.
-    pub points: Vec<[f64; 2]>,
-}
-
-impl CrackOperators {
-    /// Builds N's data from the mesh's crack chain.
-    pub fn new(mesh: &Mesh) -> CrackOperators {
-        let nodes = &mesh.crack.nodes;
-        let points: Vec<[f64; 2]> = nodes.iter().map(|&v| mesh.vertices[v]).collect();
-        let lengths = points
-            .windows(2)
-            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
-            .collect();
-        CrackOperators {
-            node_p_dofs: nodes.iter().map(|&v| [2 * v, 2 * v + 1]).collect(),
-            normal: mesh.crack.normal,
-            lengths,
-            points,
-        }
-    }
-
-    /// Number of crack nodes I + 1.
-    pub fn nodes(&self) -> usize {
-        self.node_p_dofs.len()
-    }
-
-    /// (NP)_j = p(x_j)·ν.
-    pub fn apply_n(&self, p: &[f64]) -> Vec<f64> {
-        self.node_p_dofs
-            .iter()
-            .map(|d| p[d[0]] * self.normal[0] + p[d[1]] * self.normal[1])
-            .collect()
-    }
-
-    /// Adds Nᵀ y to the p part `out`.
-    pub fn add_nt(&self, y: &[f64], out: &mut [f64]) {
-        for (d, &v) in self.node_p_dofs.iter().zip(y) {
-            out[d[0]] += v * self.normal[0];
-            out[d[1]] += v * self.normal[1];
-        }
-    }
-
-    /// The 1D P1 mass matrix M_c on Γc (dense, (I+1)²).
-    pub fn crack_mass(&self) -> Vec<Vec<f64>> {
-        let m = self.nodes();
-        let mut mc = vec![vec![0.0; m]; m];
-        for (k, &l) in self.lengths.iter().enumerate() {
-            mc[k][k] += l / 3.0;
-            mc[k + 1][k + 1] += l / 3.0;
-            mc[k][k + 1] += l / 6.0;
-            mc[k + 1][k] += l / 6.0;
-        }
-        mc
-    }
-
-    /// S of D = S N for a multiplier space (rows: multipliers, columns: crack nodes).
-    pub fn constraint_map(&self, space: MultiplierSpace) -> Vec<Vec<f64>> {
-        let m = self.nodes();
-        match space {
-            MultiplierSpace::M0 => self
-                .lengths
-                .iter()
-                .enumerate()
-                .map(|(k, &l)| {
-                    let mut row = vec![0.0; m];
-                    row[k] = l / 2.0;
-                    row[k + 1] = l / 2.0;
-                    row
-                })
-                .collect(),
-            MultiplierSpace::M1 => self.crack_mass(),
-            MultiplierSpace::M1Star => (0..m)
-                .map(|j| {
-                    let mut row = vec![0.0; m];
-                    row[j] = 1.0;
-                    row
-                })
-                .collect(),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::problem::{Rectangle, Segment, USpace};
 
     fn mesh(level: u32) -> Mesh {
-        Mesh::structured(
+        crate::mesh::structured::structured(
             Rectangle {
                 min: [-1.0, -1.0],
                 max: [1.0, 1.0],
             },
             [4, 4],
-            Segment {
+            &[Segment {
                 a: [-0.5, 0.0],
                 b: [0.5, 0.0],
-            },
+            }
+            .into()],
             level,
         )
         .unwrap()
@@ -554,27 +461,5 @@ mod tests {
                 assert!(kx.abs() < 1e-12, "{space}: u row {r}: {kx}");
             }
         }
-    }
-
-    #[test]
-    fn crack_operators_sum_to_length() {
-        let m = mesh(2);
-        let ops = CrackOperators::new(&m);
-        for space in MultiplierSpace::ALL {
-            let s = ops.constraint_map(space);
-            let total: f64 = s.iter().flatten().sum();
-            let expected = if space == MultiplierSpace::M1Star {
-                ops.nodes() as f64
-            } else {
-                1.0
-            };
-            assert!((total - expected).abs() < 1e-14, "{space}: {total}");
-        }
-        // N applied to p = (0, 1) is ν·p = 1 at every node
-        let mut p = vec![0.0; 2 * m.vertices.len()];
-        for v in 0..m.vertices.len() {
-            p[2 * v + 1] = 1.0;
-        }
-        assert!(ops.apply_n(&p).iter().all(|&v| (v - 1.0).abs() < 1e-15));
     }
 }

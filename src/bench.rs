@@ -18,7 +18,7 @@ use std::time::Instant;
 use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, MeshError};
-use crate::problem::{MultiplierSpace, PMass, USpace};
+use crate::problem::{Meshing, MultiplierSpace, PMass, USpace};
 use crate::scene::{FieldSet, Scene};
 use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
 
@@ -37,6 +37,9 @@ pub enum BenchError {
     /// The solver failed.
     #[error(transparent)]
     Study(#[from] StudyError),
+    /// The scene is not meshed by the structured grid.
+    #[error("sdcrack bench scales a structured scene (discretization.cells); this scene is meshed by gmsh: bench its levels with ci/bench-unstructured")]
+    NotStructured,
 }
 
 /// Everything `sdcrack bench` measured (seconds, megabytes).
@@ -320,13 +323,15 @@ impl BenchReport {
 
 /// Level-0 cells of the benchmark mesh: the scene's cells times the integer k that brings the
 /// vertex count closest to `vertices` (a multiple keeps the crack's ends on mesh vertices).
-pub fn bench_cells(scene: &Scene, vertices: usize) -> [usize; 2] {
-    let [cx, cy] = scene.cells;
+pub fn bench_cells(scene: &Scene, vertices: usize) -> Result<[usize; 2], BenchError> {
+    let Meshing::Cells([cx, cy]) = scene.meshing else {
+        return Err(BenchError::NotStructured);
+    };
     let count = |k: usize| (cx * k + 1) * (cy * k + 1);
     let guess = ((vertices as f64) / (cx * cy) as f64).sqrt().max(1.0) as usize;
-    (guess.saturating_sub(1).max(1)..=guess + 1)
+    Ok((guess.saturating_sub(1).max(1)..=guess + 1)
         .min_by_key(|&k| count(k).abs_diff(vertices))
-        .map_or([cx, cy], |k| [cx * k, cy * k])
+        .map_or([cx, cy], |k| [cx * k, cy * k]))
 }
 
 /// Runs the three measurements on a mesh of about `vertices` vertices.
@@ -338,9 +343,10 @@ pub fn run_bench(
     vertices: usize,
     observer: &mut dyn Observer,
 ) -> Result<BenchReport, BenchError> {
-    let cells = bench_cells(scene, vertices);
+    let cells = bench_cells(scene, vertices)?;
     let mut bench_scene = scene.clone();
-    bench_scene.cells = cells;
+    bench_scene.meshing = Meshing::Cells(cells);
+    bench_scene.level0 = crate::scene::Level0Size::Grid(cells);
     bench_scene.levels = vec![0];
     bench_scene.fields = FieldSet::default();
     bench_scene.exact = None;
@@ -475,7 +481,7 @@ fn summarize(results: &[&StudyResult]) -> (f64, bool) {
 /// The yardstick: mesh, P1 stiffness on the interior vertices, Cholesky solve of A x = 1.
 /// Returns the timings, the number of unknowns and the number of mesh vertices.
 fn yardstick(scene: &Scene) -> Result<(CholeskyTimings, usize, usize), BenchError> {
-    let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, 0)?;
+    let mesh = scene.mesh_source()?.level(0)?;
     let a = interior_laplacian(&mesh);
     let mut x = vec![1.0; a.n];
     let timings = cholesky_solve(&a, &mut x)?;
@@ -485,15 +491,15 @@ fn yardstick(scene: &Scene) -> Result<(CholeskyTimings, usize, usize), BenchErro
 /// The P1 stiffness matrix of the uncut mesh restricted to its interior vertices
 /// (homogeneous Dirichlet conditions eliminated), lower triangle.
 pub fn interior_laplacian(mesh: &Mesh) -> SymCsc {
-    let stride = mesh.nx + 1;
-    let on_boundary = |v: usize| {
-        let (i, j) = (v % stride, v / stride);
-        i == 0 || j == 0 || i == mesh.nx || j == mesh.ny
-    };
+    let mut on_boundary = vec![false; mesh.vertices.len()];
+    for e in &mesh.boundary_edges {
+        on_boundary[e[0]] = true;
+        on_boundary[e[1]] = true;
+    }
     let mut index = vec![usize::MAX; mesh.vertices.len()];
     let mut n = 0;
     for (v, slot) in index.iter_mut().enumerate() {
-        if !on_boundary(v) {
+        if !on_boundary[v] {
             *slot = n;
             n += 1;
         }
@@ -559,15 +565,19 @@ mod tests {
     #[test]
     fn cells_are_multiples_of_the_scene_cells_near_the_target() {
         let scene = Scene::default_scene();
-        assert_eq!(bench_cells(&scene, 1_000_000), [1000, 1000]);
-        assert_eq!(bench_cells(&scene, 100_000), [312, 312]); // 313² = 97 969
-        assert_eq!(bench_cells(&scene, 10), [8, 8]);
+        assert_eq!(bench_cells(&scene, 1_000_000).unwrap(), [1000, 1000]);
+        assert_eq!(bench_cells(&scene, 100_000).unwrap(), [312, 312]); // 313² = 97 969
+        assert_eq!(bench_cells(&scene, 10).unwrap(), [8, 8]);
     }
 
     #[test]
     fn laplacian_rows_sum_to_zero_away_from_the_boundary() {
         let scene = Scene::default_scene();
-        let mesh = Mesh::structured(scene.domain, [4, 4], scene.crack, 0).unwrap();
+        let mesh =
+            crate::mesh::MeshSource::new(&scene.domain, &scene.cracks, &Meshing::Cells([4, 4]))
+                .unwrap()
+                .level(0)
+                .unwrap();
         let a = interior_laplacian(&mesh);
         assert_eq!(a.n, 9);
         let mut y = vec![0.0; 9];

@@ -369,7 +369,7 @@ fn plan_json(scene: &Scene) -> String {
         .levels
         .iter()
         .map(|&l| {
-            let mib = crate::scene::estimated_memory_bytes(scene.cells, l).div_ceil(1 << 20);
+            let mib = crate::scene::estimated_memory_bytes(scene.level0, l).div_ceil(1 << 20);
             (l.to_string(), serde_json::Value::from(mib))
         })
         .collect();
@@ -466,11 +466,12 @@ fn load(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
 
 /// Checks the crack against the level-0 mesh (the same check every level makes).
 fn check_meshes(scene: &Scene, origin: &str) -> Result<(), Failure> {
-    crate::mesh::Mesh::structured(scene.domain, scene.cells, scene.crack, 0).map_err(|e| {
-        usage(format!(
-            "invalid scene {origin}: geometry.crack.segment: {e}"
-        ))
-    })?;
+    scene
+        .mesh_source()
+        .map_err(|e| match e.crack().and_then(|c| scene.crack_names.get(c)) {
+            Some(name) => usage(format!("invalid scene {origin}: {name}: {e}")),
+            None => usage(format!("invalid scene {origin}: {e}")),
+        })?;
     Ok(())
 }
 
@@ -478,7 +479,7 @@ fn check_meshes(scene: &Scene, origin: &str) -> Result<(), Failure> {
 /// at most [`crate::scene::MAX_LEVEL`] and within the memory estimate.
 fn check_level_option(scene: &Scene, level: Option<u32>) -> Result<(), Failure> {
     match level {
-        Some(l) => crate::scene::check_level(scene.cells, l)
+        Some(l) => crate::scene::check_level(scene.level0, l)
             .map_err(|m| usage(format!("--level {l}: {m}"))),
         None => Ok(()),
     }

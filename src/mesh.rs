@@ -1,46 +1,61 @@
-//! Structured triangulations of the rectangle, nested levels, the crack as a chain of mesh edges,
+//! Triangulations of the domain with the cracks as chains of mesh edges, their nested levels,
 //! and the two u-space topologies (docs/design.md).
 //!
-//! Level ℓ has `2^ℓ·nx × 2^ℓ·ny` cells, each split by its SW–NE diagonal into two counter-clockwise
-//! triangles, so levels are nested. The crack segment must join two level-0 vertices along a mesh
-//! line (horizontal, vertical or SW–NE diagonal) and stay strictly inside Ω; its nodes
-//! `x_0 = a, …, x_I = b` are mesh vertices and its segments mesh edges.
+//! A level's [`Mesh`] comes from a [`MeshSource`]: the structured grid of a rectangle
+//! ([`structured`]: level ℓ has `2^ℓ·nx × 2^ℓ·ny` cells split by their SW–NE diagonals) or a
+//! coarse triangulation (gmsh's, [`gmsh`]) refined uniformly ℓ times ([`refine`]: each triangle
+//! into four, so levels are nested). Either way every crack is a chain of mesh vertices
+//! `x_0 … x_I` (its tips first and last) joined by mesh edges, each edge lying on one segment of
+//! the crack's polyline.
 //!
-//! Sides: ν is a→b turned by +90°; a triangle touching an interior crack node lies on the **+**
-//! side when its centroid c has (c − a)·ν > 0. For the `broken` u space every interior crack node
-//! (tips excluded) carries a second u degree of freedom, used by the triangles on the − side; the
-//! original vertex number serves the + side. That numbering *is* the cracked mesh of the references (docs/design.md).
+//! Sides: each crack edge carries the normal ν of its polyline segment (direction turned by
+//! +90°). At an interior crack node v with neighbours a (before) and b (after) on the chain, a
+//! triangle corner at v lies on the **+** face when the triangle is on the left of the path
+//! a → v → b (for a straight crack: its centroid c has (c − v)·ν > 0). For the `broken` u space
+//! every interior crack node (tips excluded) carries a second u degree of freedom, used by the
+//! triangle corners on the − face; the vertex number itself serves the + face. That numbering
+//! *is* the cracked mesh of the references (docs/design.md).
 
-use crate::problem::{Rectangle, Segment, USpace};
+pub mod gmsh;
+pub mod refine;
+pub mod structured;
 
-/// Errors in building a mesh for a scene.
+use crate::problem::{Domain, Meshing, Polyline, USpace};
+
+/// Errors in building a mesh for a scene. `crack` is the 0-based index of the scene's crack.
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum MeshError {
-    /// A crack end point is not a vertex of the level-0 mesh.
-    #[error("crack end point ({x}, {y}) is not a vertex of the level-0 mesh (cells {nx}×{ny}); move it onto the grid or change discretization.cells")]
+    /// A crack point is not a vertex of the level-0 grid.
+    #[error("crack point ({x}, {y}) is not a vertex of the level-0 mesh (cells {nx}×{ny}); move it onto the grid or change discretization.cells")]
     OffMesh {
-        /// x of the end point.
+        /// Which crack.
+        crack: usize,
+        /// x of the point.
         x: f64,
-        /// y of the end point.
+        /// y of the point.
         y: f64,
         /// Level-0 cells in x.
         nx: usize,
         /// Level-0 cells in y.
         ny: usize,
     },
-    /// A crack end point lies outside Ω or on Γ.
-    #[error("crack end point ({x}, {y}) {what}; the crack must lie strictly inside the domain")]
+    /// A crack point lies outside Ω or on Γ.
+    #[error("crack point ({x}, {y}) {what}; the crack must lie strictly inside the domain")]
     NotInside {
-        /// x of the end point.
+        /// Which crack.
+        crack: usize,
+        /// x of the point.
         x: f64,
-        /// y of the end point.
+        /// y of the point.
         y: f64,
         /// "lies outside the domain" or "touches the boundary".
         what: &'static str,
     },
-    /// The crack is not along a mesh line.
-    #[error("crack from ({ax}, {ay}) to ({bx}, {by}) is not along a mesh line: it must be horizontal, vertical or along the SW–NE cell diagonals")]
+    /// A crack segment is not along a grid line.
+    #[error("crack segment from ({ax}, {ay}) to ({bx}, {by}) is not along a mesh line: on a structured grid it must be horizontal, vertical or along the SW–NE cell diagonals (use mesh_size for any direction)")]
     NotOnMeshLine {
+        /// Which crack.
+        crack: usize,
         /// Start x.
         ax: f64,
         /// Start y.
@@ -50,9 +65,42 @@ pub enum MeshError {
         /// End y.
         by: f64,
     },
+    /// Two cracks share a grid vertex or edge.
+    #[error("cracks {first} and {second} share the mesh vertex ({x}, {y}); cracks must not touch")]
+    Touching {
+        /// The first crack.
+        first: usize,
+        /// The second crack.
+        second: usize,
+        /// x of the vertex.
+        x: f64,
+        /// y of the vertex.
+        y: f64,
+    },
+    /// `cells` with a polygon domain.
+    #[error("discretization.cells needs a rectangle domain; give discretization.mesh_size for a polygon")]
+    CellsNeedRectangle,
+    /// gmsh failed, or a .msh file is not usable.
+    #[error("{0}")]
+    Gmsh(String),
+    /// The cracks of a .msh file do not match the scene's.
+    #[error("{0}")]
+    Mismatch(String),
 }
 
-/// Which face of the crack a triangle lies on.
+impl MeshError {
+    /// The scene crack an error is about, if any (the caller names it as the scene does).
+    pub fn crack(&self) -> Option<usize> {
+        match self {
+            MeshError::OffMesh { crack, .. }
+            | MeshError::NotInside { crack, .. }
+            | MeshError::NotOnMeshLine { crack, .. } => Some(*crack),
+            _ => None,
+        }
+    }
+}
+
+/// Which face of the crack a triangle corner lies on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Side {
     /// The side ν points into.
@@ -61,43 +109,68 @@ pub enum Side {
     Minus,
 }
 
-/// The crack as a chain of mesh vertices.
+/// One crack as a chain of mesh vertices.
 #[derive(Clone, Debug)]
 pub struct CrackChain {
-    /// Vertex numbers of x_0 = a, …, x_I = b (both tips included).
+    /// Vertex numbers of x_0, …, x_I (both tips included).
     pub nodes: Vec<usize>,
-    /// The unit normal ν (a→b turned by +90°).
-    pub normal: [f64; 2],
-    /// The crack segment.
-    pub segment: Segment,
+    /// Per chain edge k (x_k → x_{k+1}): the unit normal ν of the polyline segment it lies on.
+    pub normals: Vec<[f64; 2]>,
 }
 
 impl CrackChain {
-    /// Number of crack segments I.
+    /// Number of crack edges I.
     pub fn segments(&self) -> usize {
         self.nodes.len() - 1
     }
+
+    /// The chain of `crack`'s polyline through `nodes`, with each edge's segment normal: edge k
+    /// lies on the segment whose end points bracket it (`segment_of[k]`).
+    pub fn new(nodes: Vec<usize>, crack: &Polyline, segment_of: &[usize]) -> CrackChain {
+        let normals = segment_of
+            .iter()
+            .map(|&s| crack.segment(s).normal())
+            .collect();
+        CrackChain { nodes, normals }
+    }
 }
 
-/// A structured triangulation of one level with its crack chain.
+/// How a level's vertices and triangles are numbered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// The structured grid: vertex (i, j) is j·(nx + 1) + i; triangles 2(j·nx + i) (below the
+    /// cell diagonal) and 2(j·nx + i) + 1.
+    Structured {
+        /// Cells in x at this level.
+        nx: usize,
+        /// Cells in y at this level.
+        ny: usize,
+    },
+    /// A coarse mesh refined uniformly: triangle 4t + c of level ℓ + 1 lies in triangle t of
+    /// level ℓ (children 0, 1, 2 at the parent's corners 0, 1, 2, child 3 in the middle).
+    Refined {
+        /// Triangles of level 0.
+        coarse_triangles: usize,
+    },
+}
+
+/// A triangulation of one level with its crack chains.
 #[derive(Clone, Debug)]
 pub struct Mesh {
     /// Refinement level ℓ.
     pub level: u32,
-    /// Cells in x at this level.
-    pub nx: usize,
-    /// Cells in y at this level.
-    pub ny: usize,
-    /// Vertex coordinates; vertex (i, j) has number j·(nx+1) + i.
+    /// Numbering of vertices and triangles.
+    pub layout: Layout,
+    /// Vertex coordinates.
     pub vertices: Vec<[f64; 2]>,
     /// Triangles, counter-clockwise.
     pub triangles: Vec<[usize; 3]>,
     /// Boundary edges, oriented counter-clockwise along Γ (outward normal = (dy, −dx)/|e|).
     pub boundary_edges: Vec<[usize; 2]>,
-    /// The crack chain.
-    pub crack: CrackChain,
-    /// Side of each triangle that touches an interior crack node (`None` for all others).
-    pub side: Vec<Option<Side>>,
+    /// The crack chains, in the scene's order.
+    pub cracks: Vec<CrackChain>,
+    /// Per triangle corner: its face where the corner is an interior crack node, else `None`.
+    pub corner_sides: Vec<[Option<Side>; 3]>,
 }
 
 /// Degrees of freedom of a u space on a mesh.
@@ -111,191 +184,73 @@ pub struct UTopology {
     pub triangle_dofs: Vec<[usize; 3]>,
     /// The mesh vertex each dof sits at.
     pub dof_vertex: Vec<usize>,
-    /// For each crack node, its (+ dof, − dof); equal at the tips and in the continuous space.
+    /// For each crack node (cracks concatenated in order), its (+ dof, − dof); equal at the tips
+    /// and in the continuous space.
     pub crack_dofs: Vec<(usize, usize)>,
 }
 
-/// Grid index of a coordinate on `n` cells of [lo, hi], if it is a grid point.
-fn grid_index(v: f64, lo: f64, hi: f64, n: usize) -> Option<i64> {
-    let t = (v - lo) / (hi - lo) * n as f64;
-    let r = t.round();
-    ((t - r).abs() <= 1e-9 * n as f64).then_some(r as i64)
-}
-
-/// Coordinate of grid line `i` of `n` on [lo, hi], exact at both ends and at the midpoint.
-fn grid_coord(lo: f64, hi: f64, i: usize, n: usize) -> f64 {
-    let t = i as f64 / n as f64;
-    lo * (1.0 - t) + hi * t
-}
-
 impl Mesh {
-    /// Builds level `level` of the structured mesh with `cells` level-0 cells and the crack chain.
-    pub fn structured(
-        domain: Rectangle,
-        cells: [usize; 2],
-        crack: Segment,
+    /// A mesh from its parts; computes the faces of the triangle corners at crack nodes.
+    pub fn new(
         level: u32,
-    ) -> Result<Mesh, MeshError> {
-        let (ia, ja) = Self::crack_end_index(domain, cells, crack.a)?;
-        let (ib, jb) = Self::crack_end_index(domain, cells, crack.b)?;
-        let (di, dj) = (ib - ia, jb - ja);
-        if !(di == 0 || dj == 0 || di == dj) {
-            return Err(MeshError::NotOnMeshLine {
-                ax: crack.a[0],
-                ay: crack.a[1],
-                bx: crack.b[0],
-                by: crack.b[1],
-            });
-        }
-        let scale = 1usize << level;
-        let (nx, ny) = (cells[0] * scale, cells[1] * scale);
-        let vertices = Self::grid_vertices(domain, nx, ny);
-        let triangles = Self::grid_triangles(nx, ny);
-        let boundary_edges = Self::grid_boundary(nx, ny);
-        let steps = di.abs().max(dj.abs()) as usize * scale;
-        let (si, sj) = (di.signum(), dj.signum());
-        let s = scale as i64;
-        let mut nodes = Vec::with_capacity(steps + 1);
-        let mut vertices = vertices;
-        for k in 0..=steps {
-            let i = (ia * s + si * k as i64) as usize;
-            let j = (ja * s + sj * k as i64) as usize;
-            let v = j * (nx + 1) + i;
-            // Crack nodes lie exactly on the segment's parametrisation (signed zeros on y = 0 etc.).
-            let t = k as f64 / steps as f64;
-            vertices[v] = [
-                crack.a[0] * (1.0 - t) + crack.b[0] * t,
-                crack.a[1] * (1.0 - t) + crack.b[1] * t,
-            ];
-            nodes.push(v);
-        }
-        let chain = CrackChain {
-            nodes,
-            normal: crack.normal(),
-            segment: crack,
-        };
-        let side = Self::triangle_sides(&vertices, &triangles, &chain);
-        Ok(Mesh {
+        layout: Layout,
+        vertices: Vec<[f64; 2]>,
+        triangles: Vec<[usize; 3]>,
+        boundary_edges: Vec<[usize; 2]>,
+        cracks: Vec<CrackChain>,
+    ) -> Mesh {
+        let corner_sides = corner_sides(&vertices, &triangles, &cracks);
+        Mesh {
             level,
-            nx,
-            ny,
+            layout,
             vertices,
             triangles,
             boundary_edges,
-            crack: chain,
-            side,
-        })
+            cracks,
+            corner_sides,
+        }
     }
 
-    fn crack_end_index(
-        domain: Rectangle,
-        cells: [usize; 2],
-        p: [f64; 2],
-    ) -> Result<(i64, i64), MeshError> {
-        let inside = (0..2).all(|d| p[d] >= domain.min[d] && p[d] <= domain.max[d]);
-        if !inside {
-            return Err(MeshError::NotInside {
-                x: p[0],
-                y: p[1],
-                what: "lies outside the domain",
-            });
+    /// Mesh size h: the largest triangle diameter (on a structured grid every triangle has the
+    /// cell diagonal as diameter, read off the first one).
+    pub fn h(&self) -> f64 {
+        match self.layout {
+            Layout::Structured { .. } => diameter(&self.vertices, &self.triangles[0]),
+            Layout::Refined { .. } => self
+                .triangles
+                .iter()
+                .map(|t| diameter(&self.vertices, t))
+                .fold(0.0, f64::max),
         }
-        let i = grid_index(p[0], domain.min[0], domain.max[0], cells[0]);
-        let j = grid_index(p[1], domain.min[1], domain.max[1], cells[1]);
-        let (Some(i), Some(j)) = (i, j) else {
-            return Err(MeshError::OffMesh {
-                x: p[0],
-                y: p[1],
-                nx: cells[0],
-                ny: cells[1],
-            });
-        };
-        if i <= 0 || j <= 0 || i >= cells[0] as i64 || j >= cells[1] as i64 {
-            return Err(MeshError::NotInside {
-                x: p[0],
-                y: p[1],
-                what: "touches the boundary",
-            });
-        }
-        Ok((i, j))
     }
 
-    fn grid_vertices(domain: Rectangle, nx: usize, ny: usize) -> Vec<[f64; 2]> {
-        let mut v = Vec::with_capacity((nx + 1) * (ny + 1));
-        for j in 0..=ny {
-            let y = grid_coord(domain.min[1], domain.max[1], j, ny);
-            for i in 0..=nx {
-                v.push([grid_coord(domain.min[0], domain.max[0], i, nx), y]);
-            }
-        }
-        v
+    /// The crack nodes of every crack, concatenated in order.
+    pub fn crack_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+        self.cracks.iter().flat_map(|c| c.nodes.iter().copied())
     }
 
-    fn grid_triangles(nx: usize, ny: usize) -> Vec<[usize; 3]> {
-        let mut t = Vec::with_capacity(2 * nx * ny);
-        for j in 0..ny {
-            for i in 0..nx {
-                let v00 = j * (nx + 1) + i;
-                let (v10, v01, v11) = (v00 + 1, v00 + nx + 1, v00 + nx + 2);
-                t.push([v00, v10, v11]);
-                t.push([v00, v11, v01]);
-            }
-        }
-        t
-    }
-
-    fn grid_boundary(nx: usize, ny: usize) -> Vec<[usize; 2]> {
-        let id = |i: usize, j: usize| j * (nx + 1) + i;
-        let mut e = Vec::with_capacity(2 * (nx + ny));
-        e.extend((0..nx).map(|i| [id(i, 0), id(i + 1, 0)]));
-        e.extend((0..ny).map(|j| [id(nx, j), id(nx, j + 1)]));
-        e.extend((0..nx).rev().map(|i| [id(i + 1, ny), id(i, ny)]));
-        e.extend((0..ny).rev().map(|j| [id(0, j + 1), id(0, j)]));
-        e
-    }
-
-    fn triangle_sides(
-        vertices: &[[f64; 2]],
-        triangles: &[[usize; 3]],
-        chain: &CrackChain,
-    ) -> Vec<Option<Side>> {
-        let n = chain.nodes.len();
-        let mut interior = vec![false; vertices.len()];
-        for &v in &chain.nodes[1..n - 1] {
-            interior[v] = true;
-        }
-        let a = chain.segment.a;
-        let nu = chain.normal;
-        triangles
+    /// The tips: first and last node of every crack.
+    pub fn tips(&self) -> Vec<usize> {
+        self.cracks
             .iter()
-            .map(|t| {
-                if !t.iter().any(|&v| interior[v]) {
-                    return None;
-                }
-                let c = centroid(vertices, t);
-                let s = (c[0] - a[0]) * nu[0] + (c[1] - a[1]) * nu[1];
-                Some(if s > 0.0 { Side::Plus } else { Side::Minus })
-            })
+            .flat_map(|c| [c.nodes[0], c.nodes[c.nodes.len() - 1]])
             .collect()
     }
 
-    /// Mesh size h: the diameter of the triangles (the cell diagonal).
-    pub fn h(&self) -> f64 {
-        let t = &self.triangles[0];
-        let p = |k: usize| self.vertices[t[k]];
-        let d = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
-        d(p(0), p(1)).max(d(p(1), p(2))).max(d(p(0), p(2)))
+    /// The interior crack nodes (tips excluded), cracks in order.
+    fn interior_crack_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+        self.cracks
+            .iter()
+            .flat_map(|c| c.nodes[1..c.nodes.len() - 1].iter().copied())
     }
 
     /// The u degrees of freedom of `space` on this mesh.
     pub fn u_topology(&self, space: USpace) -> UTopology {
         let nv = self.vertices.len();
-        let nodes = &self.crack.nodes;
-        let interior = &nodes[1..nodes.len() - 1];
         let mut minus_of = vec![usize::MAX; nv];
         let mut dof_vertex: Vec<usize> = (0..nv).collect();
         if space == USpace::Broken {
-            for (k, &v) in interior.iter().enumerate() {
+            for (k, v) in self.interior_crack_nodes().enumerate() {
                 minus_of[v] = nv + k;
                 dof_vertex.push(v);
             }
@@ -303,27 +258,22 @@ impl Mesh {
         let triangle_dofs = self
             .triangles
             .iter()
-            .zip(&self.side)
-            .map(|(t, side)| match side {
-                Some(Side::Minus) if space == USpace::Broken => t.map(|v| {
-                    if minus_of[v] != usize::MAX {
-                        minus_of[v]
-                    } else {
-                        v
+            .zip(&self.corner_sides)
+            .map(|(t, sides)| {
+                let mut dofs = *t;
+                for (d, side) in dofs.iter_mut().zip(sides) {
+                    if *side == Some(Side::Minus) && minus_of[*d] != usize::MAX {
+                        *d = minus_of[*d];
                     }
-                }),
-                _ => *t,
+                }
+                dofs
             })
             .collect();
-        let crack_dofs = nodes
-            .iter()
-            .map(|&v| {
-                let m = if minus_of[v] != usize::MAX {
-                    minus_of[v]
-                } else {
-                    v
-                };
-                (v, m)
+        let crack_dofs = self
+            .crack_nodes()
+            .map(|v| match minus_of[v] {
+                usize::MAX => (v, v),
+                m => (v, m),
             })
             .collect();
         UTopology {
@@ -336,6 +286,360 @@ impl Mesh {
     }
 }
 
+/// What a gmsh run or a mesh file contributed to a scene's meshes (recorded in the results).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CoarseProvenance {
+    /// `gmsh` for generated meshes, or the mesh file's path.
+    pub source: String,
+    /// gmsh's version (`gmsh --version`), when gmsh ran.
+    pub gmsh_version: Option<String>,
+    /// Seconds gmsh took, when it ran.
+    pub gmsh_seconds: Option<f64>,
+    /// Level-0 vertices.
+    pub vertices: usize,
+    /// Level-0 triangles.
+    pub triangles: usize,
+    /// The level-0 mesh as gmsh wrote it (msh 4.1 text), when gmsh ran.
+    #[serde(skip)]
+    pub msh_text: Option<String>,
+}
+
+/// The meshes of every level of a scene: the level-0 mesh is made once (gmsh runs once), and
+/// [`MeshSource::level`] builds any level from it.
+#[derive(Clone, Debug)]
+pub struct MeshSource {
+    kind: SourceKind,
+    /// Where an unstructured level 0 came from (`None` for the structured grid).
+    pub provenance: Option<CoarseProvenance>,
+}
+
+#[derive(Clone, Debug)]
+enum SourceKind {
+    Structured {
+        domain: crate::problem::Rectangle,
+        cells: [usize; 2],
+        cracks: Vec<Polyline>,
+    },
+    Refined {
+        coarse: Box<Mesh>,
+    },
+}
+
+impl MeshSource {
+    /// The level-0 mesh of `domain` with `cracks` made as `meshing` says: the structured grid
+    /// for `cells` (a rectangle only), gmsh for `mesh_size`, the file for a .msh. The geometry
+    /// must have been validated ([`crate::geometry`]).
+    pub fn new(
+        domain: &Domain,
+        cracks: &[Polyline],
+        meshing: &Meshing,
+    ) -> Result<MeshSource, MeshError> {
+        match (meshing, domain) {
+            (Meshing::Cells(cells), Domain::Rectangle(r)) => {
+                // the level-0 grid checks every crack against the grid
+                structured::structured(*r, *cells, cracks, 0)?;
+                Ok(MeshSource {
+                    kind: SourceKind::Structured {
+                        domain: *r,
+                        cells: *cells,
+                        cracks: cracks.to_vec(),
+                    },
+                    provenance: None,
+                })
+            }
+            (Meshing::Cells(_), Domain::Polygon(_)) => Err(MeshError::CellsNeedRectangle),
+            (Meshing::MeshSize(size), _) => {
+                let polylines: Vec<Vec<[f64; 2]>> =
+                    cracks.iter().map(|c| c.points.clone()).collect();
+                let work = ScratchDir::new()?;
+                let (coarse, run) =
+                    gmsh::mesh_polygon(&domain.polygon(), &polylines, *size, &work.0)
+                        .map_err(|e| MeshError::Gmsh(e.to_string()))?;
+                let mesh = coarse_mesh(coarse, cracks, "gmsh")?;
+                Ok(MeshSource {
+                    provenance: Some(CoarseProvenance {
+                        source: "gmsh".into(),
+                        gmsh_version: Some(run.version),
+                        gmsh_seconds: Some(run.seconds),
+                        vertices: mesh.vertices.len(),
+                        triangles: mesh.triangles.len(),
+                        msh_text: Some(run.msh_text),
+                    }),
+                    kind: SourceKind::Refined {
+                        coarse: Box::new(mesh),
+                    },
+                })
+            }
+            (Meshing::File(path), _) => {
+                let coarse = read_msh_file(path)?;
+                let mesh = coarse_mesh(coarse, cracks, &path.display().to_string())?;
+                Ok(MeshSource {
+                    provenance: Some(CoarseProvenance {
+                        source: path.display().to_string(),
+                        gmsh_version: None,
+                        gmsh_seconds: None,
+                        vertices: mesh.vertices.len(),
+                        triangles: mesh.triangles.len(),
+                        msh_text: None,
+                    }),
+                    kind: SourceKind::Refined {
+                        coarse: Box::new(mesh),
+                    },
+                })
+            }
+        }
+    }
+
+    /// The mesh of level `level`.
+    pub fn level(&self, level: u32) -> Result<Mesh, MeshError> {
+        match &self.kind {
+            SourceKind::Structured {
+                domain,
+                cells,
+                cracks,
+            } => structured::structured(*domain, *cells, cracks, level),
+            SourceKind::Refined { coarse } => {
+                let mut mesh = (**coarse).clone();
+                for _ in 0..level {
+                    mesh = refine::refine(&mesh);
+                }
+                Ok(mesh)
+            }
+        }
+    }
+
+    /// Vertices of the uncut mesh of `level` (exact, without building it).
+    pub fn vertices_at(&self, level: u32) -> usize {
+        match &self.kind {
+            SourceKind::Structured { cells, .. } => {
+                let s = 1usize << level;
+                (cells[0] * s + 1) * (cells[1] * s + 1)
+            }
+            SourceKind::Refined { coarse } => {
+                // V' = V + E, E' = 2E + 3T, T' = 4T under uniform refinement
+                let (mut v, mut t) = (coarse.vertices.len(), coarse.triangles.len());
+                let mut e = (3 * t + coarse.boundary_edges.len()) / 2;
+                for _ in 0..level {
+                    (v, e, t) = (v + e, 2 * e + 3 * t, 4 * t);
+                }
+                v
+            }
+        }
+    }
+
+    /// Whether levels are the structured grid (fill-reducing order, h, export layout).
+    pub fn is_structured(&self) -> bool {
+        matches!(self.kind, SourceKind::Structured { .. })
+    }
+}
+
+/// The geometry of a .msh file: the boundary loop as a polygon and the cracks as polylines, each
+/// with its collinear runs merged into one segment (so a straight crack meshed in many edges is
+/// one segment, with one normal), and the number of triangles.
+pub fn msh_file_geometry(
+    path: &std::path::Path,
+) -> Result<(Domain, Vec<Polyline>, usize), MeshError> {
+    let coarse = read_msh_file(path)?;
+    let boundary = boundary_loop(&coarse.boundary_edges).ok_or_else(|| {
+        MeshError::Gmsh(format!(
+            "{}: the boundary edges do not form one closed loop (only simply connected domains are supported)",
+            path.display()
+        ))
+    })?;
+    let polygon = merge_collinear(boundary.iter().map(|&v| coarse.vertices[v]).collect(), true);
+    let cracks = coarse
+        .cracks
+        .iter()
+        .map(|chain| Polyline {
+            points: merge_collinear(chain.iter().map(|&v| coarse.vertices[v]).collect(), false),
+        })
+        .collect();
+    Ok((Domain::Polygon(polygon), cracks, coarse.triangles.len()))
+}
+
+fn read_msh_file(path: &std::path::Path) -> Result<gmsh::CoarseMesh, MeshError> {
+    gmsh::read_msh_file(path).map_err(|e| MeshError::Gmsh(e.to_string()))
+}
+
+/// The vertices of a closed chain of edges in order, if the edges form exactly one loop.
+fn boundary_loop(edges: &[[usize; 2]]) -> Option<Vec<usize>> {
+    let next: std::collections::HashMap<usize, usize> =
+        edges.iter().map(|e| (e[0], e[1])).collect();
+    if next.len() != edges.len() {
+        return None;
+    }
+    let start = edges.first()?[0];
+    let mut chain = vec![start];
+    let mut v = *next.get(&start)?;
+    while v != start {
+        chain.push(v);
+        v = *next.get(&v)?;
+        if chain.len() > edges.len() {
+            return None;
+        }
+    }
+    (chain.len() == edges.len()).then_some(chain)
+}
+
+/// Drops the points of a polyline (or closed polygon) where it goes straight on.
+fn merge_collinear(points: Vec<[f64; 2]>, closed: bool) -> Vec<[f64; 2]> {
+    let n = points.len();
+    let straight = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        let (u, v) = ([b[0] - a[0], b[1] - a[1]], [c[0] - b[0], c[1] - b[1]]);
+        let cross = u[0] * v[1] - u[1] * v[0];
+        let dot = u[0] * v[0] + u[1] * v[1];
+        dot > 0.0 && cross.abs() <= 1e-12 * u[0].hypot(u[1]) * v[0].hypot(v[1])
+    };
+    (0..n)
+        .filter(|&i| {
+            let interior = closed || (i > 0 && i + 1 < n);
+            !interior || !straight(points[(i + n - 1) % n], points[i], points[(i + 1) % n])
+        })
+        .map(|i| points[i])
+        .collect()
+}
+
+/// The level-0 [`Mesh`] of a gmsh triangulation whose crack chains run along `cracks`: each
+/// chain edge gets the normal of the polyline segment it lies on (a chain passes the polyline's
+/// points exactly, in order; a chain running backwards is reversed).
+fn coarse_mesh(
+    coarse: gmsh::CoarseMesh,
+    cracks: &[Polyline],
+    origin: &str,
+) -> Result<Mesh, MeshError> {
+    if coarse.cracks.len() != cracks.len() {
+        return Err(MeshError::Mismatch(format!(
+            "{origin}: the mesh has {} crack groups, the scene {} cracks",
+            coarse.cracks.len(),
+            cracks.len()
+        )));
+    }
+    let mut chains = Vec::with_capacity(cracks.len());
+    for (c, (mut nodes, crack)) in coarse.cracks.into_iter().zip(cracks).enumerate() {
+        let at = |v: usize| coarse.vertices[v];
+        if at(nodes[0]) != crack.points[0] {
+            nodes.reverse();
+        }
+        let mut segment_of = Vec::with_capacity(nodes.len() - 1);
+        let mut s = 0;
+        for w in nodes.windows(2) {
+            if s >= crack.segments() {
+                return Err(crack_mismatch(origin, c));
+            }
+            segment_of.push(s);
+            if at(w[1]) == crack.points[s + 1] {
+                s += 1;
+            }
+        }
+        if at(nodes[0]) != crack.points[0] || s != crack.segments() {
+            return Err(crack_mismatch(origin, c));
+        }
+        chains.push(CrackChain::new(nodes, crack, &segment_of));
+    }
+    let layout = Layout::Refined {
+        coarse_triangles: coarse.triangles.len(),
+    };
+    Ok(Mesh::new(
+        0,
+        layout,
+        coarse.vertices,
+        coarse.triangles,
+        coarse.boundary_edges,
+        chains,
+    ))
+}
+
+fn crack_mismatch(origin: &str, crack: usize) -> MeshError {
+    MeshError::Mismatch(format!(
+        "{origin}: the edges of crack {} do not pass through its polyline's points in order",
+        crack + 1
+    ))
+}
+
+/// A temporary folder for gmsh's files, removed when dropped.
+struct ScratchDir(std::path::PathBuf);
+
+impl ScratchDir {
+    fn new() -> Result<ScratchDir, MeshError> {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static COUNT: AtomicUsize = AtomicUsize::new(0);
+        let dir = std::env::temp_dir().join(format!(
+            "sdcrack-gmsh-{}-{}",
+            std::process::id(),
+            COUNT.fetch_add(1, Ordering::Relaxed)
+        ));
+        std::fs::create_dir_all(&dir).map_err(|e| {
+            MeshError::Gmsh(format!("cannot create {} for gmsh: {e}", dir.display()))
+        })?;
+        Ok(ScratchDir(dir))
+    }
+}
+
+impl Drop for ScratchDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The longest edge of a triangle.
+fn diameter(vertices: &[[f64; 2]], t: &[usize; 3]) -> f64 {
+    let p = |k: usize| vertices[t[k]];
+    let d = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
+    d(p(0), p(1)).max(d(p(1), p(2))).max(d(p(0), p(2)))
+}
+
+/// The face of every triangle corner that is an interior crack node (module documentation).
+fn corner_sides(
+    vertices: &[[f64; 2]],
+    triangles: &[[usize; 3]],
+    cracks: &[CrackChain],
+) -> Vec<[Option<Side>; 3]> {
+    // for each interior crack node: the directions to its chain neighbours (after, before)
+    let mut around: Vec<Option<([f64; 2], [f64; 2])>> = vec![None; vertices.len()];
+    for c in cracks {
+        for w in c.nodes.windows(3) {
+            let v = vertices[w[1]];
+            let dir = |q: usize| [vertices[q][0] - v[0], vertices[q][1] - v[1]];
+            around[w[1]] = Some((dir(w[2]), dir(w[0])));
+        }
+    }
+    triangles
+        .iter()
+        .map(|t| {
+            let c = centroid(vertices, t);
+            t.map(|v| {
+                let (out, back) = around[v]?;
+                let d = [c[0] - vertices[v][0], c[1] - vertices[v][1]];
+                Some(if left_of_path(out, back, d) {
+                    Side::Plus
+                } else {
+                    Side::Minus
+                })
+            })
+        })
+        .collect()
+}
+
+/// Whether direction `d` from a crack node lies left of the path that arrives from direction
+/// `back` and leaves along `out`: counter-clockwise from `out`, before reaching `back`.
+fn left_of_path(out: [f64; 2], back: [f64; 2], d: [f64; 2]) -> bool {
+    let cross = |a: [f64; 2], b: [f64; 2]| a[0] * b[1] - a[1] * b[0];
+    let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
+    if cross(out, back) == 0.0 && dot(out, back) < 0.0 {
+        // straight through: the left half-plane of `out`
+        return cross(out, d) > 0.0;
+    }
+    let angle = |x: [f64; 2]| {
+        let a = cross(out, x).atan2(dot(out, x));
+        if a < 0.0 {
+            a + std::f64::consts::TAU
+        } else {
+            a
+        }
+    };
+    angle(d) < angle(back)
+}
+
 /// Centroid of a triangle.
 pub fn centroid(vertices: &[[f64; 2]], t: &[usize; 3]) -> [f64; 2] {
     let [a, b, c] = t.map(|v| vertices[v]);
@@ -345,6 +649,7 @@ pub fn centroid(vertices: &[[f64; 2]], t: &[usize; 3]) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::problem::{Rectangle, Segment};
 
     fn unit() -> Rectangle {
         Rectangle {
@@ -359,12 +664,13 @@ mod tests {
 
     #[test]
     fn counts_and_nesting() {
-        let m = Mesh::structured(unit(), [4, 2], seg([-0.5, 0.0], [0.5, 0.0]), 2).unwrap();
-        assert_eq!((m.nx, m.ny), (16, 8));
+        let m = structured::structured(unit(), [4, 2], &[seg([-0.5, 0.0], [0.5, 0.0]).into()], 2)
+            .unwrap();
+        assert_eq!(m.layout, Layout::Structured { nx: 16, ny: 8 });
         assert_eq!(m.vertices.len(), 17 * 9);
         assert_eq!(m.triangles.len(), 2 * 16 * 8);
         assert_eq!(m.boundary_edges.len(), 2 * (16 + 8));
-        assert_eq!(m.crack.nodes.len(), 9);
+        assert_eq!(m.cracks[0].nodes.len(), 9);
         // every triangle counter-clockwise with the cell area / 2
         for t in &m.triangles {
             let [a, b, c] = t.map(|v| m.vertices[v]);
@@ -372,28 +678,34 @@ mod tests {
             assert!((area - 0.5 * (2.0 / 16.0) * (2.0 / 8.0)).abs() < 1e-14);
         }
         // crack nodes exactly on y = 0 with positive zero
-        for &v in &m.crack.nodes {
+        for &v in &m.cracks[0].nodes {
             assert_eq!(m.vertices[v][1].to_bits(), 0.0f64.to_bits());
         }
     }
 
     #[test]
     fn sides_and_broken_topology() {
-        let m = Mesh::structured(unit(), [4, 4], seg([-0.5, 0.0], [0.5, 0.0]), 1).unwrap();
-        assert_eq!(m.crack.normal, [0.0, 1.0]);
+        let m = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.0], [0.5, 0.0]).into()], 1)
+            .unwrap();
+        assert_eq!(m.cracks[0].normals[0], [0.0, 1.0]);
         let topo = m.u_topology(USpace::Broken);
-        let interior = m.crack.nodes.len() - 2;
+        let interior = m.cracks[0].nodes.len() - 2;
         assert_eq!(topo.n_dofs, m.vertices.len() + interior);
-        for (t, (dofs, side)) in m
+        for (t, (dofs, sides)) in m
             .triangles
             .iter()
-            .zip(topo.triangle_dofs.iter().zip(&m.side))
+            .zip(topo.triangle_dofs.iter().zip(&m.corner_sides))
         {
             let c = centroid(&m.vertices, t);
-            match side {
-                Some(Side::Minus) => assert!(c[1] < 0.0),
-                Some(Side::Plus) => assert!(c[1] > 0.0),
-                None => assert_eq!(dofs, t),
+            for side in sides {
+                match side {
+                    Some(Side::Minus) => assert!(c[1] < 0.0),
+                    Some(Side::Plus) => assert!(c[1] > 0.0),
+                    None => {}
+                }
+            }
+            if sides.iter().all(Option::is_none) {
+                assert_eq!(dofs, t);
             }
             if c[1] > 0.0 {
                 assert_eq!(dofs, t, "+ side keeps vertex numbers");
@@ -410,19 +722,23 @@ mod tests {
     #[test]
     fn crack_directions() {
         // vertical crack: ν = (-1, 0)
-        let m = Mesh::structured(unit(), [4, 4], seg([0.0, -0.5], [0.0, 0.5]), 0).unwrap();
-        assert_eq!(m.crack.nodes.len(), 3);
-        assert!((m.crack.normal[0] + 1.0).abs() < 1e-15);
+        let m = structured::structured(unit(), [4, 4], &[seg([0.0, -0.5], [0.0, 0.5]).into()], 0)
+            .unwrap();
+        assert_eq!(m.cracks[0].nodes.len(), 3);
+        assert!((m.cracks[0].normals[0][0] + 1.0).abs() < 1e-15);
         // diagonal crack
-        let m = Mesh::structured(unit(), [4, 4], seg([-0.5, -0.5], [0.5, 0.5]), 1).unwrap();
-        assert_eq!(m.crack.nodes.len(), 5);
+        let m = structured::structured(unit(), [4, 4], &[seg([-0.5, -0.5], [0.5, 0.5]).into()], 1)
+            .unwrap();
+        assert_eq!(m.cracks[0].nodes.len(), 5);
     }
 
     #[test]
     fn crack_errors() {
-        let e = Mesh::structured(unit(), [4, 4], seg([-0.4, 0.0], [0.5, 0.0]), 0).unwrap_err();
+        let e = structured::structured(unit(), [4, 4], &[seg([-0.4, 0.0], [0.5, 0.0]).into()], 0)
+            .unwrap_err();
         assert!(matches!(e, MeshError::OffMesh { .. }));
-        let e = Mesh::structured(unit(), [4, 4], seg([-0.5, 0.0], [1.5, 0.0]), 0).unwrap_err();
+        let e = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.0], [1.5, 0.0]).into()], 0)
+            .unwrap_err();
         assert!(matches!(
             e,
             MeshError::NotInside {
@@ -430,7 +746,8 @@ mod tests {
                 ..
             }
         ));
-        let e = Mesh::structured(unit(), [4, 4], seg([-1.0, 0.0], [0.5, 0.0]), 0).unwrap_err();
+        let e = structured::structured(unit(), [4, 4], &[seg([-1.0, 0.0], [0.5, 0.0]).into()], 0)
+            .unwrap_err();
         assert!(matches!(
             e,
             MeshError::NotInside {
@@ -438,10 +755,12 @@ mod tests {
                 ..
             }
         ));
-        let e = Mesh::structured(unit(), [4, 4], seg([-0.5, 0.0], [0.5, 0.5]), 0).unwrap_err();
+        let e = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.0], [0.5, 0.5]).into()], 0)
+            .unwrap_err();
         assert!(matches!(e, MeshError::NotOnMeshLine { .. }));
         // NW-SE diagonal is not a mesh line
-        let e = Mesh::structured(unit(), [4, 4], seg([-0.5, 0.5], [0.5, -0.5]), 0).unwrap_err();
+        let e = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.5], [0.5, -0.5]).into()], 0)
+            .unwrap_err();
         assert!(matches!(e, MeshError::NotOnMeshLine { .. }));
     }
 }

@@ -19,6 +19,7 @@ use crate::fe::quadrature::{
     gauss_legendre, physical_points, triangle_rule, PhysicalPoint, REFERENCE_TRIANGLE,
 };
 use crate::mesh::{Mesh, UTopology};
+use crate::multiplier::CrackField;
 use crate::problem::{eval_on_face, Exact};
 
 /// The three error norms of a case.
@@ -32,15 +33,6 @@ pub struct ErrorNorms {
     pub p_x: f64,
     /// ‖λ_h − [u]‖_{L²(Γc)}.
     pub lambda_l2: f64,
-}
-
-/// A discrete multiplier on the crack.
-#[derive(Clone, Debug)]
-pub enum CrackField {
-    /// One value per segment (M0).
-    PerSegment(Vec<f64>),
-    /// Nodal values of a continuous P1 function (M1, M1star).
-    PerNode(Vec<f64>),
 }
 
 /// Quadrature used by the norms.
@@ -128,10 +120,7 @@ pub fn error_norms(
 ) -> ErrorNorms {
     use rayon::prelude::*;
     let (rule, tip_rule) = (triangle_rule(quad.degree), triangle_rule(quad.tip_degree));
-    let tips = [
-        mesh.crack.nodes[0],
-        *mesh.crack.nodes.last().expect("crack has nodes"),
-    ];
+    let tips = mesh.tips();
     // vertices of the triangles touching a tip: a triangle with one of them is near a tip
     let mut tip_patch = vec![false; mesh.vertices.len()];
     for t in mesh
@@ -243,10 +232,31 @@ pub fn exact_jump(exact: &Exact, p: [f64; 2], normal: [f64; 2]) -> f64 {
     }
 }
 
-/// ‖λ_h − [u]‖_{L²(Γc)} with segments graded toward the two tips.
+/// ‖λ_h − [u]‖_{L²(Γc)} over every crack, with segments graded toward the tips.
 fn lambda_error(mesh: &Mesh, exact: &Exact, lambda: &CrackField, quad: NormQuadrature) -> f64 {
     let g = gauss_legendre(quad.tip_degree / 2 + 1);
-    let nodes = &mesh.crack.nodes;
+    let mut total = 0.0;
+    // λ's node and segment numbers run on over the cracks in order
+    let (mut node0, mut seg0) = (0, 0);
+    for chain in &mesh.cracks {
+        total += chain_lambda_error(mesh, chain, exact, lambda, (node0, seg0), &g, quad);
+        node0 += chain.nodes.len();
+        seg0 += chain.segments();
+    }
+    total.sqrt()
+}
+
+/// ∫ (λ_h − [u])² over one crack chain whose first node and segment are λ's `offsets`.
+fn chain_lambda_error(
+    mesh: &Mesh,
+    chain: &crate::mesh::CrackChain,
+    exact: &Exact,
+    lambda: &CrackField,
+    offsets: (usize, usize),
+    g: &crate::fe::quadrature::LineRule,
+    quad: NormQuadrature,
+) -> f64 {
+    let nodes = &chain.nodes;
     let last = nodes.len() - 2;
     let mut total = 0.0;
     for k in 0..nodes.len() - 1 {
@@ -268,15 +278,17 @@ fn lambda_error(mesh: &Mesh, exact: &Exact, lambda: &CrackField, quad: NormQuadr
                 let s = s0 + t * (s1 - s0);
                 let p = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
                 let lh = match lambda {
-                    CrackField::PerSegment(v) => v[k],
-                    CrackField::PerNode(v) => (1.0 - s) * v[k] + s * v[k + 1],
+                    CrackField::PerSegment(v) => v[offsets.1 + k],
+                    CrackField::PerNode(v) => {
+                        (1.0 - s) * v[offsets.0 + k] + s * v[offsets.0 + k + 1]
+                    }
                 };
-                let d = lh - exact_jump(exact, p, mesh.crack.normal);
+                let d = lh - exact_jump(exact, p, chain.normals[k]);
                 total += w * (s1 - s0) * len * d * d;
             }
         }
     }
-    total.sqrt()
+    total
 }
 
 #[cfg(test)]
@@ -309,13 +321,13 @@ mod tests {
     /// The error norms of the zero discrete solution of a repository scene at `level`.
     fn zero_field_norms(scene_toml: &str, level: u32) -> (ErrorNorms, Mesh) {
         let scene = Scene::from_toml(scene_toml).expect("repository scene is valid");
-        let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, level).unwrap();
+        let mesh = scene.mesh_source().unwrap().level(level).unwrap();
         let topo = mesh.u_topology(USpace::Broken);
         let exact = scene.exact.as_ref().expect("exact scene");
         let u = vec![0.0; topo.n_dofs];
         let p = vec![[0.0; 2]; mesh.vertices.len()];
         let bubbles = vec![[0.0; 2]; mesh.triangles.len()];
-        let lambda = CrackField::PerNode(vec![0.0; mesh.crack.nodes.len()]);
+        let lambda = CrackField::PerNode(vec![0.0; mesh.cracks[0].nodes.len()]);
         let sol = DiscreteSolution {
             u: &u,
             p: &p,

@@ -1,5 +1,6 @@
 //! The problem's vocabulary, shared by the scene parser and the maths modules: the domain Ω
-//! ([`Rectangle`]), the crack Γc ([`Segment`], with its normal ν and faces), the exact solution
+//! ([`Domain`]: a [`Rectangle`] or a polygon), the cracks Γc ([`Polyline`]s of [`Segment`]s, each
+//! with its normal ν and faces), how the level-0 mesh is made ([`Meshing`]), the exact solution
 //! ([`Exact`]) and the discrete choices of a case: the u space ([`USpace`]), the multiplier cone
 //! ([`MultiplierSpace`], paper (12)–(14)) and the p–p block ([`PMass`]). The maths modules
 //! (mesh, assembly, norms, …) import these from here, never from [`crate::scene`], which owns
@@ -127,6 +128,73 @@ pub struct Rectangle {
     pub min: [f64; 2],
     /// Upper-right corner.
     pub max: [f64; 2],
+}
+
+/// The domain Ω: today's axis-aligned rectangle or a simple polygon (issue 16).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Domain {
+    /// Ω = [x0, x1] × [y0, y1].
+    Rectangle(Rectangle),
+    /// A simple polygon, vertices counter-clockwise (the scene parser orients it), first vertex
+    /// not repeated.
+    Polygon(Vec<[f64; 2]>),
+}
+
+impl Domain {
+    /// The boundary polygon, counter-clockwise (a rectangle's four corners from the lower left).
+    pub fn polygon(&self) -> Vec<[f64; 2]> {
+        match self {
+            Domain::Rectangle(r) => vec![r.min, [r.max[0], r.min[1]], r.max, [r.min[0], r.max[1]]],
+            Domain::Polygon(p) => p.clone(),
+        }
+    }
+}
+
+/// A crack Γc as a polyline x_0, …, x_n (n ≥ 1 segments); a straight crack is a polyline of two
+/// points. Segment k runs from x_k to x_{k+1}; its normal ν_k is that direction turned by +90°,
+/// and its + face is the side ν_k points into (docs/scenes.md).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Polyline {
+    /// The points x_0 (first tip), …, x_n (last tip).
+    pub points: Vec<[f64; 2]>,
+}
+
+impl Polyline {
+    /// Number of segments n.
+    pub fn segments(&self) -> usize {
+        self.points.len() - 1
+    }
+    /// Segment k as a [`Segment`].
+    pub fn segment(&self, k: usize) -> Segment {
+        Segment {
+            a: self.points[k],
+            b: self.points[k + 1],
+        }
+    }
+    /// Total length Σ |x_{k+1} − x_k|.
+    pub fn length(&self) -> f64 {
+        (0..self.segments()).map(|k| self.segment(k).length()).sum()
+    }
+}
+
+impl From<Segment> for Polyline {
+    fn from(s: Segment) -> Polyline {
+        Polyline {
+            points: vec![s.a, s.b],
+        }
+    }
+}
+
+/// How the level-0 mesh of a scene is made (`[discretization]`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Meshing {
+    /// The structured grid of a rectangle with these level-0 cells per direction; every crack
+    /// segment must join level-0 vertices along a grid line or a SW–NE cell diagonal.
+    Cells([usize; 2]),
+    /// gmsh's triangulation with this target edge length, cracks embedded as edge chains.
+    MeshSize(f64),
+    /// A user's gmsh file (physical groups `boundary`, `crack1`, `crack2`, …; docs/scenes.md).
+    File(std::path::PathBuf),
 }
 
 /// Straight crack from `a` to `b`; ν is (b − a)/|b − a| turned by +90° (the problem, docs/scenes.md).

@@ -12,13 +12,14 @@
 
 use std::time::Instant;
 
-use crate::assembly::{assemble, AssemblyError, CrackOperators, System};
+use crate::assembly::{assemble, AssemblyError, System};
 use crate::contact::{KktResiduals, Lcp, LcpOptions, LcpStatus};
 use crate::fe::mini::bubble_coefficients;
 use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{componentwise_backward_error, Ldlt, LinalgError, SymbolicLdlt};
-use crate::mesh::{Mesh, MeshError, UTopology};
-use crate::norms::{error_norms, CrackField, DiscreteSolution, ErrorNorms, NormQuadrature};
+use crate::mesh::{Layout, Mesh, MeshError, UTopology};
+use crate::multiplier::{CrackField, CrackOperators, Multiplier};
+use crate::norms::{error_norms, DiscreteSolution, ErrorNorms, NormQuadrature};
 use crate::problem::{MultiplierSpace, PMass, USpace};
 use crate::scene::Scene;
 
@@ -205,8 +206,10 @@ pub struct MeshRecord {
     pub points: Vec<[f64; 2]>,
     /// Triangles in u-dof numbering.
     pub triangles: Vec<[usize; 3]>,
-    /// Crack node coordinates.
+    /// Crack node coordinates (cracks concatenated).
     pub crack_points: Vec<[f64; 2]>,
+    /// Crack edges as pairs of indices into `crack_points` (within one crack).
+    pub crack_segments: Vec<[usize; 2]>,
 }
 
 /// Everything a study produced.
@@ -216,6 +219,8 @@ pub struct StudyResult {
     pub cases: Vec<CaseResult>,
     /// Meshes used, when fields are wanted.
     pub meshes: Vec<MeshRecord>,
+    /// Where an unstructured level 0 came from (gmsh's version and time, or the mesh file).
+    pub coarse_mesh: Option<crate::mesh::CoarseProvenance>,
 }
 
 /// Progress callbacks of a study.
@@ -237,9 +242,11 @@ pub fn run_study(
     observer: &mut dyn Observer,
 ) -> Result<StudyResult, StudyError> {
     let mut result = StudyResult::default();
+    let source = scene.mesh_source()?;
+    result.coarse_mesh = source.provenance.clone();
     for &level in &plan.levels {
         let t0 = Instant::now();
-        let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, level)?;
+        let mesh = source.level(level)?;
         let ops = CrackOperators::new(&mesh);
         let mesh_time = t0.elapsed().as_secs_f64();
         for &u_space in &plan.u_spaces {
@@ -254,6 +261,7 @@ pub fn run_study(
                     points: topo.dof_vertex.iter().map(|&v| mesh.vertices[v]).collect(),
                     triangles: topo.triangle_dofs.clone(),
                     crack_points: ops.points.clone(),
+                    crack_segments: ops.segments.clone(),
                 });
             }
             for &p_mass in &plan.p_masses {
@@ -302,11 +310,10 @@ struct LevelContext<'a> {
 
 /// The LCP solution of one multiplier space at one δ, before x is recovered.
 struct Contact {
-    multiplier: MultiplierSpace,
-    /// S of D = S N (rows: multipliers).
-    s: Vec<Vec<f64>>,
+    /// The space with its S of D = S N.
+    multiplier: Multiplier,
     sol: crate::contact::LcpSolution,
-    /// Sᵀ μ on the crack nodes.
+    /// Sᵀ μ on the trace rows of N.
     st_mu: Vec<f64>,
     /// b − Nᵀ Sᵀ μ.
     rhs: Vec<f64>,
@@ -318,7 +325,7 @@ struct Contact {
 struct Reduced {
     ldlt: Ldlt,
     matrix: crate::linalg::SymCsc,
-    /// H_N, row-major (I+1)².
+    /// H_N, row-major (trace rows)².
     h_n: Vec<f64>,
     /// q_N = N P₀.
     q_n: Vec<f64>,
@@ -399,30 +406,16 @@ impl LevelContext<'_> {
     /// H_N from the dense trailing block of the factor: the crack's p unknowns are eliminated
     /// last ([`elimination_order`]), so (K⁻¹) restricted to them costs O((2I+2)³), no solve.
     fn h_n_from_trailing_block(&self, ldlt: &Ldlt) -> Option<Vec<f64>> {
-        let m = self.ops.nodes();
         let indices: Vec<usize> = self.ops.node_p_dofs.iter().flatten().copied().collect();
         let inv = ldlt.trailing_inverse(&indices)?;
-        let (c, nu) = (2 * m, self.ops.normal);
-        let mut h_n = vec![0.0; m * m];
-        for i in 0..m {
-            for j in 0..m {
-                let mut v = 0.0;
-                for a in 0..2 {
-                    for b in 0..2 {
-                        v += nu[a] * nu[b] * inv[(2 * i + a) * c + 2 * j + b];
-                    }
-                }
-                h_n[i * m + j] = v;
-            }
-        }
-        Some(h_n)
+        Some(self.ops.h_n_from_node_block(&inv))
     }
 
     /// H_N = N K⁻¹ Nᵀ column by column from block solves (any elimination order).
     fn h_n_by_solves(&self, ldlt: &Ldlt) -> Vec<f64> {
         let n = self.system.n();
         let n_p = self.system.n_p;
-        let m = self.ops.nodes();
+        let m = self.ops.rows.len();
         // H_N column by column in blocks, so the right-hand sides never hold more than
         // REDUCTION_BLOCK vectors of length n at once.
         let mut h_n = vec![0.0; m * m];
@@ -451,25 +444,21 @@ impl LevelContext<'_> {
     fn solve_lcp(
         &self,
         reduced: &Reduced,
-        multiplier: MultiplierSpace,
+        space: MultiplierSpace,
         warm: &mut Option<Vec<bool>>,
     ) -> Contact {
         let t0 = Instant::now();
-        let s = self.ops.constraint_map(multiplier);
-        let lcp = Lcp::reduce(&s, &reduced.h_n, &reduced.q_n);
+        let multiplier = Multiplier::new(space, self.ops);
+        let lcp = Lcp::reduce(&multiplier.s, &reduced.h_n, &reduced.q_n);
         let sol = lcp.solve(warm.as_deref(), LcpOptions::default());
         *warm = Some(sol.active.clone());
         // Sᵀ μ, and the right-hand side b − Nᵀ Sᵀ μ of the recovery K x = b − Nᵀ Sᵀ μ.
-        let m = self.ops.nodes();
-        let st_mu: Vec<f64> = (0..m)
-            .map(|j| s.iter().zip(&sol.mu).map(|(row, mu)| row[j] * mu).sum())
-            .collect();
+        let st_mu = multiplier.transpose_apply(&sol.mu);
         let mut rhs = self.system.rhs.clone();
         let neg: Vec<f64> = st_mu.iter().map(|v| -v).collect();
         self.ops.add_nt(&neg, &mut rhs[..self.system.n_p]);
         Contact {
             multiplier,
-            s,
             sol,
             st_mu,
             rhs,
@@ -514,15 +503,14 @@ impl LevelContext<'_> {
         let t0 = Instant::now();
         let Contact {
             multiplier,
-            s,
             sol,
             st_mu,
             rhs,
             ..
         } = contact;
-        let kkt = self.kkt(reduced, &s, &sol.mu, &st_mu, &rhs, x);
+        let kkt = self.kkt(reduced, &multiplier, &sol.mu, &st_mu, &rhs, x);
         timings.contact += t0.elapsed().as_secs_f64();
-        let lambda = self.lambda_field(multiplier, &sol.mu);
+        let lambda = multiplier.lambda_field(self.ops, &sol.mu);
         let n_p = self.system.n_p;
         let (p, u) = x.split_at(n_p);
         let p_vertex: Vec<[f64; 2]> = p.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
@@ -566,11 +554,11 @@ impl LevelContext<'_> {
             level: self.mesh.level,
             h: self.mesh.h(),
             u_space: self.topo.space,
-            multiplier,
+            multiplier: multiplier.space,
             p_mass: self.p_mass,
             delta,
-            unknowns: self.system.n() + s.len(),
-            multipliers: s.len(),
+            unknowns: self.system.n() + multiplier.len(),
+            multipliers: multiplier.len(),
             iterations: sol.iterations,
             status: sol.status,
             converged,
@@ -587,7 +575,7 @@ impl LevelContext<'_> {
     fn kkt(
         &self,
         reduced: &Reduced,
-        s: &[Vec<f64>],
+        multiplier: &Multiplier,
         mu: &[f64],
         st_mu: &[f64],
         rhs_mu: &[f64],
@@ -597,7 +585,6 @@ impl LevelContext<'_> {
         let mut kx = vec![0.0; n];
         let mut scale = vec![0.0; n];
         reduced.matrix.mul_vec_with_abs(x, &mut kx, &mut scale);
-        let inf = |v: &[f64]| v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
         let mut dt_mu = vec![0.0; self.system.n_p];
         self.ops.add_nt(st_mu, &mut dt_mu);
         // Componentwise (Oettli–Prager) backward error of K x + Dᵀμ = b: row i's residual over
@@ -610,31 +597,9 @@ impl LevelContext<'_> {
             kx[i] -= rhs_mu[i];
         }
         let eq = componentwise_backward_error(&kx, &scale);
-        let np = self.ops.apply_n(&x[..self.system.n_p]);
-        let y: Vec<f64> = s
-            .iter()
-            .map(|row| row.iter().zip(&np).map(|(a, b)| a * b).sum())
-            .collect();
-        let s_norm = s
-            .iter()
-            .map(|row| row.iter().map(|v| v.abs()).sum::<f64>())
-            .fold(0.0, f64::max);
-        // y = D P is measured against the size of p, not of p·ν on Γc (≈ 0 where the crack is open).
-        let mut k = KktResiduals::constraint_part(mu, &y, s_norm * inf(&x[..self.system.n_p]));
+        let mut k = multiplier.kkt_constraint_part(self.ops, mu, &x[..n_p]);
         k.equations = eq;
         k
-    }
-
-    /// λ_h from the LCP unknowns: Λ for M0/M1, M_c⁻¹ Λ̃ for M1star (docs/design.md).
-    fn lambda_field(&self, multiplier: MultiplierSpace, mu: &[f64]) -> CrackField {
-        match multiplier {
-            MultiplierSpace::M0 => CrackField::PerSegment(mu.to_vec()),
-            MultiplierSpace::M1 => CrackField::PerNode(mu.to_vec()),
-            MultiplierSpace::M1Star => {
-                let mc = self.ops.crack_mass();
-                CrackField::PerNode(solve_tridiagonal(&mc, mu))
-            }
-        }
     }
 
     fn bubbles(&self, p_vertex: &[[f64; 2]], u: &[f64]) -> Vec<[f64; 2]> {
@@ -677,13 +642,12 @@ fn elimination_order(
                 .collect();
             let mut last = crack_p;
             last.resize(vertex_of.len(), false);
-            crate::ordering::nested_dissection(mesh.nx, mesh.ny, &vertex_of, &last)
+            vertex_order(mesh, &vertex_of, &last, 1)
         }
         PMass::Lumped => {
             // S couples u dofs two grid steps apart (through a p vertex of both patches)
-            let u_order = crate::ordering::nested_dissection_with_reach(
-                mesh.nx,
-                mesh.ny,
+            let u_order = vertex_order(
+                mesh,
                 &topo.dof_vertex,
                 &vec![false; topo.dof_vertex.len()],
                 2,
@@ -697,23 +661,21 @@ fn elimination_order(
     }
 }
 
-/// Solves a tridiagonal system given as a dense matrix (Thomas algorithm; M_c is SPD).
-fn solve_tridiagonal(a: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
-    let n = b.len();
-    let mut c = vec![0.0; n];
-    let mut d = vec![0.0; n];
-    for i in 0..n {
-        let lower = if i > 0 { a[i][i - 1] } else { 0.0 };
-        let upper = if i + 1 < n { a[i][i + 1] } else { 0.0 };
-        let denom = a[i][i] - if i > 0 { lower * c[i - 1] } else { 0.0 };
-        c[i] = upper / denom;
-        d[i] = (b[i] - if i > 0 { lower * d[i - 1] } else { 0.0 }) / denom;
+/// Nested dissection of unknowns on the vertices of `mesh` ([`crate::ordering`]): by grid
+/// lines on a structured grid, by the vertex graph on a refined mesh.
+fn vertex_order(mesh: &Mesh, vertex_of: &[usize], last: &[bool], reach: usize) -> Vec<usize> {
+    match mesh.layout {
+        Layout::Structured { nx, ny } => {
+            crate::ordering::nested_dissection_with_reach(nx, ny, vertex_of, last, reach)
+        }
+        Layout::Refined { .. } => crate::ordering::nested_dissection_mesh(
+            &mesh.vertices,
+            &mesh.triangles,
+            vertex_of,
+            last,
+            reach,
+        ),
     }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        x[i] = d[i] - if i + 1 < n { c[i] * x[i + 1] } else { 0.0 };
-    }
-    x
 }
 
 #[cfg(test)]
@@ -725,7 +687,7 @@ mod tests {
     #[test]
     fn h_n_from_the_trailing_block_matches_block_solves() {
         let scene = Scene::default_scene();
-        let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, 1).unwrap();
+        let mesh = scene.mesh_source().unwrap().level(1).unwrap();
         let ops = CrackOperators::new(&mesh);
         for (space, p_mass) in [
             (USpace::Continuous, PMass::Consistent),
@@ -811,7 +773,14 @@ mod tests {
     #[test]
     fn lumped_p_mass_is_an_exact_elimination() {
         let scene = Scene::default_scene();
-        let mesh = Mesh::structured(scene.domain, [4, 4], scene.crack, 1).unwrap();
+        let mesh = crate::mesh::MeshSource::new(
+            &scene.domain,
+            &scene.cracks,
+            &crate::problem::Meshing::Cells([4, 4]),
+        )
+        .unwrap()
+        .level(1)
+        .unwrap();
         let ops = CrackOperators::new(&mesh);
         let topo = mesh.u_topology(USpace::Broken);
         let system = assemble(&mesh, &topo, &scene.f, &scene.g, PMass::Lumped).unwrap();

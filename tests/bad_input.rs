@@ -77,6 +77,24 @@ fn edit(what: &'static str, from: &str, to: &str, needle: &str) -> Case {
     scene(what, &SMALL.replacen(from, to, 1), needle)
 }
 
+/// The SMALL scene on the repository's mesh file `file` (in place of its [geometry] and cells).
+fn mesh_file(what: &'static str, file: &str, needle: &str) -> Case {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(file);
+    let text = SMALL
+        .replacen(
+            "[geometry]\ndomain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }\ncrack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }\n",
+            "",
+            1,
+        )
+        .replacen(
+            "cells = [4, 4]",
+            &format!("mesh = {{ gmsh = {:?} }}", path.display().to_string()),
+            1,
+        );
+    assert!(!text.contains("[geometry]"), "{what}: SMALL changed");
+    scene(what, &text, needle)
+}
+
 /// The valid SMALL scene with extra command-line arguments.
 fn cli(what: &'static str, extra: &[&'static str], needle: &str) -> Case {
     let mut c = scene(what, SMALL, needle);
@@ -205,7 +223,7 @@ fn catalogue() -> Vec<Case> {
             "unknown key in [discretization]",
             "cells =",
             "cels =",
-            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, levels, u_spaces, multipliers, p_mass, deltas)",
+            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, mesh_size, mesh, levels, u_spaces, multipliers, p_mass, deltas)",
         ),
         edit(
             "unknown key in [geometry]",
@@ -353,25 +371,96 @@ fn catalogue() -> Vec<Case> {
             "crack off the mesh lines",
             "[-0.5, 0.0], [0.5, 0.0]",
             "[-0.4, 0.0], [0.5, 0.0]",
-            "invalid scene {scene}: geometry.crack.segment: crack end point (-0.4, 0) is not a vertex of the level-0 mesh (cells 4×4)",
+            "invalid scene {scene}: geometry.crack.segment: crack point (-0.4, 0) is not a vertex of the level-0 mesh (cells 4×4)",
         ),
         edit(
             "crack across the cell diagonals",
             "[-0.5, 0.0], [0.5, 0.0]",
             "[-0.5, 0.5], [0.5, -0.5]",
-            "crack from (-0.5, 0.5) to (0.5, -0.5) is not along a mesh line",
+            "geometry.crack.segment: crack segment from (-0.5, 0.5) to (0.5, -0.5) is not along a mesh line",
         ),
         edit(
             "crack outside Ω",
             "[-0.5, 0.0], [0.5, 0.0]",
             "[-0.5, 0.0], [1.5, 0.0]",
-            "geometry.crack.segment: crack end point (1.5, 0) lies outside the domain",
+            "geometry.crack.segment point 1 (1.5, 0) lies outside the domain",
         ),
         edit(
             "crack touching Γ",
             "[-0.5, 0.0], [0.5, 0.0]",
             "[-1.0, 0.0], [0.5, 0.0]",
-            "geometry.crack.segment: crack end point (-1, 0) touches the boundary",
+            "geometry.crack.segment point 0 (-1, 0) touches the domain boundary",
+        ),
+        // --- polygons, polylines, several cracks, gmsh meshes (issue 16) ---
+        edit(
+            "self-intersecting polygon",
+            "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
+            "domain = { polygon = [[-1, -1], [1, 1], [1, -1], [-1, 1]] }",
+            "domain.polygon is not a simple polygon: edge 0 (from (-1, -1) to (1, 1)) crosses edge 2 (from (1, -1) to (-1, 1))",
+        ),
+        edit(
+            "crack crossing the boundary of an L",
+            "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }\ncrack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
+            "domain = { polygon = [[-1, -1], [1, -1], [1, 0], [0, 0], [0, 1], [-1, 1]] }\ncrack = { segment = [[0.5, -0.5], [-0.5, 0.5]] }",
+            "geometry.crack.segment segment 0 crosses the domain boundary",
+        ),
+        edit(
+            "two crossing cracks",
+            "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
+            "cracks = [{ segment = [[-0.5, 0.0], [0.5, 0.0]] }, { segment = [[0.0, -0.5], [0.0, 0.5]] }]",
+            "geometry.cracks[0] and geometry.cracks[1] intersect (segment 0 and segment 0)",
+        ),
+        edit(
+            "zero-length segment of a polyline",
+            "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
+            "cracks = [{ polyline = [[-0.5, 0.0], [0.0, 0.0], [0.0, 0.0], [0.5, 0.0]] }]",
+            "geometry.cracks[0] segment 1 has zero length (points 1 and 2 coincide)",
+        ),
+        edit(
+            "polyline segment off the grid lines",
+            "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
+            "cracks = [{ segment = [[-0.5, -0.5], [0.5, -0.5]] }, { polyline = [[-0.5, 0.5], [0.0, 0.5], [0.5, 0.0]] }]",
+            "geometry.cracks[1]: crack segment from (0, 0.5) to (0.5, 0) is not along a mesh line",
+        ),
+        edit(
+            "polygon with cells",
+            "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
+            "domain = { polygon = [[-1, -1], [1, -1], [1, 1], [-1, 1]] }",
+            "discretization.cells needs a rectangle domain; give discretization.mesh_size for a polygon",
+        ),
+        edit(
+            "cells and mesh_size",
+            "cells = [4, 4]",
+            "cells = [4, 4]\nmesh_size = 0.5",
+            "discretization must have exactly one of cells",
+        ),
+        edit(
+            "negative mesh_size",
+            "cells = [4, 4]",
+            "mesh_size = -0.5",
+            "discretization.mesh_size must be a positive number; got -0.5",
+        ),
+        edit(
+            "mesh file and [geometry]",
+            "cells = [4, 4]",
+            concat!("mesh = { gmsh = \"", env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/trapezoid-two-cracks.msh\" }"),
+            "[geometry] must be left out with discretization.mesh",
+        ),
+        mesh_file("missing mesh file", "tests/data/msh/no-such-file.msh", "no-such-file.msh"),
+        mesh_file(
+            "mesh file without a boundary group",
+            "tests/data/msh/no-boundary-group.msh",
+            "no physical curve group named \"boundary\"",
+        ),
+        mesh_file(
+            "mesh file without crack groups",
+            "tests/data/msh/no-crack-groups.msh",
+            "no physical curve group named crack1",
+        ),
+        mesh_file(
+            "binary mesh file",
+            "tests/data/msh/binary-header.msh",
+            "binary .msh files are not supported",
         ),
         edit(
             "crack of zero length",

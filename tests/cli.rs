@@ -138,7 +138,7 @@ fn bad_inputs_give_one_line_and_exit_2() {
         (
             "touches boundary",
             SMALL.replace("[-0.5, 0.0], [0.5, 0.0]", "[-1.0, 0.0], [0.5, 0.0]"),
-            "touches the boundary",
+            "touches the domain boundary",
         ),
         (
             "bad expression",

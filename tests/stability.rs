@@ -35,12 +35,14 @@
 
 mod common;
 
-use sdcrack::assembly::{assemble, CrackOperators};
+use sdcrack::assembly::assemble;
 use sdcrack::contact::{Lcp, LcpOptions, LcpStatus};
 use sdcrack::linalg::{Ldlt, SymbolicLdlt};
-use sdcrack::mesh::Mesh;
-use sdcrack::norms::CrackField;
-use sdcrack::scene::{Expr, FieldSet, MultiplierSpace, PMass, Scene, USpace};
+use sdcrack::multiplier::{CrackField, CrackOperators, Multiplier};
+use sdcrack::scene::{
+    Domain, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass, Polyline, Rectangle,
+    Scene, USpace,
+};
 use sdcrack::study::{CaseFilter, CaseResult};
 
 const ALL_FIELDS: FieldSet = FieldSet {
@@ -403,10 +405,7 @@ fn translating_the_domain_changes_nothing() {
             moved.f = expr(&substitute_xy(&f, &sx, &sy));
             moved.g = expr(&substitute_xy(&g, &sx, &sy));
             let shift = |p: [f64; 2]| [p[0] + a[0], p[1] + a[1]];
-            moved.domain.min = shift(scene.domain.min);
-            moved.domain.max = shift(scene.domain.max);
-            moved.crack.a = shift(scene.crack.a);
-            moved.crack.b = shift(scene.crack.b);
+            map_geometry(&mut moved, shift);
             let cases = common::solve(&moved, CaseFilter::default());
             let kkt = assert_solved(&cases, name);
             let w = assert_scaled(&format!("{name} + {a:?}"), &cases, &base, (1.0, 1.0, 1.0));
@@ -428,12 +427,25 @@ fn dilate(scene: &Scene, f: &str, g: &str, l: f64) -> Scene {
     let (sx, sy) = (format!("x/{l:e}"), format!("y/{l:e}"));
     big.f = expr(&format!("({})/{:e}", substitute_xy(f, &sx, &sy), l * l));
     big.g = expr(&substitute_xy(g, &sx, &sy));
-    big.domain.min = scene.domain.min.map(|v| v * l);
-    big.domain.max = scene.domain.max.map(|v| v * l);
-    big.crack.a = scene.crack.a.map(|v| v * l);
-    big.crack.b = scene.crack.b.map(|v| v * l);
+    map_geometry(&mut big, |p| p.map(|v| v * l));
     big.deltas = scene.deltas.iter().map(|d| d / (l * l)).collect();
     big
+}
+
+/// Moves every point of the domain and the cracks by `f` (which must keep orientation).
+fn map_geometry(scene: &mut Scene, f: impl Fn([f64; 2]) -> [f64; 2]) {
+    scene.domain = match &scene.domain {
+        Domain::Rectangle(r) => Domain::Rectangle(Rectangle {
+            min: f(r.min),
+            max: f(r.max),
+        }),
+        Domain::Polygon(p) => Domain::Polygon(p.iter().map(|&q| f(q)).collect()),
+    };
+    for c in &mut scene.cracks {
+        for q in &mut c.points {
+            *q = f(*q);
+        }
+    }
 }
 
 fn check_dilations(names: &[&str], factors: &[f64]) {
@@ -519,14 +531,15 @@ fn anisotropic_scene(dir: Direction, cells: [usize; 2]) -> Scene {
             [k * dx, k * dy]
         }
     };
-    scene.crack.a = [-c[0], -c[1]];
-    scene.crack.b = c;
+    scene.cracks = vec![Polyline {
+        points: vec![[-c[0], -c[1]], c],
+    }];
     let n2 = 2.0 * (c[0] * c[0] + c[1] * c[1]);
     scene.f = expr(&format!(
         "20*sin(2*pi*(x*{:e} + y*{:e})/{n2:e})*sign(y*{:e} - x*{:e})",
         c[0], c[1], c[0], c[1]
     ));
-    scene.cells = cells;
+    set_cells(&mut scene, cells);
     scene.levels = vec![0, 1];
     scene.deltas = vec![1e-4, 0.0];
     scene.fields = FieldSet::default();
@@ -589,7 +602,7 @@ fn exact_solutions_converge_on_aspect_4_meshes() {
     for name in ["closed-exact", "open-exact"] {
         for cells in [[8, 32], [32, 8]] {
             let mut scene = common::load(name);
-            scene.cells = cells;
+            set_cells(&mut scene, cells);
             scene.levels = vec![0, 1, 2];
             scene.deltas = vec![0.0];
             scene.fields = FieldSet::default();
@@ -707,7 +720,7 @@ fn stress_scene_alternates_open_and_closed_many_times() {
     // levels × u spaces × multipliers × δ × p masses
     assert_eq!(cases.len(), 3 * 2 * 3 * 3 * 2);
     for c in &cases {
-        assert_alternates(c, scene.crack.length(), "δ sweep");
+        assert_alternates(c, scene.cracks[0].length(), "δ sweep");
     }
 }
 
@@ -721,7 +734,7 @@ fn crack_reduction(
     u: USpace,
     delta: f64,
 ) -> (CrackOperators, Vec<f64>, Vec<f64>) {
-    let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, level).unwrap();
+    let mesh = scene.mesh_source().unwrap().level(level).unwrap();
     let ops = CrackOperators::new(&mesh);
     let topo = mesh.u_topology(u);
     let system = assemble(
@@ -735,7 +748,7 @@ fn crack_reduction(
     let symbolic = SymbolicLdlt::analyze(&system.base).unwrap();
     let matrix = system.matrix(delta);
     let ldlt = Ldlt::factor(&symbolic, &matrix, &system.signs).unwrap();
-    let (n, n_p, nodes) = (system.n(), system.n_p, ops.nodes());
+    let (n, n_p, nodes) = (system.n(), system.n_p, ops.rows.len());
     let mut x0 = vec![0.0; n];
     ldlt.solve_refined(&matrix, &system.rhs, &mut x0, 2, 1e-15);
     let mut h_n = vec![0.0; nodes * nodes];
@@ -796,7 +809,7 @@ fn lcp_iteration_cap_is_reported_and_every_start_converges() {
         let (ops, h_n, q_n) = crack_reduction(&scene, level, u, 0.0);
         for m in MultiplierSpace::ALL {
             let id = format!("level {level} {u} {m}");
-            let lcp = Lcp::reduce(&ops.constraint_map(m), &h_n, &q_n);
+            let lcp = Lcp::reduce(&Multiplier::new(m, &ops).s, &h_n, &q_n);
             let cold = lcp.solve(None, LcpOptions::default());
             assert_eq!(cold.status, LcpStatus::Converged, "{id}");
             assert!(lcp_residual(&lcp, &cold.mu) <= 1e-12, "{id}");
@@ -805,7 +818,7 @@ fn lcp_iteration_cap_is_reported_and_every_start_converges() {
                 .iter()
                 .find(|c| c.u_space == u && c.multiplier == m)
                 .unwrap();
-            assert_alternates(case, scene.crack.length(), "cold");
+            assert_alternates(case, scene.cracks[0].length(), "cold");
             assert_eq!(cold.iterations, case.iterations, "{id}");
             assert_eq!(
                 cold.mu.iter().filter(|&&v| v > 0.0).count(),
@@ -916,4 +929,10 @@ fn active_set_cycle_ends_in_murty_pivoting() {
         },
     );
     assert_eq!(short.status, LcpStatus::MaxIterations);
+}
+
+/// A structured grid of `cells` level-0 cells for `scene`.
+fn set_cells(scene: &mut Scene, cells: [usize; 2]) {
+    scene.meshing = Meshing::Cells(cells);
+    scene.level0 = Level0Size::Grid(cells);
 }

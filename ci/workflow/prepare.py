@@ -40,6 +40,23 @@ class Refused(Exception):
     """A one-line error for the user (exit 2)."""
 
 
+MESH_RE = re.compile(r'(gmsh[ \t]*=[ \t]*)"([^"\n]*)"')
+
+
+def with_absolute_mesh(scene, text, data):
+    """The scene's `mesh = { gmsh = "file.msh" }` made absolute (relative to the scene file, as
+    sdcrack reads it), so the copy in DIR/inputs/ finds the file; a comment line with the mesh
+    file's sha256 makes a changed mesh a changed input. (text, bytes), unchanged without a mesh."""
+    m = MESH_RE.search(text)
+    if not m:
+        return text, data
+    path = os.path.join(os.path.dirname(os.path.abspath(scene)), m.group(2))
+    digest = sha256(path) if os.path.isfile(path) else "missing"
+    text = (text[:m.start()] + m.group(1) + json.dumps(os.path.abspath(path)) + text[m.end():]
+            + f"\n# mesh file sha256: {digest}\n")
+    return text, text.encode("utf-8")
+
+
 def sha256(path):
     h = hashlib.sha256()
     with open(path, "rb") as fh:
@@ -135,6 +152,7 @@ def prepare(args):
         if data is None:
             raise Refused(f"{scene}: no such scene file")
         text = data.decode("utf-8", errors="replace")
+        text, data = with_absolute_mesh(scene, text, data)
         if levels is not None:
             text, n = LEVELS_RE.subn(f"levels = [{', '.join(map(str, levels))}]", text)
             if n != 1:

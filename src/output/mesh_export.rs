@@ -5,16 +5,26 @@
 //! digits so they read back bit for bit):
 //!
 //! ```text
-//! DIR/scene.json                  name, f, g, exact {u, px, py, jump}, crack {a, b, normal}, domain, cells, levels
-//! DIR/level{L}/mesh.json          level, h, nx, ny, n_vertices, n_uncut_vertices, n_triangles, normal
+//! DIR/scene.json                  name, f, g, exact {u, px, py, jump}, domain {min, max} or {polygon},
+//!                                 cracks [{points}], cells or null, mesh_size or null, levels, and
+//!                                 crack {a, b, normal} when there is one straight crack
+//! DIR/level{L}/mesh.json          level, kind ("structured": nx, ny; "refined": nx = ny = null,
+//!                                 triangle 4t + c of level L+1 lies in triangle t of level L),
+//!                                 h, coarse_triangles, n_cracks, n_vertices, n_uncut_vertices,
+//!                                 n_triangles, and normal for one straight crack
 //! DIR/level{L}/vertices.txt       x y   — the CRACKED mesh: uncut vertices, then a − copy of every
 //!                                         interior crack node (same coordinates)
 //! DIR/level{L}/triangles.txt      a b c — cracked numbering, counter-clockwise (− side uses − copies)
 //! DIR/level{L}/vertices_uncut.txt x y   — the uncut mesh
 //! DIR/level{L}/triangles_uncut.txt a b c
-//! DIR/level{L}/crack.txt          plus minus — per crack node from tip a to tip b (tips: equal)
+//! DIR/level{L}/crack.txt          plus minus — per crack node, cracks concatenated, each from its
+//!                                 first tip to its last (tips: plus = minus)
+//! DIR/level{L}/cracks.txt         first n — per crack: its rows of crack.txt
+//! DIR/level{L}/crack_normals.txt  nx ny — per crack.txt row: the node's normal ν̄ (the edge
+//!                                 normal; at a kink the normalised ℓ-weighted mean of the two)
 //! DIR/level{L}/boundary.txt       one vertex per line: the vertices on Γ
-//! DIR/level{L}/sides.txt          per triangle: 1 (+ side), -1 (− side), 0 (no interior crack node)
+//! DIR/level{L}/sides.txt          per triangle, per corner: 1 (+ face), -1 (− face), 0 (the
+//!                                 corner is not an interior crack node)
 //! ```
 //!
 //! The cracked numbering is the `broken` u space's dof numbering, so reference fields and solver
@@ -23,8 +33,9 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::mesh::{Mesh, MeshError, Side};
-use crate::problem::USpace;
+use crate::mesh::{Layout, Mesh, MeshError, Side};
+use crate::multiplier::CrackOperators;
+use crate::problem::{Domain, Meshing, USpace};
 use crate::scene::Scene;
 
 /// Errors of the mesh export.
@@ -84,16 +95,28 @@ fn scene_json(scene: &Scene) -> serde_json::Value {
             "jump": e.jump.as_ref().map(|j| j.source()),
         })
     });
-    serde_json::json!({
+    let mut json = serde_json::json!({
         "name": scene.name,
         "f": scene.f.source(),
         "g": scene.g.source(),
         "exact": exact,
-        "domain": {"min": scene.domain.min, "max": scene.domain.max},
-        "crack": {"a": scene.crack.a, "b": scene.crack.b, "normal": scene.crack.normal()},
-        "cells": scene.cells,
+        "domain": match &scene.domain {
+            Domain::Rectangle(r) => serde_json::json!({"min": r.min, "max": r.max}),
+            Domain::Polygon(p) => serde_json::json!({"polygon": p}),
+        },
+        "cracks": scene.cracks.iter().map(|c| serde_json::json!({"points": c.points})).collect::<Vec<_>>(),
+        "cells": match scene.meshing { Meshing::Cells(c) => Some(c), _ => None },
+        "mesh_size": match scene.meshing { Meshing::MeshSize(h) => Some(h), _ => None },
         "levels": scene.levels,
-    })
+    });
+    // the single straight crack of older exports, for readers that know only that
+    if let [c] = &scene.cracks[..] {
+        if c.points.len() == 2 {
+            let s = c.segment(0);
+            json["crack"] = serde_json::json!({"a": s.a, "b": s.b, "normal": s.normal()});
+        }
+    }
+    json
 }
 
 fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
@@ -102,26 +125,39 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
     let points: Vec<[f64; 2]> = topo.dof_vertex.iter().map(|&v| mesh.vertices[v]).collect();
     let mut boundary: Vec<usize> = mesh.boundary_edges.iter().map(|e| e[0]).collect();
     boundary.sort_unstable();
-    let sides: Vec<i8> = mesh
-        .side
-        .iter()
-        .map(|s| match s {
-            Some(Side::Plus) => 1,
-            Some(Side::Minus) => -1,
-            None => 0,
-        })
-        .collect();
-    let meta = serde_json::json!({
+    let side = |s: &Option<Side>| match s {
+        Some(Side::Plus) => 1,
+        Some(Side::Minus) => -1,
+        None => 0,
+    };
+    let ops = CrackOperators::new(mesh);
+    let (kind, nx, ny, coarse) = match mesh.layout {
+        Layout::Structured { nx, ny } => (
+            "structured",
+            Some(nx),
+            Some(ny),
+            2 * (nx >> mesh.level) * (ny >> mesh.level),
+        ),
+        Layout::Refined { coarse_triangles } => ("refined", None, None, coarse_triangles),
+    };
+    let mut meta = serde_json::json!({
         "level": mesh.level,
+        "kind": kind,
         "h": mesh.h(),
-        "nx": mesh.nx,
-        "ny": mesh.ny,
+        "nx": nx,
+        "ny": ny,
+        "coarse_triangles": coarse,
+        "n_cracks": mesh.cracks.len(),
         "n_vertices": points.len(),
         "n_uncut_vertices": mesh.vertices.len(),
         "n_triangles": mesh.triangles.len(),
-        "normal": mesh.crack.normal,
     });
-    let files: [(&str, String); 8] = [
+    if let [c] = &mesh.cracks[..] {
+        if c.normals.iter().all(|&n| n == c.normals[0]) {
+            meta["normal"] = serde_json::json!(c.normals[0]);
+        }
+    }
+    let files: [(&str, String); 10] = [
         ("mesh.json", format!("{meta:#}\n")),
         ("vertices.txt", points_text(&points)),
         ("triangles.txt", triangles_text(&topo.triangle_dofs)),
@@ -140,9 +176,17 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
             }),
         ),
         (
+            "cracks.txt",
+            lines(&ops.crack_nodes, |s, (first, n)| {
+                let _ = write!(s, "{first} {n}");
+            }),
+        ),
+        ("crack_normals.txt", points_text(&ops.node_normals())),
+        (
             "sides.txt",
-            lines(&sides, |s, v| {
-                let _ = write!(s, "{v}");
+            lines(&mesh.corner_sides, |s, c| {
+                let [a, b, d] = c.map(|v| side(&v));
+                let _ = write!(s, "{a} {b} {d}");
             }),
         ),
     ];
@@ -174,8 +218,9 @@ pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBu
         json["levels"] = serde_json::json!(levels);
         let path = tmp.join("scene.json");
         std::fs::write(&path, format!("{json:#}\n")).map_err(io(&path))?;
+        let source = scene.mesh_source()?;
         for &level in levels {
-            let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, level)?;
+            let mesh = source.level(level)?;
             write_level(&tmp.join(format!("level{level}")), &mesh)?;
         }
         std::fs::rename(&tmp, out).map_err(io(out))
@@ -205,10 +250,10 @@ mod tests {
                 [v[0], v[1]]
             })
             .collect();
-        let mesh = Mesh::structured(scene.domain, scene.cells, scene.crack, 1).unwrap();
+        let mesh = scene.mesh_source().unwrap().level(1).unwrap();
         assert_eq!(
             verts.len(),
-            mesh.vertices.len() + mesh.crack.nodes.len() - 2
+            mesh.vertices.len() + mesh.cracks[0].nodes.len() - 2
         );
         assert_eq!(
             &verts[..mesh.vertices.len()],
@@ -223,7 +268,7 @@ mod tests {
                 (v[0], v[1])
             })
             .collect();
-        assert_eq!(pairs.len(), mesh.crack.nodes.len());
+        assert_eq!(pairs.len(), mesh.cracks[0].nodes.len());
         assert_eq!(pairs[0].0, pairs[0].1);
         for &(p, m) in &pairs[1..pairs.len() - 1] {
             assert_ne!(p, m);

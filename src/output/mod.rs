@@ -178,6 +178,13 @@ pub fn write_run(
         path: copy,
         reason: e.to_string(),
     })?;
+    if let Some(msh) = study.coarse_mesh.as_ref().and_then(|c| c.msh_text.as_ref()) {
+        let path = dir.join("coarse.msh");
+        atomic_write(&path, msh.as_bytes()).map_err(|e| WriteError::Io {
+            path,
+            reason: e.to_string(),
+        })?;
+    }
     let with_fields = !scene.fields.is_empty();
     let t0 = std::time::Instant::now();
     if with_fields {
@@ -201,6 +208,7 @@ pub fn write_run(
         all_converged: study.cases.iter().all(|c| c.converged),
         wall_s,
         fields_write_s,
+        coarse_mesh: study.coarse_mesh.clone(),
         cases: study
             .cases
             .iter()
@@ -227,7 +235,7 @@ fn write_fields(
     scene: &crate::scene::Scene,
     study: &crate::study::StudyResult,
 ) -> Result<(), WriteError> {
-    use crate::norms::CrackField;
+    use crate::multiplier::CrackField;
     use xdmf::Meta;
     let meshes: Vec<xdmf::MeshData> = study
         .meshes
@@ -238,12 +246,12 @@ fn write_fields(
             triangles: m.triangles.clone(),
         })
         .collect();
-    let crack_points = |level: u32| {
+    let crack = |level: u32| {
         study
             .meshes
             .iter()
             .find(|m| m.level == level)
-            .map(|m| m.crack_points.clone())
+            .map(|m| (m.crack_points.clone(), m.crack_segments.clone()))
             .unwrap_or_default()
     };
     let cases: Vec<xdmf::CaseFields> = study
@@ -251,6 +259,7 @@ fn write_fields(
         .iter()
         .filter_map(|c| {
             let f = c.fields.as_ref()?;
+            let (crack_points, crack_segments) = crack(c.level);
             Some(xdmf::CaseFields {
                 name: summary::case_name(c),
                 mesh_key: mesh_key(c.level, c.u_space),
@@ -258,7 +267,8 @@ fn write_fields(
                 p: scene.fields.p.then(|| f.p.clone()),
                 // the lumped p mass has no bubble: no p_bubble dataset
                 p_bubble: (scene.fields.p && !f.p_bubble.is_empty()).then(|| f.p_bubble.clone()),
-                crack_points: crack_points(c.level),
+                crack_points,
+                crack_segments,
                 lambda: scene.fields.lambda.then(|| match &f.lambda {
                     CrackField::PerSegment(v) => (xdmf::Centering::Cell, v.clone()),
                     CrackField::PerNode(v) => (xdmf::Centering::Node, v.clone()),

@@ -31,6 +31,10 @@ pub struct Summary {
     pub wall_s: f64,
     /// Seconds spent writing `fields.h5`/`fields.xdmf` (all cases together; 0 without fields).
     pub fields_write_s: f64,
+    /// For an unstructured scene: where level 0 came from (gmsh's version and seconds, or the
+    /// mesh file) and its size; gmsh's level 0 is also written as `coarse.msh`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub coarse_mesh: Option<crate::mesh::CoarseProvenance>,
     /// The cases.
     pub cases: Vec<CaseSummary>,
 }

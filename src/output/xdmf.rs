@@ -24,9 +24,9 @@
 //! /cases/CASE/p                    f64 (N, 3)  optional, z = 0
 //! /cases/CASE/p_bubble             f64 (T, 2)  with p: bubble coefficients of the MINI p per
 //!                                              triangle (p_h = Σ p_i λ_i + p_bubble · 27 λ0 λ1 λ2)
-//! /cases/CASE/crack/points         f64 (I+1, 3) crack nodes, z = 0
-//! /cases/CASE/crack/segments       i64 (I, 2)  [k, k+1]
-//! /cases/CASE/crack/lambda         f64 (I+1,) per node or (I,) per segment, optional
+//! /cases/CASE/crack/points         f64 (N_c, 3) crack nodes, z = 0 (all cracks, concatenated)
+//! /cases/CASE/crack/segments       i64 (I, 2)  the crack segments [k, k+1], within each crack
+//! /cases/CASE/crack/lambda         f64 (N_c,) per node or (I,) per segment, optional
 //! /cases/CASE/NAME                 f64 (N,)    a constant field of [`CaseFields::constants`]
 //! /cases/CASE/crack/NAME           f64 (I+1,)  the same on the crack nodes
 //! ```
@@ -143,8 +143,10 @@ pub struct CaseFields {
     /// Bubble coefficients of p, one 2-vector per mesh triangle (same order as the triangles):
     /// on triangle T, p_h = Σ_i p_i λ_i + p_bubble[T] · 27 λ0 λ1 λ2 (the MINI field). Only with `p`.
     pub p_bubble: Option<Vec<[f64; 2]>>,
-    /// Crack polyline nodes (`I + 1` of them; empty for no crack grid).
+    /// Crack nodes (every crack's, concatenated; empty for no crack grid).
     pub crack_points: Vec<[f64; 2]>,
+    /// Crack segments as pairs of indices into `crack_points` (within one crack; `I` of them).
+    pub crack_segments: Vec<[usize; 2]>,
     /// Contact multiplier on the crack, per node or per segment.
     pub lambda: Option<(Centering, Vec<f64>)>,
     /// Name of the series the case is a step of (see the module documentation): the cases of
@@ -468,10 +470,17 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
         check_finite(&case.crack_points, || {
             format!("case {name:?}: field crack_points")
         })?;
+        if (nc > 0 && case.crack_segments.is_empty())
+            || case.crack_segments.iter().flatten().any(|&k| k >= nc)
+        {
+            return Err(OutputError::Invalid(format!(
+                "case {name:?}: the crack segments must be pairs of the {nc} crack points"
+            )));
+        }
         if let Some((centering, lambda)) = &case.lambda {
             let (want, per) = match centering {
                 Centering::Node => (nc, "crack nodes"),
-                Centering::Cell => (nc.saturating_sub(1), "crack segments"),
+                Centering::Cell => (case.crack_segments.len(), "crack segments"),
             };
             if lambda.len() != want {
                 return Err(OutputError::Invalid(format!(
@@ -502,6 +511,7 @@ fn group_series(cases: &[CaseFields], case_mesh: &[usize]) -> Result<Vec<Series>
                 let first = series[s].cases[0];
                 if case_mesh[first] != case_mesh[c]
                     || cases[first].crack_points != case.crack_points
+                    || cases[first].crack_segments != case.crack_segments
                 {
                     return Err(OutputError::Invalid(format!(
                         "case {:?}: series {:?} mixes meshes or cracks (case {:?} has another)",
@@ -647,10 +657,13 @@ fn write_h5(
                     let gk = g.create_group("crack")?;
                     let n = case.crack_points.len();
                     write_f64(&gk, "points", &pad3(&case.crack_points), vec![n, 3])?;
-                    let segs: Vec<i64> = (0..n - 1)
-                        .flat_map(|k| [to_i64(k), to_i64(k + 1)])
+                    let segs: Vec<i64> = case
+                        .crack_segments
+                        .iter()
+                        .flat_map(|s| s.map(to_i64))
                         .collect();
-                    write_i64(&gk, "segments", &segs, vec![n - 1, 2])?;
+                    let ns = case.crack_segments.len();
+                    write_i64(&gk, "segments", &segs, vec![ns, 2])?;
                     if let Some((_, lambda)) = &case.lambda {
                         let ds = write_f64(&gk, "lambda", lambda, vec![lambda.len()])?;
                         write_attrs(&ds, &meta)?;
@@ -829,16 +842,16 @@ fn crack_grid_xml(h5: &str, case: &CaseFields, k: usize, indent: &str) -> String
     let i3 = format!("{indent}    ");
     let kp = format!("/cases/{}/crack", case.name);
     let n = case.crack_points.len();
+    let ns = case.crack_segments.len();
     let mut s = step_head(&format!("{}/crack", case.name), k, &case.metadata, indent);
     s.push_str(&format!(
-        "{i2}<Topology TopologyType=\"Polyline\" NumberOfElements=\"{}\" NodesPerElement=\"2\">\n",
-        n - 1
+        "{i2}<Topology TopologyType=\"Polyline\" NumberOfElements=\"{ns}\" NodesPerElement=\"2\">\n"
     ));
     s.push_str(&data_item(
         &i3,
         h5,
         &format!("{kp}/segments"),
-        &[n - 1, 2],
+        &[ns, 2],
         true,
     ));
     s.push_str(&format!(
@@ -923,6 +936,7 @@ mod tests {
                     .collect()
             }),
             crack_points,
+            crack_segments: (0..ni).map(|k| [k, k + 1]).collect(),
             lambda: lambda.map(|c| match c {
                 Centering::Node => (c, (0..=ni).map(|k| s * k as f64).collect()),
                 Centering::Cell => (c, (0..ni).map(|k| s * (k as f64 + 0.5)).collect()),
@@ -1291,6 +1305,7 @@ mod tests {
             p: None,
             p_bubble: None,
             crack_points: vec![],
+            crack_segments: vec![],
             lambda: None,
             series: "bare".into(),
             metadata: vec![],

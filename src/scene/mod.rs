@@ -15,7 +15,10 @@ use serde::Deserialize;
 pub use crate::expr::{BatchScratch, Expr, ExprBatch, ExprError, Var};
 // The problem's vocabulary lives in crate::problem (the maths modules use it without this
 // parser); re-exported so that a scene's users find it here too.
-pub use crate::problem::{eval_on_face, Exact, MultiplierSpace, PMass, Rectangle, Segment, USpace};
+pub use crate::problem::{
+    eval_on_face, Domain, Exact, Meshing, MultiplierSpace, PMass, Polyline, Rectangle, Segment,
+    USpace,
+};
 pub use verification::{ExpectedFailure, Verification};
 
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
@@ -121,17 +124,21 @@ pub struct Scene {
     /// Free text.
     pub description: String,
     /// The domain Ω.
-    pub domain: Rectangle,
-    /// The crack Γc.
-    pub crack: Segment,
+    pub domain: Domain,
+    /// The cracks Γc, in the scene's order.
+    pub cracks: Vec<Polyline>,
+    /// How messages name each crack (`geometry.crack.segment`, `geometry.cracks[1]`, …).
+    pub crack_names: Vec<String>,
+    /// How the level-0 mesh is made.
+    pub meshing: Meshing,
+    /// The level-0 mesh's size, for memory estimates before meshing.
+    pub level0: Level0Size,
     /// Source term f of −Δu = f.
     pub f: Expr,
     /// Dirichlet data g on Γ.
     pub g: Expr,
     /// Exact solution, if the scene has one.
     pub exact: Option<Exact>,
-    /// Level-0 cells per direction.
-    pub cells: [usize; 2],
     /// Refinement levels to run (level ℓ has 2^ℓ·cells cells per direction).
     pub levels: Vec<u32>,
     /// u spaces to run.
@@ -168,7 +175,7 @@ struct SceneToml {
     name: String,
     #[serde(default)]
     description: String,
-    geometry: GeometryToml,
+    geometry: Option<GeometryToml>,
     data: DataToml,
     exact: Option<ExactToml>,
     discretization: DiscretizationToml,
@@ -179,20 +186,29 @@ struct SceneToml {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct GeometryToml {
-    domain: DomainToml,
-    crack: CrackToml,
+    domain: Option<DomainToml>,
+    crack: Option<CrackToml>,
+    cracks: Option<Vec<CrackToml>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DomainToml {
-    rectangle: Vec<Vec<f64>>,
+    rectangle: Option<Vec<Vec<f64>>>,
+    polygon: Option<Vec<Vec<f64>>>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct CrackToml {
-    segment: Vec<Vec<f64>>,
+    segment: Option<Vec<Vec<f64>>>,
+    polyline: Option<Vec<Vec<f64>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshFileToml {
+    gmsh: String,
 }
 
 #[derive(Deserialize)]
@@ -214,7 +230,9 @@ struct ExactToml {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DiscretizationToml {
-    cells: Vec<i64>,
+    cells: Option<Vec<i64>>,
+    mesh_size: Option<f64>,
+    mesh: Option<MeshFileToml>,
     levels: Vec<i64>,
     u_spaces: Vec<String>,
     multipliers: Vec<String>,
@@ -246,15 +264,19 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
             "verification",
         ],
     ),
-    ("geometry", &["domain", "crack"]),
-    ("geometry.domain", &["rectangle"]),
-    ("geometry.crack", &["segment"]),
+    ("geometry", &["domain", "crack", "cracks"]),
+    ("geometry.domain", &["rectangle", "polygon"]),
+    ("geometry.crack", &["segment", "polyline"]),
+    ("geometry.cracks", &["segment", "polyline"]),
+    ("discretization.mesh", &["gmsh"]),
     ("data", &["f", "g"]),
     ("exact", &["u", "px", "py", "jump"]),
     (
         "discretization",
         &[
             "cells",
+            "mesh_size",
+            "mesh",
             "levels",
             "u_spaces",
             "multipliers",
@@ -313,7 +335,8 @@ impl Scene {
                 "it is not UTF-8 text (invalid byte at line {line}, column {column})"
             ))
         })?;
-        Scene::from_toml(&text).map_err(|error| SceneError::InFile {
+        let base_dir = path.parent().unwrap_or(Path::new("."));
+        Scene::from_toml_in(&text, base_dir).map_err(|error| SceneError::InFile {
             path: shown,
             error: Box::new(error),
         })
@@ -330,6 +353,11 @@ impl Scene {
 
     /// Parses and validates scene TOML text.
     pub fn from_toml(text: &str) -> Result<Scene, SceneError> {
+        Scene::from_toml_in(text, Path::new("."))
+    }
+
+    /// As [`Scene::from_toml`], reading a `discretization.mesh` file relative to `base_dir`.
+    pub fn from_toml_in(text: &str, base_dir: &Path) -> Result<Scene, SceneError> {
         if text.len() > MAX_SCENE_BYTES {
             return Err(SceneError::Value(format!(
                 "the scene has {} bytes, more than the 1 MiB ({MAX_SCENE_BYTES} bytes) a scene may have",
@@ -343,9 +371,14 @@ impl Scene {
         }
         let raw: SceneToml =
             toml::from_str(text).map_err(|e| SceneError::Toml(toml_message(&e, text)))?;
-        let mut scene = raw.validate()?;
+        let mut scene = raw.validate(base_dir)?;
         scene.source = text.to_string();
         Ok(scene)
+    }
+
+    /// The scene's meshes (runs gmsh for a `mesh_size` scene).
+    pub fn mesh_source(&self) -> Result<crate::mesh::MeshSource, crate::mesh::MeshError> {
+        crate::mesh::MeshSource::new(&self.domain, &self.cracks, &self.meshing)
     }
 
     /// Total number of cases (level × u space × multiplier × δ).
@@ -543,6 +576,31 @@ const KEY_TYPES: &[(&str, &str, &str)] = &[
         "geometry.crack.segment",
         "two end points [[xa, ya], [xb, yb]] of numbers",
     ),
+    (
+        "polygon",
+        "geometry.domain.polygon",
+        "a list of at least three points [[x, y], ...] of numbers",
+    ),
+    (
+        "polyline",
+        "geometry.cracks[i].polyline",
+        "a list of at least two points [[x, y], ...] of numbers",
+    ),
+    (
+        "cracks",
+        "geometry.cracks",
+        "a list of cracks, each { segment = [[xa, ya], [xb, yb]] } or { polyline = [[x, y], ...] }",
+    ),
+    (
+        "mesh_size",
+        "discretization.mesh_size",
+        "a positive number (the coarse mesh's target edge length)",
+    ),
+    (
+        "gmsh",
+        "discretization.mesh.gmsh",
+        "the path of a .msh file in quotes",
+    ),
     ("f", "data.f", "an expression in quotes, e.g. \"sin(pi*x)\""),
     ("g", "data.g", "an expression in quotes, e.g. \"0\""),
     ("u", "exact.u", "an expression in quotes"),
@@ -681,7 +739,8 @@ fn check_finite_point(what: &str, p: [f64; 2]) -> Result<(), SceneError> {
 }
 
 impl SceneToml {
-    fn validate(self) -> Result<Scene, SceneError> {
+    /// `base_dir`: the folder relative mesh file paths are read from (the scene file's).
+    fn validate(self, base_dir: &Path) -> Result<Scene, SceneError> {
         let name = self.name.trim().to_string();
         if name.is_empty()
             || name.len() > 100
@@ -694,24 +753,39 @@ impl SceneToml {
                 self.name
             )));
         }
-        let [lo, hi] = two_points("geometry.domain.rectangle", &self.geometry.domain.rectangle)?;
-        check_finite_point("geometry.domain.rectangle", lo)?;
-        check_finite_point("geometry.domain.rectangle", hi)?;
-        if !(hi[0] > lo[0] && hi[1] > lo[1]) {
-            return Err(SceneError::Value(format!(
-                "geometry.domain.rectangle [[{}, {}], [{}, {}]] must list the lower-left corner first and have positive width and height",
-                lo[0], lo[1], hi[0], hi[1]
-            )));
-        }
-        let [a, b] = two_points("geometry.crack.segment", &self.geometry.crack.segment)?;
-        check_finite_point("geometry.crack.segment", a)?;
-        check_finite_point("geometry.crack.segment", b)?;
-        let crack = Segment { a, b };
-        if crack.length() <= 0.0 {
-            return Err(SceneError::Value(
-                "geometry.crack.segment has zero length (its two end points coincide)".into(),
-            ));
-        }
+        let d = self.discretization;
+        let meshing = validate_meshing(&d, base_dir)?;
+        let mut file_triangles = 0;
+        let (domain, cracks, crack_names) = match (&meshing, self.geometry) {
+            (Meshing::File(path), None) => {
+                let (domain, cracks, triangles) = crate::mesh::msh_file_geometry(path)
+                    .map_err(|e| SceneError::Value(format!("discretization.mesh: {e}")))?;
+                file_triangles = triangles;
+                let names = (1..=cracks.len())
+                    .map(|i| format!("crack{i} of {}", path.display()))
+                    .collect();
+                (domain, cracks, names)
+            }
+            (Meshing::File(_), Some(_)) => {
+                return Err(SceneError::Value(
+                    "[geometry] must be left out with discretization.mesh: the domain and the cracks come from the mesh file's physical groups".into(),
+                ))
+            }
+            (_, None) => {
+                return Err(SceneError::Value(
+                    "[geometry] is missing: give geometry.domain and geometry.crack (or geometry.cracks)".into(),
+                ))
+            }
+            (_, Some(g)) => validate_geometry(g)?,
+        };
+        let level0 = match meshing {
+            Meshing::Cells(c) => Level0Size::Grid(c),
+            Meshing::MeshSize(h) => {
+                let area = crate::geometry::signed_area(&domain.polygon()).abs();
+                Level0Size::Triangles(1.5 * area / (3f64.sqrt() / 4.0 * h * h))
+            }
+            Meshing::File(_) => Level0Size::Triangles(file_triangles as f64),
+        };
         let f = parse_expr("data.f", &self.data.f)?;
         let g = parse_expr("data.g", &self.data.g)?;
         let exact = match self.exact {
@@ -730,9 +804,7 @@ impl SceneToml {
                 Some(Exact { u, px, py, jump })
             }
         };
-        let d = self.discretization;
-        let cells = validate_cells(&d.cells)?;
-        let levels = validate_levels(&d.levels, cells)?;
+        let levels = validate_levels(&d.levels, level0)?;
         let u_spaces = validate_names(
             "discretization.u_spaces",
             &d.u_spaces,
@@ -776,12 +848,14 @@ impl SceneToml {
         Ok(Scene {
             name,
             description: self.description,
-            domain: Rectangle { min: lo, max: hi },
-            crack,
+            domain,
+            cracks,
+            crack_names,
+            meshing,
+            level0,
             f,
             g,
             exact,
-            cells,
             levels,
             u_spaces,
             multipliers,
@@ -807,6 +881,206 @@ fn two_points(key: &str, v: &[Vec<f64>]) -> Result<[[f64; 2]; 2], SceneError> {
     }
 }
 
+/// Domain and cracks of `[geometry]`, validated ([`crate::geometry`]), with each crack's name
+/// for messages. A polygon is stored counter-clockwise.
+fn validate_geometry(g: GeometryToml) -> Result<(Domain, Vec<Polyline>, Vec<String>), SceneError> {
+    let value = |m: String| SceneError::Value(m);
+    let Some(domain) = g.domain else {
+        return Err(value(
+            "geometry.domain is missing: give { rectangle = [[x0, y0], [x1, y1]] } or { polygon = [[x, y], ...] }".into(),
+        ));
+    };
+    let domain = match (domain.rectangle, domain.polygon) {
+        (Some(r), None) => {
+            let [lo, hi] = two_points("geometry.domain.rectangle", &r)?;
+            check_finite_point("geometry.domain.rectangle", lo)?;
+            check_finite_point("geometry.domain.rectangle", hi)?;
+            if !(hi[0] > lo[0] && hi[1] > lo[1]) {
+                return Err(value(format!(
+                    "geometry.domain.rectangle [[{}, {}], [{}, {}]] must list the lower-left corner first and have positive width and height",
+                    lo[0], lo[1], hi[0], hi[1]
+                )));
+            }
+            Domain::Rectangle(Rectangle { min: lo, max: hi })
+        }
+        (None, Some(p)) => {
+            let points = points_of("geometry.domain.polygon", &p)?;
+            crate::geometry::validate_polygon(&points).map_err(|e| value(e.to_string()))?;
+            Domain::Polygon(crate::geometry::counter_clockwise(&points))
+        }
+        _ => {
+            return Err(value(
+                "geometry.domain must have exactly one of rectangle and polygon".into(),
+            ))
+        }
+    };
+    let (cracks, names): (Vec<Polyline>, Vec<String>) = match (g.crack, g.cracks) {
+        (Some(c), None) => {
+            let (crack, name) = validate_crack(c, "geometry.crack")?;
+            (vec![crack], vec![name])
+        }
+        (None, Some(list)) if !list.is_empty() => list
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| validate_crack(c, &format!("geometry.cracks[{i}]")))
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .unzip(),
+        (None, Some(_)) => {
+            return Err(value(
+                "geometry.cracks is empty: give at least one crack".into(),
+            ))
+        }
+        (None, None) => {
+            return Err(value(
+                "missing key `crack` in [geometry]: give crack = { segment = [[xa, ya], [xb, yb]] } or a list cracks = [...]".into(),
+            ))
+        }
+        _ => {
+            return Err(value(
+                "geometry must have exactly one of crack (a single crack) and cracks (a list)"
+                    .into(),
+            ))
+        }
+    };
+    let polylines: Vec<Vec<[f64; 2]>> = cracks.iter().map(|c| c.points.clone()).collect();
+    crate::geometry::validate_cracks(&domain.polygon(), &polylines).map_err(|e| {
+        // name the cracks as the scene does
+        let mut m = e.to_string();
+        for (i, name) in names.iter().enumerate().rev() {
+            m = m.replace(&format!("geometry.cracks[{i}]"), name);
+        }
+        value(m)
+    })?;
+    Ok((domain, cracks, names))
+}
+
+/// One crack: `{ segment = [a, b] }` or `{ polyline = [x0, x1, ...] }`, and its name.
+fn validate_crack(c: CrackToml, at: &str) -> Result<(Polyline, String), SceneError> {
+    match (c.segment, c.polyline) {
+        (Some(seg), None) => {
+            let key = format!("{at}.segment");
+            let [a, b] = two_points(&key, &seg)?;
+            check_finite_point(&key, a)?;
+            check_finite_point(&key, b)?;
+            if (Segment { a, b }).length() <= 0.0 {
+                return Err(SceneError::Value(format!(
+                    "{key} has zero length (its two end points coincide)"
+                )));
+            }
+            let name = if at == "geometry.crack" {
+                key
+            } else {
+                at.to_string()
+            };
+            Ok((Polyline { points: vec![a, b] }, name))
+        }
+        (None, Some(line)) => {
+            let key = format!("{at}.polyline");
+            let points = points_of(&key, &line)?;
+            if points.len() < 2 {
+                return Err(SceneError::Value(format!(
+                    "{key} must have at least two points; got {}",
+                    points.len()
+                )));
+            }
+            let name = if at == "geometry.crack" {
+                key
+            } else {
+                at.to_string()
+            };
+            Ok((Polyline { points }, name))
+        }
+        _ => Err(SceneError::Value(format!(
+            "{at} must have exactly one of segment and polyline"
+        ))),
+    }
+}
+
+/// A list of points `[[x, y], ...]` with finite coordinates.
+fn points_of(key: &str, v: &[Vec<f64>]) -> Result<Vec<[f64; 2]>, SceneError> {
+    v.iter()
+        .map(|p| match p[..] {
+            [x, y] => {
+                check_finite_point(key, [x, y])?;
+                Ok([x, y])
+            }
+            _ => Err(SceneError::Value(format!(
+                "{key} must be a list of points [x, y]; a point has {} coordinate(s)",
+                p.len()
+            ))),
+        })
+        .collect()
+}
+
+/// Exactly one of `cells`, `mesh_size` and `mesh`.
+fn validate_meshing(d: &DiscretizationToml, base_dir: &Path) -> Result<Meshing, SceneError> {
+    match (&d.cells, d.mesh_size, &d.mesh) {
+        (Some(c), None, None) => Ok(Meshing::Cells(validate_cells(c)?)),
+        (None, Some(h), None) => {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(SceneError::Value(format!(
+                    "discretization.mesh_size must be a positive number; got {h}"
+                )));
+            }
+            Ok(Meshing::MeshSize(h))
+        }
+        (None, None, Some(m)) => {
+            if m.gmsh.is_empty() || m.gmsh.chars().any(char::is_control) {
+                return Err(SceneError::Value(format!(
+                    "discretization.mesh.gmsh {:?} must be a non-empty file path without control characters",
+                    m.gmsh
+                )));
+            }
+            Ok(Meshing::File(base_dir.join(&m.gmsh)))
+        }
+        _ => Err(SceneError::Value(
+            "discretization must have exactly one of cells (structured grid of a rectangle), mesh_size (gmsh) and mesh = { gmsh = \"file.msh\" }".into(),
+        )),
+    }
+}
+
+/// The size of a scene's level-0 mesh, known before it is made (memory estimates).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Level0Size {
+    /// The structured grid's cells per direction.
+    Grid([usize; 2]),
+    /// Triangles of an unstructured level 0: counted for a mesh file, estimated for gmsh as
+    /// |Ω| over the area √3/4 h² of an equilateral triangle of edge h, times 1.5.
+    Triangles(f64),
+}
+
+impl Level0Size {
+    /// Cells of a structured grid of the same work at `level` (a cell is two triangles).
+    fn cells_at(self, level: u32) -> f64 {
+        let n0 = match self {
+            Level0Size::Grid(c) => (c[0] as f64) * (c[1] as f64),
+            Level0Size::Triangles(t) => t / 2.0,
+        };
+        n0 * 4f64.powi(level.min(64) as i32)
+    }
+
+    /// What level `level` is, in words ("a 256×256 grid", "about 131072 triangles").
+    fn describe(self, level: u32) -> String {
+        match self {
+            Level0Size::Grid(c) => {
+                let scale = 1u64 << level.min(62);
+                format!(
+                    "level {level} of cells [{}, {}] is a {}×{} grid",
+                    c[0],
+                    c[1],
+                    (c[0] as u64).saturating_mul(scale),
+                    (c[1] as u64).saturating_mul(scale)
+                )
+            }
+            Level0Size::Triangles(_) => format!(
+                "level {level} has about {:.0} triangles",
+                2.0 * self.cells_at(level)
+            ),
+        }
+    }
+}
+
 fn validate_cells(cells: &[i64]) -> Result<[usize; 2], SceneError> {
     let &[nx, ny] = cells else {
         return Err(SceneError::Value(format!(
@@ -828,7 +1102,7 @@ fn validate_cells(cells: &[i64]) -> Result<[usize; 2], SceneError> {
     Ok(out)
 }
 
-fn validate_levels(levels: &[i64], cells: [usize; 2]) -> Result<Vec<u32>, SceneError> {
+fn validate_levels(levels: &[i64], size: Level0Size) -> Result<Vec<u32>, SceneError> {
     if levels.is_empty() {
         return Err(SceneError::Value(
             "discretization.levels is empty: list at least one level, e.g. [0, 1, 2]".into(),
@@ -847,7 +1121,7 @@ fn validate_levels(levels: &[i64], cells: [usize; 2]) -> Result<Vec<u32>, SceneE
                 "discretization.levels: level {l} is listed twice"
             )));
         }
-        check_level(cells, l)
+        check_level(size, l)
             .map_err(|m| SceneError::Value(format!("discretization.levels: {m}")))?;
         out.push(l);
     }
@@ -859,8 +1133,8 @@ fn validate_levels(levels: &[i64], cells: [usize; 2]) -> Result<Vec<u32>, SceneE
 /// 128 MiB plus [`MEMORY_BYTES_PER_CELL`] per cell times log2 of the cell count (the fill of the
 /// sparse LDLᵀ of a 2D grid under nested dissection grows like n log n). Measured peaks are in
 /// docs/design.md; the estimate is above each of them.
-pub fn estimated_memory_bytes(cells: [usize; 2], level: u32) -> u64 {
-    let n = (cells[0] as f64) * (cells[1] as f64) * 4f64.powi(level.min(64) as i32);
+pub fn estimated_memory_bytes(size: Level0Size, level: u32) -> u64 {
+    let n = size.cells_at(level);
     let bytes = (128u64 << 20) as f64 + MEMORY_BYTES_PER_CELL * n * n.max(2.0).log2();
     if bytes >= u64::MAX as f64 {
         u64::MAX
@@ -875,19 +1149,19 @@ pub const MEMORY_BYTES_PER_CELL: f64 = 600.0;
 /// Checks one refinement level of a grid of `cells` level-0 cells: at most [`MAX_LEVEL`] and an
 /// [`estimated_memory_bytes`] within [`MAX_MEMORY_BYTES`]. The message names the level, not the
 /// key (the scene's `discretization.levels` or the command line's `--level`).
-pub fn check_level(cells: [usize; 2], level: u32) -> Result<(), String> {
+pub fn check_level(size: Level0Size, level: u32) -> Result<(), String> {
     if level > MAX_LEVEL {
         return Err(format!("level {level} is outside 0..={MAX_LEVEL}"));
     }
-    let memory = estimated_memory_bytes(cells, level);
+    let memory = estimated_memory_bytes(size, level);
     if memory > MAX_MEMORY_BYTES {
-        let scale = 1u64 << level;
+        let fewer = match size {
+            Level0Size::Grid(_) => "fewer cells",
+            Level0Size::Triangles(_) => "a larger mesh_size",
+        };
         return Err(format!(
-            "level {level} of cells [{}, {}] is a {}×{} grid, which needs an estimated {:.1} GiB, more than the {} GiB limit; use a lower level or fewer cells",
-            cells[0],
-            cells[1],
-            cells[0] as u64 * scale,
-            cells[1] as u64 * scale,
+            "{}, which needs an estimated {:.1} GiB, more than the {} GiB limit; use a lower level or {fewer}",
+            size.describe(level),
             memory as f64 / (1u64 << 30) as f64,
             MAX_MEMORY_BYTES >> 30
         ));
@@ -1011,7 +1285,8 @@ mod tests {
         for (table, keys) in TABLE_KEYS {
             let last = table.rsplit('.').next().unwrap_or(table);
             let named = SCENE_TEMPLATE.contains(&format!("[{table}]"))
-                || SCENE_TEMPLATE.contains(&format!("{last} = {{"));
+                || SCENE_TEMPLATE.contains(&format!("{last} = {{"))
+                || SCENE_TEMPLATE.contains(&format!("{last} = [{{"));
             assert!(table.is_empty() || named, "template lacks [{table}]");
             for key in *keys {
                 assert!(
@@ -1042,7 +1317,7 @@ mod tests {
     #[test]
     fn memory_estimate_is_above_measured_peaks_and_admits_the_nightly() {
         for (level, peak_kib) in [(3u32, 135_612u64), (4, 165_316), (5, 507_484)] {
-            let estimate = estimated_memory_bytes([8, 8], level);
+            let estimate = estimated_memory_bytes(Level0Size::Grid([8, 8]), level);
             assert!(
                 estimate > peak_kib * 1024,
                 "level {level}: estimate {estimate} B below the measured {peak_kib} KiB"
@@ -1051,13 +1326,20 @@ mod tests {
         // ci/nightly runs every repository scene up to level 5: cells [8, 8] and [16, 8].
         for cells in [[8, 8], [16, 8]] {
             for level in 0..=5 {
-                assert_eq!(check_level(cells, level), Ok(()), "{cells:?} level {level}");
+                assert_eq!(
+                    check_level(Level0Size::Grid(cells), level),
+                    Ok(()),
+                    "{cells:?} level {level}"
+                );
             }
         }
-        let refused = check_level([8, 8], 8).unwrap_err();
+        let refused = check_level(Level0Size::Grid([8, 8]), 8).unwrap_err();
         assert!(refused.contains("more than the 16 GiB limit"), "{refused}");
-        assert!(check_level([1, 1], MAX_LEVEL + 1).is_err());
-        assert_eq!(estimated_memory_bytes([4096, 4096], 64), u64::MAX);
+        assert!(check_level(Level0Size::Grid([1, 1]), MAX_LEVEL + 1).is_err());
+        assert_eq!(
+            estimated_memory_bytes(Level0Size::Grid([4096, 4096]), 64),
+            u64::MAX
+        );
     }
 
     #[test]

@@ -439,3 +439,24 @@ def test_the_pinned_engine_is_installed():
     assert r.stdout.strip() == pins["SLURM_PLUGIN_VERSION"], r.stderr
     constraints = (ROOT / "ci" / "workflow" / "constraints.txt").read_text()
     assert f"snakemake=={pins['SNAKEMAKE_VERSION']}" in constraints
+
+
+def test_a_scene_on_a_mesh_file_runs_from_its_copy(tmp_path):
+    """The copy of a scene with `mesh = { gmsh = "meshes/….msh" }` in OUT/inputs/ names the mesh
+    file by its absolute path (it is relative to the scene file) and records its sha256, and the
+    workflow's plan of it (sdcrack check on the copy) succeeds."""
+    import hashlib
+
+    src = tmp_path / "elsewhere"
+    shutil.copytree(ROOT / "scenes" / "meshes", src / "meshes")
+    scene = src / "user-mesh.toml"
+    shutil.copyfile(ROOT / "scenes" / "user-mesh.toml", scene)
+    r = campaign(scene, "--out", tmp_path / "out", "--levels", "0-1", "--dry-run", check=0)
+    copy = (tmp_path / "out" / "inputs" / "user-mesh.toml").read_text()
+    mesh = src / "meshes" / "trapezoid-two-cracks.msh"
+    assert f'gmsh = "{mesh}"' in copy, copy
+    digest = hashlib.sha256(mesh.read_bytes()).hexdigest()
+    assert copy.rstrip().endswith(f"# mesh file sha256: {digest}"), copy[-200:]
+    jobs = dry_run_jobs(r.stdout)
+    # levels 0-1 × 2 u spaces × 3 multipliers × 2 p masses, 2 tools × 2 levels, 1 report
+    assert len(jobs) == 2 * 2 * 3 * 2 + 2 * 2 + 1, sorted(jobs)
