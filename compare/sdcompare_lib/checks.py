@@ -7,7 +7,7 @@ Each check returns rows (for the report) and problems (one line each); any probl
 import math
 
 from . import exact
-from .read import DEFAULT_P_MASS, case_key, finite_number, p_mass, plan_p_masses, pm_suffix
+from .read import DEFAULT_P_MASS, InputError, case_key, finite_number, p_mass, plan_p_masses, pm_suffix
 from .render import fmt_delta
 from .settings import QUANTITIES, scene_lists, scene_p_masses
 
@@ -198,7 +198,10 @@ def independent_errors(res, scene_file):
     worst)."""
     if "exact" not in scene_file:
         return [], []
-    ex = exact.ExactSolution.from_scene(scene_file)
+    try:
+        ex = exact.ExactSolution.from_scene(scene_file)
+    except exact.ExactError as exc:  # the scene copy's cracks (expressions raise sdexpr.ExprError)
+        raise InputError(f"{res['folder']}/scene.toml: {exc}")
     rows, problems = [], []
     fields = res["fields"]
     for c in sorted(res["summary"]["cases"], key=case_key):
@@ -233,8 +236,8 @@ def independent_errors(res, scene_file):
             lv = int(c["level"])
             if lv not in meshes or lv not in ref["u"] or not isinstance(c.get("errors"), dict):
                 continue
-            pts, tris, crack = meshes[lv]
-            ours = exact.p1_field_errors(pts, tris, ref["u"][lv], crack, ex)
+            m = meshes[lv]
+            ours = exact.p1_field_errors(m.points, m.tris, ref["u"][lv], m.crack, ex, ranges=m.ranges)
             row = _error_row(tool, c, c["errors"], ours, quantities=("u_l2", "p_l2", "lambda_l2"))
             rows.append(row)
             reported.setdefault(lv, {})[tool] = c["errors"]

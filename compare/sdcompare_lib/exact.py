@@ -8,9 +8,15 @@ What is computed (the quantities of summary.json's ``errors``)
 * ``p_x``       = sqrt(p_l2² + Σ_T h_T² ‖div p_h + f‖²_T),  h_T the longest edge of T
 * ``lambda_l2`` = ‖λ_h − [u]‖_{L²(Γc)}            (λ_h P0 per segment or P1 per node)
 
+Γc is any number of polyline cracks: the crack nodes of all cracks (fields.h5's crack/points, the
+rows of crack.txt) with the segments [k, k+1] WITHIN each crack (crack/segments, cracks.txt; without
+them the nodes form one crack, consecutive nodes joined). A crack's tips are its end nodes (a node in
+one segment only); every tip of every crack gets the tip rules below. On a segment, u on a face is
+evaluated with that segment's normal.
+
 ``solver_case_errors`` takes one solver case (fields.h5 layout, see ``read_h5_case``);
 ``p1_field_errors`` takes a reference solver's P1 field on the cracked mesh (there
-p_h = ∇u_h, constant per triangle, and λ_h = [u_h], piecewise linear along the crack).
+p_h = ∇u_h, constant per triangle, and λ_h = [u_h], piecewise linear along each crack).
 Exact data come from the scene's ``[exact]`` (u, optional px, py, jump) and ``[data] f``, parsed
 with references/common/sdexpr.py; missing px / py are the symbolic derivatives of u
 (``sdexpr.derivative``), a missing jump is u on the + face minus u on the − face with the
@@ -25,7 +31,7 @@ triangle, so data are never evaluated on the crack or on an edge.
 * Regular triangles: Stroud's conical product rule, Gauss–Jacobi (weight 1 − s, n points) ×
   Gauss–Legendre (n points), λ1 = s, λ2 = (1 − s) t: n² points, exact for total degree 2n − 1
   (default n = 8: degree 15).
-* Triangles with a crack tip as a vertex (where u ~ r^{1/2}, ∇u ~ r^{−1/2}): a Duffy transform
+* Triangles with one crack tip as a vertex (where u ~ r^{1/2}, ∇u ~ r^{−1/2}): a Duffy transform
   collapsed at the tip, x = tip + s ((1 − t)(B − tip) + t (C − tip)), followed by s = σ²:
   dA = 2|T| s ds dt = 4|T| σ³ dσ dt, Gauss–Legendre in σ and t (m points each, default m = 16).
   With r = s |d(t)| every term of the singular expansion Σ r^{k/2} φ_k(θ) becomes analytic
@@ -33,31 +39,30 @@ triangle, so data are never evaluated on the crack or on an edge.
   The integrands are therefore analytic on the closed square and Gauss converges exponentially
   (r^{−1} and r^{−1/2}-type integrands to round-off, compare/tests/test_exact.py); polynomials of total
   degree ≤ m − 2 are integrated exactly.
+* Triangles with two or three tips as vertices (a crack of one segment, tips of two cracks): the
+  four midpoint children, each corner child at a tip with the Duffy rule there (weights / 4), the
+  other children treated as the near-tip triangles below.
 * Triangles near a tip but not touching it: split recursively into 4 midpoint children until each
-  piece P satisfies dist(tip, P) ≥ η · diam(P) (default η = 1), then the Stroud rule on each piece.
-  The singularity then lies at least one piece diameter away from every piece, where the n-point
-  rules converge geometrically in n.
-* Crack segments: Gauss–Legendre with n_line points (default 12); the segment at a tip in
-  σ with s = σ² measured from the tip ([u] ~ s^{1/2} becomes analytic).
+  piece P satisfies dist(tip, P) ≥ η · diam(P) (default η = 1) for every tip, then the Stroud rule
+  on each piece. The singularity then lies at least one piece diameter away from every piece, where
+  the n-point rules converge geometrically in n.
+* Crack segments: Gauss–Legendre with n_line points (default 12); a segment ending at a tip in
+  σ with s = σ² measured from the tip ([u] ~ s^{1/2} becomes analytic; a segment that is a whole
+  crack: each half from its tip).
 
 ``Quadrature().doubled()`` doubles n, m, n_line and η; compare/tests/test_exact.py checks that the errors
 of open-exact change by < 1e-10 relative under it.
 """
 import math
-import os
 import sys
 
 import numpy as np
 
-_COMMON = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
-                       "references", "common")
-if _COMMON not in sys.path:
-    sys.path.insert(0, _COMMON)
-import sdexpr  # noqa: E402
+import sdexpr  # the references' shared modules: see sdcompare_lib/__init__.py
 
 __all__ = ["ExactSolution", "Quadrature", "load_scene", "solver_case_errors", "solver_case_errors_h5",
            "read_h5_case", "p1_field_errors", "recover_bubble", "stroud_rule", "tip_rule",
-           "integrate_on_triangle", "SharedEvaluator", "ExactError"]
+           "integrate_on_triangle", "SharedEvaluator", "ExactError", "scene_cracks", "crack_tips"]
 
 CHUNK_POINTS = 1 << 16  # expression evaluation in chunks that stay in cache
 
@@ -245,10 +250,11 @@ class ExactSolution:
     """Exact u, ∇u, [u] and f of a scene.
 
     ``u``, ``px``, ``py``, ``jump``, ``f``: expression strings (or sdexpr trees); px / py default to
-    the symbolic derivatives of u, jump to u⁺ − u⁻ on the faces, f to 0. ``crack``: the scene's
-    segment ((ax, ay), (bx, by)), optional (used for the tips / normal when the data have none)."""
+    the symbolic derivatives of u, jump to u⁺ − u⁻ on the faces, f to 0. ``cracks``: the scene's
+    cracks, a list of polylines [(x, y), ...] (``crack``: one of them, e.g. the old single segment
+    ((ax, ay), (bx, by))), optional: used for the tips when the data have no crack nodes."""
 
-    def __init__(self, u, px=None, py=None, jump=None, f="0", crack=None):
+    def __init__(self, u, px=None, py=None, jump=None, f="0", crack=None, cracks=None):
         self.u_tree = sdexpr.parse(u) if isinstance(u, str) else u
         self.px_tree = (sdexpr.parse(px) if isinstance(px, str) else px) if px is not None \
             else sdexpr.derivative(self.u_tree, "x")
@@ -258,7 +264,9 @@ class ExactSolution:
         self.f_tree = sdexpr.parse(f) if isinstance(f, str) else f
         self._evaluators = {}
         self._jump = SharedEvaluator([self.jump_tree]) if self.jump_tree is not None else None
-        self.crack = None if crack is None else np.asarray(crack, dtype=float)[:, :2]
+        if crack is not None:
+            cracks = [crack] + list(cracks or [])
+        self.cracks = [np.asarray(c, dtype=float)[:, :2] for c in cracks or []]
 
     @classmethod
     def from_scene(cls, scene):
@@ -268,9 +276,8 @@ class ExactSolution:
         ex = scene.get("exact")
         if ex is None:
             raise ExactError("the scene has no [exact] table")
-        crack = scene.get("geometry", {}).get("crack", {}).get("segment")
         return cls(ex["u"], ex.get("px"), ex.get("py"), ex.get("jump"),
-                   scene.get("data", {}).get("f", "0"), crack)
+                   scene.get("data", {}).get("f", "0"), cracks=scene_cracks(scene))
 
     def evaluate(self, x, y, u=True, grad=True, f=False):
         """dict with "u", "px", "py", "f" (those asked for) at the points (x, y), all evaluated in one
@@ -301,29 +308,74 @@ class ExactSolution:
         return self.evaluate(x, y, u=False, grad=False, f=True)["f"]
 
     def on_face(self, xy, normal, side):
-        """u on the face ``side`` (+1 / −1) at crack points xy (K, 2): a coordinate that is exactly
-        zero while the normal has a component in that direction gets the sign of side·ν there
-        (signed zero selects the branch of sign / atan2), as eval_on_face in src/scene/mod.rs."""
+        """u on the face ``side`` (+1 / −1) at crack points xy (K, 2), ν = normal (2,) or one per
+        point (K, 2): a coordinate that is exactly zero while ν has a component in that direction
+        gets the sign of side·ν there (signed zero selects the branch of sign / atan2), as
+        eval_on_face in src/scene/mod.rs."""
         q = np.array(xy, dtype=float)[:, :2]
+        nu = np.broadcast_to(np.asarray(normal, dtype=float), q.shape)
         for d in range(2):
-            if normal[d] != 0.0:
-                z = q[:, d] == 0.0
-                q[z, d] = math.copysign(0.0, side * normal[d])
+            z = (q[:, d] == 0.0) & (nu[:, d] != 0.0)
+            q[z, d] = np.copysign(0.0, side * nu[z, d])
         return self.u(q[:, 0], q[:, 1])
 
     def jump(self, xy, normal):
-        """[u] = u⁺ − u⁻ at crack points xy (K, 2): the scene's jump, else from the faces."""
+        """[u] = u⁺ − u⁻ at crack points xy (K, 2) (normal: (2,) or (K, 2), see on_face): the
+        scene's jump, else from the faces."""
         xy = np.asarray(xy, dtype=float)
         if self._jump is not None:
             return self._jump(xy[:, 0], xy[:, 1])[0]
         return self.on_face(xy, normal, 1.0) - self.on_face(xy, normal, -1.0)
 
 
-def crack_normal(a, b):
-    """ν: the direction a → b turned by +90° (unit)."""
-    d = np.asarray(b, dtype=float)[:2] - np.asarray(a, dtype=float)[:2]
-    d = d / math.hypot(d[0], d[1])
-    return np.array([-d[1], d[0]])
+def scene_cracks(scene):
+    """The cracks of a scene TOML (dict) as a list of polylines: ``[geometry] cracks = [{polyline =
+    [...]}, {segment = [a, b]}, ...]`` or the single ``crack = {segment = [a, b]}`` (or
+    ``{polyline = [...]}``); [] when the scene gives none."""
+    geometry = scene.get("geometry") or {}
+    items = geometry.get("cracks")
+    if items is None:
+        items = [geometry["crack"]] if isinstance(geometry.get("crack"), dict) else []
+    if not isinstance(items, list):
+        raise ExactError("[geometry] cracks must be a list of {polyline = [...]} or {segment = [...]}")
+    out = []
+    for c, item in enumerate(items):
+        pts = (item.get("polyline", item.get("segment")) if isinstance(item, dict) else None)
+        try:
+            pts = np.asarray(pts, dtype=float)
+        except (TypeError, ValueError):
+            pts = None
+        if pts is None or pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 2:
+            raise ExactError(f"[geometry] crack {c} is not a polyline or segment of at least 2 [x, y] points")
+        out.append(pts)
+    return out
+
+
+def consecutive_segments(n_points):
+    """(n − 1, 2) the segments [k, k+1] of one crack of n nodes (fields without crack/segments)."""
+    k = np.arange(max(int(n_points) - 1, 0))
+    return np.column_stack([k, k + 1]).astype(np.int64)
+
+
+def crack_tips(segments, n_points):
+    """Indices of the crack nodes that are tips: in exactly one segment (the ends of each crack)."""
+    degree = np.bincount(np.asarray(segments, dtype=np.int64).ravel(), minlength=int(n_points))
+    return np.flatnonzero(degree == 1)
+
+
+def check_segments(segments, n_points):
+    """(S, 2) int segments, checked: indices among the n_points crack nodes, each node in one or two
+    segments (polylines, none closed, none shared)."""
+    s = np.asarray(segments)
+    if s.ndim != 2 or s.shape[1] != 2 or not np.issubdtype(s.dtype, np.integer):
+        raise ExactError(f"crack segments of shape {s.shape} and type {s.dtype}: expected (S, 2) node indices")
+    s = s.astype(np.int64)
+    if s.size and (s.min() < 0 or s.max() >= n_points):
+        raise ExactError(f"a crack segment refers to node {int(s.max())}, of {n_points} crack nodes")
+    degree = np.bincount(s.ravel(), minlength=int(n_points))
+    if (degree > 2).any() or (degree == 0).any():
+        raise ExactError("crack segments do not form polylines (a node in no segment or in more than two)")
+    return s
 
 
 # ---------------------------------------------------------------------------------------------
@@ -373,11 +425,12 @@ def _children(V):
     return np.stack(kids, axis=1).reshape(-1, 3, 3)
 
 
-def _near_tip_pieces(X, tri_ids, tips, eta, max_depth=40):
-    """Split triangles tri_ids (their vertices X[tri_ids]) until every piece P has
-    dist(tip, P) ≥ eta·diam(P) for every tip. Returns (owner (K,), V (K,3,3) in parent barycentrics)."""
+def _near_tip_pieces(X, tri_ids, tips, eta, max_depth=40, V=None):
+    """Split triangles tri_ids (their vertices X[tri_ids]) — or the pieces V (K,3,3) of them, rows their
+    vertices in parent barycentrics — until every piece P has dist(tip, P) ≥ eta·diam(P) for every tip.
+    Returns (owner (K,), V (K,3,3) in parent barycentrics)."""
     owner = np.asarray(tri_ids, dtype=np.int64)
-    V = np.broadcast_to(np.eye(3), (owner.shape[0], 3, 3)).copy()
+    V = np.broadcast_to(np.eye(3), (owner.shape[0], 3, 3)).copy() if V is None else np.asarray(V, dtype=float)
     done_o, done_V = [], []
     for _ in range(max_depth):
         if owner.shape[0] == 0:
@@ -399,17 +452,13 @@ def _near_tip_pieces(X, tri_ids, tips, eta, max_depth=40):
 
 
 def _tip_corners(P, tris, tips, scale):
-    """(T,) local index of the tip vertex of each triangle, −1 if none."""
-    corner = np.full(tris.shape[0], -1, dtype=np.int64)
+    """(T,3) bool: local vertices of each triangle that are crack tips (of any crack)."""
     X = P[tris]
     tol = 1e-10 * scale
+    at_tip = np.zeros(tris.shape, dtype=bool)
     for tp in tips:
-        hit = np.linalg.norm(X - tp[None, None, :], axis=2) <= tol  # (T,3)
-        rows = hit.any(axis=1)
-        if np.any(corner[rows] >= 0):
-            raise ExactError("a triangle touches both crack tips")
-        corner[rows] = hit[rows].argmax(axis=1)
-    return corner
+        at_tip |= np.linalg.norm(X - tp[None, None, :], axis=2) <= tol
+    return at_tip
 
 
 # ---------------------------------------------------------------------------------------------
@@ -423,8 +472,10 @@ def _point_batches(P, tris, tips, quad, chunk_tris=1024):
     T = tris.shape[0]
     X = P[tris]
     scale = max(1.0, float(np.abs(P).max()))
-    corner = _tip_corners(P, tris, tips, scale) if len(tips) else np.full(T, -1, dtype=np.int64)
-    touching = corner >= 0
+    at_tip = _tip_corners(P, tris, tips, scale) if len(tips) else np.zeros((T, 3), dtype=bool)
+    n_tips = at_tip.sum(axis=1)
+    corner = np.where(n_tips == 1, at_tip.argmax(axis=1), -1)
+    touching = n_tips > 0
     # near-tip non-touching triangles: a cheap conservative test first (the exact test splits)
     near = np.zeros(T, dtype=bool)
     if len(tips):
@@ -438,14 +489,30 @@ def _point_batches(P, tris, tips, quad, chunk_tris=1024):
     Ls, Ws = stroud_rule(quad.n)
     for a in range(0, regular.shape[0], chunk_tris):
         yield regular[a:a + chunk_tris], Ls, Ws
-    tip_ids = np.flatnonzero(touching)
+    rules = [tip_rule(quad.tip_m, c) for c in range(3)]
+    tip_ids = np.flatnonzero(n_tips == 1)
     if tip_ids.shape[0]:
-        rules = [tip_rule(quad.tip_m, c) for c in range(3)]
         yield (tip_ids, np.stack([rules[corner[i]][0] for i in tip_ids]),
                np.stack([rules[corner[i]][1] for i in tip_ids]))
+    # two or three tips: the corner children at a tip get the tip rule, the other children are near
+    multi = np.flatnonzero(n_tips > 1)
+    kids = _children(np.broadcast_to(np.eye(3), (multi.shape[0], 3, 3))).reshape(-1, 4, 3, 3)
+    near_V = [kids[:, 3]]
+    near_owner = [multi]
+    for c in range(3):
+        hit = at_tip[multi, c]
+        if hit.any():  # child c has the parent's corner c as its local vertex c
+            L, W = rules[c]
+            yield (multi[hit], np.einsum("qv,kvb->kqb", L, kids[hit, c]),
+                   np.broadcast_to(0.25 * W, (int(hit.sum()), W.shape[0])))
+        near_V.append(kids[~hit, c])
+        near_owner.append(multi[~hit])
     near_ids = np.flatnonzero(near)
-    if near_ids.shape[0]:
-        owner, V = _near_tip_pieces(X, near_ids, tips, quad.eta)
+    near_V.append(np.broadcast_to(np.eye(3), (near_ids.shape[0], 3, 3)))
+    near_owner.append(near_ids)
+    near_owner = np.concatenate(near_owner)
+    if near_owner.shape[0]:
+        owner, V = _near_tip_pieces(X, near_owner, tips, quad.eta, V=np.concatenate(near_V))
         ratio = np.abs(np.linalg.det(V))  # area(piece) / area(parent)
         yield owner, np.einsum("qv,kvb->kqb", Ls, V), ratio[:, None] * Ws[None, :]
 
@@ -491,41 +558,52 @@ def _domain_errors(P, tris, exact, tips, quad, u_tri=None, p_tri=None, bubble=No
 # Crack integrals
 # ---------------------------------------------------------------------------------------------
 
-def _crack_error(C, lam_fn, exact, normal, quad):
-    """∫_Γc (λ_h − [u])², Γc the polyline C (I+1, 2) whose end points are the tips.
-    lam_fn(k, s) gives λ_h on segment k at local coordinate s ∈ [0, 1] (0 at C[k])."""
-    I = C.shape[0] - 1
+def _crack_error(C, segments, lam_fn, exact, quad):
+    """∫_Γc (λ_h − [u])², Γc the segments (S, 2) [a, b] of the crack nodes C (I, 2), tips the nodes
+    in one segment only. lam_fn(k, s) gives λ_h on segment k at local coordinate s ∈ [0, 1] (0 at
+    C[segments[k, 0]]); [u] is evaluated with the segment's normal."""
     g, wg = gauss_legendre01(quad.line_n)
-    ell = np.linalg.norm(C[1:] - C[:-1], axis=1)
+    a_all, b_all = C[segments[:, 0]], C[segments[:, 1]]
+    ell = np.linalg.norm(b_all - a_all, axis=1)
+    tip = np.zeros(C.shape[0], dtype=bool)
+    tip[crack_tips(segments, C.shape[0])] = True
+    at_a, at_b = tip[segments[:, 0]], tip[segments[:, 1]]
     seg, s, w = [], [], []
-    # interior segments: plain Gauss
-    inner = np.arange(1, I - 1) if I >= 2 else np.arange(0)
-    for k in inner:
+    # segments without a tip end: plain Gauss
+    for k in np.flatnonzero(~at_a & ~at_b):
         seg.append(np.full(g.shape[0], k)), s.append(g), w.append(wg * ell[k])
     # tip ends: s = σ² measured from the tip (from both ends on a lone segment, split at its middle)
-    if I == 1:
-        pieces = [(0, 0.0, 0.5), (0, 1.0, 0.5)]
-    else:
-        pieces = [(0, 0.0, 1.0), (I - 1, 1.0, 1.0)]
+    pieces = []
+    for k in np.flatnonzero(at_a | at_b):
+        if at_a[k] and at_b[k]:
+            pieces += [(k, 0.0, 0.5), (k, 1.0, 0.5)]
+        else:
+            pieces.append((k, 0.0 if at_a[k] else 1.0, 1.0))
     for k, tip_end, length in pieces:
         dist = length * g * g  # distance from the tip end, in segment-local units
         seg.append(np.full(g.shape[0], k))
         s.append(dist if tip_end == 0.0 else 1.0 - dist)
         w.append(2.0 * g * wg * length * ell[k])
+    if not seg:
+        return 0.0
     seg, s, w = np.concatenate(seg), np.concatenate(s), np.concatenate(w)
-    a, b = C[seg], C[seg + 1]
+    a, b = a_all[seg], b_all[seg]
     xy = a + s[:, None] * (b - a)
-    d = lam_fn(seg, s) - exact.jump(xy, normal)
+    normals = np.column_stack([a[:, 1] - b[:, 1], b[:, 0] - a[:, 0]]) / ell[seg][:, None]
+    d = lam_fn(seg, s) - exact.jump(xy, normals)
     return float(np.dot(w, d * d))
 
 
-def _lambda_fn(lam, I):
+def _lambda_fn(lam, segments, n_points):
+    """λ_h(k, s) on segment k: P0 (one value per segment, in the order of `segments`) or P1 (one per
+    crack node)."""
     lam = np.asarray(lam, dtype=float)
-    if lam.shape[0] == I:
+    if lam.shape[0] == segments.shape[0]:
         return lambda k, s: lam[k]
-    if lam.shape[0] == I + 1:
-        return lambda k, s: (1.0 - s) * lam[k] + s * lam[k + 1]
-    raise ExactError(f"lambda has {lam.shape[0]} values for {I} crack segments")
+    if lam.shape[0] == n_points:
+        return lambda k, s: (1.0 - s) * lam[segments[k, 0]] + s * lam[segments[k, 1]]
+    raise ExactError(f"lambda has {lam.shape[0]} values for {segments.shape[0]} crack segments and "
+                     f"{n_points} crack nodes")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -544,26 +622,29 @@ def recover_bubble(points, triangles, u, p):
     return 14.0 / 9.0 * gu - 14.0 / 27.0 * np.asarray(p, dtype=float)[:, :2][t].sum(axis=1)
 
 
-def _tips_and_normal(crack_points, exact):
+def _crack_geometry(crack_points, crack_segments, exact):
+    """(C (I, 2) crack nodes or None, segments (S, 2) or None, tips [(2,)...]): the nodes and segments
+    of the data (no segments: one crack of consecutive nodes), else the tips of exact.cracks."""
     if crack_points is not None and len(crack_points) >= 2:
         C = np.asarray(crack_points, dtype=float)[:, :2]
-        a, b = C[0], C[-1]
-    elif exact.crack is not None:
-        a, b = exact.crack[0], exact.crack[1]
-    else:
-        raise ExactError("no crack geometry: give crack_points or an ExactSolution with crack")
-    return [a, b], crack_normal(a, b)
+        segments = (consecutive_segments(C.shape[0]) if crack_segments is None
+                    else check_segments(crack_segments, C.shape[0]))
+        return C, segments, list(C[crack_tips(segments, C.shape[0])])
+    if exact.cracks:
+        return None, None, [p for c in exact.cracks for p in (c[0], c[-1])]
+    raise ExactError("no crack geometry: give crack_points or an ExactSolution with cracks")
 
 
 def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exact, quad=None,
-                       p_mass=None):
+                       p_mass=None, crack_segments=None):
     """Errors of one solver case against ``exact`` (an ExactSolution).
 
     points (N,2|3), triangles (T,3) of the case mesh (the cracked mesh for the broken u space, the
     plain mesh for the continuous one; u is P1 per triangle on it), u (N,), p (N,2|3) vertex values
     of p_h, p_bubble (T,2) its bubble coefficients (b_T = 27 λ0λ1λ2, triangle order of the mesh;
-    None: recovered from u and p by ``recover_bubble``), crack_points (I+1,2|3) from tip A to tip B,
-    lam (I,) per segment or (I+1,) per node. Any of u, p, lam may be None (its errors are None).
+    None: recovered from u and p by ``recover_bubble``), crack_points (I,2|3) the nodes of every crack,
+    crack_segments (S,2) the segments within each crack (None: one crack, consecutive nodes), lam (S,)
+    per segment or (I,) per node. Any of u, p, lam may be None (its errors are None).
     p_mass: "consistent" (p_bubble required: ExactError without it), "lumped" (p_h is P1 without
     bubble: bubble 0, and a stored p_bubble is an ExactError) or None (as stored, else recovered).
 
@@ -572,7 +653,7 @@ def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exa
     quad = quad or Quadrature()
     P = np.asarray(points, dtype=float)[:, :2]
     t = np.asarray(triangles, dtype=np.int64)
-    tips, normal = _tips_and_normal(crack_points, exact)
+    C, segments, tips = _crack_geometry(crack_points, crack_segments, exact)
     u_tri = None if u is None else np.asarray(u, dtype=float)[t]
     p_tri, bub, bsrc = None, None, None
     if p_mass not in (None, "consistent", "lumped"):
@@ -601,14 +682,16 @@ def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exa
            "p_x": None if p is None else math.sqrt(sp + sd),
            "lambda_l2": None, "bubble": bsrc}
     if lam is not None:
-        C = np.asarray(crack_points, dtype=float)[:, :2]
-        out["lambda_l2"] = math.sqrt(_crack_error(C, _lambda_fn(lam, C.shape[0] - 1), exact, normal, quad))
+        if C is None:
+            raise ExactError("lambda without crack points")
+        out["lambda_l2"] = math.sqrt(_crack_error(C, segments, _lambda_fn(lam, segments, C.shape[0]), exact,
+                                                  quad))
     return out
 
 
 def read_h5_case(h5, case):
     """Datasets of /cases/CASE in fields.h5 (an open h5py File or a path): dict(points, triangles,
-    u, p, p_bubble, crack_points, lam), missing ones None."""
+    u, p, p_bubble, crack_points, crack_segments, lam), missing ones None."""
     import h5py
 
     own = not isinstance(h5, h5py.File)
@@ -621,7 +704,7 @@ def read_h5_case(h5, case):
 
         return {"points": get("mesh/points"), "triangles": get("mesh/triangles", np.int64), "u": get("u"),
                 "p": get("p"), "p_bubble": get("p_bubble"), "crack_points": get("crack/points"),
-                "lam": get("crack/lambda")}
+                "crack_segments": get("crack/segments", np.int64), "lam": get("crack/lambda")}
     finally:
         if own:
             f.close()
@@ -631,14 +714,15 @@ def solver_case_errors_h5(h5, case, exact, quad=None, p_mass=None):
     """``solver_case_errors`` of the case CASE of fields.h5 (open h5py File or path)."""
     d = read_h5_case(h5, case)
     return solver_case_errors(d["points"], d["triangles"], d["u"], d["p"], d["p_bubble"], d["crack_points"],
-                              d["lam"], exact, quad, p_mass=p_mass)
+                              d["lam"], exact, quad, p_mass=p_mass, crack_segments=d["crack_segments"])
 
 
-def p1_field_errors(points, triangles, u, crack_pairs, exact, quad=None):
+def p1_field_errors(points, triangles, u, crack_pairs, exact, quad=None, ranges=None):
     """Errors of a P1 field u (N,) on a cracked mesh (a reference solver's solution):
-    crack_pairs (I+1,2) the (plus, minus) vertex pairs from tip A to tip B (a tip: the same index
-    twice). p_h = ∇u_h (constant per triangle), λ_h = [u_h] = u[plus] − u[minus] linear along the
-    crack. Returns {"u_l2", "p_l2", "lambda_l2"}."""
+    crack_pairs (I,2) the (plus, minus) vertex pairs of crack.txt (a tip: the same index twice),
+    ranges [(first, n)] its cracks (cracks.txt; None: one crack of all rows). p_h = ∇u_h (constant
+    per triangle), λ_h = [u_h] = u[plus] − u[minus] linear along each crack.
+    Returns {"u_l2", "p_l2", "lambda_l2"}."""
     quad = quad or Quadrature()
     P = np.asarray(points, dtype=float)[:, :2]
     t = np.asarray(triangles, dtype=np.int64)
@@ -647,13 +731,15 @@ def p1_field_errors(points, triangles, u, crack_pairs, exact, quad=None):
     C = P[pairs[:, 0]]
     if np.abs(P[pairs[:, 1]] - C).max() > 1e-12 * max(1.0, float(np.abs(P).max())):
         raise ExactError("crack pairs are not at the same positions")
-    tips, normal = [C[0], C[-1]], crack_normal(C[0], C[-1])
+    segments = consecutive_segments(len(pairs)) if ranges is None else np.concatenate(
+        [consecutive_segments(n) + first for first, n in ranges])
+    tips = list(C[crack_tips(segments, C.shape[0])])
     _, _, G, _ = _geometry(P, t)
     grad = np.einsum("tv,tvd->td", uu[t], G)
     p_tri = np.repeat(grad[:, None, :], 3, axis=1)
     su, sp, _ = _domain_errors(P, t, exact, tips, quad, uu[t], p_tri, None, want_div=False)
     jump_h = uu[pairs[:, 0]] - uu[pairs[:, 1]]
-    sl = _crack_error(C, _lambda_fn(jump_h, C.shape[0] - 1), exact, normal, quad)
+    sl = _crack_error(C, segments, _lambda_fn(jump_h, segments, C.shape[0]), exact, quad)
     return {"u_l2": math.sqrt(su), "p_l2": math.sqrt(sp), "lambda_l2": math.sqrt(sl)}
 
 

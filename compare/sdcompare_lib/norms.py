@@ -2,8 +2,16 @@
 
 Both fields are P1 on the same triangles, so ‖a − b‖²_{L²(T)} = dᵀ M_T d with the exact P1 mass
 matrix M_T = |T|/12 (1 + δ_ij), i.e. |T|/12 (Σ d_i² + (Σ d_i)²). No interpolation, no quadrature.
-On a crack polyline (1D): P0 per segment gives Σ ℓ_k d_k², P1 per node gives
-Σ ℓ_k/3 (d_a² + d_a d_b + d_b²).
+On the cracks (1D): P0 per segment gives Σ ℓ_k d_k², P1 per node gives
+Σ ℓ_k/3 (d_a² + d_a d_b + d_b²), summed over the segments [a, b] WITHIN each crack: `segments`
+(S, 2), fields.h5's crack/segments, node indices into the crack points (all cracks' nodes
+concatenated); None (a file written before several cracks) joins consecutive points (one crack).
+A λ with one value per segment is P0 (in the order of `segments`), one per point P1.
+
+Nested meshes (prolong_to_fine): a fine triangle is located in the coarse triangle that contains it
+by the meshes' kind (the export's mesh.json "kind"): "structured", the SW–NE grid, by its centroid's
+grid cell (locate_structured); "refined", uniform refinements with the numbering 4t + c (child c of
+triangle t), by t_coarse = t_fine // 4^(refinements) (locate_refined).
 """
 import numpy as np
 
@@ -70,39 +78,63 @@ def p1_l2_diff_two_meshes(points_a, tris_a, a, points_b, tris_b, b):
     return np.sqrt(_local_sq(triangle_areas(points_a, ta), va - vb))
 
 
-def segment_lengths(crack_points):
+def crack_segments(crack_points, segments=None):
+    """(S, 2) the segments of the crack points: `segments` checked (node indices in range), or for
+    None the consecutive pairs [k, k+1] (one crack)."""
+    n = np.asarray(crack_points).shape[0]
+    if segments is None:
+        k = np.arange(max(n - 1, 0))
+        return np.column_stack([k, k + 1]).astype(np.int64)
+    s = np.asarray(segments)
+    if s.ndim != 2 or s.shape[1] != 2 or not np.issubdtype(s.dtype, np.integer):
+        raise NormError(f"crack segments of shape {s.shape} and type {s.dtype}: expected (S, 2) node indices")
+    if s.size and (s.min() < 0 or s.max() >= n):
+        raise NormError(f"a crack segment refers to node {int(s.max())}, of {n} crack points")
+    return s.astype(np.int64)
+
+
+def segment_lengths(crack_points, segments=None):
+    """(S,) the lengths of the crack segments (see crack_segments)."""
     c = np.asarray(crack_points, dtype=float)[:, :2]
-    return np.linalg.norm(np.diff(c, axis=0), axis=1)
+    s = crack_segments(c, segments)
+    return np.linalg.norm(c[s[:, 1]] - c[s[:, 0]], axis=1)
 
 
-def crack_l2_norm(crack_points, lam):
-    """‖λ‖_{L²(Γc)}: P0 per segment if len(λ) = #segments, P1 per node if len(λ) = #nodes."""
-    ell = segment_lengths(crack_points)
+def _segment_values(crack_points, lam, segments):
+    """(ℓ (S,), λ) with λ (S,) for P0 or the end values (a, b) per segment for P1."""
+    s = crack_segments(crack_points, segments)
+    ell = segment_lengths(crack_points, s)
     lam = np.asarray(lam, dtype=float)
-    if lam.shape[0] == ell.shape[0]:
-        return float(np.sqrt((ell * lam ** 2).sum()))
-    if lam.shape[0] == ell.shape[0] + 1:
-        a, b = lam[:-1], lam[1:]
-        return float(np.sqrt((ell / 3.0 * (a * a + a * b + b * b)).sum()))
-    raise NormError(f"lambda has {lam.shape[0]} values for {ell.shape[0]} segments")
+    if lam.shape[0] == s.shape[0]:
+        return ell, lam
+    if lam.shape[0] == np.asarray(crack_points).shape[0]:
+        return ell, (lam[s[:, 0]], lam[s[:, 1]])
+    raise NormError(f"lambda has {lam.shape[0]} values for {s.shape[0]} segments and "
+                    f"{np.asarray(crack_points).shape[0]} nodes")
 
 
-def crack_l2_diff(crack_points, lam_a, lam_b):
+def crack_l2_norm(crack_points, lam, segments=None):
+    """‖λ‖_{L²(Γc)}: P0 per segment if len(λ) = #segments, P1 per node if len(λ) = #nodes."""
+    ell, v = _segment_values(crack_points, lam, segments)
+    if not isinstance(v, tuple):
+        return float(np.sqrt((ell * v ** 2).sum()))
+    a, b = v
+    return float(np.sqrt((ell / 3.0 * (a * a + a * b + b * b)).sum()))
+
+
+def crack_l2_diff(crack_points, lam_a, lam_b, segments=None):
     la, lb = np.asarray(lam_a, dtype=float), np.asarray(lam_b, dtype=float)
     if la.shape != lb.shape:
         raise NormError("lambda fields of different kinds (P0 vs P1)")
-    return crack_l2_norm(crack_points, la - lb)
+    return crack_l2_norm(crack_points, la - lb, segments)
 
 
-def crack_integral(crack_points, lam):
+def crack_integral(crack_points, lam, segments=None):
     """∫_Γc λ ds (P0 or P1, exact)."""
-    ell = segment_lengths(crack_points)
-    lam = np.asarray(lam, dtype=float)
-    if lam.shape[0] == ell.shape[0]:
-        return float((ell * lam).sum())
-    if lam.shape[0] == ell.shape[0] + 1:
-        return float((ell * 0.5 * (lam[:-1] + lam[1:])).sum())
-    raise NormError(f"lambda has {lam.shape[0]} values for {ell.shape[0]} segments")
+    ell, v = _segment_values(crack_points, lam, segments)
+    if not isinstance(v, tuple):
+        return float((ell * v).sum())
+    return float((ell * 0.5 * (v[0] + v[1])).sum())
 
 
 def p1_vs_piecewise_constant_l2(points, tris, values, const):
@@ -142,17 +174,20 @@ def p1_gradients(points, tris, values):
     return np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det])
 
 
-def crack_diff_vs_p1(crack_points, lam, nodal):
+def crack_diff_vs_p1(crack_points, lam, nodal, segments=None):
     """‖λ − g‖_{L²(Γc)} with g P1 on the crack nodes and λ P0 per segment or P1 per node (exact:
     ∫_0^1 (c − a(1−s) − b s)² = c² − c(a+b) + (a² + ab + b²)/3 per unit length)."""
-    ell = segment_lengths(crack_points)
+    s = crack_segments(crack_points, segments)
+    ell = segment_lengths(crack_points, s)
     lam = np.asarray(lam, dtype=float)
     g = np.asarray(nodal, dtype=float)
-    a, b = g[:-1], g[1:]
+    if g.shape[0] != np.asarray(crack_points).shape[0]:
+        raise NormError(f"{g.shape[0]} nodal values for {np.asarray(crack_points).shape[0]} crack nodes")
+    a, b = g[s[:, 0]], g[s[:, 1]]
     if lam.shape[0] == ell.shape[0]:
         c = lam
         return float(np.sqrt(np.maximum((ell * (c * c - c * (a + b) + (a * a + a * b + b * b) / 3)).sum(), 0.0)))
-    return crack_l2_diff(crack_points, lam, g)
+    return crack_l2_diff(crack_points, lam, g, s)
 
 
 def locate_structured(points, tris, xy):
@@ -172,31 +207,69 @@ def locate_structured(points, tris, xy):
     return 2 * (j * nx + i) + upper.astype(np.int64)
 
 
-def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris):
-    """Values (T_f,3[,C]) of a coarse P1 field at the corners of every triangle of a nested finer
-    mesh: each fine triangle lies in one coarse triangle (found from its centroid), whose own
-    corner values are used, so a field broken across the crack is evaluated on the right side."""
-    cp = np.asarray(coarse_points, dtype=float)[:, :2]
-    ct = np.asarray(coarse_tris, dtype=np.int64)
-    fp = np.asarray(fine_points, dtype=float)[:, :2]
-    ft = np.asarray(fine_tris, dtype=np.int64)
-    corners = fp[ft]  # (T,3,2)
-    owner = locate_structured(cp, ct, corners.mean(axis=1))
+MESH_KINDS = ("structured", "refined")
+NESTING_TOLERANCE = 1e-9  # barycentric coordinates of a fine corner in its coarse ancestor
+
+
+def locate_refined(n_coarse, n_fine, refinements):
+    """Index of the coarse triangle holding each fine triangle of `refinements` uniform refinements
+    numbered 4t + c: t_fine // 4^refinements (the counts must match)."""
+    k = int(refinements)
+    if k < 0 or n_fine != n_coarse * 4 ** k:
+        raise NormError(f"{n_fine} fine triangles are not {k} uniform refinement(s) of {n_coarse} "
+                        "coarse triangles")
+    return np.arange(n_fine, dtype=np.int64) // 4 ** k
+
+
+def _barycentrics(cp, ct, owner, corners):
+    """(T,3,3) barycentric coordinates of the fine corners (T,3,2) in their coarse owners."""
     a, b, c = cp[ct[owner, 0]], cp[ct[owner, 1]], cp[ct[owner, 2]]
     e1, e2 = b - a, c - a
     det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
     r = corners - a[:, None, :]
     l1 = (r[..., 0] * e2[:, None, 1] - r[..., 1] * e2[:, None, 0]) / det[:, None]
     l2 = (e1[:, None, 0] * r[..., 1] - e1[:, None, 1] * r[..., 0]) / det[:, None]
-    lam = np.stack([1 - l1 - l2, l1, l2], axis=2)  # (T,3,3)
+    return np.stack([1 - l1 - l2, l1, l2], axis=2)
+
+
+def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris,
+                    kind="structured", refinements=None):
+    """Values (T_f,3[,C]) of a coarse P1 field at the corners of every triangle of a nested finer
+    mesh: each fine triangle lies in one coarse triangle, whose own corner values are used, so a
+    field broken across a crack is evaluated on the right side. kind: "structured" (the coarse
+    triangle found from the fine centroid by locate_structured) or "refined" (`refinements` uniform
+    refinements from the coarse to the fine mesh: locate_refined); a fine corner outside its coarse
+    triangle (e.g. triangles not in the 4t + c order) is a NormError."""
+    cp = np.asarray(coarse_points, dtype=float)[:, :2]
+    ct = np.asarray(coarse_tris, dtype=np.int64)
+    fp = np.asarray(fine_points, dtype=float)[:, :2]
+    ft = np.asarray(fine_tris, dtype=np.int64)
+    corners = fp[ft]  # (T,3,2)
+    if kind == "structured":
+        owner = locate_structured(cp, ct, corners.mean(axis=1))
+    elif kind == "refined":
+        if refinements is None:
+            raise NormError("refined meshes: the number of refinements from the coarse level is needed")
+        owner = locate_refined(len(ct), len(ft), refinements)
+    else:
+        raise NormError(f"unknown mesh kind {kind!r} (expected one of {', '.join(MESH_KINDS)})")
+    lam = _barycentrics(cp, ct, owner, corners)
+    outside = np.flatnonzero((lam < -NESTING_TOLERANCE).any(axis=(1, 2)))
+    if len(outside):
+        t = int(outside[0])
+        raise NormError(f"fine triangle {t} does not lie in coarse triangle {int(owner[t])} ({kind} "
+                        f"nesting; {len(outside)} such triangles)")
     v = np.asarray(coarse_values, dtype=float)[ct[owner]]  # (T,3[,C])
     if v.ndim == 2:
         return np.einsum("tkm,tm->tk", lam, v)
     return np.einsum("tkm,tmc->tkc", lam, v)
 
 
-def prolonged_l2_diff(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris, fine_values):
-    """‖u_coarse − u_fine‖_{L²} exactly on the fine triangles (nested meshes, both P1)."""
-    vc = prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris)
+def prolonged_l2_diff(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris, fine_values,
+                      kind="structured", refinements=None):
+    """‖u_coarse − u_fine‖_{L²} exactly on the fine triangles (nested meshes, both P1; kind and
+    refinements: see prolong_to_fine)."""
+    vc = prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris, kind,
+                         refinements)
     vf = np.asarray(fine_values, dtype=float)[np.asarray(fine_tris, dtype=np.int64)]
     return float(np.sqrt(_local_sq(triangle_areas(fine_points, fine_tris), vc - vf)))

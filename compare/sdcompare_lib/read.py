@@ -2,8 +2,11 @@
 import json
 import math
 import os
+from dataclasses import dataclass
 
 import numpy as np
+
+import sdexport  # the references' shared reader of the mesh export's cracks (sdcompare_lib/__init__.py)
 
 REFERENCE_TOOLS = ("dolfinx", "freefem")
 
@@ -95,7 +98,9 @@ class Fields:
         return f"meshes/{key}" in self.h5
 
     def case(self, grid):
-        """dict(points, tris, u, p, crack_points, lam); missing datasets are None."""
+        """dict(points, tris, u, p, p_bubble, crack_points, crack_segments, lam); missing datasets are
+        None (crack_segments: the segments within each crack, absent in files written before several
+        cracks, whose crack points form one crack)."""
         g = self.h5[f"cases/{grid}"]
         mesh = g["mesh"]
         pts = np.asarray(mesh["points"][()], dtype=float)
@@ -106,6 +111,8 @@ class Fields:
 
         return {"points": pts, "tris": tris, "u": get("u"), "p": get("p"),
                 "p_bubble": get("p_bubble"), "crack_points": get("crack/points"),
+                "crack_segments": (np.asarray(g["crack/segments"][()], dtype=np.int64)
+                                   if "crack/segments" in g else None),
                 "lam": get("crack/lambda")}
 
 
@@ -124,19 +131,51 @@ def load_reference(folder):
             "mesh": load_export_meshes(os.path.join(os.path.dirname(folder), "mesh"), sorted(u))}
 
 
+@dataclass
+class ExportLevel:
+    """One level of the mesh export the references solved on: the cracked mesh (points (N,2),
+    tris (T,3)), crack (I,2) the (plus, minus) rows of crack.txt, ranges [(first, n)] its cracks
+    (cracks.txt), kind "structured" | "refined" (mesh.json; references/common/sdexport.py)."""
+
+    level: int
+    points: np.ndarray
+    tris: np.ndarray
+    crack: np.ndarray
+    ranges: list
+    kind: str = sdexport.DEFAULT_KIND
+
+    @classmethod
+    def one_crack(cls, level, points, tris, crack):
+        """A level of an export written before issue 16: the rows of crack.txt form one crack on a
+        structured grid."""
+        return cls(int(level), points, tris, np.asarray(crack, dtype=np.int64), [(0, len(crack))])
+
+    def segments(self):
+        """(S, 2) the crack.txt row pairs [k, k+1] within each crack."""
+        return sdexport.segments_of(self.ranges)
+
+
 def load_export_meshes(export, levels):
     """The cracked meshes of the `sdcrack mesh` export the references solved on (written by
-    `sdcrack run` into RESULTS/<scene>/mesh): {level: (points (N,2), triangles (T,3), crack (I+1,2))}."""
+    `sdcrack run` into RESULTS/<scene>/mesh): {level: ExportLevel}. A level whose vertices.txt,
+    triangles.txt or crack.txt is missing or unreadable is left out (completeness reports it); a
+    malformed crack layout (cracks.txt, crack_normals.txt, tips) or mesh.json kind is an InputError."""
     meshes = {}
     for lvl in levels:
         d = os.path.join(export, f"level{lvl}")
         try:
             pts = np.loadtxt(os.path.join(d, "vertices.txt"), dtype=float, ndmin=2)
             tris = np.loadtxt(os.path.join(d, "triangles.txt"), dtype=np.int64, ndmin=2)
-            crack = np.loadtxt(os.path.join(d, "crack.txt"), dtype=np.int64, ndmin=2)
+            np.loadtxt(os.path.join(d, "crack.txt"), dtype=np.int64, ndmin=2)
         except (OSError, ValueError):
             continue
-        meshes[lvl] = (pts, tris, crack)
+        try:
+            kind = sdexport.read_kind(sdexport.read_mesh_json(d), os.path.join(d, "mesh.json"))
+            # copies=False: a field on a mesh without crack copies (plus == minus everywhere) is read too
+            layout = sdexport.read_layout(d, pts[:, :2], len(pts), copies=False)
+        except sdexport.ExportError as exc:
+            raise InputError(str(exc))
+        meshes[lvl] = ExportLevel(int(lvl), pts, tris, layout.pairs, layout.ranges, kind)
     return meshes
 
 

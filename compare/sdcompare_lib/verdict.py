@@ -153,8 +153,8 @@ def compute_delta_limit(scene, cases, fields):
             ("p_l2", "p", lambda f, g: norms.p1_l2_diff(f["points"], f["tris"], f["p"], g["p"]),
              lambda f: norms.p1_l2_norm(f["points"], f["tris"], f["p"])),
             ("lambda_l2", "lam",
-             lambda f, g: norms.crack_l2_diff(f["crack_points"], f["lam"], g["lam"]),
-             lambda f: norms.crack_l2_norm(f["crack_points"], f["lam"])),
+             lambda f, g: norms.crack_l2_diff(f["crack_points"], f["lam"], g["lam"], f["crack_segments"]),
+             lambda f: norms.crack_l2_norm(f["crack_points"], f["lam"], f["crack_segments"])),
         ]
         for q, name, diff, nrm in specs:
             if base[name] is None or any(g[name] is None for _, g in others):
@@ -201,18 +201,40 @@ def compute_agreement(scene, cases, fields, refs):
     return out
 
 
+def _prolongation(meshes, coarse, fine):
+    """(kind, refinements) of prolong_to_fine from export level `coarse` to level `fine`: the levels'
+    mesh.json kind ("structured": located by coordinates; "refined": 4t + c numbering, fine − coarse
+    refinements); levels of different kinds are a NormError."""
+    kind = meshes[fine].kind
+    if coarse in meshes and meshes[coarse].kind != kind:
+        raise norms.NormError(f"mesh export levels {coarse} and {fine} are of kinds "
+                              f"{meshes[coarse].kind} and {kind}")
+    return kind, fine - coarse
+
+
+def _check_same_cracks(f, nodes, segments):
+    """NormError unless the solver case's crack points are the export's crack nodes (crack.txt's
+    order) and its crack segments, when stored, the export's: λ_h is indexed by them."""
+    cp = f.get("crack_points")
+    if cp is None or cp.shape[0] != nodes.shape[0] or \
+            np.abs(cp[:, :2] - nodes).max() > 1e-9 * max(1.0, float(np.abs(nodes).max())):
+        raise norms.NormError("the solver's crack points are not the mesh export's crack nodes")
+    if f.get("crack_segments") is not None and not np.array_equal(f["crack_segments"], segments):
+        raise norms.NormError("the solver's crack segments are not the mesh export's (cracks.txt)")
+
+
 def _solver_vs_reference(scene, cases, fields, ref, tool):
     """e_u, e_p (p with its bubble; the lumped p has none), e_λ of every solver case against the
     reference of the same level, and e_u, e_p (P1 part of p) against the reference's finest level (nested meshes: the
-    coarse field is evaluated exactly at the fine triangles' corners), all exact on shared
-    (sub)triangles."""
+    coarse field is evaluated exactly at the fine triangles' corners, the fine triangles located in
+    the coarse ones by the export's mesh kind), all exact on shared (sub)triangles."""
     out = []
     meshes = ref.get("mesh") or {}
     if not meshes:
         return [{"scene": scene, "kind": "solver_vs_reference", "reference": tool, "e_u": None,
                  "note": "mesh export not found next to the reference results"}]
     finest = max(meshes)
-    fpts, ftris, fcrack = meshes[finest]
+    fpts, ftris = meshes[finest].points, meshes[finest].tris
     uf = ref["u"][finest]
     grad_f = norms.p1_gradients(fpts, ftris, uf)
     for c in sorted((c for c in cases if fields.has_case(c.get("fields_grid"))), key=case_key):
@@ -220,7 +242,8 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
         f = fields.case(c["fields_grid"])
         if f["u"] is None or lvl not in meshes or lvl not in ref["u"]:
             continue
-        pts, tris, crack = meshes[lvl]
+        m = meshes[lvl]
+        pts, tris, crack = m.points, m.tris, m.crack
         uref = ref["u"][lvl]
         row = {"scene": scene, "kind": "solver_vs_reference", "reference": tool, "level": lvl,
                "u_space": c["u_space"], "multiplier": c["multiplier"], "p_mass": p_mass(c),
@@ -243,11 +266,16 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
                 row["e_p"] = None
                 row["note"] = "no p_bubble in fields.h5: e_p (MINI p) not computed"
             jump = uref[crack[:, 0]] - uref[crack[:, 1]]
-            row["e_lambda"] = (None if f.get("lam") is None
-                               else norms.crack_diff_vs_p1(pts[crack[:, 0]], f["lam"], jump))
-            row["e_u_finest"] = norms.prolonged_l2_diff(f["points"], f["tris"], f["u"], fpts, ftris, uf)
+            if f.get("lam") is None:
+                row["e_lambda"] = None
+            else:
+                _check_same_cracks(f, pts[crack[:, 0]], m.segments())
+                row["e_lambda"] = norms.crack_diff_vs_p1(pts[crack[:, 0]], f["lam"], jump, m.segments())
+            nesting = _prolongation(meshes, lvl, finest)
+            row["e_u_finest"] = norms.prolonged_l2_diff(f["points"], f["tris"], f["u"], fpts, ftris, uf,
+                                                        *nesting)
             if p is not None:
-                pf = norms.prolong_to_fine(f["points"], f["tris"], p, fpts, ftris)
+                pf = norms.prolong_to_fine(f["points"], f["tris"], p, fpts, ftris, *nesting)
                 area = norms.triangle_areas(fpts, ftris)
                 row["e_p_finest"] = float(np.sqrt(norms._local_sq(area, pf - grad_f[:, None, :])))
         except norms.NormError as exc:
@@ -286,7 +314,7 @@ def compute_gci(scene, cases, fields, has_exact):
             h.append(float(c["h"]))
             unorm.append(norms.p1_l2_norm(f["points"], f["tris"], f["u"]) if f["u"] is not None
                          else None)
-            lint.append(norms.crack_integral(f["crack_points"], f["lam"])
+            lint.append(norms.crack_integral(f["crack_points"], f["lam"], f["crack_segments"])
                         if f["lam"] is not None and f["crack_points"] is not None else None)
         for name, vals in (("u_h_l2_norm", unorm), ("lambda_h_integral", lint)):
             if any(v is None for v in vals):

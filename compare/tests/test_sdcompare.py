@@ -815,8 +815,9 @@ def test_lumped_reference_distance_has_no_bubble(tmp_path):
         p = f[f"{src}/p"][()][:, :2]
     c = next(c for c in summary["cases"] if c["fields_grid"] == "level1-broken-M1-delta0")
     lumped = dict(c, p_mass="lumped", fields_grid="level1-broken-M1-lumped-delta0")
-    ref = {"u": {1: u1 + 1e-3}, "mesh": {1: (pts[:, :2], tris, np.array([[0, 0]]))}}
     from sdcompare_lib import read
+
+    ref = {"u": {1: u1 + 1e-3}, "mesh": {1: read.ExportLevel.one_crack(1, pts[:, :2], tris, np.array([[0, 0]]))}}
 
     fields = read.Fields(os.path.join(d, "fields.h5"))
     try:

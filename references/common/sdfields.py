@@ -4,12 +4,15 @@ ParaView, meshio and the compare tool read solver and references alike.
 
     fields.h5   /meshes/level{L}/points (N,3)   /meshes/level{L}/triangles (T,3) int64
                 /cases/level{L}/<point field>   scalar (N,) or vector (N,3)
-                /cases/level{L}/crack/points (I+1,3)  /crack/segments (I,2)  /crack/<crack field> (I+1,)
+                /cases/level{L}/crack/points (I,3)  /crack/segments (S,2)  /crack/<crack field> (I,)
+                (the crack nodes of every crack in crack.txt's row order; segments: the row pairs
+                [k, k+1] within each crack, none joining two cracks, S = I − number of cracks)
                 every dataset has the attributes "level" (int), "tool" (str) and, when the caller
                 gives it, "h" (float, the level's mesh size); the file has the attribute "tool"
     fields/level{L}.xdmf         XDMF 3, the Triangle grid "level{L}" with the point fields
-    fields/level{L}.crack.xdmf   XDMF 3, the Polyline grid "level{L}/crack" with the crack fields
-                                 (one grid a file: meshio reads them, ParaView opens them as they are)
+    fields/level{L}.crack.xdmf   XDMF 3, the Polyline grid "level{L}/crack" with the crack fields, one
+                                 line cell per segment (one grid a file: meshio reads them, ParaView
+                                 opens them as they are)
 
 There is no top-level fields.xdmf: a spatial collection of all levels' grids (they overlap) showed
 as one grey square in ParaView and meshio.read could not read it.
@@ -43,11 +46,19 @@ def _mesh_grid(h5name, level, fs):
     return "\n".join(parts + ["</Grid>"])
 
 
+def _segments(fs):
+    """(S, 2) the crack segments of a field set: its "segments", else consecutive rows (one crack)."""
+    if fs.get("segments") is not None:
+        return np.asarray(fs["segments"], dtype=np.int64).reshape(-1, 2)
+    m = len(fs["crack"])
+    return np.column_stack([np.arange(m - 1), np.arange(1, m)]).astype(np.int64)
+
+
 def _crack_grid(h5name, level, fs):
-    name, m = f"level{level}", len(fs["crack"])
+    name, m, s = f"level{level}", len(fs["crack"]), len(_segments(fs))
     parts = [f'<Grid Name="{name}/crack" GridType="Uniform">',
-             f'<Topology TopologyType="Polyline" NumberOfElements="{m - 1}" NodesPerElement="2">'
-             f"{_item(h5name, (m - 1, 2), 'Int', f'/cases/{name}/crack/segments')}</Topology>",
+             f'<Topology TopologyType="Polyline" NumberOfElements="{s}" NodesPerElement="2">'
+             f"{_item(h5name, (s, 2), 'Int', f'/cases/{name}/crack/segments')}</Topology>",
              f'<Geometry GeometryType="XYZ">{_item(h5name, (m, 3), "Float", f"/cases/{name}/crack/points")}</Geometry>']
     for key, values in fs["crack_fields"].items():
         parts.append(_attribute(h5name, key, m, f"/cases/{name}/crack/{key}", np.asarray(values)))
@@ -63,9 +74,10 @@ def write_fields(folder, field_sets, tool):
     """Writes the files into `folder` (the caller's temporary output folder); `tool` ("dolfinx",
     "freefem") goes into the HDF5 attributes.
 
-    field_sets: [(level, {"xy": (N,2), "tri": (T,3), "crack": (I+1,2) (+, −) vertex pairs,
-                          "point": {name: (N,) or (N,2)}, "crack_fields": {name: (I+1,)},
-                          "h": mesh size (optional)})]."""
+    field_sets: [(level, {"xy": (N,2), "tri": (T,3), "crack": (I,2) (+, −) vertex pairs (crack.txt),
+                          "segments": (S,2) row pairs within each crack (optional: absent, the
+                          rows form one crack), "point": {name: (N,) or (N,2)},
+                          "crack_fields": {name: (I,)}, "h": mesh size (optional)})]."""
     import h5py
 
     head = '<?xml version="1.0"?>\n<Xdmf Version="3.0">\n<Domain>\n'
@@ -90,9 +102,7 @@ def write_fields(folder, field_sets, tool):
                 put(f"/cases/{name}/{key}", values)
             crack = np.asarray(fs["crack"])
             put(f"/cases/{name}/crack/points", _pad3(np.asarray(fs["xy"])[crack[:, 0]]))
-            m = len(crack)
-            put(f"/cases/{name}/crack/segments",
-                np.column_stack([np.arange(m - 1), np.arange(1, m)]).astype(np.int64))
+            put(f"/cases/{name}/crack/segments", _segments(fs))
             for key, values in fs["crack_fields"].items():
                 put(f"/cases/{name}/crack/{key}", np.asarray(values, dtype=float))
             (folder / "fields" / f"{name}.xdmf").write_text(head + _mesh_grid("../fields.h5", level, fs) + "\n" + tail)

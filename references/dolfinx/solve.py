@@ -12,11 +12,14 @@ __version__; any other version (or none importable) exits with status 2 and one 
 python3-dolfinx)".
 
 Reads a folder written by `sdcrack mesh SCENE --out DIR` (scene.json, level{L}/{mesh.json, vertices.txt,
-triangles.txt, crack.txt, boundary.txt, sides.txt}) and, per level, solves on the CRACKED mesh
-(crack vertices except the tips duplicated; dolfinx just sees a mesh with a slit):
+triangles.txt, crack.txt, cracks.txt, crack_normals.txt, boundary.txt, sides.txt}; the crack files are
+read and checked by references/common/sdexport.py, which documents them: any number of polyline
+cracks, each with its two tips; an export without cracks.txt / crack_normals.txt has one crack and the
+scene's single normal) and, per level, solves on the CRACKED mesh (crack vertices except the tips
+duplicated; dolfinx just sees a mesh with slits):
 
     continuous P1,  -Δu = f,  u = g strongly on Γ (g interpolated at the boundary vertices),
-    u⁺_j − u⁻_j ≥ 0 at every interior crack node pair j,
+    u⁺_j − u⁻_j ≥ 0 at every interior crack node pair j (of every crack),
 
 i.e. the convex QP  min ½uᵀKu − Fᵀu.  K, F are assembled by dolfinx (f as a UFL expression of the scene
 string, translated by references/common/sdexpr.py).  Quadrature, shared with the FreeFEM reference so that
@@ -46,12 +49,14 @@ Writes OUT/summary.json ({"scene", "tool": "dolfinx", "provenance", "cases": [{"
     active set did not converge in 100 solves" or "not_converged: complementarity 3.0e-04 > 1e-10");
     the results are still written and the exit status is 3;
   errors: {"u_l2" (‖u_h − u‖_{L²(Ω)}), "p_l2" (‖∇u_h − ∇u‖_{L²(Ω_c)}, ∇u from exact.px/py, else UFL's
-    derivative of exact.u; null if UFL cannot differentiate it), "lambda_l2" (‖[u_h] − [u]‖_{L²(Γc)},
-    [u] from exact.jump, else, in numpy, exact.u on each face with the signed-zero rule of
-    eval_on_face)}: UFL forms with converged quadrature ("Errors against an exact solution" below),
+    derivative of exact.u; null if UFL cannot differentiate it), "lambda_l2" (‖[u_h] − [u]‖_{L²(Γc)}
+    over the segments of every crack, [u] from exact.jump, else, in numpy, exact.u on each face of a
+    segment with the signed-zero rule of eval_on_face and the segment's normal)}: UFL forms with
+    converged quadrature, graded toward the tips of every crack ("Errors against an exact solution"),
 OUT/u_level{L}.txt (u at the cracked vertices in the export's numbering, %.17g, for cross-checks with
 the FreeFEM reference) and with --fields OUT/fields.h5 + OUT/fields/level{L}.xdmf (the grid "level{L}"
-with u, and u_exact when the scene has one) + OUT/fields/level{L}.crack.xdmf (jump, multiplier)
+with u, and u_exact when the scene has one: at a crack copy exact.u on its face, see side_points) +
+OUT/fields/level{L}.crack.xdmf (jump, multiplier; the cracks as polylines, segments within each crack)
 (references/common/sdfields.py).  OUT is written atomically (temporary folder, then rename); an
 existing OUT is an error unless --overwrite.  Errors: one line on stderr; exit status 2 for an
 unsupported dolfinx and for an invalid scene (scene.json malformed, an expression outside the grammar
@@ -69,6 +74,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
+import sdexport  # noqa: E402  the crack layout of the export (crack.txt, cracks.txt, crack_normals.txt)
 import sdexpr  # noqa: E402
 import sdfields  # noqa: E402
 import sdquad  # noqa: E402  the load quadrature shared with the FreeFEM reference
@@ -140,33 +146,43 @@ def read_scene(export):
         raise SceneError(f"{p}: invalid JSON: {e}") from None
     if not isinstance(scene, dict):
         raise SceneError(f"{p}: not a JSON object")
-    for key in ("name", "f", "g", "crack", "levels"):
+    for key in ("name", "f", "g", "levels"):
         if key not in scene:
             raise SceneError(f"{p}: missing key '{key}'")
+    try:
+        sdexport.scene_cracks(scene, p)  # "cracks", or the old single "crack"
+    except sdexport.ExportError as e:
+        raise SceneError(str(e)) from None
     return scene
 
 
-def read_level(export, level):
+def read_level(export, level, default_normal=None):
+    """One level of the export: {"dir", "meta" (mesh.json), "kind", "xy", "tri", "crack" (crack.txt),
+    "layout" (sdexport.CrackLayout: cracks, tips, segments, nodal normals), "bnd", "sides" ((T, 3) per
+    corner, or None)}; `default_normal`: the scene's single normal, for an export without
+    crack_normals.txt (else mesh.json's "normal", else the normals computed from the nodes)."""
     d = export / f"level{level}"
     if not d.is_dir():
         raise SolveError(f"missing folder {d}")
-    meta = json.loads((d / "mesh.json").read_text()) if (d / "mesh.json").exists() else {}
-    xy = _load_txt(d / "vertices.txt", float, 2)
-    tri = _load_txt(d / "triangles.txt", np.int64, 3)
-    crack = _load_txt(d / "crack.txt", np.int64, 2)
-    bnd = _load_txt(d / "boundary.txt", np.int64)
-    sides = _load_txt(d / "sides.txt", np.int64) if (d / "sides.txt").exists() else None
-    nv = len(xy)
-    for name, arr in (("triangles", tri), ("crack", crack), ("boundary", bnd)):
-        if arr.size and (arr.min() < 0 or arr.max() >= nv):
-            raise SolveError(f"{d}/{name}.txt: vertex index out of range 0..{nv - 1}")
-    if meta.get("n_vertices", nv) != nv or meta.get("n_triangles", len(tri)) != len(tri):
-        raise SolveError(f"{d}/mesh.json: counts do not match vertices.txt/triangles.txt")
-    if len(crack) < 2:
-        raise SolveError(f"{d}/crack.txt: a crack needs at least its two tips")
-    if crack[0, 0] != crack[0, 1] or crack[-1, 0] != crack[-1, 1]:
-        raise SolveError(f"{d}/crack.txt: the tips (first and last rows) must have plus == minus")
-    return {"dir": d, "meta": meta, "xy": xy, "tri": tri, "crack": crack, "bnd": bnd, "sides": sides}
+    try:
+        meta = sdexport.read_mesh_json(d)
+        kind = sdexport.read_kind(meta, d / "mesh.json")
+        xy = _load_txt(d / "vertices.txt", float, 2)
+        tri = _load_txt(d / "triangles.txt", np.int64, 3)
+        bnd = _load_txt(d / "boundary.txt", np.int64)
+        nv = len(xy)
+        for name, arr in (("triangles", tri), ("boundary", bnd)):
+            if arr.size and (arr.min() < 0 or arr.max() >= nv):
+                raise SolveError(f"{d}/{name}.txt: vertex index out of range 0..{nv - 1}")
+        if meta.get("n_vertices", nv) != nv or meta.get("n_triangles", len(tri)) != len(tri):
+            raise SolveError(f"{d}/mesh.json: counts do not match vertices.txt/triangles.txt")
+        normal = default_normal if default_normal is not None else meta.get("normal")
+        layout = sdexport.read_layout(d, xy, nv, normal)
+        sides = sdexport.read_sides(d / "sides.txt", tri, layout)
+    except sdexport.ExportError as e:
+        raise SolveError(str(e)) from None
+    return {"dir": d, "meta": meta, "kind": kind, "xy": xy, "tri": tri, "crack": layout.pairs,
+            "layout": layout, "bnd": bnd, "sides": sides}
 
 
 def parse_expr(scene, key, src):
@@ -177,20 +193,23 @@ def parse_expr(scene, key, src):
 
 
 def side_points(xy, side, normal):
-    """Coordinates at which a vertex belongs to face `side` (+1/-1/0) of the crack.
+    """Coordinates at which each vertex belongs to face `side` (N,) (+1/-1, 0: no crack copy) of a
+    crack, ν = normal (N, 2) at the vertex (its crack node's normal; rows with side 0 are unused).
 
-    On a crack lying on y = 0 the side is selected by the sign of zero (y = ±0.0, understood by the
-    numpy back-end: sign, atan2); elsewhere the point is pushed 1e-13 along ±normal."""
-    x = xy[:, 0].copy()
-    y = xy[:, 1].copy()
+    A node on the x axis (y = 0) whose ν is along the y axis gets y = ±0.0 with the sign of side·ν_y,
+    one on the y axis (x = 0) whose ν is along the x axis x = ±0.0 with the sign of side·ν_x (the
+    signed zero is understood by the numpy back-end: sign, atan2); any other node is pushed 1e-13
+    along side·ν."""
+    pts = xy[:, :2].astype(float)
+    normal = np.asarray(normal, dtype=float)
     on = side != 0
-    zero = on & (y == 0.0) & (abs(normal[0]) < 1e-14)
-    sgn = side * (1.0 if normal[1] >= 0 else -1.0)
-    y[zero] = np.copysign(0.0, sgn[zero])
-    other = on & ~zero
-    x[other] += 1e-13 * side[other] * normal[0]
-    y[other] += 1e-13 * side[other] * normal[1]
-    return x, y
+    pushed = on.copy()
+    for axis in (1, 0):  # y = 0 with ν ∥ y, then x = 0 with ν ∥ x
+        zero = on & (pts[:, axis] == 0.0) & (np.abs(normal[:, 1 - axis]) < 1e-14)
+        pts[zero, axis] = np.copysign(0.0, side[zero] * normal[zero, axis])
+        pushed &= ~zero
+    pts[pushed] += 1e-13 * side[pushed, None] * normal[pushed]
+    return pts[:, 0], pts[:, 1]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -207,9 +226,8 @@ def solve_level(scene, lv, trees, want_fields, quadrature=None):
     import dolfinx.fem.petsc  # noqa: F401
 
     t0 = time.perf_counter()
-    xy, tri, crack, bnd = lv["xy"], lv["tri"], lv["crack"], lv["bnd"]
+    xy, tri, crack, bnd, layout = lv["xy"], lv["tri"], lv["crack"], lv["bnd"], lv["layout"]
     nv = len(xy)
-    normal = np.asarray(scene["crack"].get("normal", lv["meta"].get("normal", [0.0, 1.0])), float)
 
     # ---- mesh and dof map (create_mesh renumbers: go through input_global_indices) ----------
     domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.triangle, 1))
@@ -251,10 +269,9 @@ def solve_level(scene, lv, trees, want_fields, quadrature=None):
     F = Fd[dof_of]
 
     # ---- change of variables u = T v: the + copy carries the jump w = u+ - u- -----------------
-    pairs = crack[1:-1]
+    interior = layout.interior()  # every crack's rows but its tips (sdexport checked plus != minus)
+    pairs = crack[interior]
     plus, minus = pairs[:, 0], pairs[:, 1]
-    if (plus == minus).any():
-        raise SolveError(f"{lv['dir']}/crack.txt: interior crack nodes must have two copies")
     T = (sp.identity(nv, format="csr")
          + sp.csr_matrix((np.ones(len(plus)), (plus, minus)), shape=(nv, nv))).tocsr()
     Kp = (T.T @ K @ T).tocsr()
@@ -326,14 +343,17 @@ def solve_level(scene, lv, trees, want_fields, quadrature=None):
     # ---- errors against the exact solution ---------------------------------------------------
     jump = u[crack[:, 0]] - u[crack[:, 1]]
     mult = np.zeros(len(crack))
-    mult[1:-1] = lam
-    fields = {"xy": xy, "tri": tri, "crack": crack, "u": u, "jump": jump, "multiplier": mult}
+    mult[interior] = lam
+    fields = {"xy": xy, "tri": tri, "crack": crack, "segments": layout.segments(), "u": u, "jump": jump,
+              "multiplier": mult}
     if trees.get("exact_u") is not None:
-        case["errors"] = exact_errors(mesh, uh, dof_of, inp, xy, crack, jump, trees, normal, quadrature)
+        case["errors"] = exact_errors(mesh, uh, dof_of, inp, xy, layout, jump, trees, quadrature)
         if want_fields:
             side = np.zeros(nv, np.int64)
             side[plus] = 1
             side[minus] = -1
+            normal = np.zeros((nv, 2))
+            normal[plus] = normal[minus] = layout.normals[interior]
             sx, sy = side_points(xy, side, normal)
             fields["u_exact"] = sdexpr.to_numpy(trees["exact_u"])(sx, sy)
     case["timings_s"] = {"assembly": t_asm, "solve": t_solve, "total": time.perf_counter() - t0}
@@ -383,8 +403,8 @@ def kkt_residuals(K, F, u, plus, minus, free, active):
 # ---------------------------------------------------------------------------------------------
 #
 # u_l2 and p_l2 are UFL forms assembled by dolfinx over the cracked mesh; lambda_l2 is a form over
-# the facets of the crack's + face. Cells and crack facets without a tip get basix's default rule of
-# degree NORM_DEGREE. Cells and facets having a crack tip as a vertex are tagged and get a custom
+# the facets of the cracks' + faces. Cells and crack facets without a tip get basix's default rule of
+# degree NORM_DEGREE. Cells and facets having a crack tip (of any crack) as a vertex are tagged and get a custom
 # rule built for the r^(1/2) singularity (tip_cell_rule, tip_facet_rule): the Duffy map collapsing
 # the cell onto the tip (r ∝ ρ, Jacobian ∝ ρ), then ρ = σ², so that the integrands, which are
 # expansions in powers of r^(1/2) times smooth functions of the angle, become smooth in (σ, t) and
@@ -410,8 +430,9 @@ def duffy_sqrt_rule(tri, k, n):
 
 def tip_cell_rule(corners, n, degree):
     """Reference points and weights (sum 1/2) for a cell whose local vertices k with corners[k] are
-    crack tips. One tip: duffy_sqrt_rule toward it. Two or three (a crack of one segment): the four
-    midpoint children, each corner child at a tip with duffy_sqrt_rule, the others with basix's rule."""
+    crack tips. One tip: duffy_sqrt_rule toward it. Two or three (a crack of one segment, or tips of
+    different cracks): the four midpoint children, each corner child at a tip with duffy_sqrt_rule,
+    the others with basix's rule."""
     import basix
 
     if sum(map(bool, corners)) == 1:
@@ -451,15 +472,16 @@ def custom_measure(measure, tag, points, weights):
     return measure(int(tag), metadata=md)
 
 
-def exact_errors(mesh, uh, dof_of, inp, xy, crack, jump_h, trees, normal, quadrature=None):
-    """{"u_l2", "p_l2", "lambda_l2"} of uh against the scene's exact solution (see above).
+def exact_errors(mesh, uh, dof_of, inp, xy, layout, jump_h, trees, quadrature=None):
+    """{"u_l2", "p_l2", "lambda_l2"} of uh against the scene's exact solution (see above); layout: the
+    level's sdexport.CrackLayout, jump_h the nodal jumps per row of crack.txt.
     quadrature: {"degree": NORM_DEGREE, "tip_points": TIP_POINTS} to override the defaults."""
     import ufl
     import dolfinx
 
     q = {"degree": NORM_DEGREE, "tip_points": TIP_POINTS, **(quadrature or {})}
     degree, n = int(q["degree"]), int(q["tip_points"])
-    tips = np.array([crack[0, 0], crack[-1, 0]])
+    tips = layout.tip_vertices()
     cell_vertices = inp[mesh.geometry.dofmap.array.reshape(-1, 3)]  # export vertex per local vertex
     at_tip = np.isin(cell_vertices, tips)
     code = (at_tip[:, 0] * 1 + at_tip[:, 1] * 2 + at_tip[:, 2] * 4).astype(np.int32)
@@ -485,25 +507,27 @@ def exact_errors(mesh, uh, dof_of, inp, xy, crack, jump_h, trees, normal, quadra
         e_p = integral(ufl.inner(ufl.grad(uh) - grad_e, ufl.grad(uh) - grad_e))
     except Exception:  # UFL cannot differentiate some expressions: no p error
         e_p = None
-    if trees.get("exact_jump") is not None and len(crack) > 2:
-        e_l = jump_error_ufl(mesh, uh, dof_of, inp, crack, jump_h, trees["exact_jump"], degree, n)
-    else:  # no exact.jump, or a crack of one segment (no slit in the mesh)
-        e_l = jump_error_numpy(xy, crack, jump_h, trees, normal, degree, n)
+    one_segment = any(n_nodes == 2 for _, n_nodes in layout.ranges)
+    if trees.get("exact_jump") is not None and not one_segment:
+        e_l = jump_error_ufl(mesh, uh, dof_of, inp, layout, jump_h, trees["exact_jump"], degree, n)
+    else:  # no exact.jump, or a crack of one segment (no slit in the mesh there)
+        e_l = jump_error_numpy(xy, layout, jump_h, trees, degree, n)
     return {"u_l2": e_u, "p_l2": e_p, "lambda_l2": e_l}
 
 
-def plus_facets(mesh, inp, crack):
-    """The facets of the crack's + face: (facet index, segment k, ends) with ends[i] true when the
-    facet's reference vertex i (basix: facet f of a triangle joins local vertices (1,2), (0,2), (0,1)
-    for f = 0, 1, 2) is a crack tip."""
+def plus_facets(mesh, inp, layout):
+    """The facets of the cracks' + faces: (facet index, segment k (a row of layout.segments()), ends)
+    with ends[i] true when the facet's reference vertex i (basix: facet f of a triangle joins local
+    vertices (1,2), (0,2), (0,1) for f = 0, 1, 2) is a crack tip."""
     import dolfinx
 
     tdim = 2
     mesh.topology.create_connectivity(tdim, tdim - 1)
     c2f = mesh.topology.connectivity(tdim, tdim - 1)
-    chain = crack[:, 0]
-    segment = {frozenset((int(chain[k]), int(chain[k + 1]))): k for k in range(len(chain) - 1)}
-    tips = {int(chain[0]), int(chain[-1])}
+    chain = layout.pairs[:, 0]  # the + copies (a tip: its one vertex)
+    segments = chain[layout.segments()]
+    segment = {frozenset((int(a), int(b))): k for k, (a, b) in enumerate(segments)}
+    tips = set(map(int, layout.tip_vertices()))
     cell_vertices = inp[mesh.geometry.dofmap.array.reshape(-1, 3)]
     on_chain = np.isin(cell_vertices, chain).sum(axis=1) >= 2
     found = {}
@@ -515,8 +539,8 @@ def plus_facets(mesh, inp, crack):
                 found[k] = (int(c2f.links(c)[f]), k, (a in tips, b in tips), {a, b})
     mesh.topology.create_connectivity(tdim - 1, tdim)
     exterior = set(map(int, dolfinx.mesh.exterior_facet_indices(mesh.topology)))
-    if len(found) != len(chain) - 1 or any(found[k][0] not in exterior for k in found):
-        raise SolveError("internal error: the + face of the crack is not a chain of boundary facets")
+    if len(found) != len(segments) or any(found[k][0] not in exterior for k in found):
+        raise SolveError("internal error: the + faces of the cracks are not chains of boundary facets")
     # check the numbering assumed above: topology and geometry list a cell's vertices in the same
     # order, and the cell's facet f joins the vertices other than f
     mesh.topology.create_connectivity(tdim, 0)
@@ -531,13 +555,14 @@ def plus_facets(mesh, inp, crack):
     return [found[k][:3] for k in sorted(found)]
 
 
-def jump_error_ufl(mesh, uh, dof_of, inp, crack, jump_h, jump_tree, degree, n):
-    """‖[u_h] − [u]‖_{L²(Γc)} as a form over the + face facets: [u_h] is the P1 function J with the
-    nodal jumps at the + copies (0 at the tips and everywhere else), [u] the scene's exact.jump."""
+def jump_error_ufl(mesh, uh, dof_of, inp, layout, jump_h, jump_tree, degree, n):
+    """‖[u_h] − [u]‖_{L²(Γc)} as a form over the + face facets of every crack: [u_h] is the P1
+    function J with the nodal jumps at the + copies (0 at the tips and everywhere else), [u] the
+    scene's exact.jump."""
     import ufl
     import dolfinx
 
-    facets = plus_facets(mesh, inp, crack)
+    facets = plus_facets(mesh, inp, layout)
     tags = np.array([1 + (1 if ends[0] else 0) + (2 if ends[1] else 0) for _, _, ends in facets], np.int32)
     ids = np.array([f for f, _, _ in facets], np.int32)
     order = np.argsort(ids)
@@ -545,7 +570,8 @@ def jump_error_ufl(mesh, uh, dof_of, inp, crack, jump_h, jump_tree, degree, n):
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=ft)
     J = dolfinx.fem.Function(uh.function_space)
     J.x.array[:] = 0.0
-    J.x.array[dof_of[crack[1:-1, 0]]] = jump_h[1:-1]
+    interior = layout.interior()
+    J.x.array[dof_of[layout.pairs[interior, 0]]] = jump_h[interior]
     integrand = (J - sdexpr.to_ufl(jump_tree, ufl.SpatialCoordinate(mesh))) ** 2
     form = integrand * ds(1, metadata={"quadrature_degree": degree})
     for tag in np.unique(tags[tags > 1]):
@@ -555,24 +581,27 @@ def jump_error_ufl(mesh, uh, dof_of, inp, crack, jump_h, jump_tree, degree, n):
     return math.sqrt(max(value, 0.0))
 
 
-def jump_error_numpy(xy, crack, jump_h, trees, normal, degree, n):
-    """‖[u_h] − [u]‖_{L²(Γc)} in numpy, with the rules of jump_error_ufl (tip_facet_rule at the tips,
-    Gauss of `degree` elsewhere). Without exact.jump, [u] = u⁺ − u⁻ by on_face (UFL has no signed
-    zero to select a face)."""
+def jump_error_numpy(xy, layout, jump_h, trees, degree, n):
+    """‖[u_h] − [u]‖_{L²(Γc)} in numpy over the segments of every crack, with the rules of
+    jump_error_ufl (tip_facet_rule at a tip end, Gauss of `degree` elsewhere). Without exact.jump,
+    [u] = u⁺ − u⁻ by on_face with the segment's normal (UFL has no signed zero to select a face)."""
     fj = sdexpr.to_numpy(trees["exact_jump"]) if trees.get("exact_jump") is not None else None
     fu = sdexpr.to_numpy(trees["exact_u"])
     g, gw = sdquad.gauss01(degree // 2 + 1)
+    segments = layout.segments()
+    points = xy[layout.pairs[:, 0]]
+    normals = sdexport.segment_normals(points, segments)
+    is_tip = ~layout.interior()
     total = 0.0
-    last = len(crack) - 2
-    for k in range(len(crack) - 1):
-        a, b = xy[crack[k, 0]], xy[crack[k + 1, 0]]
-        s, w = tip_facet_rule(k == 0, k == last, n) if k in (0, last) else (g, gw)
+    for (i, j), normal in zip(segments, normals):
+        a, b = points[i], points[j]
+        s, w = tip_facet_rule(is_tip[i], is_tip[j], n) if is_tip[i] or is_tip[j] else (g, gw)
         X, Y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
         if fj is not None:
             je = fj(X, Y)
         else:
             je = fu(*sdexpr.on_face(X, Y, normal, 1.0)) - fu(*sdexpr.on_face(X, Y, normal, -1.0))
-        jh = (1 - s) * jump_h[k] + s * jump_h[k + 1]
+        jh = (1 - s) * jump_h[i] + s * jump_h[j]
         total += float(np.hypot(*(b - a)) * np.sum(w * (jh - je) ** 2))
     return math.sqrt(total)
 
@@ -598,7 +627,8 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
         for k in ("jump", "px", "py"):
             if exact.get(k):
                 trees[f"exact_{k}"] = parse_expr(scene, f"exact.{k}", exact[k])
-    levels = [read_level(export, L) | {"level": L} for L in scene["levels"]]
+    normal = sdexport.scene_normal(scene)
+    levels = [read_level(export, L, normal) | {"level": L} for L in scene["levels"]]
     if out.exists() and not overwrite:
         raise SolveError(f"{out} exists; refusing to overwrite earlier results (use --overwrite)")
     with sdresults.staged_folder(out) as tmp:
@@ -612,7 +642,8 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
                 if "u_exact" in fs:
                     point["u_exact"] = fs["u_exact"]
                 field_sets.append((case["level"], {
-                    "xy": fs["xy"], "tri": fs["tri"], "crack": fs["crack"], "point": point,
+                    "xy": fs["xy"], "tri": fs["tri"], "crack": fs["crack"], "segments": fs["segments"],
+                    "point": point,
                     "h": case["h"] if math.isfinite(case["h"]) else None,
                     "crack_fields": {"jump": fs["jump"], "multiplier": fs["multiplier"]}}))
         if fields:

@@ -3,9 +3,12 @@
 
 Usage: solve.py MESH_EXPORT_DIR --out OUT [--fields] [--freefem FreeFem++] [--keep-work] [--overwrite]
 
-Reads a mesh export of `sdcrack mesh SCENE --out DIR`, runs FreeFem++ on crack_qp.edp once per level
-(P1 on the cracked mesh, u = g on Γ, nodal jump constraints u⁺ − u⁻ ≥ 0, primal–dual active set),
-and writes OUT/summary.json and OUT/u_level{L}.txt (u at the cracked vertices, %.17g).
+Reads a mesh export of `sdcrack mesh SCENE --out DIR` (its crack files crack.txt, cracks.txt,
+crack_normals.txt, sides.txt and mesh.json's kind read and checked by references/common/sdexport.py,
+which documents them: any number of polyline cracks; an export without cracks.txt has one crack),
+runs FreeFem++ on crack_qp.edp once per level (P1 on the cracked mesh, u = g on Γ, nodal jump
+constraints u⁺ − u⁻ ≥ 0 at the interior nodes of every crack, primal–dual active set), and writes
+OUT/summary.json and OUT/u_level{L}.txt (u at the cracked vertices, %.17g).
 
 Quadrature, shared with the dolfinx reference so that both solve the same discrete problem to round-off:
 the load ∫ f φ_i with references/common/sdquad.py's rule (symmetric Xiao–Gimbutas, degree 16, 55 interior
@@ -27,10 +30,11 @@ summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h"
     active set did not converge in 100 solves", "not_converged: complementarity 3.0e-04 > 1e-10");
     the results are still written and the exit status is 3;
   errors: with an exact solution in the scene, computed on the cracked mesh with numpy (exact_errors:
-    collapsed Gauss rules, geometric grading toward the crack tips, converged to < 1e-9 relative)
-    u_l2 = ‖u_h − u‖_{L²(Ω_c)},  p_l2 = ‖∇u_h − ∇u‖_{L²(Ω_c)},  lambda_l2 = ‖[u_h] − [u]‖_{L²(Γc)},
-    ∇u from exact.px/py, else sdexpr's symbolic derivative of exact.u; [u] from exact.jump, else u on
-    each face by the signed-zero rule of eval_on_face (src/scene/mod.rs).
+    collapsed Gauss rules, geometric grading toward the tips of every crack, converged to < 1e-9
+    relative) u_l2 = ‖u_h − u‖_{L²(Ω_c)},  p_l2 = ‖∇u_h − ∇u‖_{L²(Ω_c)},  lambda_l2 = ‖[u_h] − [u]‖_{L²(Γc)}
+    (over the segments within each crack), ∇u from exact.px/py, else sdexpr's symbolic derivative of
+    exact.u; [u] from exact.jump, else u on each face of a segment by the signed-zero rule of
+    eval_on_face (src/scene/mod.rs) with the segment's normal.
 With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf + level{L}.crack.xdmf
 (references/common/sdfields.py).
 OUT is written atomically (a temporary folder, then one rename); an existing OUT is an error unless
@@ -56,6 +60,7 @@ FF_LOADPATH_DEFAULT = "/usr/lib/freefem++"
 APT_HINT = "apt-get install -y freefem++ libfreefem++"
 
 sys.path.insert(0, str(HERE.parent / "common"))
+import sdexport  # noqa: E402  the crack layout of the export (crack.txt, cracks.txt, crack_normals.txt)
 import sdexpr  # noqa: E402  the shared translator: parse, to_freefem, to_numpy, derivative
 import sdquad  # noqa: E402  the load quadrature shared with the dolfinx reference
 import sdresults  # noqa: E402  (standard library only)
@@ -112,21 +117,33 @@ def _load(path, dtype, cols):
     return a
 
 
-def read_level(export, level):
+def read_level(export, level, default_normal=None):
+    """One level of the export: {"meta" (mesh.json), "kind", "xy_uncut", "tri_uncut", "xy", "tri",
+    "crack" (crack.txt), "layout" (sdexport.CrackLayout: cracks, tips, segments, nodal normals),
+    "boundary"}; `default_normal`: the scene's single normal, for an export without
+    crack_normals.txt (else mesh.json's "normal", else the normals computed from the nodes)."""
     d = Path(export) / f"level{level}"
     if not d.is_dir():
         raise SolveError(f"missing level folder {d}")
-    lv = {
-        "meta": json.loads((d / "mesh.json").read_text()) if (d / "mesh.json").exists() else None,
-        "xy_uncut": _load(d / "vertices_uncut.txt", float, 2),
-        "tri_uncut": _load(d / "triangles_uncut.txt", np.int64, 3),
-        "xy": _load(d / "vertices.txt", float, 2),
-        "tri": _load(d / "triangles.txt", np.int64, 3),
-        "crack": _load(d / "crack.txt", np.int64, 2),
-        "boundary": _load(d / "boundary.txt", np.int64, 1)[:, 0],
-    }
-    if lv["meta"] is None:
+    if not (d / "mesh.json").exists():
         raise SolveError(f"missing file {d / 'mesh.json'}")
+    try:
+        meta = sdexport.read_mesh_json(d)
+        lv = {
+            "meta": meta,
+            "kind": sdexport.read_kind(meta, d / "mesh.json"),
+            "xy_uncut": _load(d / "vertices_uncut.txt", float, 2),
+            "tri_uncut": _load(d / "triangles_uncut.txt", np.int64, 3),
+            "xy": _load(d / "vertices.txt", float, 2),
+            "tri": _load(d / "triangles.txt", np.int64, 3),
+            "boundary": _load(d / "boundary.txt", np.int64, 1)[:, 0],
+        }
+        normal = default_normal if default_normal is not None else meta.get("normal")
+        lv["layout"] = sdexport.read_layout(d, lv["xy"], len(lv["xy"]), normal)
+        sdexport.read_sides(d / "sides.txt", lv["tri"], lv["layout"])  # checked, not needed
+    except sdexport.ExportError as e:
+        raise SolveError(str(e)) from None
+    lv["crack"] = lv["layout"].pairs
     nu, n = len(lv["xy_uncut"]), len(lv["xy"])
     if lv["tri"].shape != lv["tri_uncut"].shape:
         raise SolveError(f"{d}: cracked and uncut meshes have different triangle counts")
@@ -141,21 +158,34 @@ def read_level(export, level):
 
 # ---- FreeFEM input -------------------------------------------------------------------------------
 
-def minus_map_and_regions(lv):
-    """Region 1/2 per triangle (2: uses a − copy) and the uncut → − copy vertex map."""
+def regions_and_maps(lv):
+    """The FreeFEM regions of the uncut triangles and their vertex maps: (region (T,) in 1..R,
+    maps (R, n_uncut)), maps[r − 1][i] the cracked vertex that stands for uncut vertex i in the
+    triangles of region r (i itself where they do not use it). Region 1: the triangles that use no − copy (map:
+    the identity). The others go, in triangle order, to the first region ≥ 2 whose map agrees with
+    theirs at their three corners: one region 2 unless a triangle uses the − copy of one crack node
+    and the + copy of another that has a − copy (two cracks one element apart)."""
     tri, tri_u = lv["tri"], lv["tri_uncut"]
     nu = len(lv["xy_uncut"])
-    differs = tri != tri_u
-    region = np.where(differs.any(axis=1), 2, 1)
-    mmap = np.arange(nu)
-    src, dst = tri_u[region == 2].ravel(), tri[region == 2].ravel()
-    mmap[src] = dst
-    if not np.array_equal(mmap[src], dst):
-        raise SolveError("inconsistent − copies between triangles")
     for p, m in lv["crack"]:
         if p != m and not (0 <= p < nu <= m < len(lv["xy"])):
             raise SolveError(f"bad crack pair {p} {m}")
-    return region, mmap
+    region = np.ones(len(tri), dtype=np.int64)
+    maps = [np.arange(nu)]
+    assigned = []  # per region ≥ 2: {uncut vertex: cracked vertex} of its triangles
+    for t in np.flatnonzero((tri != tri_u).any(axis=1)):
+        corners = list(zip(tri_u[t].tolist(), tri[t].tolist()))
+        r = next((k for k, m in enumerate(assigned) if all(m.get(i, j) == j for i, j in corners)), None)
+        if r is None:
+            r = len(assigned)
+            assigned.append({})
+        assigned[r].update(corners)
+        region[t] = r + 2
+    for m in assigned:
+        vmap = np.arange(nu)
+        vmap[list(m)] = list(m.values())
+        maps.append(vmap)
+    return region, np.array(maps)
 
 
 def boundary_edges(tri):
@@ -227,10 +257,11 @@ def freefem_version(exe):
 def run_level(exe, lv, f_ff, g_ff, work):
     xy_u, tri_u = lv["xy_uncut"], lv["tri_uncut"]
     n = len(lv["xy"])
-    region, mmap = minus_map_and_regions(lv)
+    region, maps = regions_and_maps(lv)
     write_msh(work / "uncut.msh", xy_u, tri_u, region)
-    np.savetxt(work / "minus_map.txt", mmap, fmt="%d")
-    pairs = lv["crack"][lv["crack"][:, 0] != lv["crack"][:, 1]]
+    with open(work / "region_maps.txt", "w") as fm:
+        fm.write(f"{len(maps)}\n" + "".join(f"{v}\n" for v in maps.ravel()))
+    pairs = lv["crack"][lv["layout"].interior()]
     with open(work / "pairs.txt", "w") as fp:
         fp.write(f"{len(pairs)}\n")
         for p, m in pairs:
@@ -342,15 +373,15 @@ def exact_gradient(exact):
             to_numpy("exact.u", sdexpr.derivative(tree, "y")))
 
 
-def exact_errors(lv, u_h, exact, normal, degree=NORM_DEGREE, near_degree=NORM_NEAR_DEGREE,
+def exact_errors(lv, u_h, exact, degree=NORM_DEGREE, near_degree=NORM_NEAR_DEGREE,
                  depth=NORM_TIP_DEPTH, near_radius=NORM_NEAR_RADIUS, chunk=1 << 20):
     """{"u_l2", "p_l2", "lambda_l2"} of the P1 field u_h (cracked-mesh vertices) against `exact`
     (the scene's dict of expressions): `degree` away from the tips, `near_degree` near them, on the
-    graded pieces (`depth` splits) and on the crack; `chunk` bounds the points evaluated at once."""
-    xy, tri, cr = lv["xy"], lv["tri"], lv["crack"]
+    graded pieces (`depth` splits) and on the cracks; `chunk` bounds the points evaluated at once."""
+    xy, tri, layout = lv["xy"], lv["tri"], lv["layout"]
     u_ex = to_numpy("exact.u", exact["u"])
     px, py = exact_gradient(exact)
-    tips = np.array([cr[0, 0], cr[-1, 0]])
+    tips = layout.tip_vertices()
     # rule of each triangle: 1..7 graded toward the tip vertices (bit k: local vertex k), 0 near, 8 far
     at_tip = np.isin(tri, tips)
     code = at_tip[:, 0] * 1 + at_tip[:, 1] * 2 + at_tip[:, 2] * 4
@@ -382,22 +413,33 @@ def exact_errors(lv, u_h, exact, normal, degree=NORM_DEGREE, near_degree=NORM_NE
             gx = (d1 * e2[:, 1] - d2 * e1[:, 1]) / det
             gy = (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det
             sp += float(np.sum(W * ((gx[:, None] - px(X, Y)) ** 2 + (gy[:, None] - py(X, Y)) ** 2)))
-    # jump along the + chain of the crack (crack.txt: tip a → tip b; [u_h] = 0 at the tips)
+    sl = jump_error_sq(xy, layout, u_h, u_ex, exact, near_degree, depth)
+    return {"u_l2": float(np.sqrt(su)), "p_l2": float(np.sqrt(sp)), "lambda_l2": float(np.sqrt(sl))}
+
+
+def jump_error_sq(xy, layout, u_h, u_ex, exact, degree, depth):
+    """‖[u_h] − [u]‖²_{L²(Γc)} over the segments within each crack (sdexport.CrackLayout; [u_h] = 0 at
+    the tips): Gauss–Legendre of `degree` on pieces halved `depth` times toward a tip end. [u] is
+    exact.jump, else u on each face of the segment (sdexpr.on_face with the segment's normal)."""
+    cr = layout.pairs
     jump_h = u_h[cr[:, 0]] - u_h[cr[:, 1]]
-    a, b = xy[cr[:-1, 0]], xy[cr[1:, 0]]
-    length = np.linalg.norm(b - a, axis=1)
+    segments = layout.segments()
+    points = xy[cr[:, 0]]
+    normals = sdexport.segment_normals(points, segments)
+    is_tip = ~layout.interior()
     u_jump = to_numpy("exact.jump", exact["jump"]) if exact.get("jump") else None
     sl = 0.0
-    for k in range(len(cr) - 1):
-        s, w = graded_segment_rule(k == 0, k == len(cr) - 2, near_degree, depth)
-        X, Y = a[k, 0] + s * (b[k, 0] - a[k, 0]), a[k, 1] + s * (b[k, 1] - a[k, 1])
+    for (i, j), normal in zip(segments, normals):
+        a, b = points[i], points[j]
+        s, w = graded_segment_rule(is_tip[i], is_tip[j], degree, depth)
+        X, Y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
         if u_jump is not None:
             jx = u_jump(X, Y)
         else:
             jx = u_ex(*sdexpr.on_face(X, Y, normal, 1.0)) - u_ex(*sdexpr.on_face(X, Y, normal, -1.0))
-        jh = (1 - s) * jump_h[k] + s * jump_h[k + 1]
-        sl += float(length[k] * np.sum(w * (jh - jx) ** 2))
-    return {"u_l2": float(np.sqrt(su)), "p_l2": float(np.sqrt(sp)), "lambda_l2": float(np.sqrt(sl))}
+        jh = (1 - s) * jump_h[i] + s * jump_h[j]
+        sl += float(np.hypot(*(b - a)) * np.sum(w * (jh - jx) ** 2))
+    return sl
 
 
 # ---- fields (--fields): fields.h5 + fields/level{L}[.crack].xdmf (references/common/sdfields.py) --
@@ -429,7 +471,10 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
         scene = json.loads(scene_path.read_text())
         name, f_src, g_src = scene["name"], scene["f"], scene["g"]
         levels, exact = scene["levels"], scene.get("exact")
-        normal = scene["crack"]["normal"]
+        sdexport.scene_cracks(scene, scene_path)  # "cracks", or the old single "crack"
+        normal = sdexport.scene_normal(scene)
+    except sdexport.ExportError as e:
+        raise SceneError(str(e))
     except (ValueError, KeyError, TypeError) as e:
         raise SceneError(f"{scene_path}: malformed scene ({e})")
     if out.exists() and not overwrite:
@@ -446,7 +491,7 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
         cases, fields_data = [], []
         for level in levels:
             t0 = time.perf_counter()
-            lv = read_level(export, level)
+            lv = read_level(export, level, normal)
             work = tmp / f"work_level{level}"
             work.mkdir()
             u, lam, info, t_ff = run_level(exe, lv, f_ff, g_ff, work)
@@ -464,15 +509,16 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
             with open(tmp / f"u_level{level}.txt", "w") as fu:
                 fu.write("".join(f"{v:.17g}\n" for v in u))
             if exact:
-                case["errors"] = exact_errors(lv, u, exact, normal)
+                case["errors"] = exact_errors(lv, u, exact)
             case["timings_s"] = {"freefem": t_ff, "total": time.perf_counter() - t0}
             cases.append(case)
-            if fields:  # multipliers at the crack nodes (tip a → tip b; 0 at the tips)
+            if fields:  # multipliers at the crack nodes (crack.txt's rows; 0 at the tips)
                 crack = lv["crack"]
                 lam_nodes = np.zeros(len(crack))
-                lam_nodes[crack[:, 0] != crack[:, 1]] = lam
+                lam_nodes[lv["layout"].interior()] = lam
                 fields_data.append((level, {
-                    "xy": lv["xy"], "tri": lv["tri"], "crack": crack, "h": lv["meta"]["h"],
+                    "xy": lv["xy"], "tri": lv["tri"], "crack": crack, "segments": lv["layout"].segments(),
+                    "h": lv["meta"]["h"],
                     "point": {"u": u, "p": vertex_gradient(lv["xy"], lv["tri"], u)},
                     "crack_fields": {"jump": u[crack[:, 0]] - u[crack[:, 1]], "multiplier": lam_nodes}}))
             if not keep_work:

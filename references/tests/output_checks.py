@@ -39,7 +39,8 @@ def assert_provenance(summary, tool, script=None):
 def assert_fields_readable(out, export, summary, tool):
     """Every *.xdmf under `out` is read by meshio.read: the per-level grid has finite point data of
     the mesh's length (u among them), the crack grid finite jump and multiplier (the nodal λ) of the
-    crack's length; there is no top-level fields.xdmf; fields.h5's datasets carry level, h, tool."""
+    cracks' length and one line per segment within a crack (cracks.txt; absent: one crack); there is
+    no top-level fields.xdmf; fields.h5's datasets carry level, h, tool."""
     import h5py
     import meshio
 
@@ -55,8 +56,12 @@ def assert_fields_readable(out, export, summary, tool):
         assert n > 0 and np.isfinite(m.points).all()
         if rel.endswith(".crack.xdmf"):
             crack = np.loadtxt(export / f"level{L}" / "crack.txt", dtype=np.int64, ndmin=2)
+            cracks = export / f"level{L}" / "cracks.txt"
+            ranges = np.loadtxt(cracks, dtype=np.int64, ndmin=2) if cracks.exists() else [(0, len(crack))]
             assert n == len(crack)
-            assert [(b.type, len(b.data)) for b in m.cells] == [("line", n - 1)]
+            assert [(b.type, len(b.data)) for b in m.cells] == [("line", n - len(ranges))]
+            within = {(k, k + 1) for first, c in ranges for k in range(first, first + c - 1)}
+            assert {tuple(map(int, s)) for s in m.cells[0].data} == within, rel
             assert {"jump", "multiplier"} <= set(m.point_data), rel
         else:
             tri = np.loadtxt(export / f"level{L}" / "triangles.txt", dtype=np.int64, ndmin=2)

@@ -1,0 +1,328 @@
+"""The cracks of an `sdcrack mesh SCENE --out DIR` export, read and checked alike by both references
+and the compare tool: which rows of crack.txt form which crack, the tips, the segments, the nodal
+normals, the triangle sides and the kind of mesh (structured grid, or uniform refinement).
+
+Files of DIR/level{L}/ (0-based indices; absent files are those of an export written before issue 16,
+which has one straight crack on a structured grid):
+
+    crack.txt          plus minus        per crack node: the cracked-mesh vertex on the + face and the one
+                                         on the − face. The cracks' nodes are concatenated in scene order,
+                                         each crack from its first point to its last; the two tips of every
+                                         crack (its first and last row) have plus == minus, every other
+                                         node plus != minus.
+    cracks.txt         first n           per crack: crack c is rows first..first+n−1 of crack.txt, n ≥ 2,
+                                         the cracks in order and together covering every row.
+                                         Absent: one crack made of all rows.
+    crack_normals.txt  nx ny             per row of crack.txt: the unit normal ν at the node. A segment's
+                                         normal is its direction (node k → k+1) turned by +90°; at an
+                                         interior node the normalised length-weighted mean
+                                         (ℓ_{k−1}ν_{k−1} + ℓ_kν_k)/|…| of its two segments' normals (at a
+                                         kink of a polyline: a bisector); at a tip its one segment's normal.
+                                         The + face is the side ν points into. Absent: the scene's single
+                                         normal at every row (when the caller gives one), else the normals
+                                         computed from the nodes by that rule.
+    sides.txt          s0 s1 s2          per triangle, one per corner in triangles.txt order: +1 / −1 when
+                                         that corner is an interior crack node and the triangle lies on its
+                                         + / − face, 0 otherwise. Old format: one integer per triangle,
+                                         ±1 for a triangle at an interior crack node, 0 otherwise.
+    mesh.json          "kind"            "structured" (a rectangle's grid: `nx`, `ny` cells) or "refined"
+                                         (level 0 from gmsh, `coarse_triangles` triangles, refined
+                                         uniformly: triangle 4t + c of level L+1 lies in triangle t of
+                                         level L, children c = 0, 1, 2 at its corners 0, 1, 2, child 3 the
+                                         middle). Absent: "structured".
+
+A crack's segments are the pairs of consecutive rows WITHIN it: no segment joins the last node of a
+crack to the first of the next. Errors are ExportError, one line naming the file (and the crack).
+Standard library and numpy only.
+"""
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+KINDS = ("structured", "refined")
+DEFAULT_KIND = "structured"
+NORMAL_TOLERANCE = 1e-9  # crack_normals.txt against the normals computed from the nodes
+
+
+class ExportError(ValueError):
+    """A missing or malformed file of a mesh export (the message is one line naming it)."""
+
+
+@dataclass
+class CrackLayout:
+    """The cracks of one level: pairs (I, 2) = crack.txt, ranges [(first, n)] per crack (rows
+    first..first+n−1), normals (I, 2) the unit normal ν at each row."""
+
+    pairs: np.ndarray
+    ranges: list
+    normals: np.ndarray
+
+    @property
+    def n_cracks(self):
+        return len(self.ranges)
+
+    def tip_rows(self):
+        """(2·cracks,) the rows of the tips: each crack's first and last row, in crack order."""
+        return np.array([r for first, n in self.ranges for r in (first, first + n - 1)], dtype=np.int64)
+
+    def tip_vertices(self):
+        """The cracked-mesh vertices of all tips (a tip's plus == minus)."""
+        return self.pairs[self.tip_rows(), 0]
+
+    def interior(self):
+        """(I,) bool: rows that are not tips (their nodes have a + and a − copy)."""
+        mask = np.ones(len(self.pairs), dtype=bool)
+        mask[self.tip_rows()] = False
+        return mask
+
+    def segments(self):
+        """(S, 2) row pairs [k, k+1] of the segments, crack by crack (S = I − cracks)."""
+        return segments_of(self.ranges)
+
+
+def segments_of(ranges):
+    """(S, 2) the row pairs [k, k+1] within each crack of `ranges` [(first, n)], in crack order."""
+    parts = [np.column_stack([np.arange(first, first + n - 1), np.arange(first + 1, first + n)])
+             for first, n in ranges]
+    return np.concatenate(parts).astype(np.int64) if parts else np.zeros((0, 2), dtype=np.int64)
+
+
+def segment_normals(points, segments):
+    """(S, 2) unit normals of the segments [a, b] (rows of points): (b − a)/|b − a| turned by +90°."""
+    d = points[segments[:, 1]] - points[segments[:, 0]]
+    length = np.hypot(d[:, 0], d[:, 1])
+    return np.column_stack([-d[:, 1], d[:, 0]]) / length[:, None]
+
+
+def node_normals(points, ranges):
+    """(I, 2) the nodal normals of the module documentation's rule, from the crack nodes' points."""
+    segments = segments_of(ranges)
+    d = points[segments[:, 1]] - points[segments[:, 0]]
+    weighted = np.column_stack([-d[:, 1], d[:, 0]])  # ℓ_k ν_k
+    acc = np.zeros((len(points), 2))
+    np.add.at(acc, segments[:, 0], weighted)
+    np.add.at(acc, segments[:, 1], weighted)
+    return acc / np.hypot(acc[:, 0], acc[:, 1])[:, None]
+
+
+# ---- reading -----------------------------------------------------------------------------------
+
+def load_table(path, dtype, ncols):
+    """A whitespace table of `ncols` columns as an (R, ncols) array (R may be 0)."""
+    path = Path(path)
+    if not path.exists():
+        raise ExportError(f"missing file {path}")
+    try:
+        a = np.loadtxt(path, dtype=dtype, ndmin=2)
+    except ValueError as e:
+        raise ExportError(f"cannot read {path}: {e}".replace("\n", " ")) from None
+    if a.size == 0:
+        return a.reshape(0, ncols)
+    if a.shape[1] != ncols:
+        raise ExportError(f"{path}: expected {ncols} columns, found {a.shape[1]}")
+    return a
+
+
+def read_ranges(path, n_rows):
+    """[(first, n)] of cracks.txt at `path` for a crack.txt of `n_rows` rows ([(0, n_rows)] when the
+    file is absent): the cracks must follow each other from row 0 and cover every row."""
+    path = Path(path)
+    if not path.exists():
+        if n_rows < 2:
+            raise ExportError(f"{path.parent / 'crack.txt'}: {n_rows} row(s), a crack needs at least its 2 tips")
+        return [(0, int(n_rows))]
+    table = load_table(path, np.int64, 2)
+    if len(table) == 0:
+        raise ExportError(f"{path}: no crack listed")
+    ranges, expected = [], 0
+    for c, (first, n) in enumerate(table.tolist()):
+        if first != expected:
+            raise ExportError(f"{path}: crack {c} starts at row {first} of crack.txt, expected {expected} "
+                              "(the cracks' rows must follow each other)")
+        if n < 2:
+            raise ExportError(f"{path}: crack {c} has {n} node(s), at least its 2 tips are needed")
+        ranges.append((int(first), int(n)))
+        expected = first + n
+    if expected != n_rows:
+        raise ExportError(f"{path}: the cracks cover rows 0..{expected - 1}, but crack.txt has {n_rows} rows")
+    return ranges
+
+
+def check_pairs(path, pairs, ranges, n_vertices, copies=True):
+    """crack.txt's rows against the ranges: indices in range, each crack's tips with plus == minus and,
+    with `copies`, its interior nodes with plus != minus (the cracked mesh of a solver; a field on a
+    mesh without copies, where every row has plus == minus, is read with copies=False)."""
+    if pairs.size and (pairs.min() < 0 or pairs.max() >= n_vertices):
+        raise ExportError(f"{path}: vertex index out of range 0..{n_vertices - 1}")
+    for c, (first, n) in enumerate(ranges):
+        last = first + n - 1
+        for row in (first, last):
+            if pairs[row, 0] != pairs[row, 1]:
+                raise ExportError(f"{path}: crack {c} (rows {first}..{last}): its tip at row {row} has "
+                                  f"plus {pairs[row, 0]} != minus {pairs[row, 1]}")
+        if not copies:
+            continue
+        inner = np.flatnonzero(pairs[first + 1:last, 0] == pairs[first + 1:last, 1])
+        if len(inner):
+            row = first + 1 + int(inner[0])
+            raise ExportError(f"{path}: crack {c} (rows {first}..{last}): interior node at row {row} has "
+                              "plus == minus (an interior crack node needs two copies)")
+
+
+def _crack_of_row(ranges, row):
+    """The crack of `ranges` [(first, n)] that holds crack.txt's row `row`."""
+    return next(c for c, (first, n) in enumerate(ranges) if first <= row < first + n)
+
+
+def check_segments(path, nodes, ranges):
+    """Every segment of every crack has a positive length (nodes (I, 2): the crack nodes' points)."""
+    segments = segments_of(ranges)
+    d = nodes[segments[:, 1]] - nodes[segments[:, 0]]
+    zero = np.flatnonzero(~(np.hypot(d[:, 0], d[:, 1]) > 0))
+    if len(zero):
+        k = int(segments[zero[0], 0])
+        crack = _crack_of_row(ranges, k)
+        raise ExportError(f"{path}: crack {crack}: rows {k} and {k + 1} are at the same point (a segment of "
+                          "zero length)")
+
+
+def read_normals(path, points, ranges, default=None):
+    """(I, 2) crack_normals.txt at `path` (I crack nodes at `points`), each row checked against the
+    normal computed from the nodes (to NORMAL_TOLERANCE); absent: `default` (2,) at every row, or the
+    computed normals when no default is given."""
+    path = Path(path)
+    computed = node_normals(points, ranges)
+    if not path.exists():
+        return computed if default is None else np.tile(np.asarray(default, dtype=float), (len(points), 1))
+    normals = load_table(path, float, 2)
+    if len(normals) != len(points):
+        raise ExportError(f"{path}: {len(normals)} rows for {len(points)} rows of crack.txt")
+    bad = np.flatnonzero(~(np.abs(normals - computed) <= NORMAL_TOLERANCE).all(axis=1))
+    if len(bad):
+        row = int(bad[0])
+        crack = _crack_of_row(ranges, row)
+        raise ExportError(f"{path}: row {row} (crack {crack}) is ({normals[row, 0]:.17g}, {normals[row, 1]:.17g}), "
+                          f"not the unit normal ({computed[row, 0]:.17g}, {computed[row, 1]:.17g}) of the "
+                          "crack at that node")
+    return normals
+
+
+def read_layout(level_dir, points, n_vertices, default_normal=None, copies=True):
+    """The CrackLayout of level_dir (crack.txt, cracks.txt, crack_normals.txt); `points` (N, 2) the
+    cracked mesh's vertices, `default_normal` the scene's single normal of an old export (or None),
+    `copies`: see check_pairs."""
+    d = Path(level_dir)
+    pairs = load_table(d / "crack.txt", np.int64, 2)
+    ranges = read_ranges(d / "cracks.txt", len(pairs))
+    check_pairs(d / "crack.txt", pairs, ranges, n_vertices, copies)
+    nodes = np.asarray(points, dtype=float)[pairs[:, 0], :2]
+    check_segments(d / "crack.txt", nodes, ranges)
+    normals = read_normals(d / "crack_normals.txt", nodes, ranges, default_normal)
+    return CrackLayout(pairs=pairs, ranges=ranges, normals=normals)
+
+
+def read_sides(path, triangles, layout):
+    """(T, 3) sides.txt at `path`, with the cracked `triangles` (T, 3). New format: each ±1 corner must
+    be the + / − copy of an interior crack node, each 0 corner none. Old format (one value per
+    triangle): ±1 spread to the corners at interior crack copies. Absent: None."""
+    path = Path(path)
+    if not path.exists():
+        return None
+    try:
+        a = np.loadtxt(path, dtype=np.int64, ndmin=1)
+    except ValueError as e:
+        raise ExportError(f"cannot read {path}: {e}".replace("\n", " ")) from None
+    n = len(triangles)
+    if a.shape not in ((n,), (n, 3)) or not np.isin(a, (-1, 0, 1)).all():
+        raise ExportError(f"{path}: expected one value (old format) or three (s0 s1 s2) in -1, 0, 1 per "
+                          f"triangle for {n} triangles, found shape {a.shape}")
+    inner = layout.pairs[layout.interior()]
+    copy_side = np.zeros(int(max(triangles.max(initial=0), inner.max(initial=0))) + 1, dtype=np.int64)
+    copy_side[inner[:, 0]] = 1
+    copy_side[inner[:, 1]] = -1
+    at_copy = copy_side[triangles]
+    if a.ndim == 1:
+        return np.where(at_copy != 0, a[:, None], 0)
+    bad = np.argwhere(a != at_copy)
+    if len(bad):
+        t, k = (int(v) for v in bad[0])
+        raise ExportError(f"{path}: triangle {t} corner {k} (vertex {triangles[t, k]}) has side {a[t, k]}, "
+                          f"but that vertex is {_copy_name(at_copy[t, k])}")
+    return a
+
+
+def _copy_name(side):
+    return {1: "the + copy of an interior crack node", -1: "the − copy of an interior crack node",
+            0: "no interior crack node"}[int(side)]
+
+
+def read_kind(meta, path):
+    """The mesh.json kind (DEFAULT_KIND when absent), checked: one of KINDS; a refined level has
+    coarse_triangles · 4^level triangles."""
+    kind = meta.get("kind", DEFAULT_KIND) if isinstance(meta, dict) else DEFAULT_KIND
+    if kind not in KINDS:
+        raise ExportError(f"{path}: kind {kind!r} is not one of {', '.join(KINDS)}")
+    if kind == "refined":
+        level, coarse, n = meta.get("level"), meta.get("coarse_triangles"), meta.get("n_triangles")
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in (level, coarse, n)):
+            raise ExportError(f"{path}: a refined level needs integer level, coarse_triangles and n_triangles")
+        if n != coarse * 4 ** level:
+            raise ExportError(f"{path}: {n} triangles, but a level-{level} refinement of {coarse} coarse "
+                              f"triangles has {coarse * 4 ** level}")
+    return kind
+
+
+def read_mesh_json(level_dir):
+    """mesh.json of level_dir as a dict ({} when absent)."""
+    path = Path(level_dir) / "mesh.json"
+    if not path.exists():
+        return {}
+    try:
+        meta = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise ExportError(f"{path}: invalid JSON: {e}") from None
+    if not isinstance(meta, dict):
+        raise ExportError(f"{path}: not a JSON object")
+    return meta
+
+
+# ---- scene.json ----------------------------------------------------------------------------------
+
+def scene_cracks(scene, path="scene.json"):
+    """The scene's cracks as a list of (n, 2) polylines: "cracks" [{"points": [[x, y], ...]}, ...], else
+    the old single "crack" {"a", "b"}."""
+    if "cracks" in scene:
+        cracks = scene["cracks"]
+        if not isinstance(cracks, list) or not cracks:
+            raise ExportError(f"{path}: 'cracks' must be a non-empty list")
+        out = []
+        for c, crack in enumerate(cracks):
+            pts = crack.get("points") if isinstance(crack, dict) else None
+            out.append(_polyline(pts, f"{path}: crack {c}"))
+        return out
+    crack = scene.get("crack")
+    if not isinstance(crack, dict) or "a" not in crack or "b" not in crack:
+        raise ExportError(f"{path}: neither 'cracks' nor a 'crack' with 'a' and 'b'")
+    return [_polyline([crack["a"], crack["b"]], f"{path}: crack")]
+
+
+def _polyline(points, what):
+    try:
+        a = np.asarray(points, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.ndim != 2 or a.shape[1] != 2 or len(a) < 2 or not np.isfinite(a).all():
+        raise ExportError(f"{what}: 'points' must be a list of at least 2 finite [x, y] points")
+    return a
+
+
+def scene_normal(scene):
+    """The old single crack's normal "crack": {"normal"} as a (2,) array, or None (several cracks,
+    a polyline, or none given)."""
+    crack = scene.get("crack")
+    if isinstance(crack, dict) and crack.get("normal") is not None:
+        return np.asarray(crack["normal"], dtype=float)
+    return None
