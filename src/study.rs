@@ -686,7 +686,24 @@ mod tests {
     /// block solves (the fallback for an order that does not put the crack unknowns last).
     #[test]
     fn h_n_from_the_trailing_block_matches_block_solves() {
-        let scene = Scene::default_scene();
+        // the structured default scene, and a gmsh mesh of a kinked crack beside a straight one
+        // (two trace rows at the kink; nested dissection of the vertex graph)
+        let unstructured = Scene::from_toml(
+            &crate::scene::DEFAULT_SCENE
+                .replace(
+                    "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
+                    "cracks = [{ polyline = [[-0.6, -0.2], [0.0, -0.2], [0.5, 0.3]] }, { segment = [[-0.5, 0.5], [0.3, 0.6]] }]",
+                )
+                .replace("cells = [8, 8]", "mesh_size = 0.3"),
+        )
+        .unwrap();
+        assert_eq!(unstructured.cracks.len(), 2, "the replacements took");
+        for scene in [Scene::default_scene(), unstructured] {
+            h_n_agrees_on(&scene);
+        }
+    }
+
+    fn h_n_agrees_on(scene: &Scene) {
         let mesh = scene.mesh_source().unwrap().level(1).unwrap();
         let ops = CrackOperators::new(&mesh);
         for (space, p_mass) in [
@@ -699,7 +716,7 @@ mod tests {
             let order = elimination_order(&mesh, &topo, &ops, system.n_p, p_mass);
             let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
             let ctx = LevelContext {
-                scene: &scene,
+                scene,
                 mesh: &mesh,
                 topo: &topo,
                 ops: &ops,

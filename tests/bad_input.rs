@@ -435,6 +435,12 @@ fn catalogue() -> Vec<Case> {
             "discretization must have exactly one of cells",
         ),
         edit(
+            "gmsh level over the memory limit",
+            "cells = [4, 4]\nlevels = [0, 1]",
+            "mesh_size = 0.01\nlevels = [0, 6]",
+            "discretization.levels: level 6 has about 5.68e8 triangles, which needs an estimated",
+        ),
+        edit(
             "negative mesh_size",
             "cells = [4, 4]",
             "mesh_size = -0.5",

@@ -1074,7 +1074,7 @@ impl Level0Size {
                 )
             }
             Level0Size::Triangles(_) => format!(
-                "level {level} has about {:.0} triangles",
+                "level {level} has about {:.2e} triangles",
                 2.0 * self.cells_at(level)
             ),
         }
