@@ -1,7 +1,8 @@
 """Checks of a reference's result folder shared by the reference tests (not a test module):
 summary.json's provenance, and the field files (every *.xdmf readable by meshio, the HDF5
-attributes)."""
+attributes); and `load_module`, which imports a reference's solve.py under a name of its own."""
 
+import importlib.util
 import json
 import platform
 import re
@@ -12,6 +13,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
 import sdresults  # noqa: E402
+
+
+def load_module(name, path):
+    """The Python file `path` imported as module `name` (each test file its own copy)."""
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def assert_provenance(summary, tool, script=None):

@@ -8,7 +8,6 @@ triangles given in several vertex orders to the numpy value of the same rule (ro
 Run: /usr/bin/python3 -m pytest references/tests/test_load_quadrature.py -q
 """
 
-import importlib.util
 import itertools
 import math
 import os
@@ -25,13 +24,8 @@ REFS = HERE.parent
 sys.path.insert(0, str(REFS / "common"))
 import sdexpr  # noqa: E402
 import sdquad  # noqa: E402
+from output_checks import load_module  # noqa: E402
 
-
-def load_module(name, path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 # Two counter-clockwise triangles, each listed in its three rotations (FreeFEM rejects clockwise

@@ -13,7 +13,6 @@ per such segment.
 Run: /usr/bin/python3 -m pytest references/tests/test_multi_crack_exports.py -q
 """
 
-import importlib.util
 import json
 import math
 import shutil
@@ -29,18 +28,12 @@ sys.path.insert(0, str(HERE))
 import fake_export as fe  # noqa: E402
 import sdexport  # noqa: E402
 import sdexpr  # noqa: E402
-from output_checks import assert_fields_readable  # noqa: E402
+from output_checks import assert_fields_readable, load_module  # noqa: E402
 
 
-def _load(name, path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
-
-dxsolve = _load("dolfinx_solve_multi", HERE.parent / "dolfinx" / "solve.py")
-ffsolve = _load("freefem_solve_multi", HERE.parent / "freefem" / "solve.py")
+dxsolve = load_module("dolfinx_solve_multi", HERE.parent / "dolfinx" / "solve.py")
+ffsolve = load_module("freefem_solve_multi", HERE.parent / "freefem" / "solve.py")
 
 # closed: u smooth, −Δu = f, ∂u/∂ν < −1 on every segment of every crack below (the linear part gives
 # ≤ −2.75, the sine part at most π/2; test_exact_u_pushes_every_crack_closed), so [u] = 0 and

@@ -12,7 +12,6 @@ on stderr, no result folder, nothing run.
 
 import builtins
 import json
-import importlib.util
 from contextlib import contextmanager
 import os
 import shutil
@@ -29,6 +28,7 @@ ROOT = HERE.parents[1]
 sys.path.insert(0, str(HERE.parent / "common"))
 sys.path.insert(0, str(HERE))
 import sdexpr  # noqa: E402
+from output_checks import load_module  # noqa: E402
 from fake_export import write_fake_export  # noqa: E402
 
 PWNED = "PWNED"  # replaced by a path under the test's tmp_path
@@ -41,15 +41,9 @@ def hostile(src, tmp_path):
     return src.replace(PWNED, str(tmp_path / "pwned"))
 
 
-def load(name, path):
-    spec = importlib.util.spec_from_file_location(name, path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
-
-ffsolve = load("freefem_solve_no_eval", HERE.parent / "freefem" / "solve.py")
-dxsolve = load("dolfinx_solve_no_eval", HERE.parent / "dolfinx" / "solve.py")
+ffsolve = load_module("freefem_solve_no_eval", HERE.parent / "freefem" / "solve.py")
+dxsolve = load_module("dolfinx_solve_no_eval", HERE.parent / "dolfinx" / "solve.py")
 sys.path.insert(0, str(ROOT / "compare"))
 from sdcompare_lib import exact as sdexact  # noqa: E402
 
