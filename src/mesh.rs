@@ -349,12 +349,7 @@ impl MeshSource {
             }
             (Meshing::Cells(_), Domain::Polygon(_)) => Err(MeshError::CellsNeedRectangle),
             (Meshing::MeshSize(size), _) => {
-                let polylines: Vec<Vec<[f64; 2]>> =
-                    cracks.iter().map(|c| c.points.clone()).collect();
-                let work = ScratchDir::new()?;
-                let (coarse, run) =
-                    gmsh::mesh_polygon(&domain.polygon(), &polylines, *size, &work.0)
-                        .map_err(|e| MeshError::Gmsh(e.to_string()))?;
+                let (coarse, run) = gmsh_level0(&domain.polygon(), cracks, *size)?;
                 let mesh = coarse_mesh(coarse, cracks, "gmsh")?;
                 Ok(MeshSource {
                     provenance: Some(CoarseProvenance {
@@ -554,6 +549,41 @@ fn crack_mismatch(origin: &str, crack: usize) -> MeshError {
         "{origin}: the edges of crack {} do not pass through its polyline's points in order",
         crack + 1
     ))
+}
+
+/// gmsh's triangulation of `polygon` with `cracks` at `size`, run once per process for a given
+/// input (gmsh is deterministic; `sdcrack run` checks the scene's meshes, then solves them).
+fn gmsh_level0(
+    polygon: &[[f64; 2]],
+    cracks: &[Polyline],
+    size: f64,
+) -> Result<(gmsh::CoarseMesh, gmsh::GmshRun), MeshError> {
+    type Cache = Vec<(Vec<u64>, (gmsh::CoarseMesh, gmsh::GmshRun))>;
+    static CACHE: std::sync::Mutex<Cache> = std::sync::Mutex::new(Vec::new());
+    let polylines: Vec<Vec<[f64; 2]>> = cracks.iter().map(|c| c.points.clone()).collect();
+    // the input, bit for bit: size, then the polygon, then each crack after its length
+    let mut key = vec![size.to_bits(), polygon.len() as u64];
+    key.extend(polygon.iter().flatten().map(|v| v.to_bits()));
+    for c in &polylines {
+        key.push(c.len() as u64);
+        key.extend(c.iter().flatten().map(|v| v.to_bits()));
+    }
+    let cached = |cache: &Cache| {
+        cache
+            .iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, v)| v.clone())
+    };
+    if let Some(hit) = CACHE.lock().ok().and_then(|c| cached(&c)) {
+        return Ok(hit);
+    }
+    let work = ScratchDir::new()?;
+    let made = gmsh::mesh_polygon(polygon, &polylines, size, &work.0)
+        .map_err(|e| MeshError::Gmsh(e.to_string()))?;
+    if let Ok(mut cache) = CACHE.lock() {
+        cache.push((key, made.clone()));
+    }
+    Ok(made)
 }
 
 /// A temporary folder for gmsh's files, removed when dropped.
