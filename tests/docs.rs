@@ -11,7 +11,7 @@ fn every_toml_example_of_the_scene_documentation_is_a_valid_scene() {
         .skip(1)
         .map(|b| b.split("```").next().unwrap_or(""))
         .collect();
-    assert_eq!(blocks.len(), 2, "docs/scenes.md has two worked examples");
+    assert_eq!(blocks.len(), 3, "docs/scenes.md has three worked examples");
     for b in blocks {
         let scene = Scene::from_toml(b).unwrap_or_else(|e| panic!("{e}\n{b}"));
         assert!(!scene.name.is_empty());
