@@ -679,14 +679,7 @@ pub fn centroid(vertices: &[[f64; 2]], t: &[usize; 3]) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::{Rectangle, Segment};
-
-    fn unit() -> Rectangle {
-        Rectangle {
-            min: [-1.0, -1.0],
-            max: [1.0, 1.0],
-        }
-    }
+    use crate::problem::{Segment, UNIT_SQUARE};
 
     fn seg(a: [f64; 2], b: [f64; 2]) -> Segment {
         Segment { a, b }
@@ -694,8 +687,13 @@ mod tests {
 
     #[test]
     fn counts_and_nesting() {
-        let m = structured::structured(unit(), [4, 2], &[seg([-0.5, 0.0], [0.5, 0.0]).into()], 2)
-            .unwrap();
+        let m = structured::structured(
+            UNIT_SQUARE,
+            [4, 2],
+            &[seg([-0.5, 0.0], [0.5, 0.0]).into()],
+            2,
+        )
+        .unwrap();
         assert_eq!(m.layout, Layout::Structured { nx: 16, ny: 8 });
         assert_eq!(m.vertices.len(), 17 * 9);
         assert_eq!(m.triangles.len(), 2 * 16 * 8);
@@ -715,8 +713,13 @@ mod tests {
 
     #[test]
     fn sides_and_broken_topology() {
-        let m = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.0], [0.5, 0.0]).into()], 1)
-            .unwrap();
+        let m = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([-0.5, 0.0], [0.5, 0.0]).into()],
+            1,
+        )
+        .unwrap();
         assert_eq!(m.cracks[0].normals[0], [0.0, 1.0]);
         let topo = m.u_topology(USpace::Broken);
         let interior = m.cracks[0].nodes.len() - 2;
@@ -752,23 +755,43 @@ mod tests {
     #[test]
     fn crack_directions() {
         // vertical crack: ν = (-1, 0)
-        let m = structured::structured(unit(), [4, 4], &[seg([0.0, -0.5], [0.0, 0.5]).into()], 0)
-            .unwrap();
+        let m = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([0.0, -0.5], [0.0, 0.5]).into()],
+            0,
+        )
+        .unwrap();
         assert_eq!(m.cracks[0].nodes.len(), 3);
         assert!((m.cracks[0].normals[0][0] + 1.0).abs() < 1e-15);
         // diagonal crack
-        let m = structured::structured(unit(), [4, 4], &[seg([-0.5, -0.5], [0.5, 0.5]).into()], 1)
-            .unwrap();
+        let m = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([-0.5, -0.5], [0.5, 0.5]).into()],
+            1,
+        )
+        .unwrap();
         assert_eq!(m.cracks[0].nodes.len(), 5);
     }
 
     #[test]
     fn crack_errors() {
-        let e = structured::structured(unit(), [4, 4], &[seg([-0.4, 0.0], [0.5, 0.0]).into()], 0)
-            .unwrap_err();
+        let e = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([-0.4, 0.0], [0.5, 0.0]).into()],
+            0,
+        )
+        .unwrap_err();
         assert!(matches!(e, MeshError::OffMesh { .. }));
-        let e = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.0], [1.5, 0.0]).into()], 0)
-            .unwrap_err();
+        let e = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([-0.5, 0.0], [1.5, 0.0]).into()],
+            0,
+        )
+        .unwrap_err();
         assert!(matches!(
             e,
             MeshError::NotInside {
@@ -776,8 +799,13 @@ mod tests {
                 ..
             }
         ));
-        let e = structured::structured(unit(), [4, 4], &[seg([-1.0, 0.0], [0.5, 0.0]).into()], 0)
-            .unwrap_err();
+        let e = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([-1.0, 0.0], [0.5, 0.0]).into()],
+            0,
+        )
+        .unwrap_err();
         assert!(matches!(
             e,
             MeshError::NotInside {
@@ -785,12 +813,22 @@ mod tests {
                 ..
             }
         ));
-        let e = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.0], [0.5, 0.5]).into()], 0)
-            .unwrap_err();
+        let e = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([-0.5, 0.0], [0.5, 0.5]).into()],
+            0,
+        )
+        .unwrap_err();
         assert!(matches!(e, MeshError::NotOnMeshLine { .. }));
         // NW-SE diagonal is not a mesh line
-        let e = structured::structured(unit(), [4, 4], &[seg([-0.5, 0.5], [0.5, -0.5]).into()], 0)
-            .unwrap_err();
+        let e = structured::structured(
+            UNIT_SQUARE,
+            [4, 4],
+            &[seg([-0.5, 0.5], [0.5, -0.5]).into()],
+            0,
+        )
+        .unwrap_err();
         assert!(matches!(e, MeshError::NotOnMeshLine { .. }));
     }
 }

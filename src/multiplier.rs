@@ -363,21 +363,14 @@ fn solve_tridiagonal(a: &[Vec<f64>], b: &[f64]) -> Vec<f64> {
 mod tests {
     use super::*;
     use crate::mesh::structured::structured;
-    use crate::problem::{Polyline, Rectangle};
-
-    fn unit() -> Rectangle {
-        Rectangle {
-            min: [-1.0, -1.0],
-            max: [1.0, 1.0],
-        }
-    }
+    use crate::problem::{Polyline, UNIT_SQUARE};
 
     fn mesh(cracks: &[Vec<[f64; 2]>], level: u32) -> Mesh {
         let cracks: Vec<Polyline> = cracks
             .iter()
             .map(|p| Polyline { points: p.clone() })
             .collect();
-        structured(unit(), [4, 4], &cracks, level).unwrap()
+        structured(UNIT_SQUARE, [4, 4], &cracks, level).unwrap()
     }
 
     /// p = constant vector q at every vertex.

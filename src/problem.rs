@@ -197,6 +197,13 @@ pub enum Meshing {
     File(std::path::PathBuf),
 }
 
+/// Ω = [−1, 1]², the square of the unit tests.
+#[cfg(test)]
+pub(crate) const UNIT_SQUARE: Rectangle = Rectangle {
+    min: [-1.0, -1.0],
+    max: [1.0, 1.0],
+};
+
 /// Straight crack from `a` to `b`; ν is (b − a)/|b − a| turned by +90° (the problem, docs/scenes.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Segment {
