@@ -290,3 +290,57 @@ fn reference_needs_a_listed_tool_and_check_json_gives_the_plan() {
     assert_eq!(plan["memory_mb"]["0"], mib(16.0).ceil() as u64);
     assert_eq!(plan["memory_mb"]["1"], mib(64.0).ceil() as u64);
 }
+
+/// A scene on a mesh file names it relative to the scene file; its shards, run from the scene's
+/// folder, merge from any other folder (the merge finds the scene's folder in the shards'
+/// provenance), and the merged summary keeps where level 0 came from.
+#[test]
+fn shards_of_a_mesh_file_scene_merge_from_another_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let folder = tmp.path().join("scene");
+    copy_dir(&repo.join("scenes/meshes"), &folder.join("meshes"));
+    let mut text = std::fs::read_to_string(repo.join("scenes/user-mesh.toml")).unwrap();
+    for (key, value) in [
+        ("levels", "[0, 1]"),
+        ("u_spaces", "[\"continuous\", \"broken\"]"),
+        ("multipliers", "[\"M1\"]"),
+        ("p_mass", "[\"consistent\"]"),
+        ("deltas", "[0.0]"),
+        ("fields", "[]"),
+        ("references", "[]"),
+    ] {
+        let start = text.find(&format!("\n{key} = ")).expect(key) + 1;
+        let end = start + text[start..].find('\n').unwrap();
+        text.replace_range(start..end, &format!("{key} = {value}"));
+    }
+    std::fs::write(folder.join("user-mesh.toml"), &text).unwrap();
+    let shards = tmp.path().join("shards");
+    for level in ["0", "1"] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+            .current_dir(&folder)
+            .args([
+                "run",
+                "user-mesh.toml",
+                "--solver-only",
+                "--quiet",
+                "--level",
+                level,
+            ])
+            .args(["--out", shards.join(level).to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let out = tmp.path().join("merged");
+    let parts = [shards.join("0/user-mesh"), shards.join("1/user-mesh")];
+    let o = merge(&parts, &out);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = summary(&out.join("user-mesh"));
+    assert_eq!(s["cases"].as_array().unwrap().len(), 4);
+    let source = s["coarse_mesh"]["source"].as_str().unwrap();
+    assert!(
+        source.ends_with("meshes/trapezoid-two-cracks.msh"),
+        "{source}"
+    );
+}

@@ -89,6 +89,27 @@ struct Shard {
     tools: Vec<(String, Value)>,
 }
 
+/// The folder the shards' scene file was in (its `mesh = { gmsh = … }` path is relative to it),
+/// from the first solver shard's provenance: the scene file as given, in the working directory
+/// of that run. "." when no shard says (an embedded scene has no mesh file).
+fn scene_folder(shards: &[Shard]) -> PathBuf {
+    let provenance = shards
+        .iter()
+        .find_map(|s| s.summary.as_ref()?.get("provenance").cloned());
+    let field = |k: &str| {
+        provenance
+            .as_ref()
+            .and_then(|p| p.get(k)?.as_str().map(PathBuf::from))
+    };
+    match (field("working_directory"), field("scene_origin")) {
+        (Some(cwd), Some(scene)) => cwd
+            .join(scene)
+            .parent()
+            .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
+        _ => PathBuf::from("."),
+    }
+}
+
 fn shard_err(path: &Path, reason: impl std::fmt::Display) -> MergeError {
     MergeError::Shard {
         path: path.to_path_buf(),
@@ -214,7 +235,7 @@ pub fn merge_shards(
             ));
         }
     }
-    let scene = Scene::from_toml(&first.scene_text)
+    let scene = Scene::from_toml_in(&first.scene_text, &scene_folder(&shards))
         .map_err(|e| shard_err(&first.path, format!("invalid {SCENE_COPY}: {e}")))?;
     let plan = CasePlan::new(&scene, &CaseFilter::default());
     let plan_summary = PlanSummary::from_plan(&plan);
