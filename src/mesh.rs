@@ -351,37 +351,34 @@ impl MeshSource {
             (Meshing::MeshSize(size), _) => {
                 let (coarse, run) = gmsh_level0(&domain.polygon(), cracks, *size)?;
                 let mesh = coarse_mesh(coarse, cracks, "gmsh")?;
-                Ok(MeshSource {
-                    provenance: Some(CoarseProvenance {
-                        source: "gmsh".into(),
-                        gmsh_version: Some(run.version),
-                        gmsh_seconds: Some(run.seconds),
-                        vertices: mesh.vertices.len(),
-                        triangles: mesh.triangles.len(),
-                        msh_text: Some(run.msh_text),
-                    }),
-                    kind: SourceKind::Refined {
-                        coarse: Box::new(mesh),
-                    },
-                })
+                Ok(MeshSource::refined(mesh, "gmsh".into(), Some(run)))
             }
             (Meshing::File(path), _) => {
-                let coarse = read_msh_file(path)?;
-                let mesh = coarse_mesh(coarse, cracks, &path.display().to_string())?;
-                Ok(MeshSource {
-                    provenance: Some(CoarseProvenance {
-                        source: path.display().to_string(),
-                        gmsh_version: None,
-                        gmsh_seconds: None,
-                        vertices: mesh.vertices.len(),
-                        triangles: mesh.triangles.len(),
-                        msh_text: None,
-                    }),
-                    kind: SourceKind::Refined {
-                        coarse: Box::new(mesh),
-                    },
-                })
+                let origin = path.display().to_string();
+                let mesh = coarse_mesh(read_msh_file(path)?, cracks, &origin)?;
+                Ok(MeshSource::refined(mesh, origin, None))
             }
+        }
+    }
+
+    /// Levels refined from `coarse`, which came from `source` (by the gmsh run `gmsh`, if any).
+    fn refined(coarse: Mesh, source: String, gmsh: Option<gmsh::GmshRun>) -> MeshSource {
+        let (version, seconds, msh_text) = match gmsh {
+            Some(run) => (Some(run.version), Some(run.seconds), Some(run.msh_text)),
+            None => (None, None, None),
+        };
+        MeshSource {
+            provenance: Some(CoarseProvenance {
+                source,
+                gmsh_version: version,
+                gmsh_seconds: seconds,
+                vertices: coarse.vertices.len(),
+                triangles: coarse.triangles.len(),
+                msh_text,
+            }),
+            kind: SourceKind::Refined {
+                coarse: Box::new(coarse),
+            },
         }
     }
 
@@ -401,30 +398,6 @@ impl MeshSource {
                 Ok(mesh)
             }
         }
-    }
-
-    /// Vertices of the uncut mesh of `level` (exact, without building it).
-    pub fn vertices_at(&self, level: u32) -> usize {
-        match &self.kind {
-            SourceKind::Structured { cells, .. } => {
-                let s = 1usize << level;
-                (cells[0] * s + 1) * (cells[1] * s + 1)
-            }
-            SourceKind::Refined { coarse } => {
-                // V' = V + E, E' = 2E + 3T, T' = 4T under uniform refinement
-                let (mut v, mut t) = (coarse.vertices.len(), coarse.triangles.len());
-                let mut e = (3 * t + coarse.boundary_edges.len()) / 2;
-                for _ in 0..level {
-                    (v, e, t) = (v + e, 2 * e + 3 * t, 4 * t);
-                }
-                v
-            }
-        }
-    }
-
-    /// Whether levels are the structured grid (fill-reducing order, h, export layout).
-    pub fn is_structured(&self) -> bool {
-        matches!(self.kind, SourceKind::Structured { .. })
     }
 }
 

@@ -248,6 +248,12 @@ pub fn run_study(
         let t0 = Instant::now();
         let mesh = source.level(level)?;
         let ops = CrackOperators::new(&mesh);
+        // S of each multiplier space: the mesh's, shared by every u space, p mass and δ
+        let multipliers: Vec<Multiplier> = plan
+            .multipliers
+            .iter()
+            .map(|&space| Multiplier::new(space, &ops))
+            .collect();
         let mesh_time = t0.elapsed().as_secs_f64();
         for &u_space in &plan.u_spaces {
             observer.phase(&format!("level {level}, {u_space}: assembling"));
@@ -280,6 +286,7 @@ pub fn run_study(
                     mesh: &mesh,
                     topo: &topo,
                     ops: &ops,
+                    multipliers: &multipliers,
                     system: &system,
                     p_mass,
                     symbolic: &symbolic,
@@ -302,6 +309,8 @@ struct LevelContext<'a> {
     mesh: &'a Mesh,
     topo: &'a UTopology,
     ops: &'a CrackOperators,
+    /// The plan's multiplier spaces, in its order.
+    multipliers: &'a [Multiplier],
     system: &'a System,
     p_mass: PMass,
     symbolic: &'a SymbolicLdlt,
@@ -309,9 +318,9 @@ struct LevelContext<'a> {
 }
 
 /// The LCP solution of one multiplier space at one δ, before x is recovered.
-struct Contact {
+struct Contact<'a> {
     /// The space with its S of D = S N.
-    multiplier: Multiplier,
+    multiplier: &'a Multiplier,
     sol: crate::contact::LcpSolution,
     /// Sᵀ μ on the trace rows of N.
     st_mu: Vec<f64>,
@@ -338,7 +347,7 @@ impl LevelContext<'_> {
         observer: &mut dyn Observer,
         out: &mut Vec<CaseResult>,
     ) -> Result<(), StudyError> {
-        let mut warm: Vec<Option<Vec<bool>>> = vec![None; plan.multipliers.len()];
+        let mut warm: Vec<Option<Vec<bool>>> = vec![None; self.multipliers.len()];
         let mut spare: Option<Ldlt> = None;
         for &delta in &plan.deltas {
             observer.phase(&format!(
@@ -353,11 +362,11 @@ impl LevelContext<'_> {
             let t1 = Instant::now();
             let reduced = self.reduce(ldlt, matrix);
             timings.crack_reduction = t1.elapsed().as_secs_f64();
-            let contacts: Vec<Contact> = plan
+            let contacts: Vec<Contact> = self
                 .multipliers
                 .iter()
                 .zip(warm.iter_mut())
-                .map(|(&multiplier, warm)| self.solve_lcp(&reduced, multiplier, warm))
+                .map(|(multiplier, warm)| self.solve_lcp(&reduced, multiplier, warm))
                 .collect();
             let (xs, recovery_time, condition_estimate, condition_time) =
                 self.recover(&reduced, &contacts);
@@ -441,14 +450,13 @@ impl LevelContext<'_> {
     }
 
     /// Solves the multiplier LCP of one space on the reduced system (warm-started).
-    fn solve_lcp(
+    fn solve_lcp<'m>(
         &self,
         reduced: &Reduced,
-        space: MultiplierSpace,
+        multiplier: &'m Multiplier,
         warm: &mut Option<Vec<bool>>,
-    ) -> Contact {
+    ) -> Contact<'m> {
         let t0 = Instant::now();
-        let multiplier = Multiplier::new(space, self.ops);
         let lcp = Lcp::reduce(&multiplier.s, &reduced.h_n, &reduced.q_n);
         let sol = lcp.solve(warm.as_deref(), LcpOptions::default());
         *warm = Some(sol.active.clone());
@@ -508,7 +516,7 @@ impl LevelContext<'_> {
             rhs,
             ..
         } = contact;
-        let kkt = self.kkt(reduced, &multiplier, &sol.mu, &st_mu, &rhs, x);
+        let kkt = self.kkt(reduced, multiplier, &sol.mu, &st_mu, &rhs, x);
         timings.contact += t0.elapsed().as_secs_f64();
         let lambda = multiplier.lambda_field(self.ops, &sol.mu);
         let n_p = self.system.n_p;
@@ -720,6 +728,7 @@ mod tests {
                 mesh: &mesh,
                 topo: &topo,
                 ops: &ops,
+                multipliers: &[],
                 system: &system,
                 p_mass,
                 symbolic: &symbolic,
@@ -872,6 +881,7 @@ mod tests {
                 mesh: &mesh,
                 topo: &topo,
                 ops: &ops,
+                multipliers: &[],
                 system: &system,
                 p_mass: PMass::Lumped,
                 symbolic: &symbolic,
