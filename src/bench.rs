@@ -364,6 +364,8 @@ pub fn run_bench(
         multipliers: vec![MultiplierSpace::M1],
         p_masses: vec![PMass::Consistent],
         deltas: vec![0.0],
+        // the solver alone: no field arrays kept for output
+        keep_fields: false,
         ..CasePlan::new(&bench_scene, &CaseFilter::default())
     };
     let t0 = Instant::now();

@@ -373,4 +373,67 @@ mod tests {
             n.lambda_l2
         );
     }
+
+    /// The norms of a known discrete field against u = x² + xy + 3y on (−1, 1)² (∇u = (2x + y,
+    /// x + 3), f = −Δu = −2), on an 8 × 8 grid (cells of side s, h_T = s√2): u_h = 0, and p_h the
+    /// P1 interpolant of ∇u + (βx, 0) (linear: exact) plus the same bubble c·b_T on every
+    /// triangle. With ∫_T b = 9|T|/20, ∫_T x b = 9|T|/20 x̄_T, ∫_T b² = 81|T|/280, ∫_T c·∇b = 0,
+    /// ∫_T (c·∇b)² = 81|T|/20 Σ_i (c·∇λ_i)² and Σ_i (c·∇λ_i)² = Q/s² on both triangles of a
+    /// cell, Q = c_x² + (c_x − c_y)² + c_y², the closed forms are
+    /// ‖u_h − u‖² = ∫ (x² + xy + 3y)² = 4/5 + 4/9 + 12,
+    /// ‖p_h − ∇u‖² = β² ∫ x² + 2β c_x Σ_T ∫_T x b + |c|² Σ_T ∫_T b² = 4β²/3 + 0 + 81|c|²/70,
+    /// and the X-norm's divergence term (div p_h + f = β + c·∇b_T)
+    /// Σ_T h_T² ‖β + c·∇b_T‖²_T = 2s² (4β²) + Σ_T 2s² (81|T|/20) Q/s² = 8s²β² + 32.4 Q.
+    /// A halved weight, a factor √2, a wrong sign of f, a lost or wrong term of div p_h (its P1
+    /// part or the bubble's gradient) fails this.
+    #[test]
+    fn norms_of_a_known_discrete_field_against_a_polynomial_are_the_closed_forms() {
+        let mesh = crate::mesh::structured::structured(
+            crate::problem::Rectangle {
+                min: [-1.0, -1.0],
+                max: [1.0, 1.0],
+            },
+            [4, 4],
+            &[],
+            1,
+        )
+        .unwrap();
+        assert_eq!(mesh.triangles.len(), 2 * 8 * 8);
+        let topo = mesh.u_topology(USpace::Continuous);
+        let parse = |s: &str| crate::expr::Expr::parse(s).unwrap();
+        let exact = Exact {
+            u: parse("x^2 + x*y + 3*y"),
+            px: parse("2*x + y"),
+            py: parse("x + 3"),
+            jump: None,
+        };
+        let (beta, c, s) = (0.6, [0.3, -0.2], 0.25);
+        let u = vec![0.0; topo.n_dofs];
+        let p: Vec<[f64; 2]> = mesh
+            .vertices
+            .iter()
+            .map(|&[x, y]| [2.0 * x + y + beta * x, x + 3.0])
+            .collect();
+        let bubbles = vec![c; mesh.triangles.len()];
+        let lambda = CrackField::PerNode(vec![]);
+        let source = parse("-2");
+        let sol = DiscreteSolution {
+            u: &u,
+            p: &p,
+            bubbles: &bubbles,
+            lambda: &lambda,
+            source: &source,
+        };
+        let n = error_norms(&mesh, &topo, &exact, &sol, NormQuadrature::default());
+        let close = |a: f64, b: f64, what: &str| {
+            assert!((a - b).abs() <= 1e-12 * b, "{what}: {a} vs closed form {b}");
+        };
+        close(n.u_l2, (4.0f64 / 5.0 + 4.0 / 9.0 + 12.0).sqrt(), "‖u‖");
+        let p2 = 4.0 * beta * beta / 3.0 + (c[0] * c[0] + c[1] * c[1]) * 81.0 / 70.0;
+        close(n.p_l2, p2.sqrt(), "‖p_h − ∇u‖");
+        let q = c[0] * c[0] + (c[0] - c[1]).powi(2) + c[1] * c[1];
+        let divergence = 8.0 * s * s * beta * beta + 32.4 * q;
+        close(n.p_x, (p2 + divergence).sqrt(), "‖p_h − ∇u‖_X");
+        assert_eq!(n.lambda_l2, 0.0, "no crack");
+    }
 }

@@ -79,6 +79,11 @@ pub struct CasePlan {
     pub deltas: Vec<f64>,
     /// Quadrature of the error norms.
     pub norm_quadrature: NormQuadrature,
+    /// Keep every case's fields (u, p with its bubbles for the consistent p mass, λ) and the
+    /// meshes in the [`StudyResult`]: what a run writes to `fields.h5` / `verification.h5`, from
+    /// which the compare tool recomputes the errors. On for every plan of [`CasePlan::new`];
+    /// `sdcrack bench` turns it off to time and measure the solver alone.
+    pub keep_fields: bool,
 }
 
 impl CasePlan {
@@ -101,6 +106,7 @@ impl CasePlan {
                 .delta
                 .map_or_else(|| scene.deltas.clone(), |d| vec![d]),
             norm_quadrature: NormQuadrature::default(),
+            keep_fields: true,
         }
     }
 
@@ -136,7 +142,7 @@ pub struct Timings {
     pub contact: f64,
     /// Error norms against `[exact]`.
     pub norms: f64,
-    /// Preparing field arrays.
+    /// Preparing field arrays (the p bubbles, when only the fields need them, are in `norms`).
     pub fields: f64,
 }
 
@@ -191,7 +197,8 @@ pub struct CaseResult {
     pub timings: Timings,
     /// Errors against `[exact]`.
     pub errors: Option<ErrorNorms>,
-    /// Fields, when the scene asks for any.
+    /// Fields, every quantity whatever the scene's `fields` (`None` only when the plan's
+    /// [`CasePlan::keep_fields`] is off).
     pub fields: Option<CaseFieldData>,
 }
 
@@ -217,7 +224,7 @@ pub struct MeshRecord {
 pub struct StudyResult {
     /// Cases in the order solved.
     pub cases: Vec<CaseResult>,
-    /// Meshes used, when fields are wanted.
+    /// Meshes used (empty when the plan's [`CasePlan::keep_fields`] is off).
     pub meshes: Vec<MeshRecord>,
     /// Where an unstructured level 0 came from (gmsh's version and time, or the mesh file).
     pub coarse_mesh: Option<crate::mesh::CoarseProvenance>,
@@ -260,7 +267,7 @@ pub fn run_study(
             let t1 = Instant::now();
             let topo = mesh.u_topology(u_space);
             let topo_time = mesh_time + t1.elapsed().as_secs_f64();
-            if !scene.fields.is_empty() {
+            if plan.keep_fields {
                 result.meshes.push(MeshRecord {
                     level,
                     u_space,
@@ -376,14 +383,7 @@ impl LevelContext<'_> {
             for (contact, x) in contacts.into_iter().zip(xs.chunks_exact(self.system.n())) {
                 let mut case_timings = timings;
                 case_timings.contact = contact.time + share;
-                let mut case = self.finish_case(
-                    &reduced,
-                    contact,
-                    x,
-                    delta,
-                    case_timings,
-                    plan.norm_quadrature,
-                );
+                let mut case = self.finish_case(&reduced, contact, x, delta, case_timings, plan);
                 case.condition_estimate = condition_estimate;
                 observer.case_done(&case);
                 out.push(case);
@@ -506,7 +506,7 @@ impl LevelContext<'_> {
         x: &[f64],
         delta: f64,
         mut timings: Timings,
-        quadrature: NormQuadrature,
+        plan: &CasePlan,
     ) -> CaseResult {
         let t0 = Instant::now();
         let Contact {
@@ -526,7 +526,7 @@ impl LevelContext<'_> {
         // The lumped p is P1 without bubble: zero bubbles in the norms, none in the fields.
         let exact = self.scene.exact.is_some();
         let bubbles = match self.p_mass {
-            PMass::Consistent if exact || self.scene.fields.p => self.bubbles(&p_vertex, u),
+            PMass::Consistent if exact || plan.keep_fields => self.bubbles(&p_vertex, u),
             PMass::Lumped if exact => vec![[0.0; 2]; self.mesh.triangles.len()],
             _ => Vec::new(),
         };
@@ -542,12 +542,12 @@ impl LevelContext<'_> {
                     lambda: &lambda,
                     source: &self.scene.f,
                 },
-                quadrature,
+                plan.norm_quadrature,
             )
         });
         timings.norms = t1.elapsed().as_secs_f64();
         let t2 = Instant::now();
-        let fields = (!self.scene.fields.is_empty()).then(|| CaseFieldData {
+        let fields = plan.keep_fields.then(|| CaseFieldData {
             u: u.to_vec(),
             p: self.topo.dof_vertex.iter().map(|&v| p_vertex[v]).collect(),
             p_bubble: match self.p_mass {

@@ -172,6 +172,89 @@ fn merged_shards_equal_a_single_run() {
     );
 }
 
+/// A scene that does not list u, p and λ: every shard keeps `verification.h5`, and the merge
+/// unites them like `fields.h5` (`H5Ocopy` of the case groups), so that the merged folder holds
+/// the same files as a single run, `verification.h5` bit for bit the same datasets and
+/// attributes, and names it as the recomputation file. With no fields there is neither
+/// `fields.h5` nor `fields/`; with u only, both are merged too.
+#[test]
+fn shards_verification_h5_merge_like_fields_h5() {
+    for fields in ["[]", r#"["u"]"#] {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("small.toml");
+        let text = scene_text().replace(
+            r#"fields = ["u", "p", "lambda"]"#,
+            &format!("fields = {fields}"),
+        );
+        std::fs::write(&scene, text).unwrap();
+        let scene = scene.to_str().unwrap();
+        let single = dir.path().join("single");
+        let o = sdcrack(&["run", scene, "--out", single.to_str().unwrap(), "--quiet"]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let single = single.join("small");
+        // one shard per level and u space, each with every multiplier, p mass and δ
+        let mut shards = Vec::new();
+        for level in ["1", "0"] {
+            for u in ["broken", "continuous"] {
+                let out = dir.path().join("shards").join(format!("{level}-{u}"));
+                let o = sdcrack(&[
+                    "run",
+                    scene,
+                    "--level",
+                    level,
+                    "--u-space",
+                    u,
+                    "--solver-only",
+                    "--quiet",
+                    "--out",
+                    out.to_str().unwrap(),
+                ]);
+                assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+                let shard = out.join("small");
+                assert!(shard.join("verification.h5").is_file());
+                shards.push(shard);
+            }
+        }
+        let out = dir.path().join("merged");
+        let o = merge(&shards, &out);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let merged = out.join("small");
+
+        let files = |folder: &Path| {
+            let mut names: Vec<String> = std::fs::read_dir(folder)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            names.sort();
+            names
+        };
+        assert_eq!(files(&merged), files(&single), "fields = {fields}");
+        assert_eq!(fields == "[]", !merged.join("fields.h5").exists());
+        assert_eq!(fields == "[]", !merged.join("fields").exists());
+
+        let (a, b) = (summary(&single), summary(&merged));
+        assert_eq!(b["recomputation_file"], "verification.h5");
+        assert_eq!(numbers(a), numbers(b));
+
+        let (va, vb) = (
+            common::h5_contents(&single.join("verification.h5")),
+            common::h5_contents(&merged.join("verification.h5")),
+        );
+        assert!(
+            va.iter().filter(|(p, _)| p.ends_with("/u")).count() == 48,
+            "u of every case"
+        );
+        common::assert_same_h5(&va, &vb);
+        if fields != "[]" {
+            common::assert_same_h5(
+                &common::h5_contents(&single.join("fields.h5")),
+                &common::h5_contents(&merged.join("fields.h5")),
+            );
+            assert_eq!(series_files(&single), series_files(&merged));
+        }
+    }
+}
+
 /// A failed merge: exit 2, one line containing `needle`, nothing under `out`.
 fn refused(shards: &[PathBuf], out: &Path, needle: &str) {
     let o = merge(shards, out);

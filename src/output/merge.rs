@@ -6,9 +6,9 @@
 //! module puts the shards of one scene together into the folder a single `sdcrack run` of the
 //! scene writes: the same files, the cases in the same order, the numbers the same (summary
 //! values are parsed back to the same `f64` and written by the same serializer), the field
-//! datasets copied bit for bit (HDF5's `H5Ocopy`), the series files and reference outputs copied
-//! byte for byte, the mesh export written afresh by the same code. What differs from a single run
-//! is what describes the process: the timings of each case are those of its shard, `wall_s` is
+//! datasets of `fields.h5` and `verification.h5` copied bit for bit (HDF5's `H5Ocopy`), the
+//! series files and reference outputs copied byte for byte, the mesh export written afresh by the
+//! same code. What differs from a single run is what describes the process: the timings of each case are those of its shard, `wall_s` is
 //! the sum of the shards' solve times, `provenance` is the merge's (the shards' own are kept
 //! under `shards`), and each reference's summary keeps its first shard's provenance with every
 //! shard's under `shards`.
@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use serde_json::{Map, Value};
 
 use super::summary::{PlanSummary, Provenance};
-use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY};
+use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
 use crate::scene::Scene;
 use crate::study::{CaseFilter, CasePlan};
 
@@ -257,10 +257,10 @@ pub fn merge_shards(
         .map_err(|e| write_err(&scene_copy, e))?;
 
     let t0 = std::time::Instant::now();
-    if !scene.fields.is_empty() {
-        let sources: Vec<&Path> = solver.iter().map(|s| s.path.as_path()).collect();
-        merge_field_files(&sources, &dir, &["summary.json", SCENE_COPY])?;
-    }
+    // fields.h5 and its series when the scene lists fields, verification.h5 when it does not
+    // list them all, coarse.msh for a gmsh scene: whatever the shards hold
+    let sources: Vec<&Path> = solver.iter().map(|s| s.path.as_path()).collect();
+    merge_field_files(&sources, &dir, &["summary.json", SCENE_COPY])?;
     let fields_write_s = t0.elapsed().as_secs_f64();
 
     let lead_summary = lead.summary.as_ref().expect("solver shards have a summary");
@@ -287,6 +287,10 @@ pub fn merge_shards(
     object.insert("all_converged".into(), Value::Bool(not_converged == 0));
     object.insert("wall_s".into(), Value::from(wall_s));
     object.insert("fields_write_s".into(), Value::from(fields_write_s));
+    object.insert(
+        "recomputation_file".into(),
+        Value::from(super::recomputation_file(&scene.fields)),
+    );
     object.insert("cases".into(), Value::Array(cases));
     object.insert("shards".into(), shard_list(&solver, |s| s.summary.as_ref()));
     write_json(&dir.join("summary.json"), &summary)?;
@@ -536,22 +540,27 @@ fn write_json(path: &Path, value: &Value) -> Result<(), MergeError> {
 }
 
 /// Copies into `dir` every file of the folders `sources` (recursively) except `skip` (names at
-/// their top level) and `fields.h5`, which is merged: the union of the sources' HDF5 trees. A
-/// file present in several sources must be the same bytes in each.
+/// their top level), `fields.h5` and `verification.h5`, which are merged: each the union of the
+/// sources' HDF5 trees of that name. A file present in several sources must be the same bytes in
+/// each.
 fn merge_field_files(sources: &[&Path], dir: &Path, skip: &[&str]) -> Result<(), MergeError> {
-    let h5_name = format!("{FIELDS_STEM}.h5");
-    let mut h5_sources = Vec::new();
+    let h5_names = [FIELDS_STEM, VERIFICATION_STEM].map(|stem| format!("{stem}.h5"));
+    let mut h5_sources: [Vec<PathBuf>; 2] = Default::default();
     for src in sources {
-        let h5 = src.join(&h5_name);
-        if h5.is_file() {
-            h5_sources.push(h5);
+        for (name, found) in h5_names.iter().zip(&mut h5_sources) {
+            let h5 = src.join(name);
+            if h5.is_file() {
+                found.push(h5);
+            }
         }
         copy_files(src, dir, src, &|rel: &Path| {
-            rel == Path::new(&h5_name) || skip.iter().any(|s| rel == Path::new(s))
+            h5_names.iter().any(|n| rel == Path::new(n)) || skip.iter().any(|s| rel == Path::new(s))
         })?;
     }
-    if !h5_sources.is_empty() {
-        hdf5_union(&h5_sources, &dir.join(&h5_name))?;
+    for (name, found) in h5_names.iter().zip(&h5_sources) {
+        if !found.is_empty() {
+            hdf5_union(found, &dir.join(name))?;
+        }
     }
     Ok(())
 }

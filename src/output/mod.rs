@@ -1,4 +1,5 @@
-//! Result files: the results folder of a run, `summary.json`, and the HDF5/XDMF fields.
+//! Result files: the results folder of a run, `summary.json`, the HDF5/XDMF fields, and
+//! `verification.h5` (every field, for the compare tool, when the scene does not list them all).
 //!
 //! A run writes into a fresh hidden folder `OUT/.NAME.partial-PID` and renames it to `OUT/NAME`
 //! only when everything is written, so an interrupted run leaves no folder under the final name
@@ -16,6 +17,23 @@ use std::path::{Path, PathBuf};
 
 /// Stem of the field files in a results folder: `fields.h5` and the series under `fields/`.
 pub const FIELDS_STEM: &str = "fields";
+
+/// Stem of `verification.h5`: the HDF5 layout of `fields.h5` with every quantity (u, p, its
+/// bubbles, λ), no XDMF series. A run writes it when the scene's `fields` does not list u, p and
+/// λ, so that the compare tool can always recompute the reported errors from stored fields.
+pub const VERIFICATION_STEM: &str = "verification";
+
+/// The file of a results folder that holds every field the compare tool recomputes the errors
+/// from: `fields.h5` when the scene lists u, p and λ, `verification.h5` otherwise (summary.json's
+/// `recomputation_file`).
+pub fn recomputation_file(fields: &crate::scene::FieldSet) -> String {
+    let stem = if fields.is_complete() {
+        FIELDS_STEM
+    } else {
+        VERIFICATION_STEM
+    };
+    format!("{stem}.h5")
+}
 
 /// Errors of the results folder.
 #[derive(Debug, thiserror::Error)]
@@ -154,7 +172,7 @@ pub enum WriteError {
         /// Reason.
         reason: String,
     },
-    /// The field files could not be written.
+    /// The field files (`fields.h5`, `fields/`, `verification.h5`) could not be written.
     #[error("cannot write field files: {0}")]
     Fields(#[from] xdmf::OutputError),
 }
@@ -163,8 +181,9 @@ pub enum WriteError {
 /// without a file): what the run was asked to do, read by the compare tool.
 pub const SCENE_COPY: &str = "scene.toml";
 
-/// Writes `scene.toml` (the scene's text byte for byte), `summary.json` (with `provenance`) and, when the scene asks
-/// for fields, `fields.h5` + `fields.xdmf` into `dir`.
+/// Writes `scene.toml` (the scene's text byte for byte), `summary.json` (with `provenance`),
+/// when the scene asks for fields `fields.h5` + the series `fields/*.xdmf` with those fields, and
+/// when it does not ask for all of u, p and λ `verification.h5` with all of them, into `dir`.
 pub fn write_run(
     dir: &Path,
     scene: &crate::scene::Scene,
@@ -187,9 +206,7 @@ pub fn write_run(
     }
     let with_fields = !scene.fields.is_empty();
     let t0 = std::time::Instant::now();
-    if with_fields {
-        write_fields(dir, scene, study)?;
-    }
+    write_fields(dir, scene, study)?;
     let fields_write_s = t0.elapsed().as_secs_f64();
     let summary = summary::Summary {
         scene: scene.name.clone(),
@@ -208,6 +225,7 @@ pub fn write_run(
         all_converged: study.cases.iter().all(|c| c.converged),
         wall_s,
         fields_write_s,
+        recomputation_file: recomputation_file(&scene.fields),
         coarse_mesh: study.coarse_mesh.clone(),
         cases: study
             .cases
@@ -230,11 +248,30 @@ fn mesh_key(level: u32, u_space: crate::problem::USpace) -> String {
     format!("level{level}-{u_space}")
 }
 
+/// Writes `fields.h5` + `fields/` with the fields the scene lists (none when it lists none) and,
+/// unless it lists u, p and λ, `verification.h5` with all of them.
 fn write_fields(
     dir: &Path,
     scene: &crate::scene::Scene,
     study: &crate::study::StudyResult,
 ) -> Result<(), WriteError> {
+    let (meshes, all) = field_data(study);
+    if scene.fields.is_complete() {
+        xdmf::write_fields(dir, FIELDS_STEM, &meshes, &all)?;
+        return Ok(());
+    }
+    if !scene.fields.is_empty() {
+        let wanted: Vec<xdmf::CaseFields> =
+            all.iter().map(|c| restrict(c, &scene.fields)).collect();
+        xdmf::write_fields(dir, FIELDS_STEM, &meshes, &wanted)?;
+    }
+    xdmf::write_h5_only(dir, VERIFICATION_STEM, &meshes, &all)?;
+    Ok(())
+}
+
+/// The meshes and every case's fields, all quantities: u, p, its bubbles (consistent p mass
+/// only: the lumped p has none) and λ.
+fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>) {
     use crate::multiplier::CrackField;
     use xdmf::Meta;
     let meshes: Vec<xdmf::MeshData> = study
@@ -263,13 +300,13 @@ fn write_fields(
             Some(xdmf::CaseFields {
                 name: summary::case_name(c),
                 mesh_key: mesh_key(c.level, c.u_space),
-                u: scene.fields.u.then(|| f.u.clone()),
-                p: scene.fields.p.then(|| f.p.clone()),
+                u: Some(f.u.clone()),
+                p: Some(f.p.clone()),
                 // the lumped p mass has no bubble: no p_bubble dataset
-                p_bubble: (scene.fields.p && !f.p_bubble.is_empty()).then(|| f.p_bubble.clone()),
+                p_bubble: (!f.p_bubble.is_empty()).then(|| f.p_bubble.clone()),
                 crack_points,
                 crack_segments,
-                lambda: scene.fields.lambda.then(|| match &f.lambda {
+                lambda: Some(match &f.lambda {
                     CrackField::PerSegment(v) => (xdmf::Centering::Cell, v.clone()),
                     CrackField::PerNode(v) => (xdmf::Centering::Node, v.clone()),
                 }),
@@ -286,6 +323,22 @@ fn write_fields(
             })
         })
         .collect();
-    xdmf::write_fields(dir, FIELDS_STEM, &meshes, &cases)?;
-    Ok(())
+    (meshes, cases)
+}
+
+/// `case` with only the quantities of `fields` (p's bubbles go with p).
+fn restrict(case: &xdmf::CaseFields, fields: &crate::scene::FieldSet) -> xdmf::CaseFields {
+    xdmf::CaseFields {
+        name: case.name.clone(),
+        mesh_key: case.mesh_key.clone(),
+        u: fields.u.then(|| case.u.clone()).flatten(),
+        p: fields.p.then(|| case.p.clone()).flatten(),
+        p_bubble: fields.p.then(|| case.p_bubble.clone()).flatten(),
+        crack_points: case.crack_points.clone(),
+        crack_segments: case.crack_segments.clone(),
+        lambda: fields.lambda.then(|| case.lambda.clone()).flatten(),
+        series: case.series.clone(),
+        metadata: case.metadata.clone(),
+        constants: case.constants.clone(),
+    }
 }

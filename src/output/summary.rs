@@ -1,6 +1,8 @@
 //! `summary.json`: one entry per case with the keys of README.md's results folder (level, h, u_space, multiplier,
 //! delta, unknowns, iterations, kkt, timings_s, errors when the scene has `[exact]`) plus the LCP
-//! status, the active-set size and the factorisation's regularised pivots.
+//! status, the active-set size and the factorisation's regularised pivots, the case's group in
+//! the field files (`fields_grid`), and at the top level the file the compare tool recomputes
+//! the errors from (`recomputation_file`).
 
 use serde::Serialize;
 
@@ -29,8 +31,14 @@ pub struct Summary {
     pub all_converged: bool,
     /// Wall-clock seconds of the solves (all cases, before writing files).
     pub wall_s: f64,
-    /// Seconds spent writing `fields.h5`/`fields.xdmf` (all cases together; 0 without fields).
+    /// Seconds spent writing the field files (`fields.h5` with its series `fields/*.xdmf`,
+    /// `verification.h5`), all cases together.
     pub fields_write_s: f64,
+    /// The file holding every field the compare tool recomputes the errors from: `fields.h5`
+    /// when the scene's `fields` lists u, p and λ, otherwise `verification.h5` (the same HDF5
+    /// layout with all of them, no XDMF series). Each case's group in it is
+    /// `/cases/<fields_grid>`.
+    pub recomputation_file: String,
     /// For an unstructured scene: where level 0 came from (gmsh's version and seconds, or the
     /// mesh file) and its size; gmsh's level 0 is also written as `coarse.msh`.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -159,18 +167,18 @@ pub struct CaseSummary {
     /// Errors against `[exact]`, when the scene has it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub errors: Option<ErrorNorms>,
-    /// Name of the case in the field files, when fields are written: its group
-    /// `/cases/<fields_grid>` in `fields.h5` and its step grid in the series file.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub fields_grid: Option<String>,
+    /// Name of the case in the field files, always set: its group `/cases/<fields_grid>` in
+    /// `fields.h5` and in `verification.h5` (whichever exist), and its step grid in the series
+    /// file.
+    pub fields_grid: String,
     /// The series file (relative to the results folder, `fields/<series>.xdmf`) whose time
-    /// steps are this case's δ sweep, when fields are written.
+    /// steps are this case's δ sweep, when the XDMF series are written (the scene lists fields).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fields_series: Option<String>,
 }
 
-/// Name of a case in the field files: its `/cases/` group in `fields.h5` and its step grid,
-/// e.g. `level3-broken-M1-delta1e-2` (δ = 0 is written `delta0`).
+/// Name of a case in the field files, e.g. `level3-broken-M1-delta1e-2` (δ = 0 is written
+/// `delta0`): its `/cases/` group in `fields.h5` and `verification.h5`, and its step grid.
 pub fn case_name(c: &CaseResult) -> String {
     format!("{}-delta{}", series_name(c), delta_text(c.delta))
 }
@@ -196,8 +204,8 @@ pub fn series_name(c: &CaseResult) -> String {
 }
 
 impl CaseSummary {
-    /// The summary entry of a solved case.
-    pub fn from_case(c: &CaseResult, with_fields: bool) -> CaseSummary {
+    /// The summary entry of a solved case; `with_series` when the XDMF series are written.
+    pub fn from_case(c: &CaseResult, with_series: bool) -> CaseSummary {
         CaseSummary {
             level: c.level,
             h: c.h,
@@ -225,9 +233,106 @@ impl CaseSummary {
             condition_estimate: c.condition_estimate,
             timings_s: c.timings,
             errors: c.errors,
-            fields_grid: with_fields.then(|| case_name(c)),
-            fields_series: with_fields
+            fields_grid: case_name(c),
+            fields_series: with_series
                 .then(|| format!("{}/{}.xdmf", super::FIELDS_STEM, series_name(c))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::LcpStatus;
+    use crate::problem::{MultiplierSpace, PMass, USpace};
+
+    /// A solved case with awkward numbers: the shortest round trip needs 17 digits, a
+    /// subnormal, the smallest normal, an exact zero, huge and tiny exponents.
+    fn case() -> CaseResult {
+        CaseResult {
+            level: 3,
+            h: 0.1 + 0.2,
+            u_space: USpace::Broken,
+            multiplier: MultiplierSpace::M1Star,
+            p_mass: PMass::Lumped,
+            delta: 1.5e-8,
+            unknowns: 1234,
+            multipliers: 17,
+            iterations: 4,
+            status: LcpStatus::Converged,
+            converged: true,
+            kkt: KktResiduals {
+                equations: f64::EPSILON / 3.0,
+                primal: 0.0,
+                dual: 5e-324,
+                complementarity: f64::MIN_POSITIVE,
+            },
+            active: 5,
+            regularized_pivots: 0,
+            condition_estimate: 1e17 / 7.0,
+            timings: Timings::default(),
+            errors: Some(ErrorNorms {
+                u_l2: 1.0 / 3.0,
+                p_l2: std::f64::consts::PI * 1e-300,
+                p_x: (0.1 + 0.2) * 1e10,
+                lambda_l2: 2f64.powi(53) + 2.0,
+            }),
+            fields: None,
+        }
+    }
+
+    /// summary.json carries a case's errors and KKT residuals unchanged: written by
+    /// [`crate::output::write_run`] and parsed back, every value is the same `f64` bit for bit,
+    /// under its own key (the compare tool recomputes the errors and compares with these).
+    #[test]
+    fn errors_and_kkt_round_trip_through_summary_json_bit_for_bit() {
+        let c = case();
+        let scene = crate::scene::Scene::default_scene();
+        let plan = crate::study::CasePlan::new(&scene, &crate::study::CaseFilter::default());
+        let study = crate::study::StudyResult {
+            cases: vec![c.clone()],
+            ..Default::default()
+        };
+        let provenance = Provenance::of_this_process("test", std::time::SystemTime::now());
+        let dir = tempfile::tempdir().unwrap();
+        crate::output::write_run(dir.path(), &scene, &plan, &study, 1.0, &provenance).unwrap();
+        let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
+        let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let got = &json["cases"][0];
+        let e = c.errors.unwrap();
+        let bits = |v: &serde_json::Value, key: &str| {
+            let x = v[key].as_f64().unwrap_or_else(|| panic!("{key}: {v}"));
+            x.to_bits()
+        };
+        for (key, want) in [
+            ("u_l2", e.u_l2),
+            ("p_l2", e.p_l2),
+            ("p_x", e.p_x),
+            ("lambda_l2", e.lambda_l2),
+        ] {
+            assert_eq!(bits(&got["errors"], key), want.to_bits(), "errors.{key}");
+        }
+        assert_eq!(got["errors"].as_object().unwrap().len(), 4);
+        for (key, want) in [
+            ("equations", c.kkt.equations),
+            ("primal", c.kkt.primal),
+            ("dual", c.kkt.dual),
+            ("complementarity", c.kkt.complementarity),
+        ] {
+            assert_eq!(bits(&got["kkt"], key), want.to_bits(), "kkt.{key}");
+        }
+        assert_eq!(got["kkt"].as_object().unwrap().len(), 4);
+        for (key, want) in [
+            ("h", c.h),
+            ("delta", c.delta),
+            ("condition_estimate", c.condition_estimate),
+        ] {
+            assert_eq!(bits(got, key), want.to_bits(), "{key}");
+        }
+        assert_eq!(
+            got["fields_grid"],
+            "level3-broken-M1star-lumped-delta1.5e-8"
+        );
+        assert_eq!(json["recomputation_file"], "fields.h5");
     }
 }

@@ -1,4 +1,6 @@
-//! HDF5 + XDMF 3 field files: [`write_fields`] writes the fields of every solved case.
+//! HDF5 + XDMF 3 field files: [`write_fields`] writes the fields of every solved case;
+//! [`write_h5_only`] writes the same HDF5 file without the XDMF series (the results folder's
+//! `verification.h5`, kept for the compare tool's recomputation, not for viewers).
 //!
 //! # Files
 //!
@@ -13,6 +15,10 @@
 //! A *series* is a list of cases on one mesh that a viewer walks through with its time slider;
 //! the solver makes one series per (level, u space, multiplier), whose steps are the δ sweep in
 //! the order solved (δ decreasing, so the slider walks δ → 0).
+//!
+//! `write_h5_only(DIR, STEM, meshes, cases)` writes `DIR/STEM.h5` alone: the same datasets with
+//! the same values and attributes as `write_fields` would, validated and committed the same way;
+//! no series folder.
 //!
 //! # HDF5 datasets (`STEM.h5`)
 //!
@@ -33,7 +39,7 @@
 //!
 //! The group `/cases/CASE` and every field dataset in it (`u`, `p`, `p_bubble`, `crack/lambda`,
 //! the constants) carry the case's [`CaseFields::metadata`] as HDF5 attributes (the solver's:
-//! `level`, `h`, `u_space`, `multiplier`, `delta`), plus `series` (text) and `step` (integer).
+//! `level`, `h`, `u_space`, `multiplier`, `p_mass`, `delta`), plus `series` (text) and `step` (integer).
 //! The solver's only constant field is `delta`: ParaView ignores XDMF `Information` and shows no
 //! step names, so δ is also a point attribute whose value (its range in the information panel, or
 //! the "Annotate Attribute Data" filter) says which δ the time slider is on; meshio reads it as
@@ -90,7 +96,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Errors of [`write_fields`].
+/// Errors of [`write_fields`] and [`write_h5_only`].
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// The HDF5 library reported an error.
@@ -198,6 +204,30 @@ pub fn write_fields(
     meshes: &[MeshData],
     cases: &[CaseFields],
 ) -> Result<(), OutputError> {
+    write(dir, stem, meshes, cases, true)
+}
+
+/// Writes `DIR/<stem>.h5` alone, with no series files: the same HDF5 file as [`write_fields`]
+/// (same layout, datasets and attributes, including each case's `series` and `step`), validated
+/// and committed the same way (temporary name, fsync, atomic rename); `DIR/<stem>/` is neither
+/// written nor looked at.
+pub fn write_h5_only(
+    dir: &Path,
+    stem: &str,
+    meshes: &[MeshData],
+    cases: &[CaseFields],
+) -> Result<(), OutputError> {
+    write(dir, stem, meshes, cases, false)
+}
+
+/// [`write_fields`] (`with_series`) or [`write_h5_only`].
+fn write(
+    dir: &Path,
+    stem: &str,
+    meshes: &[MeshData],
+    cases: &[CaseFields],
+    with_series: bool,
+) -> Result<(), OutputError> {
     check_name("stem", stem)?;
     let plan = validate(meshes, cases)?;
     match fs::metadata(dir) {
@@ -217,14 +247,16 @@ pub fn write_fields(
     }
     let final_h5 = dir.join(format!("{stem}.h5"));
     let final_cases = dir.join(stem);
-    match fs::symlink_metadata(&final_cases) {
-        Ok(m) if !m.is_dir() => {
-            return Err(OutputError::Invalid(format!(
-                "{} exists and is not a directory; cannot write the per-case XDMF files there",
-                final_cases.display()
-            )))
+    if with_series {
+        match fs::symlink_metadata(&final_cases) {
+            Ok(m) if !m.is_dir() => {
+                return Err(OutputError::Invalid(format!(
+                    "{} exists and is not a directory; cannot write the per-case XDMF files there",
+                    final_cases.display()
+                )))
+            }
+            _ => {}
         }
-        _ => {}
     }
 
     static COUNTER: AtomicU64 = AtomicU64::new(0);
@@ -243,8 +275,30 @@ pub fn write_fields(
     write_h5(&temps.h5, meshes, cases, &plan)?;
     sync_path(&temps.h5)?;
 
-    // Series files.
-    fs::create_dir(&temps.cases).map_err(io_err(&temps.cases))?;
+    if with_series {
+        write_series(&temps.cases, stem, meshes, cases, &plan)?;
+    }
+
+    // Commit.
+    fs::rename(&temps.h5, &final_h5).map_err(io_err(&final_h5))?;
+    if with_series {
+        replace_dir(&temps.cases, &final_cases, &temps.old_cases)?;
+    }
+    // Persist the renames; failure here leaves correct files, so it is not an error.
+    let _ = sync_path(dir);
+    Ok(())
+}
+
+/// Writes the series files of every series into the new folder `folder` (fsynced), pointing at
+/// `../<stem>.h5`.
+fn write_series(
+    folder: &Path,
+    stem: &str,
+    meshes: &[MeshData],
+    cases: &[CaseFields],
+    plan: &Plan,
+) -> Result<(), OutputError> {
+    fs::create_dir(folder).map_err(io_err(folder))?;
     let h5 = format!("../{stem}.h5");
     for series in &plan.series {
         let first = &cases[series.cases[0]];
@@ -255,28 +309,21 @@ pub fn write_fields(
         };
         let body = grids(&|c, k| mesh_grid_xml(&h5, mesh, c, k, "      "));
         write_synced(
-            &temps.cases.join(format!("{}.xdmf", first.series)),
+            &folder.join(format!("{}.xdmf", first.series)),
             &document(&temporal(&first.series, &body)),
         )?;
         if has_crack(first) {
             let body = grids(&|c, k| crack_grid_xml(&h5, c, k, "      "));
             write_synced(
-                &temps.cases.join(format!("{}.crack.xdmf", first.series)),
+                &folder.join(format!("{}.crack.xdmf", first.series)),
                 &document(&temporal(&first.series, &body)),
             )?;
         }
     }
-    sync_path(&temps.cases)?;
-
-    // Commit.
-    fs::rename(&temps.h5, &final_h5).map_err(io_err(&final_h5))?;
-    replace_dir(&temps.cases, &final_cases, &temps.old_cases)?;
-    // Persist the renames; failure here leaves correct files, so it is not an error.
-    let _ = sync_path(dir);
-    Ok(())
+    sync_path(folder)
 }
 
-/// Temporary paths of one [`write_fields`] call, removed on drop (success or failure).
+/// Temporary paths of one [`write_fields`] or [`write_h5_only`] call, removed on drop (success or failure).
 struct Temporaries {
     h5: PathBuf,
     cases: PathBuf,
@@ -1121,6 +1168,101 @@ mod tests {
         want_files.sort();
         assert_eq!(listing(&dir.join("fields")), want_files);
         assert!(!listing(&dir).iter().any(|n| n.starts_with('.')));
+    }
+
+    /// Every dataset of an HDF5 file (recursively, soft links skipped) with its values as bits
+    /// and its attributes as text.
+    fn h5_contents(path: &Path) -> Vec<(String, Vec<u64>, Vec<String>)> {
+        fn walk(g: &hdf5::Group, prefix: &str, out: &mut Vec<(String, Vec<u64>, Vec<String>)>) {
+            let attrs = |loc: &hdf5::Location| -> Vec<String> {
+                let mut names = loc.attr_names().unwrap();
+                names.sort();
+                names
+                    .into_iter()
+                    .map(|n| {
+                        let a = loc.attr(&n).unwrap();
+                        let v = a
+                            .read_scalar::<f64>()
+                            .map(|x| x.to_bits().to_string())
+                            .or_else(|_| {
+                                a.read_scalar::<hdf5::types::VarLenUnicode>()
+                                    .map(|t| t.to_string())
+                            })
+                            .unwrap();
+                        format!("{n}={v}")
+                    })
+                    .collect()
+            };
+            for name in g.member_names().unwrap() {
+                let path = format!("{prefix}/{name}");
+                if name == "mesh" {
+                    continue; // the soft link to /meshes/KEY
+                }
+                if let Ok(sub) = g.group(&name) {
+                    out.push((path.clone(), vec![], attrs(&sub)));
+                    walk(&sub, &path, out);
+                } else {
+                    let ds = g.dataset(&name).unwrap();
+                    let bits = ds
+                        .read_raw::<f64>()
+                        .unwrap()
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .collect();
+                    out.push((path, bits, attrs(&ds)));
+                }
+            }
+        }
+        let f = hdf5::File::open(path).unwrap();
+        let mut out = Vec::new();
+        walk(&f, "", &mut out);
+        out.sort();
+        out
+    }
+
+    /// The HDF5 part alone: the same datasets, values and attributes as with the series, no
+    /// series folder (an existing one is left alone), and the same validation.
+    #[test]
+    fn h5_only_writes_the_same_heavy_file_and_no_series() {
+        let tmp = tempfile::tempdir().unwrap();
+        let (meshes, cases) = fixture();
+        let full = tmp.path().join("full");
+        let alone = tmp.path().join("alone");
+        fs::create_dir(&full).unwrap();
+        fs::create_dir(&alone).unwrap();
+        write_fields(&full, "fields", &meshes, &cases).unwrap();
+        write_h5_only(&alone, "verification", &meshes, &cases).unwrap();
+        assert_eq!(listing(&alone), ["verification.h5"]);
+        let want = h5_contents(&full.join("fields.h5"));
+        assert!(want.len() > 20, "{}", want.len());
+        assert_eq!(h5_contents(&alone.join("verification.h5")), want);
+        // the soft link of a case still resolves
+        let f = hdf5::File::open(alone.join("verification.h5")).unwrap();
+        let pts = f.dataset("cases/level1-P1-P0-delta0/mesh/points").unwrap();
+        assert_eq!(pts.shape(), [9, 3]);
+        drop(f);
+
+        // an unrelated folder of the stem's name is neither needed nor touched
+        fs::create_dir(alone.join("verification")).unwrap();
+        fs::write(alone.join("verification/keep"), b"k").unwrap();
+        let (m, mut c) = fixture();
+        c.truncate(1);
+        write_h5_only(&alone, "verification", &m, &c).unwrap();
+        assert_eq!(listing(&alone), ["verification", "verification.h5"]);
+        assert_eq!(listing(&alone.join("verification")), ["keep"]);
+        let f = hdf5::File::open(alone.join("verification.h5")).unwrap();
+        assert_eq!(f.group("cases").unwrap().member_names().unwrap().len(), 1);
+        drop(f);
+
+        // invalid input: an error naming the case, nothing written, the old file kept
+        let before = fs::read(alone.join("verification.h5")).unwrap();
+        let mut bad = cases.clone();
+        bad[0].u.as_mut().unwrap().pop();
+        let e = write_h5_only(&alone, "verification", &meshes, &bad).unwrap_err();
+        assert!(matches!(e, OutputError::Invalid(_)), "{e}");
+        assert!(e.to_string().contains("field u"), "{e}");
+        assert_eq!(fs::read(alone.join("verification.h5")).unwrap(), before);
+        assert_eq!(listing(&alone), ["verification", "verification.h5"]);
     }
 
     #[test]

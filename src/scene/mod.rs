@@ -98,7 +98,8 @@ fn in_file_message(path: &str, error: &SceneError) -> String {
     }
 }
 
-/// Which fields are written to `fields.h5`/`fields.xdmf`.
+/// Which fields are written to `fields.h5` and the series `fields/*.xdmf` (the results folder
+/// keeps all of them in `verification.h5` when this set is not complete).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FieldSet {
     /// Write u at vertices.
@@ -113,6 +114,12 @@ impl FieldSet {
     /// True when no field file is to be written at all.
     pub fn is_empty(&self) -> bool {
         !(self.u || self.p || self.lambda)
+    }
+
+    /// True when u, p and λ are all listed: `fields.h5` then holds everything the compare tool
+    /// recomputes the errors from, and no `verification.h5` is written.
+    pub fn is_complete(&self) -> bool {
+        self.u && self.p && self.lambda
     }
 }
 
@@ -289,6 +296,14 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
     (
         "verification.expected_failure",
         verification::EXPECTED_FAILURE_KEYS,
+    ),
+    (
+        "verification.expected_rate",
+        verification::EXPECTED_RATE_KEYS,
+    ),
+    (
+        "verification.not_applicable",
+        verification::NOT_APPLICABLE_KEYS,
     ),
 ];
 
@@ -1306,7 +1321,9 @@ mod tests {
                 "u_spaces = [\"broken\"]",
                 "u_spaces = [\"continuous\", \"broken\"]",
             )
-            .replace("# reason = ", "reason = ");
+            .replace("# reason = ", "reason = ")
+            .replace("# rate = ", "rate = ")
+            .replace("# check = ", "check = ");
         let scene = Scene::from_toml(&full).expect("template with its options parses");
         assert!(scene.exact.is_some());
     }

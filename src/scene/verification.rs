@@ -18,6 +18,18 @@
 //! multiplier = "*"              # M0 | M1 | M1star | "*" (default "*")
 //! quantity = "*"                # u_l2 | p_l2 | p_x | lambda_l2 | "*" (default "*")
 //! reason = "continuous P1 u cannot carry the jump [u] > 0 of the open crack"
+//!
+//! [[verification.expected_rate]]      # the scene's own expected order of some series
+//! u_space = "broken"            # continuous | broken | "*" (default "*")
+//! multiplier = "*"              # M0 | M1 | M1star | "*" (default "*")
+//! p_mass = "*"                  # consistent | lumped | "*" (default "*")
+//! quantity = "u_l2"             # u_l2 | p_l2 | p_x | lambda_l2 | "*" (default "*")
+//! rate = 1.0                    # in (0, 4]: the series must show ≥ rate − 0.1 on its last two steps
+//! reason = "where the order comes from"
+//!
+//! [[verification.not_applicable]]     # a check that does not apply to this scene, and why
+//! check = "interpolation yardstick"   # one of NOT_APPLICABLE_CHECKS
+//! reason = "..."
 //! ```
 
 use serde::Deserialize;
@@ -40,6 +52,31 @@ pub struct ExpectedFailure {
     pub reason: String,
 }
 
+/// A series' expected order of convergence declared by the scene, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExpectedRate {
+    /// u space, or `None` for every u space (`"*"`).
+    pub u_space: Option<USpace>,
+    /// Multiplier space, or `None` for every one (`"*"`).
+    pub multiplier: Option<MultiplierSpace>,
+    /// `"consistent"`, `"lumped"`, or `None` for both (`"*"`).
+    pub p_mass: Option<String>,
+    /// One of [`QUANTITIES`], or `None` for every quantity (`"*"`).
+    pub quantity: Option<String>,
+    /// The expected order, in (0, 4].
+    pub rate: f64,
+    /// Where the order comes from (shown in the report).
+    pub reason: String,
+}
+
+/// The compare tool's checks a scene may declare not to apply to it.
+pub const NOT_APPLICABLE_CHECKS: [&str; 4] = [
+    "interpolation yardstick",
+    "reference yardstick",
+    "δ → 0",
+    "Theorem 2.1 (exact)",
+];
+
 /// The validated `[verification]` table; `None` means the compare tool's default.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Verification {
@@ -55,6 +92,10 @@ pub struct Verification {
     pub min_rate: Option<f64>,
     /// Series declared not to converge.
     pub expected_failures: Vec<ExpectedFailure>,
+    /// The scene's own expected orders.
+    pub expected_rates: Vec<ExpectedRate>,
+    /// Checks declared not to apply, with the reason: (check, reason).
+    pub not_applicable: Vec<(String, String)>,
 }
 
 #[derive(Deserialize)]
@@ -68,6 +109,28 @@ pub(super) struct VerificationToml {
     min_rate: Option<f64>,
     #[serde(default)]
     expected_failure: Vec<ExpectedFailureToml>,
+    #[serde(default)]
+    expected_rate: Vec<ExpectedRateToml>,
+    #[serde(default)]
+    not_applicable: Vec<NotApplicableToml>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ExpectedRateToml {
+    u_space: Option<String>,
+    multiplier: Option<String>,
+    p_mass: Option<String>,
+    quantity: Option<String>,
+    rate: f64,
+    reason: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct NotApplicableToml {
+    check: String,
+    reason: String,
 }
 
 #[derive(Deserialize)]
@@ -87,9 +150,22 @@ pub(super) const VERIFICATION_KEYS: &[&str] = &[
     "delta_slope_tolerance",
     "min_rate",
     "expected_failure",
+    "expected_rate",
+    "not_applicable",
 ];
 /// Keys of one `[[verification.expected_failure]]`.
 pub(super) const EXPECTED_FAILURE_KEYS: &[&str] = &["u_space", "multiplier", "quantity", "reason"];
+/// Keys of one `[[verification.expected_rate]]`.
+pub(super) const EXPECTED_RATE_KEYS: &[&str] = &[
+    "u_space",
+    "multiplier",
+    "p_mass",
+    "quantity",
+    "rate",
+    "reason",
+];
+/// Keys of one `[[verification.not_applicable]]`.
+pub(super) const NOT_APPLICABLE_KEYS: &[&str] = &["check", "reason"];
 
 /// `"*"` → `None`; otherwise one of `known` (a value the scene runs), with a suggestion.
 fn pattern<T: Copy>(
@@ -168,7 +244,21 @@ impl VerificationToml {
             }
             expected_failures.push(failure);
         }
+        let expected_rates = self
+            .expected_rate
+            .into_iter()
+            .enumerate()
+            .map(|(i, e)| e.validate(i, &us, &ms, &qs))
+            .collect::<Result<Vec<_>, _>>()?;
+        let not_applicable = self
+            .not_applicable
+            .into_iter()
+            .enumerate()
+            .map(|(i, n)| n.validate(i))
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(Verification {
+            expected_rates,
+            not_applicable,
             smoke: self.smoke,
             kkt_tolerance: positive("kkt_tolerance", self.kkt_tolerance)?,
             reference_agreement: positive("reference_agreement", self.reference_agreement)?,
@@ -176,6 +266,67 @@ impl VerificationToml {
             min_rate: positive("min_rate", self.min_rate)?,
             expected_failures,
         })
+    }
+}
+
+fn non_empty(key: String, reason: &str) -> Result<String, SceneError> {
+    let r = reason.trim();
+    if r.is_empty() {
+        return Err(SceneError::Value(format!("{key}: say why")));
+    }
+    Ok(r.to_string())
+}
+
+impl ExpectedRateToml {
+    fn validate(
+        self,
+        i: usize,
+        us: &[(USpace, String)],
+        ms: &[(MultiplierSpace, String)],
+        qs: &[(usize, String)],
+    ) -> Result<ExpectedRate, SceneError> {
+        let key = |k: &str| format!("verification.expected_rate[{i}].{k}");
+        if !(self.rate.is_finite() && self.rate > 0.0 && self.rate <= 4.0) {
+            return Err(SceneError::Value(format!(
+                "{} = {} must be a number in (0, 4]",
+                key("rate"),
+                self.rate
+            )));
+        }
+        let pms = [(0, "consistent".to_string()), (1, "lumped".to_string())];
+        Ok(ExpectedRate {
+            u_space: pattern(&key("u_space"), self.u_space.as_deref().unwrap_or("*"), us)?,
+            multiplier: pattern(
+                &key("multiplier"),
+                self.multiplier.as_deref().unwrap_or("*"),
+                ms,
+            )?,
+            p_mass: pattern(&key("p_mass"), self.p_mass.as_deref().unwrap_or("*"), &pms)?
+                .map(|p| pms[p].1.clone()),
+            quantity: pattern(
+                &key("quantity"),
+                self.quantity.as_deref().unwrap_or("*"),
+                qs,
+            )?
+            .map(|q| QUANTITIES[q].to_string()),
+            rate: self.rate,
+            reason: non_empty(key("reason"), &self.reason)?,
+        })
+    }
+}
+
+impl NotApplicableToml {
+    fn validate(self, i: usize) -> Result<(String, String), SceneError> {
+        let key = |k: &str| format!("verification.not_applicable[{i}].{k}");
+        if !NOT_APPLICABLE_CHECKS.contains(&self.check.as_str()) {
+            return Err(SceneError::Value(format!(
+                "{}: {:?} is none of {}",
+                key("check"),
+                self.check,
+                NOT_APPLICABLE_CHECKS.join(", ")
+            )));
+        }
+        Ok((self.check, non_empty(key("reason"), &self.reason)?))
     }
 }
 
@@ -242,11 +393,54 @@ mod tests {
             ("[verification]\nkkt_tolerance = -1.0\n", "kkt_tolerance = -1 must be"),
             ("[verification]\nmin_rate = nan\n", "min_rate = NaN must be"),
             ("[verification]\nkkt_tolerence = 1e-12\n", "did you mean `kkt_tolerance`?"),
+            (
+                "[[verification.expected_rate]]\nquantity = \"u_l2\"\nrate = 0.0\nreason = \"r\"\n",
+                "verification.expected_rate[0].rate = 0 must be a number in (0, 4]",
+            ),
+            (
+                "[[verification.expected_rate]]\nrate = 1.0\nreason = \" \"\n",
+                "verification.expected_rate[0].reason: say why",
+            ),
+            (
+                "[[verification.expected_rate]]\np_mass = \"lumpd\"\nrate = 1.0\nreason = \"r\"\n",
+                "did you mean \"lumped\"?",
+            ),
+            (
+                "[[verification.not_applicable]]\ncheck = \"interpolation\"\nreason = \"r\"\n",
+                "verification.not_applicable[0].check: \"interpolation\" is none of",
+            ),
+            (
+                "[[verification.expected_rate]]\nrate = 1.0\nreason = \"r\"\norder = 2\n",
+                "unknown",
+            ),
         ];
         for (table, needle) in cases {
             let e = with(table).expect_err(table);
             assert!(e.contains(needle), "{table:?}: {e}");
             assert!(!e.contains('\n'), "{e}");
         }
+    }
+
+    #[test]
+    fn expected_rates_and_not_applicable_checks_are_read() {
+        let s = with(
+            "[[verification.expected_rate]]\nu_space = \"broken\"\nquantity = \"u_l2\"\n\
+             p_mass = \"lumped\"\nrate = 1.0\nreason = \" corner \"\n\
+             [[verification.not_applicable]]\ncheck = \"reference yardstick\"\nreason = \"x\"\n",
+        )
+        .unwrap();
+        let v = &s.verification;
+        assert_eq!(v.expected_rates.len(), 1);
+        let r = &v.expected_rates[0];
+        assert_eq!(r.u_space, Some(crate::problem::USpace::Broken));
+        assert_eq!(
+            (r.p_mass.as_deref(), r.quantity.as_deref()),
+            (Some("lumped"), Some("u_l2"))
+        );
+        assert_eq!((r.rate, r.reason.as_str()), (1.0, "corner"));
+        assert_eq!(
+            v.not_applicable,
+            vec![("reference yardstick".to_string(), "x".to_string())]
+        );
     }
 }

@@ -77,3 +77,62 @@ pub fn error_series(
         })
         .collect()
 }
+
+/// The contents of the HDF5 file `path`, sorted by path: every dataset under its path with its
+/// values as `f64` bits, and every attribute of a group or dataset as `PATH@NAME` with its value
+/// (numbers as `f64` bits, text as its bytes). The soft links `mesh` of the case groups are
+/// skipped (their target is listed under `/meshes`).
+pub fn h5_contents(path: &std::path::Path) -> Vec<(String, Vec<u64>)> {
+    fn attrs(loc: &hdf5::Location, at: &str, out: &mut Vec<(String, Vec<u64>)>) {
+        for name in loc.attr_names().unwrap() {
+            let a = loc.attr(&name).unwrap();
+            let value = match a.read_scalar::<f64>() {
+                Ok(x) => vec![x.to_bits()],
+                Err(_) => a
+                    .read_scalar::<hdf5::types::VarLenUnicode>()
+                    .unwrap()
+                    .as_bytes()
+                    .iter()
+                    .map(|&b| u64::from(b))
+                    .collect(),
+            };
+            out.push((format!("{at}@{name}"), value));
+        }
+    }
+    fn walk(g: &hdf5::Group, at: &str, out: &mut Vec<(String, Vec<u64>)>) {
+        for name in g.member_names().unwrap() {
+            let path = format!("{at}/{name}");
+            if name == "mesh" {
+                continue;
+            }
+            if let Ok(sub) = g.group(&name) {
+                attrs(&sub, &path, out);
+                walk(&sub, &path, out);
+            } else {
+                let ds = g.dataset(&name).unwrap();
+                attrs(&ds, &path, out);
+                let values = ds.read_raw::<f64>().unwrap();
+                out.push((path, values.iter().map(|v| v.to_bits()).collect()));
+            }
+        }
+    }
+    let file = hdf5::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut out = Vec::new();
+    walk(&file, "", &mut out);
+    out.sort();
+    out
+}
+
+/// Asserts that two [`h5_contents`] are equal, naming the first entry that differs.
+pub fn assert_same_h5(a: &[(String, Vec<u64>)], b: &[(String, Vec<u64>)]) {
+    for ((pa, va), (pb, vb)) in a.iter().zip(b) {
+        assert_eq!(pa, pb, "the same datasets and attributes");
+        assert!(va == vb, "{pa} differs");
+    }
+    assert_eq!(
+        a.len(),
+        b.len(),
+        "the same number of datasets and attributes; the first extra one: {:?}",
+        a.get(b.len()).or(b.get(a.len())).map(|(p, _)| p)
+    );
+}
