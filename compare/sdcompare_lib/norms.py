@@ -190,12 +190,20 @@ def crack_diff_vs_p1(crack_points, lam, nodal, segments=None):
     return crack_l2_diff(crack_points, lam, g, s)
 
 
+def _grid_lines(v):
+    """The distinct grid-line coordinates among v, values closer than 1e-9 × the extent merged
+    (a grid point computed two ways, e.g. x0 + i h and x1 − (n − i) h, differs in its last bits)."""
+    v = np.sort(v)
+    tol = 1e-9 * max(float(v[-1] - v[0]), 1e-300)
+    return v[np.concatenate([[True], np.diff(v) > tol])]
+
+
 def locate_structured(points, tris, xy):
     """Index of the triangle of a structured SW–NE mesh (the solver's meshes: cell (i, j) holds
     triangles 2(j nx + i) (below the diagonal) and 2(j nx + i) + 1) containing each point of xy,
     taken at interior points (e.g. centroids of a finer nested mesh)."""
     p = np.asarray(points, dtype=float)[:, :2]
-    xs, ys = np.unique(p[:, 0]), np.unique(p[:, 1])
+    xs, ys = _grid_lines(p[:, 0]), _grid_lines(p[:, 1])
     nx, ny = len(xs) - 1, len(ys) - 1
     if 2 * nx * ny != len(tris):
         raise NormError("mesh is not the structured SW-NE triangulation")

@@ -69,7 +69,7 @@ def total_time(c):
 
 
 class Fields:
-    """Lazy access to fields.h5."""
+    """Lazy access to fields.h5 (or verification.h5: the same layout)."""
 
     def __init__(self, path):
         import h5py
@@ -199,18 +199,32 @@ def load_results(folder):
     mesh_scene = os.path.join(folder, "mesh", "scene.json")
     fpath = os.path.join(folder, "fields.h5")
     fields = Fields(fpath) if os.path.exists(fpath) else None
+    vpath = os.path.join(folder, VERIFICATION_FILE)
+    # What the independent recomputation reads: verification.h5, which sdcrack keeps with every
+    # quantity whenever the scene's [outputs] fields does not list u, p and lambda, else fields.h5.
+    data = Fields(vpath) if os.path.exists(vpath) else fields
     refs = {}
     for tool in REFERENCE_TOOLS:
         sub = os.path.join(folder, tool)
         if os.path.exists(os.path.join(sub, "summary.json")):
             refs[tool] = load_reference(sub)
     return {"folder": folder, "summary": summary, "scene": summary.get("scene", os.path.basename(
-        os.path.normpath(folder))), "fields": fields, "refs": refs, "plan": plan,
+        os.path.normpath(folder))), "fields": fields, "data": data, "refs": refs, "plan": plan,
         "scene_text": scene_text, "scene_file": scene_file,
         "mesh_scene": _load_json(mesh_scene) if os.path.exists(mesh_scene) else None}
 
 
+def close_results(res):
+    """Closes the HDF5 files of a load_results() dict (None: nothing)."""
+    if res is None:
+        return
+    for f in {id(f): f for f in (res.get("fields"), res.get("data")) if f is not None}.values():
+        f.close()
+
+
 PLAN_KEYS = ("levels", "u_spaces", "multipliers", "deltas")
+# The solver's compact copy of every field for this tool, written whenever fields.h5 lacks some.
+VERIFICATION_FILE = "verification.h5"
 SCENE_COPY = "scene.toml"
 
 

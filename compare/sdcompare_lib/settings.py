@@ -9,9 +9,13 @@ The defaults are not set from the outputs they judge:
 * delta_slope_tolerance 0.1: Theorem 2.1 at the discrete level gives ‖x_δ − x_0‖ = O(δ) (the
   condensed system is linear in δ), slope 1; 0.1 absorbs the curvature of a least-squares fit over
   δ = 1 … 1e-8;
-* min_rate 0.4: the smallest rate Theorem 4.3 claims is h^{1/2} (M0, M1); an observed rate is an
-  estimate, so a converging series must show at least 1/2 − 0.1 on each of its last two steps.
-A scene may tighten every one of them (a smaller tolerance, a larger min_rate), never loosen it.
+* the expected order of each series comes from the theory (theory.py: the regularity of the
+  exact solution, Theorem 4.3); a converging series shows at least the expected order − 0.1 on
+  each of its last two steps. `min_rate`, when a scene gives it, is a floor on top of that (0.4 is
+  the least it may be: the paper's smallest rate 1/2 minus 0.1).
+A scene may tighten every one of them (a smaller tolerance, a larger min_rate), never loosen it; it
+may declare the expected order of some series itself, with a reason ([[verification.expected_rate]]),
+and declare a check that does not apply to it, with a reason ([[verification.not_applicable]]).
 """
 import math
 
@@ -69,6 +73,56 @@ def verification(scene, where):
             f[key] = value
         fails.append(f)
     out["expected_failures"] = fails
+    out["min_rate_declared"] = "min_rate" in v
+    out["expected_rates"] = _expected_rates(v, known, where)
+    out["not_applicable"] = _not_applicable(v, where)
+    return out
+
+
+def _expected_rates(v, known, where):
+    """[[verification.expected_rate]]: dict(u_space, multiplier, p_mass, quantity, rate, reason)."""
+    out = []
+    for i, e in enumerate(v.get("expected_rate", [])):
+        name = f"{where}: verification.expected_rate[{i}]"
+        reason = str(e.get("reason", "")).strip()
+        if not reason:
+            raise InputError(f"{name} has no reason (say where the order comes from)")
+        rate = e.get("rate")
+        if not isinstance(rate, (int, float)) or isinstance(rate, bool) or not math.isfinite(rate) \
+                or not 0 < rate <= 4:
+            raise InputError(f"{name}.rate = {rate!r} must be a number in (0, 4]")
+        d = {"rate": float(rate), "reason": reason, "p_mass": e.get("p_mass", "*")}
+        if d["p_mass"] not in ("*", "consistent", "lumped"):
+            raise InputError(f"{name}.p_mass = {d['p_mass']!r} is none of consistent, lumped, '*'")
+        for key, values in known.items():
+            value = e.get(key, "*")
+            if value != "*" and value not in values:
+                raise InputError(f"{name}.{key} = {value!r} is not among the scene's {key} "
+                                 f"values {values}")
+            d[key] = value
+        bad = set(e) - {"u_space", "multiplier", "p_mass", "quantity", "rate", "reason"}
+        if bad:
+            raise InputError(f"{name}: unknown key(s) {sorted(bad)}")
+        out.append(d)
+    return out
+
+
+# Checks a scene may declare not to apply to it ([[verification.not_applicable]]).
+DECLARABLE_CHECKS = ("interpolation yardstick", "reference yardstick", "δ → 0",
+                     "Theorem 2.1 (exact)")
+
+
+def _not_applicable(v, where):
+    """{check: reason} of [[verification.not_applicable]]."""
+    out = {}
+    for i, e in enumerate(v.get("not_applicable", [])):
+        name = f"{where}: verification.not_applicable[{i}]"
+        check, reason = e.get("check"), str(e.get("reason", "")).strip()
+        if check not in DECLARABLE_CHECKS:
+            raise InputError(f"{name}.check = {check!r} is none of {', '.join(DECLARABLE_CHECKS)}")
+        if not reason:
+            raise InputError(f"{name} has no reason")
+        out[check] = reason
     return out
 
 

@@ -7,7 +7,7 @@ from collections import defaultdict
 
 import numpy as np
 
-from . import norms, rates
+from . import norms, rates, theory
 from .read import DEFAULT_P_MASS, case_key, finite_number, p_mass, total_time, variant_label
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
@@ -83,11 +83,21 @@ def _measured_series(cases, agreement, has_exact):
     return delta, out
 
 
-def compute_series(scene, cases, agreement, has_exact, settings):
+def expected_order(settings, u, m, pm, q, s, closed=False):
+    """(expected order, its reason) of one series: the scene's declaration, else theory.py's."""
+    declared = theory.declared_rate(settings.get("expected_rates", []), u, m, pm, q)
+    return declared if declared is not None else theory.expected_rate(q, m, pm, s, closed)
+
+
+def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGULAR_S,
+                   s_reason="", unstored=(), crack_closed=False):
     """One entry per (u space, multiplier, p mass, quantity): the errors against the exact solution
-    (scenes with [exact]) or against the reference of the same level, their rates, the measured
-    status (rates.series_status) and the status after the scene's expected failures (which apply
-    to both p masses)."""
+    (scenes with [exact]) or against the reference of the same level, their rates, the expected
+    order (theory.py, for the regularity index s of the solution), the measured status
+    (rates.series_status against expected − theory.RATE_MARGIN) and the status after the scene's
+    expected failures (which apply to both p masses). A quantity in `unstored` (its field neither
+    asked for nor kept for verification: a folder written before verification.h5) whose errors
+    are missing is "not judged", not incomplete."""
     out = []
     if not cases:
         return out
@@ -103,11 +113,17 @@ def compute_series(scene, cases, agreement, has_exact, settings):
         if against is None:
             status, reason = "inconclusive", ("no exact solution and no reference with solver "
                                               "fields to measure against")
+        elif bad and q in unstored:
+            status, reason = "not judged", ("not requested: the scene's [outputs] fields do not "
+                                            "store it, and the folder has no verification.h5")
         elif bad:
             status, reason = "incomplete", (f"error against the {against} missing, null or NaN at "
                                             f"level(s) {bad}")
-        else:
-            status, reason = rates.series_status(h, e, levels, settings["min_rate"])
+        expected, why = expected_order(settings, u, m, pm, q, s, crack_closed)
+        floor = theory.threshold(expected, settings["min_rate"] if settings.get(
+            "min_rate_declared") else None)
+        if against is not None and not bad:
+            status, reason = rates.series_status(h, e, levels, floor)
         measured_status = status
         xfail = expected_failure(settings, u, m, q)
         if xfail is not None and status == "converges":
@@ -123,7 +139,9 @@ def compute_series(scene, cases, agreement, has_exact, settings):
                     "measured_status": measured_status, "status": status, "reason": reason,
                     "expected_failure": xfail,
                     "finest_error": ok_e[-1] if ok_e else None,
-                    "paper_rate": PAPER_RATE.get(m) if q in PAPER_NORMS else None})
+                    "paper_rate": PAPER_RATE.get(m) if q in PAPER_NORMS else None,
+                    "expected_rate": expected, "expected_rate_reason": why,
+                    "rate_threshold": floor, "regularity": s, "regularity_reason": s_reason})
     return out
 
 
@@ -165,10 +183,15 @@ def compute_delta_limit(scene, cases, fields):
             floor = ROUNDOFF_REL * max(scale, 1e-300)
             fit_d = [d for d, e in zip(ds, diffs) if e > floor]
             fit_e = [e for e in diffs if e > floor]
+            line = rates.fit_line(fit_d, fit_e)
+            resid = dict(zip(fit_d, line[2])) if line else {}
             out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "level": lvl,
                         "quantity": q, "delta_ref": d0, "deltas": ds, "diffs": diffs,
-                        "norm_ref": scale, "slope": rates.fit_slope(fit_d, fit_e),
-                        "points_fitted": len(fit_d)})
+                        "norm_ref": scale, "slope": line[0] if line else None,
+                        "points_fitted": len(fit_d),
+                        "residuals": [resid.get(d) for d in ds],
+                        "max_residual": max((abs(r) for r in resid.values() if r is not None),
+                                            default=None)})
     return out
 
 
@@ -389,6 +412,32 @@ def _scene_names_beside(path):
         if isinstance(name, str):
             names.add(name)
     return names
+
+
+EXPECTATIONS_NAME = "expectations.toml"
+# The repository's scenes/ folder as pip installs it (pyproject.toml: package-dir and package-data).
+PACKAGED_SCENES = "sdcompare_scenes"
+
+
+def default_expectations(script_dir):
+    """The expectations file sdcompare judges with when none is given: scenes/expectations.toml of
+    the checkout the script `script_dir` belongs to, else the copy installed with the package (pip:
+    `sdcompare_scenes`, the repository's scenes/ with their expectations); None when neither
+    exists (the caller refuses to judge: an sdcompare without its expectations judges less)."""
+    here = os.path.join(script_dir, "..", "scenes", EXPECTATIONS_NAME)
+    if os.path.isfile(here):
+        return os.path.normpath(here)
+    import importlib.util
+
+    try:
+        spec = importlib.util.find_spec(PACKAGED_SCENES)
+    except (ImportError, ValueError):
+        spec = None
+    for folder in (spec.submodule_search_locations or []) if spec else []:
+        path = os.path.join(folder, EXPECTATIONS_NAME)
+        if os.path.isfile(path):
+            return os.path.normpath(path)
+    return None
 
 
 def load_expectations(path):

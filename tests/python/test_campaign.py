@@ -38,8 +38,8 @@ def cases(*scenes, cwd=ROOT):
 
 def test_case_list_counts_every_case():
     rows = cases(ROOT / "scenes" / "closed-exact.toml")
-    # levels × u spaces × multipliers × p masses × δ
-    assert len(rows) == 5 * 2 * 3 * 2 * 1
+    # levels × u spaces × multipliers × p masses × δ (its sweep 1, 1e-2, 1e-4, 1e-6, 0)
+    assert len(rows) == 5 * 2 * 3 * 2 * 5
     assert {r[0] for r in rows} == {"closed-exact"}
     outs = [r[5].split("--out ")[1] for r in rows]
     assert len(set(outs)) == len(outs), "one folder per case"
@@ -68,13 +68,15 @@ def test_case_list_names_the_campaign_jobs(tmp_path):
     out = subprocess.run(["bash", "-c", "ci/cases scenes/closed-exact.toml | head -1 | cut -d' ' -f6- "
                           "| sed 's/^[^ ]*/echo/' | sh"], cwd=ROOT, check=True,
                          capture_output=True, text=True).stdout
-    assert out.strip().endswith("--out results/rerun/closed-exact-l0-continuous-M0-d0.0")
+    assert out.strip().endswith("--out results/rerun/closed-exact-l0-continuous-M0-d1.0")
 
 
 def test_case_list_of_a_results_folder(tmp_path):
     folder = tmp_path / "out" / "closed-exact"
     folder.mkdir(parents=True)
-    (folder / "scene.toml").write_text((ROOT / "scenes" / "closed-exact.toml").read_text())
+    # a run of the scene at δ = 0 only
+    (folder / "scene.toml").write_text(
+        set_key((ROOT / "scenes" / "closed-exact.toml").read_text(), "deltas", "[0.0]"))
     (folder / "summary.json").write_text(json.dumps({"plan": {
         "levels": [2], "u_spaces": ["broken"], "multipliers": ["M0", "M1"], "deltas": [0.0]}}))
     rows = cases("out/closed-exact", cwd=tmp_path)
@@ -132,7 +134,7 @@ def test_case_list_of_both_p_masses(tmp_path):
     plain_scene.write_text(set_key(text, "p_mass", '["consistent"]'))
     plain = cases(plain_scene)
     rows = cases(scene)
-    assert len(rows) == 2 * len(plain) == 2 * 5 * 2 * 3
+    assert len(rows) == 2 * len(plain) == 2 * 5 * 2 * 3 * 5
     lumped = [r for r in rows if "--p-mass" in r[5]]
     consistent = [r for r in rows if "--p-mass" not in r[5]]
     assert [r[:5] for r in lumped] == [r[:5] for r in consistent] == [r[:5] for r in plain]
@@ -147,7 +149,7 @@ def test_case_list_of_both_p_masses(tmp_path):
     # a results folder of a --p-mass lumped run: its plan's p masses
     folder = tmp_path / "out" / "closed-exact"
     folder.mkdir(parents=True)
-    (folder / "scene.toml").write_text(scene.read_text())
+    (folder / "scene.toml").write_text(set_key(scene.read_text(), "deltas", "[0.0]"))
     (folder / "summary.json").write_text(json.dumps({"plan": {
         "levels": [2], "u_spaces": ["broken"], "multipliers": ["M1"], "p_masses": ["lumped"],
         "deltas": [0.0]}}))
