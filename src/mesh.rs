@@ -16,6 +16,7 @@
 //! triangle corners on the − face; the vertex number itself serves the + face. That numbering
 //! *is* the cracked mesh of the references (docs/design.md).
 
+pub mod bisect;
 pub mod gmsh;
 pub mod refine;
 pub mod structured;
@@ -86,6 +87,9 @@ pub enum MeshError {
     /// The cracks of a .msh file do not match the scene's.
     #[error("{0}")]
     Mismatch(String),
+    /// A graded level could not be built.
+    #[error(transparent)]
+    Grading(#[from] bisect::GradingError),
 }
 
 impl MeshError {
@@ -152,6 +156,12 @@ pub enum Layout {
         /// Triangles of level 0.
         coarse_triangles: usize,
     },
+    /// Graded towards the crack tips by newest-vertex bisection ([`bisect`]): each triangle of
+    /// level ℓ + 1 lies in triangle `parents[t]` of level ℓ.
+    Graded {
+        /// Triangles of the ungraded level 0 the levels were made from.
+        coarse_triangles: usize,
+    },
 }
 
 /// A triangulation of one level with its crack chains.
@@ -171,6 +181,9 @@ pub struct Mesh {
     pub cracks: Vec<CrackChain>,
     /// Per triangle corner: its face where the corner is an interior crack node, else `None`.
     pub corner_sides: Vec<[Option<Side>; 3]>,
+    /// [`Layout::Graded`] levels above 0: per triangle, the triangle of the previous level it lies
+    /// in; empty otherwise.
+    pub parents: Vec<usize>,
 }
 
 /// Degrees of freedom of a u space on a mesh.
@@ -208,6 +221,7 @@ impl Mesh {
             boundary_edges,
             cracks,
             corner_sides,
+            parents: Vec::new(),
         }
     }
 
@@ -216,7 +230,7 @@ impl Mesh {
     pub fn h(&self) -> f64 {
         match self.layout {
             Layout::Structured { .. } => diameter(&self.vertices, &self.triangles[0]),
-            Layout::Refined { .. } => self
+            Layout::Refined { .. } | Layout::Graded { .. } => self
                 .triangles
                 .iter()
                 .map(|t| diameter(&self.vertices, t))
@@ -309,6 +323,9 @@ pub struct CoarseProvenance {
 #[derive(Clone, Debug)]
 pub struct MeshSource {
     kind: SourceKind,
+    /// The grading towards the tips (`[discretization] grading`), if any: levels are then graded
+    /// from the ungraded level 0 ([`bisect`]).
+    grading: Option<crate::problem::Grading>,
     /// Where an unstructured level 0 came from (`None` for the structured grid).
     pub provenance: Option<CoarseProvenance>,
 }
@@ -344,6 +361,7 @@ impl MeshSource {
                         cells: *cells,
                         cracks: cracks.to_vec(),
                     },
+                    grading: None,
                     provenance: None,
                 })
             }
@@ -379,11 +397,28 @@ impl MeshSource {
             kind: SourceKind::Refined {
                 coarse: Box::new(coarse),
             },
+            grading: None,
         }
+    }
+
+    /// These meshes graded towards the crack tips by `grading` (None: unchanged).
+    pub fn graded(mut self, grading: Option<crate::problem::Grading>) -> MeshSource {
+        self.grading = grading.filter(|g| g.beta < 1.0);
+        self
     }
 
     /// The mesh of level `level`.
     pub fn level(&self, level: u32) -> Result<Mesh, MeshError> {
+        match self.grading {
+            None => self.ungraded(level),
+            Some(g) => {
+                let mut levels = bisect::graded_levels(&self.ungraded(0)?, g, level)?;
+                Ok(levels.pop().expect("levels 0..=level"))
+            }
+        }
+    }
+
+    fn ungraded(&self, level: u32) -> Result<Mesh, MeshError> {
         match &self.kind {
             SourceKind::Structured {
                 domain,
@@ -585,7 +620,8 @@ impl Drop for ScratchDir {
 }
 
 /// The longest edge of a triangle.
-fn diameter(vertices: &[[f64; 2]], t: &[usize; 3]) -> f64 {
+/// The largest edge length of triangle `t`.
+pub(crate) fn diameter(vertices: &[[f64; 2]], t: &[usize; 3]) -> f64 {
     let p = |k: usize| vertices[t[k]];
     let d = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]);
     d(p(0), p(1)).max(d(p(1), p(2))).max(d(p(0), p(2)))

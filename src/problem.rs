@@ -197,6 +197,30 @@ pub enum Meshing {
     File(std::path::PathBuf),
 }
 
+/// Meshes graded towards every crack tip (`[discretization] grading`, issue 24): element size
+/// h·(r/R)^{1−β} within the radius R of a tip (r: the distance to it), h elsewhere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Grading {
+    /// β in (0, 1]: 1/2 or less suits the r^{1/2} tip singularity; 1 is uniform.
+    pub beta: f64,
+    /// R > 0 (length unit of the scene): the radius of the graded zone around each tip.
+    pub radius: f64,
+}
+
+impl Grading {
+    /// The target diameter of an element at distance `r` from the nearest tip on a level whose
+    /// ungraded size is `h`: h·(max(r, r₀)/R)^{1−β} inside R, h outside, with r₀ = R·(h/R)^{1/β}
+    /// (the elements touching a tip have size h·(h/R)^{(1−β)/β}, so the number of elements
+    /// stays O(h⁻²)).
+    pub fn target(&self, h: f64, r: f64) -> f64 {
+        if r >= self.radius || self.beta >= 1.0 {
+            return h;
+        }
+        let r0 = self.radius * (h / self.radius).powf(1.0 / self.beta);
+        h * (r.max(r0) / self.radius).min(1.0).powf(1.0 - self.beta)
+    }
+}
+
 /// Ω = [−1, 1]², the square of the unit tests.
 #[cfg(test)]
 pub(crate) const UNIT_SQUARE: Rectangle = Rectangle {

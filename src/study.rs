@@ -676,7 +676,7 @@ fn vertex_order(mesh: &Mesh, vertex_of: &[usize], last: &[bool], reach: usize) -
         Layout::Structured { nx, ny } => {
             crate::ordering::nested_dissection_with_reach(nx, ny, vertex_of, last, reach)
         }
-        Layout::Refined { .. } => crate::ordering::nested_dissection_mesh(
+        Layout::Refined { .. } | Layout::Graded { .. } => crate::ordering::nested_dissection_mesh(
             &mesh.vertices,
             &mesh.triangles,
             vertex_of,

@@ -223,7 +223,7 @@ fn catalogue() -> Vec<Case> {
             "unknown key in [discretization]",
             "cells =",
             "cels =",
-            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, mesh_size, mesh, levels, u_spaces, multipliers, p_mass, deltas)",
+            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, mesh_size, mesh, grading, levels, u_spaces, multipliers, p_mass, deltas)",
         ),
         edit(
             "unknown key in [geometry]",
@@ -445,6 +445,30 @@ fn catalogue() -> Vec<Case> {
             "cells = [4, 4]",
             "mesh_size = -0.5",
             "discretization.mesh_size must be a positive number; got -0.5",
+        ),
+        edit(
+            "grading beta 0",
+            "cells = [4, 4]",
+            "cells = [4, 4]\ngrading = { beta = 0.0, radius = 0.25 }",
+            "discretization.grading.beta must be in (0, 1]",
+        ),
+        edit(
+            "grading beta above 1",
+            "cells = [4, 4]",
+            "cells = [4, 4]\ngrading = { beta = 1.5, radius = 0.25 }",
+            "discretization.grading.beta must be in (0, 1]",
+        ),
+        edit(
+            "grading radius 0",
+            "cells = [4, 4]",
+            "cells = [4, 4]\ngrading = { beta = 0.5, radius = 0 }",
+            "discretization.grading.radius must be a positive length; got 0",
+        ),
+        edit(
+            "grading without radius",
+            "cells = [4, 4]",
+            "cells = [4, 4]\ngrading = { beta = 0.5 }",
+            "missing key `radius` in [discretization.grading]",
         ),
         edit(
             "mesh file and [geometry]",

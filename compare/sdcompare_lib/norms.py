@@ -215,7 +215,7 @@ def locate_structured(points, tris, xy):
     return 2 * (j * nx + i) + upper.astype(np.int64)
 
 
-MESH_KINDS = ("structured", "refined")
+MESH_KINDS = ("structured", "refined", "graded")
 NESTING_TOLERANCE = 1e-9  # barycentric coordinates of a fine corner in its coarse ancestor
 
 
@@ -227,6 +227,29 @@ def locate_refined(n_coarse, n_fine, refinements):
         raise NormError(f"{n_fine} fine triangles are not {k} uniform refinement(s) of {n_coarse} "
                         "coarse triangles")
     return np.arange(n_fine, dtype=np.int64) // 4 ** k
+
+
+def nesting(meshes, coarse, fine):
+    """(kind, nesting) of prolong_to_fine from export level `coarse` to level `fine` of `meshes`
+    ({level: ExportLevel}): "structured" (located by coordinates; nesting None), "refined" (4t + c
+    numbering: fine − coarse refinements), "graded" (each level's parents.txt: per fine triangle
+    its ancestor in the coarse level, composed level by level); levels of different kinds, or a
+    graded level without its parents, are a NormError."""
+    kind = meshes[fine].kind
+    if coarse in meshes and meshes[coarse].kind != kind:
+        raise NormError(f"mesh export levels {coarse} and {fine} are of kinds "
+                        f"{meshes[coarse].kind} and {kind}")
+    if kind == "structured":
+        return kind, None
+    if kind == "refined":
+        return kind, fine - coarse
+    owner = np.arange(len(meshes[fine].tris), dtype=np.int64)
+    for lv in range(fine, coarse, -1):
+        parents = getattr(meshes.get(lv), "parents", None)
+        if parents is None:
+            raise NormError(f"graded level {lv} of the mesh export has no parents.txt")
+        owner = np.asarray(parents, dtype=np.int64)[owner]
+    return kind, owner
 
 
 def _barycentrics(cp, ct, owner, corners):
@@ -245,9 +268,10 @@ def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine
     """Values (T_f,3[,C]) of a coarse P1 field at the corners of every triangle of a nested finer
     mesh: each fine triangle lies in one coarse triangle, whose own corner values are used, so a
     field broken across a crack is evaluated on the right side. kind: "structured" (the coarse
-    triangle found from the fine centroid by locate_structured) or "refined" (`refinements` uniform
-    refinements from the coarse to the fine mesh: locate_refined); a fine corner outside its coarse
-    triangle (e.g. triangles not in the 4t + c order) is a NormError."""
+    triangle found from the fine centroid by locate_structured), "refined" (`refinements` uniform
+    refinements from the coarse to the fine mesh: locate_refined) or "graded" (`refinements` is
+    then each fine triangle's ancestor in the coarse mesh: nesting); a fine corner outside its
+    coarse triangle (e.g. triangles not in the 4t + c order) is a NormError."""
     cp = np.asarray(coarse_points, dtype=float)[:, :2]
     ct = np.asarray(coarse_tris, dtype=np.int64)
     fp = np.asarray(fine_points, dtype=float)[:, :2]
@@ -259,6 +283,11 @@ def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine
         if refinements is None:
             raise NormError("refined meshes: the number of refinements from the coarse level is needed")
         owner = locate_refined(len(ct), len(ft), refinements)
+    elif kind == "graded":
+        owner = np.asarray(refinements if refinements is not None else [], dtype=np.int64)
+        if owner.shape != (len(ft),) or (len(owner) and (owner.min() < 0 or owner.max() >= len(ct))):
+            raise NormError("graded meshes: per fine triangle its ancestor in the coarse level is "
+                            "needed (norms.nesting)")
     else:
         raise NormError(f"unknown mesh kind {kind!r} (expected one of {', '.join(MESH_KINDS)})")
     lam = _barycentrics(cp, ct, owner, corners)

@@ -135,7 +135,8 @@ def load_reference(folder):
 class ExportLevel:
     """One level of the mesh export the references solved on: the cracked mesh (points (N,2),
     tris (T,3)), crack (I,2) the (plus, minus) rows of crack.txt, ranges [(first, n)] its cracks
-    (cracks.txt), kind "structured" | "refined" (mesh.json; references/common/sdexport.py)."""
+    (cracks.txt), kind "structured" | "refined" | "graded" (mesh.json;
+    references/common/sdexport.py), parents (graded levels: parents.txt)."""
 
     level: int
     points: np.ndarray
@@ -143,6 +144,8 @@ class ExportLevel:
     crack: np.ndarray
     ranges: list
     kind: str = sdexport.DEFAULT_KIND
+    # "graded" levels above the first: per triangle, its parent in the previous level (parents.txt)
+    parents: object = None
 
     @classmethod
     def one_crack(cls, level, points, tris, crack):
@@ -175,7 +178,15 @@ def load_export_meshes(export, levels):
             layout = sdexport.read_layout(d, pts[:, :2], len(pts), copies=False)
         except sdexport.ExportError as exc:
             raise InputError(str(exc))
-        meshes[lvl] = ExportLevel(int(lvl), pts, tris, layout.pairs, layout.ranges, kind)
+        parents = None
+        if kind == "graded" and os.path.exists(os.path.join(d, "parents.txt")):
+            try:
+                parents = np.loadtxt(os.path.join(d, "parents.txt"), dtype=np.int64, ndmin=1)
+            except ValueError as exc:
+                raise InputError(f"{d}/parents.txt: {exc}")
+            if parents.shape != (len(tris),):
+                raise InputError(f"{d}/parents.txt: {parents.shape[0]} rows for {len(tris)} triangles")
+        meshes[lvl] = ExportLevel(int(lvl), pts, tris, layout.pairs, layout.ranges, kind, parents)
     return meshes
 
 

@@ -224,17 +224,6 @@ def compute_agreement(scene, cases, fields, refs):
     return out
 
 
-def _prolongation(meshes, coarse, fine):
-    """(kind, refinements) of prolong_to_fine from export level `coarse` to level `fine`: the levels'
-    mesh.json kind ("structured": located by coordinates; "refined": 4t + c numbering, fine − coarse
-    refinements); levels of different kinds are a NormError."""
-    kind = meshes[fine].kind
-    if coarse in meshes and meshes[coarse].kind != kind:
-        raise norms.NormError(f"mesh export levels {coarse} and {fine} are of kinds "
-                              f"{meshes[coarse].kind} and {kind}")
-    return kind, fine - coarse
-
-
 def _check_same_cracks(f, nodes, segments):
     """NormError unless the solver case's crack points are the export's crack nodes (crack.txt's
     order) and its crack segments, when stored, the export's: λ_h is indexed by them."""
@@ -294,7 +283,7 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
             else:
                 _check_same_cracks(f, pts[crack[:, 0]], m.segments())
                 row["e_lambda"] = norms.crack_diff_vs_p1(pts[crack[:, 0]], f["lam"], jump, m.segments())
-            nesting = _prolongation(meshes, lvl, finest)
+            nesting = norms.nesting(meshes, lvl, finest)
             row["e_u_finest"] = norms.prolonged_l2_diff(f["points"], f["tris"], f["u"], fpts, ftris, uf,
                                                         *nesting)
             if p is not None:

@@ -174,7 +174,7 @@ def reference_errors_finest(ref):
             continue
         try:
             vc = norms.prolong_to_fine(m.points, m.tris, ref["u"][lv], fm.points, fm.tris,
-                                       fm.kind, finest - lv)
+                                       *norms.nesting(meshes, lv, finest))
         except norms.NormError:
             continue  # no row: the check reports it could not run
         vf = np.asarray(uf, dtype=float)[fm.tris]

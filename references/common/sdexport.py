@@ -29,7 +29,10 @@ which has one straight crack on a structured grid):
                                          (level 0 from gmsh, `coarse_triangles` triangles, refined
                                          uniformly: triangle 4t + c of level L+1 lies in triangle t of
                                          level L, children c = 0, 1, 2 at its corners 0, 1, 2, child 3 the
-                                         middle). Absent: "structured".
+                                         middle) or "graded" (graded towards the crack tips by
+                                         newest-vertex bisection; levels L > 0 have parents.txt:
+                                         per triangle, the triangle of level L−1 it lies in).
+                                         Absent: "structured".
 
 A crack's segments are the pairs of consecutive rows WITHIN it: no segment joins the last node of a
 crack to the first of the next. Errors are ExportError, one line naming the file (and the crack).
@@ -42,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
-KINDS = ("structured", "refined")
+KINDS = ("structured", "refined", "graded")
 DEFAULT_KIND = "structured"
 NORMAL_TOLERANCE = 1e-9  # crack_normals.txt against the normals computed from the nodes
 

@@ -57,7 +57,9 @@ pub fn refine(mesh: &Mesh) -> Mesh {
         })
         .collect();
     let coarse_triangles = match mesh.layout {
-        Layout::Refined { coarse_triangles } => coarse_triangles,
+        Layout::Refined { coarse_triangles } | Layout::Graded { coarse_triangles } => {
+            coarse_triangles
+        }
         Layout::Structured { .. } => mesh.triangles.len(),
     };
     Mesh::new(

@@ -9,7 +9,8 @@
 //!                                 cracks [{points}], cells or null, mesh_size or null, levels, and
 //!                                 crack {a, b, normal} when there is one straight crack
 //! DIR/level{L}/mesh.json          level, kind ("structured": nx, ny; "refined": nx = ny = null,
-//!                                 triangle 4t + c of level L+1 lies in triangle t of level L),
+//!                                 triangle 4t + c of level L+1 lies in triangle t of level L;
+//!                                 "graded": graded towards the tips, see parents.txt),
 //!                                 h, coarse_triangles, n_cracks, n_vertices, n_uncut_vertices,
 //!                                 n_triangles, and normal for one straight crack
 //! DIR/level{L}/vertices.txt       x y   — the CRACKED mesh: uncut vertices, then a − copy of every
@@ -25,6 +26,8 @@
 //! DIR/level{L}/boundary.txt       one vertex per line: the vertices on Γ
 //! DIR/level{L}/sides.txt          per triangle, per corner: 1 (+ face), -1 (− face), 0 (the
 //!                                 corner is not an interior crack node)
+//! DIR/level{L}/parents.txt        "graded" levels L > 0: per triangle, the triangle of level L−1
+//!                                 it lies in
 //! ```
 //!
 //! The cracked numbering is the `broken` u space's dof numbering, so reference fields and solver
@@ -139,6 +142,7 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
             2 * (nx >> mesh.level) * (ny >> mesh.level),
         ),
         Layout::Refined { coarse_triangles } => ("refined", None, None, coarse_triangles),
+        Layout::Graded { coarse_triangles } => ("graded", None, None, coarse_triangles),
     };
     let mut meta = serde_json::json!({
         "level": mesh.level,
@@ -192,6 +196,13 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
     ];
     for (name, text) in files {
         let path = dir.join(name);
+        std::fs::write(&path, text).map_err(io(&path))?;
+    }
+    if !mesh.parents.is_empty() {
+        let path = dir.join("parents.txt");
+        let text = lines(&mesh.parents, |s, p| {
+            let _ = write!(s, "{p}");
+        });
         std::fs::write(&path, text).map_err(io(&path))?;
     }
     Ok(())

@@ -138,6 +138,8 @@ pub struct Scene {
     pub crack_names: Vec<String>,
     /// How the level-0 mesh is made.
     pub meshing: Meshing,
+    /// Grading of every level towards the crack tips (`[discretization] grading`), if any.
+    pub grading: Option<crate::problem::Grading>,
     /// The level-0 mesh's size, for memory estimates before meshing.
     pub level0: Level0Size,
     /// Source term f of −Δu = f.
@@ -220,6 +222,13 @@ struct MeshFileToml {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct GradingToml {
+    beta: f64,
+    radius: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct DataToml {
     f: String,
     g: String,
@@ -240,6 +249,8 @@ struct DiscretizationToml {
     cells: Option<Vec<i64>>,
     mesh_size: Option<f64>,
     mesh: Option<MeshFileToml>,
+    #[serde(default)]
+    grading: Option<GradingToml>,
     levels: Vec<i64>,
     u_spaces: Vec<String>,
     multipliers: Vec<String>,
@@ -276,6 +287,7 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
     ("geometry.crack", &["segment", "polyline"]),
     ("geometry.cracks", &["segment", "polyline"]),
     ("discretization.mesh", &["gmsh"]),
+    ("discretization.grading", &["beta", "radius"]),
     ("data", &["f", "g"]),
     ("exact", &["u", "px", "py", "jump"]),
     (
@@ -284,6 +296,7 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
             "cells",
             "mesh_size",
             "mesh",
+            "grading",
             "levels",
             "u_spaces",
             "multipliers",
@@ -393,7 +406,10 @@ impl Scene {
 
     /// The scene's meshes (runs gmsh for a `mesh_size` scene).
     pub fn mesh_source(&self) -> Result<crate::mesh::MeshSource, crate::mesh::MeshError> {
-        crate::mesh::MeshSource::new(&self.domain, &self.cracks, &self.meshing)
+        Ok(
+            crate::mesh::MeshSource::new(&self.domain, &self.cracks, &self.meshing)?
+                .graded(self.grading),
+        )
     }
 
     /// Total number of cases (level × u space × multiplier × δ).
@@ -770,6 +786,7 @@ impl SceneToml {
         }
         let d = self.discretization;
         let meshing = validate_meshing(&d, base_dir)?;
+        let grading = d.grading.as_ref().map(validate_grading).transpose()?;
         let mut file_triangles = 0;
         let (domain, cracks, crack_names) = match (&meshing, self.geometry) {
             (Meshing::File(path), None) => {
@@ -867,6 +884,7 @@ impl SceneToml {
             cracks,
             crack_names,
             meshing,
+            grading,
             level0,
             f,
             g,
@@ -1026,6 +1044,26 @@ fn points_of(key: &str, v: &[Vec<f64>]) -> Result<Vec<[f64; 2]>, SceneError> {
             ))),
         })
         .collect()
+}
+
+/// `grading = { beta, radius }`: 0 < β ≤ 1, R > 0.
+fn validate_grading(g: &GradingToml) -> Result<crate::problem::Grading, SceneError> {
+    if !(g.beta.is_finite() && g.beta > 0.0 && g.beta <= 1.0) {
+        return Err(SceneError::Value(format!(
+            "discretization.grading.beta must be in (0, 1] (1/2 or less for the r^(1/2) crack tip; 1 is uniform); got {}",
+            g.beta
+        )));
+    }
+    if !(g.radius.is_finite() && g.radius > 0.0) {
+        return Err(SceneError::Value(format!(
+            "discretization.grading.radius must be a positive length; got {}",
+            g.radius
+        )));
+    }
+    Ok(crate::problem::Grading {
+        beta: g.beta,
+        radius: g.radius,
+    })
 }
 
 /// Exactly one of `cells`, `mesh_size` and `mesh`.
