@@ -71,6 +71,19 @@ def test_u_order_drops_to_s_where_the_crack_opens():
     assert s["status"] == "does not converge", s["reason"]
 
 
+@pytest.mark.parametrize("quantity", ["p_l2", "p_x"])
+def test_p_order_is_one_half_where_the_crack_opens(quantity):
+    """p_h is continuous across Γc, ∇u jumps where the crack opens: h^(1/2) even for a smooth u
+    (measured: 0.90, 0.69, 0.59, 0.54 on a smooth open crack); closed, the smooth order 1."""
+    s = judge(series_cases(0.45, quantity), closed=False)[(quantity, "consistent")]
+    assert s["expected_rate"] == 0.5 and s["status"] == "converges", s["reason"]
+    assert "strip" in s["expected_rate_reason"]
+    s = judge(series_cases(0.3, quantity), closed=False)[(quantity, "consistent")]
+    assert s["status"] == "does not converge", s["reason"]
+    s = judge(series_cases(0.45, quantity), closed=True)[(quantity, "consistent")]
+    assert s["expected_rate"] == 1.0 and s["status"] == "does not converge"
+
+
 def test_load_quadrature_slip_rate_fails_on_a_smooth_solution():
     """The auditor's load-quadrature bug: closed-crack u rate 2.0 -> 1.06. The old rule (≥ 0.4)
     passed it; the expected order 2 does not."""
