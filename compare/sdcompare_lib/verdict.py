@@ -53,25 +53,35 @@ PREFERRED_REFERENCE = ("dolfinx", "freefem")
 FAILING = ("does not converge", "unexpected pass", "incomplete")
 
 
-def _measured_series(cases, agreement, has_exact):
-    """{(u, m, p mass, q): (against, reference, [(level, h, error or None)])} at δ = ref_delta."""
+def mesh_parameter(case, graded=False):
+    """The mesh parameter rates are measured in: the case's h (largest triangle diameter), or on
+    graded meshes N^{-1/2}, N its unknowns (a graded level's largest triangle says nothing of its
+    refinement near the tips; ~4× unknowns per level is a halving of N^{-1/2})."""
+    if graded and finite_number(case.get("unknowns")) and case["unknowns"] > 0:
+        return float(case["unknowns"]) ** -0.5
+    return float(case["h"])
+
+
+def _measured_series(cases, agreement, has_exact, graded=False):
+    """{(u, m, p mass, q): (against, reference, [(level, h, error or None)])} at δ = ref_delta;
+    h is mesh_parameter's."""
     delta = ref_delta(cases)
     out = {}
     if has_exact:
         for (u, m, pm), cs in series_by_variant(cases, delta).items():
             for q in QUANTITIES:
                 out[(u, m, pm, q)] = ("exact", None, [
-                    (int(c["level"]), float(c["h"]),
+                    (int(c["level"]), mesh_parameter(c, graded),
                      (c.get("errors") or {}).get(q) if isinstance(c.get("errors"), dict) else None)
                     for c in cs])
         return delta, out
     rows = [r for r in agreement if r["kind"] == "solver_vs_reference" and "level" in r]
     tools = [t for t in PREFERRED_REFERENCE if any(r["reference"] == t for r in rows)]
-    h_of = {(int(c["level"])): float(c["h"]) for c in cases}
     for (u, m, pm), cs in series_by_variant(cases, delta).items():
+        h_of = {int(c["level"]): mesh_parameter(c, graded) for c in cs}
         for q, key in REFERENCE_QUANTITIES.items():
             if not tools:
-                out[(u, m, pm, q)] = (None, None, [(int(c["level"]), float(c["h"]), None)
+                out[(u, m, pm, q)] = (None, None, [(int(c["level"]), h_of[int(c["level"])], None)
                                                    for c in cs])
                 continue
             tool = tools[0]
@@ -90,18 +100,19 @@ def expected_order(settings, u, m, pm, q, s, closed=False):
 
 
 def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGULAR_S,
-                   s_reason="", unstored=(), crack_closed=False):
+                   s_reason="", unstored=(), crack_closed=False, graded=False):
     """One entry per (u space, multiplier, p mass, quantity): the errors against the exact solution
     (scenes with [exact]) or against the reference of the same level, their rates, the expected
     order (theory.py, for the regularity index s of the solution), the measured status
     (rates.series_status against expected − theory.RATE_MARGIN) and the status after the scene's
-    expected failures (which apply to both p masses). A quantity in `unstored` (its field neither
+    expected failures (which apply to both p masses). Rates are per halving of h, or of N^{-1/2} on
+    `graded` meshes (mesh_parameter). A quantity in `unstored` (its field neither
     asked for nor kept for verification: a folder written before verification.h5) whose errors
     are missing is "not judged", not incomplete."""
     out = []
     if not cases:
         return out
-    delta, measured = _measured_series(cases, agreement, has_exact)
+    delta, measured = _measured_series(cases, agreement, has_exact, graded)
     order = {q: i for i, q in enumerate(QUANTITIES)}
     for (u, m, pm, q), (against, tool, pts) in sorted(
             measured.items(), key=lambda kv: (kv[0][:2], kv[0][2] != DEFAULT_P_MASS, kv[0][2],
@@ -141,7 +152,8 @@ def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGUL
                     "finest_error": ok_e[-1] if ok_e else None,
                     "paper_rate": PAPER_RATE.get(m) if q in PAPER_NORMS else None,
                     "expected_rate": expected, "expected_rate_reason": why,
-                    "rate_threshold": floor, "regularity": s, "regularity_reason": s_reason})
+                    "rate_threshold": floor, "regularity": s, "regularity_reason": s_reason,
+                    "mesh_parameter": "N^-1/2" if graded else "h"})
     return out
 
 

@@ -73,3 +73,24 @@ def test_a_wrong_parent_is_a_norm_error(export):
     meshes[2].parents = None
     with pytest.raises(norms.NormError, match="has no parents.txt"):
         norms.nesting(meshes, 1, 2)
+
+
+def test_graded_rates_are_measured_in_unknowns():
+    """On graded meshes the rate is per halving of N^{-1/2}: errors falling 2× per level while N
+    grows 5.7×, 4.7× are rates 0.80, 0.90 — not 1 (h still halves)."""
+    from sdcompare_lib import settings, verdict
+
+    st = settings.verification({"discretization": {"levels": [0, 1, 2], "u_spaces": ["broken"],
+                                                   "multipliers": ["M1"], "deltas": [0.0]},
+                                "verification": {}}, "scene.toml")
+    cases = [{"level": lv, "h": 0.35 / 2 ** lv, "unknowns": n, "u_space": "broken",
+              "multiplier": "M1", "delta": 0.0, "p_mass": "consistent", "kkt": {},
+              "errors": {"u_l2": 0.1 / 2 ** lv, "p_l2": 0.1 / 2 ** lv, "p_x": 0.1 / 2 ** lv,
+                         "lambda_l2": 0.1 / 2 ** lv}}
+             for lv, n in enumerate([256, 1464, 6912])]
+    uniform = {s["quantity"]: s for s in verdict.compute_series("t", cases, [], True, st, 1.0)}
+    graded = {s["quantity"]: s for s in verdict.compute_series("t", cases, [], True, st, 1.0,
+                                                                graded=True)}
+    assert uniform["u_l2"]["rates"] == pytest.approx([1.0, 1.0])
+    assert graded["u_l2"]["rates"] == pytest.approx([2 / np.log2(1464 / 256), 2 / np.log2(6912 / 1464)])
+    assert graded["u_l2"]["mesh_parameter"] == "N^-1/2" and uniform["u_l2"]["mesh_parameter"] == "h"
