@@ -220,15 +220,11 @@ fn shards_verification_h5_merge_like_fields_h5() {
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let merged = out.join("small");
 
-        let files = |folder: &Path| {
-            let mut names: Vec<String> = std::fs::read_dir(folder)
-                .unwrap()
-                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-                .collect();
-            names.sort();
-            names
-        };
-        assert_eq!(files(&merged), files(&single), "fields = {fields}");
+        assert_eq!(
+            common::listing(&merged),
+            common::listing(&single),
+            "fields = {fields}"
+        );
         assert_eq!(fields == "[]", !merged.join("fields.h5").exists());
         assert_eq!(fields == "[]", !merged.join("fields").exists());
 

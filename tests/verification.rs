@@ -44,16 +44,6 @@ fn summary(folder: &Path) -> Value {
     serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap()
 }
 
-/// The files of a results folder, sorted.
-fn listing(folder: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(folder)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
-}
-
 /// The summary without what describes the process or the XDMF series.
 fn numbers(mut s: Value) -> Value {
     let o = s.as_object_mut().unwrap();
@@ -82,7 +72,7 @@ fn a_scene_without_all_fields_keeps_them_in_verification_h5() {
 
     // all fields: fields.h5 is the recomputation file, no verification.h5
     assert_eq!(
-        listing(&full),
+        common::listing(&full),
         ["fields", "fields.h5", "scene.toml", "summary.json"]
     );
     let s_full = summary(&full);
@@ -91,7 +81,7 @@ fn a_scene_without_all_fields_keeps_them_in_verification_h5() {
 
     // no fields: verification.h5 alone, no fields.h5, no series folder, no XDMF
     assert_eq!(
-        listing(&none),
+        common::listing(&none),
         ["scene.toml", "summary.json", "verification.h5"]
     );
     let s_none = summary(&none);
@@ -100,7 +90,7 @@ fn a_scene_without_all_fields_keeps_them_in_verification_h5() {
 
     // u only: fields.h5 with u only and its series, plus verification.h5 with everything
     assert_eq!(
-        listing(&only_u),
+        common::listing(&only_u),
         [
             "fields",
             "fields.h5",

@@ -64,18 +64,25 @@ def verification(scene, where):
         reason = str(e.get("reason", "")).strip()
         if not reason:
             raise InputError(f"{where}: verification.expected_failure[{i}] has no reason")
-        f = {"reason": reason}
-        for key, values in known.items():
-            value = e.get(key, "*")
-            if value != "*" and value not in values:
-                raise InputError(f"{where}: verification.expected_failure[{i}].{key} = {value!r} "
-                                 f"is not among the scene's {key} values {values}")
-            f[key] = value
-        fails.append(f)
+        fails.append({"reason": reason,
+                      **_series_keys(e, known, f"{where}: verification.expected_failure[{i}]")})
     out["expected_failures"] = fails
     out["min_rate_declared"] = "min_rate" in v
     out["expected_rates"] = _expected_rates(v, known, where)
     out["not_applicable"] = _not_applicable(v, where)
+    return out
+
+
+def _series_keys(e, known, name):
+    """{key: value or "*"} of a declaration's series keys (u_space, multiplier, quantity), each a
+    value the scene runs (InputError naming `name` otherwise)."""
+    out = {}
+    for key, values in known.items():
+        value = e.get(key, "*")
+        if value != "*" and value not in values:
+            raise InputError(f"{name}.{key} = {value!r} is not among the scene's {key} values "
+                             f"{values}")
+        out[key] = value
     return out
 
 
@@ -94,12 +101,7 @@ def _expected_rates(v, known, where):
         d = {"rate": float(rate), "reason": reason, "p_mass": e.get("p_mass", "*")}
         if d["p_mass"] not in ("*", "consistent", "lumped"):
             raise InputError(f"{name}.p_mass = {d['p_mass']!r} is none of consistent, lumped, '*'")
-        for key, values in known.items():
-            value = e.get(key, "*")
-            if value != "*" and value not in values:
-                raise InputError(f"{name}.{key} = {value!r} is not among the scene's {key} "
-                                 f"values {values}")
-            d[key] = value
+        d.update(_series_keys(e, known, name))
         bad = set(e) - {"u_space", "multiplier", "p_mass", "quantity", "rate", "reason"}
         if bad:
             raise InputError(f"{name}: unknown key(s) {sorted(bad)}")

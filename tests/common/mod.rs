@@ -136,3 +136,13 @@ pub fn assert_same_h5(a: &[(String, Vec<u64>)], b: &[(String, Vec<u64>)]) {
         a.get(b.len()).or(b.get(a.len())).map(|(p, _)| p)
     );
 }
+
+/// The file names of a folder, sorted.
+pub fn listing(folder: &std::path::Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
