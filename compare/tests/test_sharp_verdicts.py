@@ -62,13 +62,26 @@ def test_smooth_orders_fail_at_expected_minus_02_and_pass_at_minus_005(quantity,
     assert "expected" not in good["expected_rate_reason"] or good["expected_rate_reason"]
 
 
-def test_u_order_drops_to_s_where_the_crack_opens():
-    """On an open crack the mixed method's u error has no duality gain (measured: u rate 1.35 ->
-    0.66 on the open crack, 2.09 -> 1.88 on a smooth open one): expected order s, not 2s."""
-    s = judge(series_cases(0.95, "u_l2"), closed=False)[("u_l2", "consistent")]
-    assert s["expected_rate"] == 1.0 and s["status"] == "converges", s["reason"]
-    s = judge(series_cases(0.8, "u_l2"), closed=False)[("u_l2", "consistent")]
+def test_u_order_drops_to_one_half_where_the_crack_opens():
+    """On an open crack the mixed method's u error has no duality gain and is bounded by p's, of
+    order 1/2 there (measured: u rate 1.35 -> 0.66 on the open crack, 0.56-0.78 on graded
+    meshes): expected 1/2, not 2s."""
+    s = judge(series_cases(0.45, "u_l2"), closed=False)[("u_l2", "consistent")]
+    assert s["expected_rate"] == 0.5 and s["status"] == "converges", s["reason"]
+    s = judge(series_cases(0.3, "u_l2"), closed=False)[("u_l2", "consistent")]
     assert s["status"] == "does not converge", s["reason"]
+
+
+def test_reference_yardstick_only_where_the_orders_allow_a_constant_factor():
+    """The references (conforming P1 on the cracked mesh) reach u 2s, p s; the smooth-domain
+    method where the crack opens only 1/2: no constant bounds the ratio of errors there."""
+    assert theory.comparable_to_references("u_l2", 2.0, 1.0)       # closed, smooth
+    assert theory.comparable_to_references("p_l2", 1.0, 1.0)
+    assert not theory.comparable_to_references("u_l2", 0.5, 1.0)   # open, smooth
+    assert not theory.comparable_to_references("p_l2", 0.5, 1.0)
+    assert not theory.comparable_to_references("u_l2", 0.5, 0.5)   # open, r^(1/2) tip
+    assert theory.comparable_to_references("p_l2", 0.5, 0.5)
+    assert theory.comparable_to_references("lambda_l2", 0.5, 0.5)
 
 
 @pytest.mark.parametrize("quantity", ["p_l2", "p_x"])
