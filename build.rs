@@ -27,16 +27,18 @@ fn main() {
         git(&args).map(|s| !s.is_empty())
     });
     if commit.is_some() {
-        // A commit, a checkout or a staged change moves these files.
-        for name in ["HEAD", "index", "packed-refs"] {
-            if let Some(p) = git(&["rev-parse", "--git-path", name]) {
-                println!("cargo:rerun-if-changed={p}");
-            }
-        }
+        // A commit, a checkout or a staged change moves these files. Only those that exist are
+        // watched: cargo reruns a build script whose watched path is missing on every build (a
+        // checkout without .git/packed-refs rebuilt the crate each time, ~40 s).
+        let mut watched: Vec<String> = ["HEAD", "index", "packed-refs"]
+            .iter()
+            .filter_map(|name| git(&["rev-parse", "--git-path", name]))
+            .collect();
         if let Some(r) = git(&["symbolic-ref", "-q", "HEAD"]) {
-            if let Some(p) = git(&["rev-parse", "--git-path", &r]) {
-                println!("cargo:rerun-if-changed={p}");
-            }
+            watched.extend(git(&["rev-parse", "--git-path", &r]));
+        }
+        for p in watched.iter().filter(|p| std::path::Path::new(p).exists()) {
+            println!("cargo:rerun-if-changed={p}");
         }
     }
     println!(
