@@ -637,7 +637,9 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
         if scene.exact.is_some() {
             say!("level        h  unknowns  iter     e_u  rate     e_p  rate     e_λ  rate   kkt");
         } else {
-            say!("level        h  unknowns  iter  active     kkt");
+            // open: multiplier unknowns with λ > 0, where the crack faces separate (contact
+            // researchers read "active" as "in contact", the opposite)
+            say!("level        h  unknowns  iter    open     kkt");
         }
         let mut prev: Option<(f64, f64, f64, f64)> = None;
         for c in cases.iter().filter(|c| {

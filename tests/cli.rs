@@ -201,6 +201,39 @@ fn bad_inputs_give_one_line_and_exit_2() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
+/// The terminal table of a scene without [exact] says how much of the crack is open (λ > 0), in
+/// words a contact researcher reads right ("active" reads as "in contact": issue 25).
+#[test]
+fn the_terminal_table_counts_open_multipliers() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::scene_path("mixed");
+    let out = dir.path().join("res");
+    let o = sdcrack(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--level",
+        "1",
+        "--u-space",
+        "broken",
+        "--multiplier",
+        "M1",
+        "--delta",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let header = text
+        .lines()
+        .find(|l| l.starts_with("level"))
+        .expect("a table");
+    assert!(
+        header.contains(" open ") && !header.contains("active"),
+        "{header}"
+    );
+}
+
 #[test]
 fn closed_stdout_is_not_a_panic() {
     use std::process::{Command, Stdio};
