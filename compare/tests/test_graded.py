@@ -94,3 +94,31 @@ def test_graded_rates_are_measured_in_unknowns():
     assert uniform["u_l2"]["rates"] == pytest.approx([1.0, 1.0])
     assert graded["u_l2"]["rates"] == pytest.approx([2 / np.log2(1464 / 256), 2 / np.log2(6912 / 1464)])
     assert graded["u_l2"]["mesh_parameter"] == "N^-1/2" and uniform["u_l2"]["mesh_parameter"] == "h"
+
+
+def test_graded_l_shape_with_two_cracks_passes_against_the_references(tmp_path):
+    """Issue 24's acceptance scene (scenes/l-shape-graded.toml: an L-shaped polygon, two cracks,
+    four graded tips), levels 0-2 with both references: PASS, the reference yardstick and the
+    references' agreement among its checks."""
+    if not os.access(sdcrack_bin(), os.X_OK):
+        pytest.skip("no sdcrack binary (cargo build --release, or SDCRACK_BIN)")
+    with open(os.path.join(ROOT, "scenes", "l-shape-graded.toml"), encoding="utf-8") as fh:
+        text = set_key(fh.read(), "levels", "[0, 1, 2]")
+    scene = tmp_path / "l-shape-graded.toml"
+    scene.write_text(text)
+    env = dict(os.environ, MPLBACKEND="Agg")
+    env.setdefault("FF_LOADPATH", "/usr/lib/freefem++")
+    p = subprocess.run([sdcrack_bin(), "run", str(scene), "--out", str(tmp_path / "out"),
+                        "--quiet"], capture_output=True, text=True, env=env, timeout=900)
+    assert p.returncode == 0, p.stderr[-2000:]
+    folder = tmp_path / "out" / "l-shape-graded"
+    assert (folder / "mesh" / "level2" / "parents.txt").is_file()
+    p = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "compare", "sdcompare"),
+                        str(folder)], capture_output=True, text=True, env=env, timeout=900)
+    assert p.returncode == 0 and p.stdout.strip().endswith("l-shape-graded: PASS"), \
+        p.stdout[-2000:] + p.stderr[-2000:]
+    import json
+
+    report = json.loads((folder / "report" / "report.json").read_text())
+    status = {c["check"]: c["status"] for c in report["checks"]}
+    assert status["reference yardstick"] == "ok" and status["reference agreement"] == "ok"
