@@ -1,0 +1,98 @@
+"""ci/mutants' catalogue and engine (issue 23), without running it (ci/nightly runs it: ~40 min).
+
+The catalogue must hold at least 15 realistic bugs covering the solver, both references and the
+compare tool, each still applying to this checkout (its text found exactly once); the engine's
+verdict must be FAIL (exit 1) on a survivor or a mutant that no longer applies, so that a rotted
+catalogue cannot report success.
+"""
+import importlib.util
+import os
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+spec = importlib.util.spec_from_file_location("mutants", os.path.join(ROOT, "ci", "mutants.py"))
+mutants = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(mutants)
+
+CATALOGUE = mutants.load_catalogue()
+
+
+def test_catalogue_has_at_least_15_realistic_bugs_in_every_part():
+    assert len(CATALOGUE) >= 15
+    kinds = [mutants.kind(m) for m in CATALOGUE]
+    assert {"solver", "reference", "compare"} <= set(kinds)
+    assert kinds.count("solver") >= 8
+
+
+@pytest.mark.parametrize("m", CATALOGUE, ids=[m["name"] for m in CATALOGUE])
+def test_every_mutant_still_applies_to_this_checkout(m):
+    with open(os.path.join(ROOT, m["file"]), encoding="utf-8") as fh:
+        text = fh.read()
+    mutated = mutants.mutated_text(text, m)
+    assert mutated != text and m["bug"].strip() and m["catches"].strip()
+    if m["file"].endswith(".py"):
+        compile(mutated, m["file"], "exec")  # still Python: the bug, not a syntax error, is judged
+
+
+def test_a_mutant_whose_text_moved_is_refused():
+    m = {"name": "x", "file": "f.rs", "find": "a", "replace": "b", "bug": "", "catches": ""}
+    with pytest.raises(ValueError, match="occurs 0 times"):
+        mutants.mutated_text("ccc", m)
+    with pytest.raises(ValueError, match="occurs 2 times"):
+        mutants.mutated_text("aa", m)
+
+
+def verdict(status):
+    return {"name": "m", "file": "src/x.rs", "bug": "b", "expected_check": "c", "kind": "solver",
+            "status": status, "scene": "s" if status == "KILLED" else None,
+            "reasons": ["series: broken/M1 u_l2: does not converge"] if status != "SURVIVED" else [],
+            "caught_by": ["series"] if status == "KILLED" else []}
+
+
+def test_exit_code_fails_on_a_survivor_or_a_broken_mutant_and_on_nothing_run():
+    assert mutants.exit_code([verdict("KILLED")] * 3) == 0
+    assert mutants.exit_code([verdict("KILLED"), verdict("SURVIVED")]) == 1
+    assert mutants.exit_code([verdict("KILLED"), verdict("BROKEN")]) == 1
+    assert mutants.exit_code([]) == 1
+    assert mutants.line(verdict("SURVIVED")).startswith("SURVIVED")
+    assert "s FAIL (series)" in mutants.line(verdict("KILLED"))
+
+
+def test_caught_by_names_each_check_once():
+    assert mutants.caught_by(["series: a", "interpolation yardstick: b", "series: c"]) == [
+        "series", "interpolation yardstick"]
+
+
+def test_record_replaces_only_the_marked_table(tmp_path):
+    doc = tmp_path / "v.md"
+    doc.write_text(f"head\n{mutants.BEGIN}\nold\n{mutants.END}\ntail\n")
+    meta = {"date": "d", "commit": "c", "machine": "m", "seconds": 1.0, "scenes": ["s"]}
+    mutants.record(str(doc), mutants.markdown([verdict("KILLED"), verdict("SURVIVED")], meta))
+    text = doc.read_text()
+    assert text.startswith("head\n") and text.endswith("tail\n") and "old" not in text
+    assert "1 of 2 mutants killed" in text and "**SURVIVED**" in text
+    # a | in a bug's text would end its table cell
+    v = dict(verdict("KILLED"), bug="keeps 4|T|/45")
+    row = mutants.markdown([v], meta).splitlines()[-1]
+    assert "4\\|T\\|/45" in row and row.count(" | ") == 5
+    doc.write_text("no markers\n")
+    with pytest.raises(mutants.UsageError):
+        mutants.record(str(doc), "t")
+    assert doc.read_text() == "no markers\n"
+
+
+def test_docs_record_a_run_of_the_whole_catalogue():
+    with open(os.path.join(ROOT, "docs", "verification.md"), encoding="utf-8") as fh:
+        text = fh.read()
+    table = text.split(mutants.BEGIN, 1)[1].split(mutants.END, 1)[0]
+    for m in CATALOGUE:
+        assert f"`{m['name']}`" in table, f"mutant {m['name']} not in docs/verification.md's last run"
+
+
+def test_bad_usage_exits_2_with_one_line():
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "ci", "mutants.py"), "--only", "nope"],
+                       capture_output=True, text=True)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and "no mutant named nope" in p.stderr
