@@ -113,7 +113,7 @@ def test_graded_l_shape_with_two_cracks_passes_against_the_references(tmp_path):
     assert p.returncode == 0, p.stderr[-2000:]
     folder = tmp_path / "out" / "l-shape-graded"
     assert (folder / "mesh" / "level2" / "parents.txt").is_file()
-    p = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "compare", "sdcompare"),
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "compare", "sdcompare"),
                         str(folder)], capture_output=True, text=True, env=env, timeout=900)
     assert p.returncode == 0 and p.stdout.strip().endswith("l-shape-graded: PASS"), \
         p.stdout[-2000:] + p.stderr[-2000:]

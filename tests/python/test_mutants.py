@@ -29,6 +29,10 @@ def test_catalogue_has_at_least_15_realistic_bugs_in_every_part():
 
 @pytest.mark.parametrize("m", CATALOGUE, ids=[m["name"] for m in CATALOGUE])
 def test_every_mutant_still_applies_to_this_checkout(m):
+    if m["file"].startswith("compare/sdcompare_lib/") and not os.path.isdir(
+            os.path.join(ROOT, "compare", "sdcompare_lib")):
+        pytest.skip("ci/test-pip's copy of the tree has no compare/sdcompare_lib (it tests the "
+                    "installed package); ci/test checks these mutants on the checkout")
     with open(os.path.join(ROOT, m["file"]), encoding="utf-8") as fh:
         text = fh.read()
     mutated = mutants.mutated_text(text, m)
