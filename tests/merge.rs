@@ -13,6 +13,17 @@ use serde_json::Value;
 
 use common::{sdcrack, stderr};
 
+/// `sdcrack run SCENE FILTERS --solver-only --out OUT` (must succeed): the shard's folder of the
+/// scene `small`.
+fn solver_shard(scene: &str, filters: &[&str], out: &Path) -> PathBuf {
+    let mut args = vec!["run", scene];
+    args.extend_from_slice(filters);
+    args.extend(["--solver-only", "--quiet", "--out", out.to_str().unwrap()]);
+    let o = sdcrack(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    out.join("small")
+}
+
 /// The small scene with both p masses: 2 levels × 2 u spaces × 3 multipliers × 2 p masses × 2 δ.
 fn scene_text() -> String {
     common::SMALL_SCENE.replace(
@@ -36,24 +47,20 @@ fn single_and_shards(dir: &Path) -> (PathBuf, Vec<PathBuf>) {
             for m in ["M0", "M1", "M1star"] {
                 for pm in ["consistent", "lumped"] {
                     let out = dir.join("shards").join(format!("{level}-{u}-{m}-{pm}"));
-                    let o = sdcrack(&[
-                        "run",
+                    shards.push(solver_shard(
                         scene,
-                        "--level",
-                        level,
-                        "--u-space",
-                        u,
-                        "--multiplier",
-                        m,
-                        "--p-mass",
-                        pm,
-                        "--solver-only",
-                        "--quiet",
-                        "--out",
-                        out.to_str().unwrap(),
-                    ]);
-                    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-                    shards.push(out.join("small"));
+                        &[
+                            "--level",
+                            level,
+                            "--u-space",
+                            u,
+                            "--multiplier",
+                            m,
+                            "--p-mass",
+                            pm,
+                        ],
+                        &out,
+                    ));
                 }
             }
         }
@@ -197,20 +204,7 @@ fn shards_verification_h5_merge_like_fields_h5() {
         for level in ["1", "0"] {
             for u in ["broken", "continuous"] {
                 let out = dir.path().join("shards").join(format!("{level}-{u}"));
-                let o = sdcrack(&[
-                    "run",
-                    scene,
-                    "--level",
-                    level,
-                    "--u-space",
-                    u,
-                    "--solver-only",
-                    "--quiet",
-                    "--out",
-                    out.to_str().unwrap(),
-                ]);
-                assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-                let shard = out.join("small");
+                let shard = solver_shard(scene, &["--level", level, "--u-space", u], &out);
                 assert!(shard.join("verification.h5").is_file());
                 shards.push(shard);
             }
