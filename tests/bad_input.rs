@@ -32,6 +32,8 @@ enum Out {
     Fresh,
     /// A path under a regular file (cannot be created, even by root).
     UnderFile,
+    /// A regular file itself.
+    IsFile,
     /// A folder inside a read-only folder.
     ReadOnly,
     /// A folder already holding `small/`, earlier results of the same scene.
@@ -724,7 +726,15 @@ fn catalogue() -> Vec<Case> {
             ..scene(
                 "--out under a regular file",
                 SMALL,
-                "cannot write results under {out}: Not a directory",
+                "cannot write results under {out}: a part of the path is a file, not a folder",
+            )
+        },
+        Case {
+            out: Out::IsFile,
+            ..scene(
+                "--out is a regular file",
+                SMALL,
+                "--out {out} is a file, not a folder; give a folder for the results",
             )
         },
         Case {
@@ -732,7 +742,7 @@ fn catalogue() -> Vec<Case> {
             ..scene(
                 "--out in a read-only folder",
                 SMALL,
-                "cannot write results under {out}: Permission denied",
+                "cannot write results under {out}: permission denied",
             )
         },
         Case {
@@ -923,6 +933,10 @@ fn catalogue_of_bad_inputs() {
             Out::UnderFile => {
                 std::fs::write(dir.join("file"), b"a regular file").unwrap();
                 dir.join("file").join("out")
+            }
+            Out::IsFile => {
+                std::fs::write(dir.join("file"), b"a regular file").unwrap();
+                dir.join("file")
             }
             Out::ReadOnly => {
                 let ro = dir.join("ro");

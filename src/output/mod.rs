@@ -41,6 +41,9 @@ pub enum ResultsError {
     /// The final folder exists already.
     #[error("results folder {0} already exists; remove it or choose another --out (earlier results are never overwritten)")]
     Exists(PathBuf),
+    /// `--out` names a file.
+    #[error("--out {0} is a file, not a folder; give a folder for the results")]
+    OutIsAFile(PathBuf),
     /// The output location cannot be created or written.
     #[error("cannot write results under {path}: {reason}")]
     Unwritable {
@@ -49,6 +52,25 @@ pub enum ResultsError {
         /// Operating-system reason.
         reason: String,
     },
+}
+
+/// An operating-system error in plain words, without its "(os error N)" code: what a user reads
+/// in a one-line message about a file or a folder.
+pub fn plain_reason(e: &std::io::Error) -> String {
+    match e.raw_os_error() {
+        Some(1 | 13) => "permission denied".into(),
+        Some(17) => "a file of that name exists".into(),
+        Some(20) => "a part of the path is a file, not a folder".into(),
+        Some(28) => "no space left on the device".into(),
+        Some(30) => "the file system is read-only".into(),
+        _ => {
+            let text = e.to_string();
+            match text.find(" (os error") {
+                Some(i) => text[..i].to_string(),
+                None => text,
+            }
+        }
+    }
 }
 
 /// A results folder being written.
@@ -64,8 +86,11 @@ impl ResultsDir {
     pub fn create(out: &Path, name: &str) -> Result<ResultsDir, ResultsError> {
         let unwritable = |path: &Path, e: std::io::Error| ResultsError::Unwritable {
             path: path.to_path_buf(),
-            reason: e.to_string(),
+            reason: plain_reason(&e),
         };
+        if out.exists() && !out.is_dir() {
+            return Err(ResultsError::OutIsAFile(out.to_path_buf()));
+        }
         fs::create_dir_all(out).map_err(|e| unwritable(out, e))?;
         let final_path = out.join(name);
         if final_path.exists() {
