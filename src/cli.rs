@@ -303,6 +303,12 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                 s.name,
                 s.case_count()
             );
+            if s.exact.is_none() && s.references.is_empty() {
+                eprintln!(
+                    "sdcrack: warning: scene '{}' has no [exact] and no references: there is nothing to judge its errors against, so the compare tool can only call it INCONCLUSIVE (add [exact] or [outputs] references)",
+                    s.name
+                );
+            }
             Ok(0)
         }
         Command::Bench {

@@ -234,6 +234,27 @@ fn the_terminal_table_counts_open_multipliers() {
     );
 }
 
+/// `check` accepts a scene with nothing to judge against but says so (issue 25 item 7): no
+/// [exact] and no references leave the compare tool nothing but INCONCLUSIVE.
+#[test]
+fn check_warns_when_a_scene_has_nothing_to_judge_against() {
+    let dir = tempfile::tempdir().unwrap();
+    let mixed = std::fs::read_to_string(common::scene_path("mixed")).unwrap();
+    let lonely = mixed.replace(r#"references = ["dolfinx", "freefem"]"#, "references = []");
+    assert_ne!(lonely, mixed);
+    for (text, warned) in [(&lonely, true), (&mixed, false)] {
+        let scene = write_scene(dir.path(), "s.toml", text);
+        let o = sdcrack(&["check", &scene]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert_eq!(
+            err.contains("nothing to judge its errors against"),
+            warned,
+            "{err}"
+        );
+    }
+}
+
 #[test]
 fn closed_stdout_is_not_a_panic() {
     use std::process::{Command, Stdio};
