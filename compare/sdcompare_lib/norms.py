@@ -164,13 +164,20 @@ def mini_vs_piecewise_constant_l2(points, tris, values, bubble, const):
 
 def p1_gradients(points, tris, values):
     """∇ of a P1 field, constant per triangle: (T,2)."""
+    t = np.asarray(tris, dtype=np.int64)
+    return corner_gradients(points, t, np.asarray(values, dtype=float)[t])
+
+
+def corner_gradients(points, tris, corner_values):
+    """(T,2) gradient on each triangle of the linear function with the given (T,3) corner values
+    (a field broken across a crack, or a coarse field prolonged onto finer triangles)."""
     p = np.asarray(points, dtype=float)[:, :2]
     t = np.asarray(tris, dtype=np.int64)
-    u = np.asarray(values, dtype=float)
+    u = np.asarray(corner_values, dtype=float)
     a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
     e1, e2 = b - a, c - a
     det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    d1, d2 = u[t[:, 1]] - u[t[:, 0]], u[t[:, 2]] - u[t[:, 0]]
+    d1, d2 = u[:, 1] - u[:, 0], u[:, 2] - u[:, 0]
     return np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det])
 
 
