@@ -35,6 +35,17 @@ foreign_cores} and, for sdcrack, norms_s; tool keys `sdcrack`, `sdcrack-lumped`,
 `sdcrack` / `sdcrack-lumped`, each a list of {level, u_l2, dolfinx, freefem}, the ratios or null
 outside the reference's range) and `lumped_vs_consistent` (a list of {level, u_l2, solve, wall}:
 consistent's time at lumped's error / lumped's time, null outside consistent's range).
+
+With `--graded-scene` (the same problem on meshes graded towards the crack tips, e.g.
+scenes/open-graded.toml) every tool also runs on that scene's levels, under row keys with the
+suffix `@graded` (`sdcrack@graded`, `dolfinx@graded`, …). Each graded sdcrack variant is then
+compared by wall time, at its own errors, with both references on the uniform meshes, both on the
+graded meshes and itself on the uniform meshes (JSON `speedup_graded_wall_time`, keyed by the
+graded row key, entries {level, u_l2, dolfinx, freefem, dolfinx@graded, freefem@graded, sdcrack
+or sdcrack-lumped}), and held to issue 24's goal: ≥ 100× faster than the faster uniform
+reference at the finest error that reference reaches (JSON `graded_goal`, one line per variant
+printed with MET or MISSED). The plot draws uniform meshes dashed with open markers and graded
+meshes solid with filled ones, one colour per tool and p mass.
 """
 
 import argparse
@@ -55,6 +66,11 @@ TOOLS = ("dolfinx", "freefem")
 # sdcrack's p masses → row key and label
 VARIANTS = {"consistent": "sdcrack", "lumped": "sdcrack-lumped"}
 LABELS = {"sdcrack": "sdcrack", "sdcrack-lumped": "sdcrack (lumped p)"}
+# a row key on the graded scene's meshes: the tool's key with this suffix
+GRADED = "@graded"
+# the goal of issue 24: graded sdcrack this many times faster by wall time than the faster
+# uniform reference at the finest error that reference reaches
+GRADED_GOAL = 100.0
 IDLE_LOAD = 1.0  # 1-min load average below which the machine counts as idle
 IDLE_FOREIGN = 0.1  # cores used by other processes below which the machine counts as idle
 REJECT_FOREIGN = 0.2  # cores used by other processes during a measurement that reject it
@@ -166,8 +182,20 @@ def measure(label, fn, log, check=True, idle_timeout=300.0, max_tries=3):
     return result
 
 
-def run_sdcrack(scene_file, level, work, p_mass="consistent"):
-    out = work / f"sd{level}-{p_mass}"
+def graded(key):
+    """The row key of `key` (a tool or sdcrack variant) on the graded scene's meshes."""
+    return key + GRADED
+
+
+def label(key):
+    """'sdcrack (lumped p), graded' for 'sdcrack-lumped@graded'."""
+    base = key.removesuffix(GRADED)
+    return LABELS.get(base, base) + (", graded" if key.endswith(GRADED) else "")
+
+
+def run_sdcrack(scene_file, level, work, p_mass="consistent", tag=""):
+    """One sdcrack case; `tag` keeps the graded scene's folders apart from the uniform one's."""
+    out = work / f"sd{tag}{level}-{p_mass}"
     shutil.rmtree(out, ignore_errors=True)  # a repeated try writes afresh
     wall = run_timed([SDCRACK, "run", scene_file, "--level", str(level), "--u-space", "broken",
                       "--multiplier", "M1", "--p-mass", p_mass, "--delta", "0", "--out", out,
@@ -185,11 +213,11 @@ def run_sdcrack(scene_file, level, work, p_mass="consistent"):
     }
 
 
-def run_reference(tool, scene_file, level, work):
-    mesh = work / f"mesh{level}"
+def run_reference(tool, scene_file, level, work, tag=""):
+    mesh = work / f"mesh{tag}{level}"
     if not mesh.exists():
         run_timed([SDCRACK, "mesh", scene_file, "--level", str(level), "--out", mesh])
-    out = work / f"{tool}{level}"
+    out = work / f"{tool}{tag}{level}"
     shutil.rmtree(out, ignore_errors=True)  # a repeated try writes afresh
     env = dict(os.environ, FF_LOADPATH=os.environ.get("FF_LOADPATH", "/usr/lib/freefem++"))
     wall = run_timed(["/usr/bin/python3", ROOT / "references" / tool / "solve.py", mesh,
@@ -224,15 +252,66 @@ def ratio_at_error(rows, tool, key, e, t):
     return None if tr is None else tr / t
 
 
-def speedups(rows, key, variant="sdcrack"):
-    """For each row of sdcrack `variant` (a row key): time of each reference at the variant's
-    error / the variant's time."""
+def speedups(rows, key, variant="sdcrack", against=TOOLS):
+    """For each row of sdcrack `variant` (a row key): time of each curve of `against` (row keys,
+    by default the references on the same meshes) at the variant's error / the variant's time."""
     out = []
     for r in (r for r in rows if variant in r):
         e, t = r[variant]["u_l2"], r[variant][key]
         out.append({"level": r["level"], "u_l2": e,
-                    **{tool: ratio_at_error(rows, tool, key, e, t) for tool in TOOLS}})
+                    **{other: ratio_at_error(rows, other, key, e, t) for other in against}})
     return out
+
+
+def graded_against(variant):
+    """What a graded sdcrack variant is compared with: both references on uniform meshes, both on
+    the graded meshes, and the same variant on uniform meshes."""
+    return (*TOOLS, *map(graded, TOOLS), variant)
+
+
+def finest_uniform_reference(rows):
+    """(tool, level, u_l2, wall_s) of the faster uniform reference at the finest level both
+    reached (the references solve the same problem on the same mesh: equal errors)."""
+    common = [r for r in rows if all(t in r for t in TOOLS)] or [r for r in rows
+                                                                 if any(t in r for t in TOOLS)]
+    if not common:
+        return None
+    r = max(common, key=lambda r: r["level"])
+    tool = min((t for t in TOOLS if t in r), key=lambda t: r[t]["wall_s"])
+    return tool, r["level"], r[tool]["u_l2"], r[tool]["wall_s"]
+
+
+def graded_goal(rows, variants):
+    """Issue 24's goal for each graded sdcrack variant (row keys without the suffix): the faster
+    uniform reference's wall time at its finest level / the graded variant's wall time
+    interpolated log-log at that error. Ratio None when the graded variant's errors do not
+    bracket that error; then the goal is MISSED, said in words."""
+    ref = finest_uniform_reference(rows)
+    if ref is None:
+        return []
+    tool, level, e, t = ref
+    out = []
+    for v in variants:
+        curve = [(r[graded(v)]["u_l2"], r[graded(v)]["wall_s"]) for r in rows if graded(v) in r]
+        if not curve:
+            continue
+        tg = time_at_error(curve, e)
+        ratio = None if tg is None else t / tg
+        out.append({"variant": v, "reference": tool, "reference_level": level, "u_l2": e,
+                    "reference_wall_s": t, "graded_wall_s": tg, "ratio": ratio,
+                    "met": ratio is not None and ratio >= GRADED_GOAL})
+    return out
+
+
+def goal_line(g):
+    """One printed line per graded variant: MET or MISSED with the figures."""
+    head = (f"goal: {label(graded(g['variant']))} >= {GRADED_GOAL:.0f}x faster by wall time than "
+            f"{g['reference']} on uniform meshes at its finest error ({g['u_l2']:.3e}, level "
+            f"{g['reference_level']}, {g['reference_wall_s']:.2f} s): ")
+    if g["ratio"] is None:
+        return head + "MISSED (the graded errors do not reach it)"
+    return head + (f"{'MET' if g['met'] else 'MISSED'} ({g['ratio']:.1f}x, "
+                   f"{g['graded_wall_s']:.2f} s)")
 
 
 def lumped_vs_consistent(rows):
@@ -254,12 +333,15 @@ def level_line(level, tool, x):
     norms = "–" if "norms_s" not in x else f"{x['norms_s']:.2f}"
     ratio = ("–" if "norms_s" not in x or x["solver_s"] <= 0
              else f"{x['norms_s'] / x['solver_s']:.1f}")
-    return (f"| {level} | {LABELS.get(tool, tool)} | {x['unknowns']} | {x['u_l2']:.3e} | "
+    return (f"| {level} | {label(tool)} | {x['unknowns']} | {x['u_l2']:.3e} | "
             f"{x['wall_s']:.2f} | {x['solver_s']:.2f} | {norms} | {ratio} |")
 
 
-def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=()):
-    """The report; `fast_internal` / `fast_wall`: speedups() per sdcrack variant (row key)."""
+def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=(), graded_fast=None, goals=(),
+             graded_scene=None):
+    """The report; `fast_internal` / `fast_wall`: speedups() per sdcrack variant (row key);
+    `graded_fast`: wall-time speedups() of each graded variant (row key) against
+    graded_against(); `goals`: graded_goal()."""
     lines = [f"# Work-precision: scene `{scene}` (broken u, M1, δ = 0 for sdcrack)", "",
              "Times in seconds, one process per tool and level on this machine. `wall`: the whole "
              "process (start-up, imports, solve and error evaluation); `solve`: the tool's own "
@@ -269,9 +351,10 @@ def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=()):
              "`sdcrack (lumped p)`: lumped p mass.", "",
              "| level | tool | unknowns | ‖u_h − u‖_L² | wall s | solve s | norms s "
              "| norms / solve |", "|---|---|---|---|---|---|---|---|"]
+    keys = (*VARIANTS.values(), *TOOLS)
     for r in rows:
         lines += [level_line(r["level"], tool, r[tool])
-                  for tool in (*VARIANTS.values(), *TOOLS) if tool in r]
+                  for tool in (*keys, *map(graded, keys)) if tool in r]
     lines += ["", "Speed-up of sdcrack at equal error (reference time interpolated log-log at "
               "sdcrack's error, divided by sdcrack's time of the same kind; – where sdcrack's error is "
               "outside the reference's range):", "",
@@ -291,34 +374,58 @@ def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=()):
                   "| level | lumped ‖u_h − u‖ | solve | wall |", "|---|---|---|---|"]
         lines += [f"| {x['level']} | {x['u_l2']:.3e} | {fmt_x(x['solve'])} | {fmt_x(x['wall'])} |"
                   for x in lumped_fast]
+    if graded_fast:
+        lines += ["", f"sdcrack on the graded meshes of `{graded_scene}` at equal error, by wall "
+                  "time (the other curve's wall time interpolated log-log at the graded variant's "
+                  "error, divided by its wall time; – outside that curve's range):", "",
+                  "| level | variant | ‖u_h − u‖ | vs dolfinx, uniform | vs FreeFEM, uniform "
+                  "| vs dolfinx, graded | vs FreeFEM, graded | vs itself, uniform |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for key, entries in graded_fast.items():
+            base = key.removesuffix(GRADED)
+            mass = next(m for m, k in VARIANTS.items() if k == base)
+            lines += [f"| {a['level']} | {mass} | {a['u_l2']:.3e} | "
+                      + " | ".join(fmt_x(a[o]) for o in graded_against(base)) + " |"
+                      for a in entries]
+    if goals:
+        lines += [""] + [goal_line(g) for g in goals]
     return "\n".join(lines) + "\n"
 
 
+# marker and colour per tool and p mass; uniform meshes: dashed, open markers; graded: solid, filled
+PLOT_STYLE = {"sdcrack": ("o", "C0"), "sdcrack-lumped": ("D", "C1"), "dolfinx": ("s", "C2"),
+              "freefem": ("^", "C3")}
+
+
 def plot(rows, path, scene):
-    """Error against wall time and solve time against unknowns, one line per tool and variant."""
+    """Error against wall time and solve time against unknowns, one line per tool, variant and
+    mesh kind; one legend beside the panels, off the data."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
-    for tool, style in (("sdcrack", "o-"), ("sdcrack-lumped", "D:"), ("dolfinx", "s--"),
-                        ("freefem", "^-.")):
-        pts = [(r[tool]["wall_s"], r[tool]["u_l2"], r[tool].get("solver_s"), r[tool]["unknowns"])
-               for r in rows if tool in r]
+    fig, axes = plt.subplots(1, 2, figsize=(12.5, 4.4))
+    for key in (k + suffix for suffix in ("", GRADED) for k in PLOT_STYLE):
+        pts = [(r[key]["wall_s"], r[key]["u_l2"], r[key].get("solver_s"), r[key]["unknowns"])
+               for r in rows if key in r]
         if not pts:
             continue
-        label = LABELS.get(tool, tool)
-        axes[0].loglog([p[0] for p in pts], [p[1] for p in pts], style, label=f"{label} (wall)")
-        axes[1].loglog([p[3] for p in pts], [p[2] for p in pts], style, label=label)
-    axes[0].set_xlabel("wall time [s]")
+        marker, colour = PLOT_STYLE[key.removesuffix(GRADED)]
+        kw = dict(marker=marker, color=colour, label=label(key))
+        kw.update(linestyle="-") if key.endswith(GRADED) else kw.update(linestyle="--",
+                                                                       markerfacecolor="none")
+        axes[0].loglog([p[0] for p in pts], [p[1] for p in pts], **kw)
+        axes[1].loglog([p[3] for p in pts], [p[2] for p in pts], **kw)
+    axes[0].set_xlabel("wall time per process [s] (start-up included)")
     axes[0].set_ylabel("‖u_h − u‖_L²")
-    axes[0].set_title(f"work-precision, {scene}")
+    axes[0].set_title(f"work–precision, {scene}")
     axes[1].set_xlabel("unknowns")
-    axes[1].set_ylabel("solve time [s]")
-    axes[1].set_title("time per level")
+    axes[1].set_ylabel("solve time [s] (no start-up)")
+    axes[1].set_title("solve time per level")
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend()
-    fig.tight_layout()
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="center right", fontsize="small")
+    fig.tight_layout(rect=(0, 0, 0.8, 1))
     fig.savefig(path, dpi=110)
     return fig
 
@@ -360,6 +467,14 @@ def main(argv=None):
     ap.add_argument("--ref-levels", default=None,
                     help="the references' levels (default: sdcrack's and three more, so that their "
                          "errors reach sdcrack's)")
+    ap.add_argument("--graded-scene", default=None,
+                    help="a second scene, the first on graded meshes (e.g. "
+                         "scenes/open-graded.toml): every tool on it as well, and graded sdcrack "
+                         "against everything at equal error")
+    ap.add_argument("--graded-levels", default=None,
+                    help="sdcrack's levels on the graded scene (default: --levels)")
+    ap.add_argument("--graded-ref-levels", default=None,
+                    help="the references' levels on the graded scene (default: --graded-levels)")
     ap.add_argument("--tools", default="dolfinx,freefem",
                     help="references to time ('' for sdcrack alone)")
     ap.add_argument("--p-masses", type=parse_p_masses, default="consistent,lumped",
@@ -384,8 +499,16 @@ def main(argv=None):
     if not SDCRACK.exists():
         sys.exit(f"bench-references: {SDCRACK} not built (run `cargo build --release`)")
     scene_path = Path(a.scene)
-    if not scene_path.is_file():
-        sys.exit(f"bench-references: scene file {scene_path} not found")
+    graded_path = Path(a.graded_scene) if a.graded_scene else None
+    for path in (scene_path, graded_path):
+        if path is not None and not path.is_file():
+            sys.exit(f"bench-references: scene file {path} not found")
+    g_levels = parse_levels(a.graded_levels) if a.graded_levels else levels
+    g_ref_levels = (parse_levels(a.graded_ref_levels) if a.graded_ref_levels else g_levels)
+    if graded_path is None:
+        g_levels = g_ref_levels = []
+    if not tools:
+        g_ref_levels = []
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
     text = scene_path.read_text()
@@ -397,24 +520,40 @@ def main(argv=None):
         work = Path(tmp)
         solo = work / "scene.toml"
         solo.write_text(sdcrack_only_scene(text))
-        for level in sorted(set(levels) | set(ref_levels)):
+        g_solo = work / "graded.toml"
+        if graded_path is not None:
+            g_solo.write_text(sdcrack_only_scene(graded_path.read_text()))
+        for level in sorted(set(levels) | set(ref_levels) | set(g_levels) | set(g_ref_levels)):
             measured = [(VARIANTS[m], lambda m=m: run_sdcrack(solo, level, work, m))
                         for m in a.p_masses if level in levels]
             measured += [(t, lambda t=t: run_reference(t, scene_path, level, work))
                          for t in tools if level in ref_levels]
+            measured += [(graded(VARIANTS[m]),
+                          lambda m=m: run_sdcrack(g_solo, level, work, m, tag="graded"))
+                         for m in a.p_masses if level in g_levels]
+            measured += [(graded(t),
+                          lambda t=t: run_reference(t, graded_path, level, work, tag="graded"))
+                         for t in tools if level in g_ref_levels]
             rows.append(run_level(level, measured, log, check=not a.no_idle_wait,
                                   idle_timeout=a.idle_timeout, max_tries=a.max_tries))
     keys = [VARIANTS[m] for m in a.p_masses]
     fast_internal = {k: speedups(rows, "solver_s", k) for k in keys}
     fast_wall = {k: speedups(rows, "wall_s", k) for k in keys}
     lumped_fast = lumped_vs_consistent(rows) if len(keys) == 2 else []
-    md = markdown(name, rows, fast_internal, fast_wall, lumped_fast)
+    graded_fast = {graded(k): speedups(rows, "wall_s", graded(k), graded_against(k))
+                   for k in keys if g_levels}
+    goals = graded_goal(rows, keys) if g_levels else []
+    graded_name = (re.search(r'(?m)^name\s*=\s*"([^"]+)"', graded_path.read_text()).group(1)
+                   if graded_path else None)
+    md = markdown(name, rows, fast_internal, fast_wall, lumped_fast, graded_fast, goals,
+                  graded_name)
     (out / "work_precision.md").write_text(md)
     (out / "work_precision.json").write_text(json.dumps(
         {"scene": name, "p_masses": a.p_masses, "levels": rows,
          "speedup_solver_time": fast_internal, "speedup_wall_time": fast_wall,
-         "lumped_vs_consistent": lumped_fast}, indent=2))
-    plot(rows, out / "work_precision.png", name)
+         "lumped_vs_consistent": lumped_fast, "graded_scene": graded_name,
+         "speedup_graded_wall_time": graded_fast, "graded_goal": goals}, indent=2))
+    plot(rows, out / "work_precision.png", name if not graded_name else f"{name} and {graded_name}")
     print(md)
 
 

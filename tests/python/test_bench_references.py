@@ -138,12 +138,26 @@ def test_markdown_lists_both_variants_and_the_norms_columns():
 
 def test_plot_draws_both_variants_in_both_panels(tmp_path):
     fig = br.plot(hand_rows(), tmp_path / "wp.png", "hand")
-    wall, solve = ([(x.get_label(), x.get_marker(), x.get_linestyle()) for x in ax.get_lines()]
-                   for ax in fig.axes)
-    assert wall[:2] == [("sdcrack (wall)", "o", "-"), ("sdcrack (lumped p) (wall)", "D", ":")]
-    assert solve[:2] == [("sdcrack", "o", "-"), ("sdcrack (lumped p)", "D", ":")]
+    wall, solve = ([(x.get_label(), x.get_marker(), x.get_linestyle(), x.get_color())
+                    for x in ax.get_lines()] for ax in fig.axes)
+    # one colour per tool and p mass (issue 25: consistent and lumped differ by more than dashing)
+    assert wall[:2] == [("sdcrack", "o", "--", "C0"), ("sdcrack (lumped p)", "D", "--", "C1")]
+    assert solve == wall
     assert [x[0] for x in solve[2:]] == ["dolfinx", "freefem"]
+    assert len({x[3] for x in wall}) == 4
+    # one legend beside the panels, none over the data
+    assert all(ax.get_legend() is None for ax in fig.axes) and len(fig.legends) == 1
     assert (tmp_path / "wp.png").stat().st_size > 0
+
+
+def test_plot_draws_graded_curves_solid_and_filled(tmp_path):
+    fig = br.plot(graded_rows(), tmp_path / "wp.png", "hand")
+    lines = {x.get_label(): x for x in fig.axes[0].get_lines()}
+    assert set(lines) == {"sdcrack", "sdcrack (lumped p)", "dolfinx", "freefem", "sdcrack, graded",
+                          "sdcrack (lumped p), graded", "dolfinx, graded", "freefem, graded"}
+    g, u = lines["sdcrack, graded"], lines["sdcrack"]
+    assert g.get_color() == u.get_color() and g.get_linestyle() == "-" and u.get_linestyle() == "--"
+    assert u.get_markerfacecolor() == "none" and g.get_markerfacecolor() != "none"
 
 
 def test_proc_parsers_on_fake_text():
@@ -247,3 +261,70 @@ def test_end_to_end_both_p_masses(tmp_path):
     assert (tmp_path / "work_precision.png").stat().st_size > 0
     load = (tmp_path / "work_precision.load.txt").read_text().splitlines()
     assert sum(" try 1: " in x for x in load) == 4
+
+
+def graded_rows():
+    """hand_rows() plus graded curves. Graded sdcrack consistent: e 0.02 → 0.01 at wall 0.01 →
+    0.04 (t ∝ e⁻²); lumped: e 0.03 → 0.025 (never reaching the uniform references' finest 0.02).
+    Graded references: e 0.04 → 0.01 at wall 0.1 → 0.2."""
+    rows = hand_rows()
+    rows[0].update({"sdcrack@graded": entry(0.02, 0.005, 0.01),
+                    "sdcrack-lumped@graded": entry(0.03, 0.005, 0.01),
+                    "dolfinx@graded": entry(0.04, 0.05, 0.1), "freefem@graded": entry(0.04, 0.05, 0.2)})
+    rows[1].update({"sdcrack@graded": entry(0.01, 0.02, 0.04),
+                    "sdcrack-lumped@graded": entry(0.025, 0.02, 0.04),
+                    "dolfinx@graded": entry(0.01, 0.1, 0.2), "freefem@graded": entry(0.01, 0.1, 0.4)})
+    return rows
+
+
+def test_graded_speedups_against_every_curve():
+    rows = graded_rows()
+    fast = br.speedups(rows, "wall_s", "sdcrack@graded", br.graded_against("sdcrack"))
+    assert [x["level"] for x in fast] == [0, 1]
+    # e = 0.02: uniform dolfinx wall 1·(0.08/0.02)² = 16, FreeFEM 8, over 0.01
+    assert fast[0]["dolfinx"] == pytest.approx(1600, rel=1e-12)
+    assert fast[0]["freefem"] == pytest.approx(800, rel=1e-12)
+    # graded dolfinx between (0.04, 0.1) and (0.01, 0.2): t = 0.1·2^{log(2)/log(4)} = 0.1·√2
+    assert fast[0]["dolfinx@graded"] == pytest.approx(10 * 2 ** 0.5, rel=1e-12)
+    assert fast[0]["freefem@graded"] == pytest.approx(20 * 2 ** 0.5, rel=1e-12)
+    # uniform sdcrack's range is 0.05 → 0.0125 with t ∝ 1/e: 0.1·0.05/0.02 = 0.25 over 0.01
+    assert fast[0]["sdcrack"] == pytest.approx(25, rel=1e-12)
+    # e = 0.01 is below the uniform curves' ranges; graded dolfinx's finest point is at 0.01
+    assert fast[1]["dolfinx"] is None and fast[1]["sdcrack"] is None
+    assert fast[1]["dolfinx@graded"] == pytest.approx(5, rel=1e-12)
+
+
+def test_graded_goal_met_missed_and_unreached():
+    goals = {g["variant"]: g for g in br.graded_goal(graded_rows(), ["sdcrack", "sdcrack-lumped"])}
+    # the uniform references' finest level is 2 (e 0.02): FreeFEM is faster there (8 s vs 16 s)
+    g = goals["sdcrack"]
+    assert (g["reference"], g["reference_level"], g["u_l2"]) == ("freefem", 2, 0.02)
+    # graded consistent reaches e 0.02 at its level 0 (0.01 s): 800×, met
+    assert g["graded_wall_s"] == pytest.approx(0.01) and g["ratio"] == pytest.approx(800)
+    assert g["met"] and "MET (800.0x" in br.goal_line(g)
+    # lumped never gets below 0.025: missed, in words
+    g = goals["sdcrack-lumped"]
+    assert g["ratio"] is None and not g["met"]
+    assert br.goal_line(g).endswith("MISSED (the graded errors do not reach it)")
+    # a slower graded variant (damaged: 100× the wall time) misses the goal
+    rows = graded_rows()
+    for r in rows[:2]:
+        r["sdcrack@graded"]["wall_s"] *= 100
+    slow = br.graded_goal(rows, ["sdcrack"])[0]
+    assert slow["ratio"] == pytest.approx(8) and not slow["met"]
+    assert "MISSED (8.0x" in br.goal_line(slow)
+
+
+def test_markdown_has_the_graded_table_and_goal_lines():
+    rows = graded_rows()
+    keys = ("sdcrack", "sdcrack-lumped")
+    fast = {k: br.speedups(rows, "solver_s", k) for k in keys}
+    wall = {k: br.speedups(rows, "wall_s", k) for k in keys}
+    gf = {br.graded(k): br.speedups(rows, "wall_s", br.graded(k), br.graded_against(k))
+          for k in keys}
+    md = br.markdown("hand", rows, fast, wall, (), gf, br.graded_goal(rows, keys), "hand-graded")
+    lines = md.splitlines()
+    assert "| 0 | sdcrack, graded | 100 | 2.000e-02 | 0.01 | 0.01 | – | – |" in lines
+    assert "| 1 | dolfinx, graded | 100 | 1.000e-02 | 0.20 | 0.10 | – | – |" in lines
+    assert "| 0 | consistent | 2.000e-02 | 1600.0× | 800.0× | 14.1× | 28.3× | 25.0× |" in lines
+    assert sum(x.startswith("goal: ") for x in lines) == 2
