@@ -3,9 +3,10 @@
     pvpython ci/render_field.py RESULTS_DIR [--series NAME] [--out PNG] [--check-json FILE]
 
 RESULTS_DIR is one scene's results folder (`sdcrack run ... --out OUT` writes OUT/SCENE/), holding
-`fields.h5` and `fields/SERIES.xdmf` (+ `fields/SERIES.crack.xdmf`), one XDMF temporal collection
-per (level, u space, multiplier) whose time steps 0, 1, 2, ... are the δ sweep in decreasing δ
-(see src/output/xdmf.rs). The default series is broken-M1 at the finest level that has one, else
+`fields.h5` and `fields/SERIES.series.xdmf` (+ `fields/SERIES.crack.series.xdmf`), one XDMF
+temporal collection per (level, u space, multiplier, p mass) whose time steps 0, 1, 2, ... are the
+δ sweep in decreasing δ (see src/output/xdmf.rs; the one-state files `fields/CASE.xdmf` beside
+them are for meshio.read). The default series is broken-M1 at the finest level that has one, else
 the first series (by level, then name); --series takes `level4-broken-M1`, its file name or the
 `fields_series` of summary.json.
 
@@ -55,6 +56,9 @@ class _Parser(argparse.ArgumentParser):
         raise BadInput(message)
 
 
+# the time-series files (src/output/xdmf.rs): NAME.series.xdmf; NAME.xdmf holds one state
+SERIES = ".series.xdmf"
+
 def parse_args(argv):
     p = _Parser(prog="render-field", add_help=True)
     p.add_argument("results", metavar="RESULTS_DIR")
@@ -84,10 +88,10 @@ def list_series(results):
     fields = os.path.join(results, "fields")
     if not os.path.isdir(fields):
         raise BadInput(f"{results}: no fields/ folder (run with [outputs] fields)")
-    names = [f[: -len(".xdmf")] for f in os.listdir(fields)
-             if f.endswith(".xdmf") and not f.endswith(".crack.xdmf")]
+    names = [f[: -len(SERIES)] for f in os.listdir(fields)
+             if f.endswith(SERIES) and not f.endswith(".crack" + SERIES)]
     if not names:
-        raise BadInput(f"{fields}: no field series (*.xdmf)")
+        raise BadInput(f"{fields}: no field series (*{SERIES})")
     return sorted(names, key=lambda n: (level_of(n), n))
 
 
@@ -95,8 +99,8 @@ def pick_series(results, requested):
     names = list_series(results)
     if requested:
         name = os.path.basename(requested)
-        if name.endswith(".xdmf"):
-            name = name[: -len(".xdmf")]
+        for suffix in (SERIES, ".xdmf"):
+            name = name.removesuffix(suffix)
         if name not in names:
             raise BadInput(f"unknown series {requested!r} in {results} "
                            f"(have {', '.join(names[:4])}{', ...' if len(names) > 4 else ''})")
@@ -147,7 +151,7 @@ def summary_cases(results, series):
         return None
     with open(path) as f:
         cases = json.load(f).get("cases", [])
-    want = f"fields/{series}.xdmf"
+    want = f"fields/{series}{SERIES}"
     return [(c.get("delta"), c.get("fields_grid")) for c in cases
             if c.get("fields_series") == want]
 
@@ -388,11 +392,11 @@ def main(argv):
                 else " (run with [outputs] fields)")
         raise BadInput(f"{a.results}: no fields.h5{hint}")
     series = pick_series(results, a.series)
-    path = os.path.join(results, "fields", series + ".xdmf")
+    path = os.path.join(results, "fields", series + SERIES)
     steps = parse_series(path)
     if any("u" not in s["attributes"] for s in steps):
         raise BadInput(f"series {series} has no u at every step (run with u in [outputs] fields)")
-    crack_path = os.path.join(results, "fields", series + ".crack.xdmf")
+    crack_path = os.path.join(results, "fields", series + ".crack" + SERIES)
     crack_steps = parse_series(crack_path) if os.path.isfile(crack_path) else None
     out = os.path.abspath(a.out) if a.out else os.path.join(results, "render", series + ".png")
     if a.validate_only:

@@ -47,21 +47,28 @@ fn run_writes_summary_and_fields_and_never_overwrites() {
         assert_eq!(c["converged"], true, "{c}");
     }
     assert!(folder.join("fields.h5").is_file());
-    // one time series (and its crack) per level, u space and multiplier; no spatial collection
+    // one time series (and its crack) per level, u space and multiplier, one state file (and
+    // its crack) per case; no spatial collection
     assert!(!folder.join("fields.xdmf").exists());
-    let series = std::fs::read_dir(folder.join("fields")).unwrap().count();
+    let files = std::fs::read_dir(folder.join("fields")).unwrap().count();
     assert_eq!(
-        series,
-        (2 * 2 * 3) * 2,
-        "12 series, a mesh file and a crack file each"
+        files,
+        (2 * 2 * 3) * 2 + cases.len() * 2,
+        "12 series and 24 states, a mesh file and a crack file each"
     );
     for c in cases {
         let file = c["fields_series"].as_str().unwrap();
         assert!(folder.join(file).is_file(), "{file}");
-        assert!(c["fields_grid"]
-            .as_str()
-            .unwrap()
-            .starts_with(file.trim_start_matches("fields/").trim_end_matches(".xdmf")));
+        assert!(c["fields_grid"].as_str().unwrap().starts_with(
+            file.trim_start_matches("fields/")
+                .trim_end_matches(".series.xdmf")
+        ));
+        let state = c["fields_state"].as_str().unwrap();
+        assert_eq!(
+            state,
+            format!("fields/{}.xdmf", c["fields_grid"].as_str().unwrap())
+        );
+        assert!(folder.join(state).is_file(), "{state}");
     }
     // provenance: the command line as given, the binary, the date
     let prov = &summary["provenance"];
@@ -351,7 +358,7 @@ fn lumped_p_mass_runs_alone_and_is_named_in_the_results() {
         assert_eq!(c["p_mass"], "lumped");
         assert_eq!(c["converged"], true, "{c}");
         let series = c["fields_series"].as_str().unwrap();
-        assert!(series.ends_with("-M1-lumped.xdmf"), "{series}");
+        assert!(series.ends_with("-M1-lumped.series.xdmf"), "{series}");
         assert!(folder.join(series).is_file());
     }
     let f = hdf5::File::open(folder.join("fields.h5")).unwrap();

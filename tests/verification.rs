@@ -59,6 +59,7 @@ fn numbers(mut s: Value) -> Value {
         let c = c.as_object_mut().unwrap();
         c.remove("timings_s");
         c.remove("fields_series");
+        c.remove("fields_state");
     }
     s
 }

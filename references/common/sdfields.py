@@ -14,6 +14,10 @@ ParaView, meshio and the compare tool read solver and references alike.
                                  line cell per segment (one grid a file: meshio reads them, ParaView
                                  opens them as they are)
 
+The solver's convention (src/output/xdmf.rs): `NAME.xdmf` holds one state, a single grid that
+meshio.read reads; `NAME.series.xdmf` a temporal collection for meshio's TimeSeriesReader. A
+reference solves one state per level, so it writes only the first kind.
+
 There is no top-level fields.xdmf: a spatial collection of all levels' grids (they overlap) showed
 as one grey square in ParaView and meshio.read could not read it.
 """

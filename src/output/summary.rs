@@ -171,10 +171,15 @@ pub struct CaseSummary {
     /// `fields.h5` and in `verification.h5` (whichever exist), and its step grid in the series
     /// file.
     pub fields_grid: String,
-    /// The series file (relative to the results folder, `fields/<series>.xdmf`) whose time
-    /// steps are this case's δ sweep, when the XDMF series are written (the scene lists fields).
+    /// The series file (relative to the results folder, `fields/<series>.series.xdmf`) whose
+    /// time steps are this case's δ sweep, when the XDMF files are written (the scene lists
+    /// fields); `meshio.xdmf.TimeSeriesReader` reads it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fields_series: Option<String>,
+    /// This case's one-state file (`fields/<fields_grid>.xdmf`), written with the series;
+    /// `meshio.read` reads it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fields_state: Option<String>,
 }
 
 /// Name of a case in the field files, e.g. `level3-broken-M1-delta1e-2` (δ = 0 is written
@@ -193,8 +198,8 @@ pub fn delta_text(delta: f64) -> String {
 }
 
 /// Name of the δ sweep a case belongs to in the field files, e.g. `level3-broken-M1` (and
-/// `level3-broken-M1-lumped` for the lumped p mass): the time series `fields/<series>.xdmf`
-/// whose steps are the sweep's δ.
+/// `level3-broken-M1-lumped` for the lumped p mass): the time series
+/// `fields/<series>.series.xdmf` whose steps are the sweep's δ.
 pub fn series_name(c: &CaseResult) -> String {
     let suffix = match c.p_mass {
         crate::problem::PMass::Consistent => "",
@@ -234,8 +239,14 @@ impl CaseSummary {
             timings_s: c.timings,
             errors: c.errors,
             fields_grid: case_name(c),
-            fields_series: with_series
-                .then(|| format!("{}/{}.xdmf", super::FIELDS_STEM, series_name(c))),
+            fields_series: with_series.then(|| {
+                let file = super::xdmf::series_file(&series_name(c), "");
+                format!("{}/{file}", super::FIELDS_STEM)
+            }),
+            fields_state: with_series.then(|| {
+                let file = super::xdmf::state_file(&case_name(c), "");
+                format!("{}/{file}", super::FIELDS_STEM)
+            }),
         }
     }
 }

@@ -7,14 +7,23 @@
 //! For `write_fields(DIR, STEM, meshes, cases)`:
 //!
 //! ```text
-//! DIR/STEM.h5                      all heavy data (HDF5)
-//! DIR/STEM/SERIES.xdmf             the triangle grids of one series, one time step per case
-//! DIR/STEM/SERIES.crack.xdmf       the crack polylines of the same series (when it has a crack)
+//! DIR/STEM.h5                          all heavy data (HDF5)
+//! DIR/STEM/CASE.xdmf                   one case's triangle grid: one state (meshio.read)
+//! DIR/STEM/CASE.crack.xdmf             its crack polylines (when it has a crack)
+//! DIR/STEM/SERIES.series.xdmf          the triangle grids of one series, one time step per case
+//!                                      (meshio.xdmf.TimeSeriesReader)
+//! DIR/STEM/SERIES.crack.series.xdmf    the crack polylines of the same series
 //! ```
 //!
 //! A *series* is a list of cases on one mesh that a viewer walks through with its time slider;
-//! the solver makes one series per (level, u space, multiplier), whose steps are the δ sweep in
-//! the order solved (δ decreasing, so the slider walks δ → 0).
+//! the solver makes one series per (level, u space, multiplier, p mass), whose steps are the δ
+//! sweep in the order solved (δ decreasing, so the slider walks δ → 0).
+//!
+//! The convention, the same in the reference scripts' fields (references/common/sdfields.py):
+//! a file `NAME.xdmf` holds one state, a single grid, which `meshio.read` and ParaView read;
+//! a file `NAME.series.xdmf` holds a temporal collection, which `meshio.xdmf.TimeSeriesReader`
+//! and ParaView read. No one file serves both meshio readers: `meshio.read` accepts exactly one
+//! grid with no `Time`, and `TimeSeriesReader` needs a temporal collection.
 //!
 //! `write_h5_only(DIR, STEM, meshes, cases)` writes `DIR/STEM.h5` alone: the same datasets with
 //! the same values and attributes as `write_fields` would, validated and committed the same way;
@@ -49,7 +58,7 @@
 //! written. A case whose `crack_points` is empty (and has no `lambda`) has no `crack` group and no
 //! crack grid. Data are stored contiguously, uncompressed.
 //!
-//! # XDMF (`STEM/SERIES.xdmf`, `STEM/SERIES.crack.xdmf`)
+//! # XDMF series (`STEM/SERIES.series.xdmf`, `STEM/SERIES.crack.series.xdmf`)
 //!
 //! ```text
 //! <Xdmf Version="3.0">
@@ -74,6 +83,12 @@
 //! `Information`, and would reject `Center="Grid"` attributes, which are therefore not used).
 //! No file holds more than one series: overlapping grids of several levels or δ in one spatial
 //! collection are what a viewer cannot show.
+//!
+//! # XDMF states (`STEM/CASE.xdmf`, `STEM/CASE.crack.xdmf`)
+//!
+//! One `<Grid Name="CASE" GridType="Uniform">` directly in the `Domain`, with the same topology,
+//! geometry and attributes as the case's step in its series and neither `Time` nor
+//! `Information`.
 //!
 //! # Names
 //!
@@ -304,24 +319,55 @@ fn write_series(
         let first = &cases[series.cases[0]];
         let mesh = &meshes[plan.case_mesh[series.cases[0]]];
         let steps: Vec<&CaseFields> = series.cases.iter().map(|&c| &cases[c]).collect();
-        let grids = |grid: &dyn Fn(&CaseFields, usize) -> String| -> String {
-            steps.iter().enumerate().map(|(k, c)| grid(c, k)).collect()
+        let grids = |grid: &dyn Fn(&CaseFields, Option<usize>) -> String| -> String {
+            steps
+                .iter()
+                .enumerate()
+                .map(|(k, c)| grid(c, Some(k)))
+                .collect()
         };
         let body = grids(&|c, k| mesh_grid_xml(&h5, mesh, c, k, "      "));
         write_synced(
-            &folder.join(format!("{}.xdmf", first.series)),
+            &folder.join(series_file(&first.series, "")),
             &document(&temporal(&first.series, &body)),
         )?;
+        for c in &steps {
+            write_synced(
+                &folder.join(state_file(&c.name, "")),
+                &document(&mesh_grid_xml(&h5, mesh, c, None, "    ")),
+            )?;
+        }
         if has_crack(first) {
             let body = grids(&|c, k| crack_grid_xml(&h5, c, k, "      "));
             write_synced(
-                &folder.join(format!("{}.crack.xdmf", first.series)),
+                &folder.join(series_file(&first.series, ".crack")),
                 &document(&temporal(&first.series, &body)),
             )?;
+            for c in &steps {
+                write_synced(
+                    &folder.join(state_file(&c.name, ".crack")),
+                    &document(&crack_grid_xml(&h5, c, None, "    ")),
+                )?;
+            }
         }
     }
     sync_path(folder)
 }
+
+/// The one-state file of case `name` (`part`: "" for the triangle grid, ".crack" for the crack):
+/// a single grid, what `meshio.read` reads.
+pub fn state_file(name: &str, part: &str) -> String {
+    format!("{name}{part}.xdmf")
+}
+
+/// The time-series file of series `name` (`part` as in [`state_file`]): a temporal collection,
+/// what `meshio.xdmf.TimeSeriesReader` reads.
+pub fn series_file(name: &str, part: &str) -> String {
+    format!("{name}{part}{SERIES_SUFFIX}.xdmf")
+}
+
+/// What tells a time-series file from a one-state file: `NAME.series.xdmf`.
+pub const SERIES_SUFFIX: &str = ".series";
 
 /// Temporary paths of one [`write_fields`] or [`write_h5_only`] call, removed on drop (success or failure).
 struct Temporaries {
@@ -576,10 +622,15 @@ fn group_series(cases: &[CaseFields], case_mesh: &[usize]) -> Result<Vec<Series>
     let mut files = HashSet::new();
     for s in &series {
         let name = &cases[s.cases[0]].series;
-        for file in [format!("{name}.xdmf"), format!("{name}.crack.xdmf")] {
+        let own = [series_file(name, ""), series_file(name, ".crack")];
+        let states = s.cases.iter().flat_map(|&c| {
+            let case = &cases[c].name;
+            [state_file(case, ""), state_file(case, ".crack")]
+        });
+        for file in own.into_iter().chain(states) {
             if !files.insert(file.clone()) {
                 return Err(OutputError::Invalid(format!(
-                    "series {name:?}: file {file:?} clashes with another series' file"
+                    "series {name:?}: file {file:?} clashes with another file of the series or cases"
                 )));
             }
         }
@@ -821,12 +872,16 @@ fn temporal(name: &str, body: &str) -> String {
     )
 }
 
-/// Opening of the step grid `name`, step `k`: its `Time` and its metadata as `Information`.
-fn step_head(name: &str, k: usize, metadata: &[(String, Meta)], indent: &str) -> String {
+/// Opening of the grid `name`. As step `k` of a series: its `Time` and its metadata as
+/// `Information`. As a one-state file (`k` None): neither, since `meshio.read` rejects both (it
+/// reads `Information` only in its own format); the metadata stay in the HDF5 attributes.
+fn step_head(name: &str, k: Option<usize>, metadata: &[(String, Meta)], indent: &str) -> String {
     let mut s = format!(
-        "{indent}<Grid Name=\"{}\" GridType=\"Uniform\">\n{indent}  <Time Value=\"{k}\"/>\n",
+        "{indent}<Grid Name=\"{}\" GridType=\"Uniform\">\n",
         xml_escape(name)
     );
+    let Some(k) = k else { return s };
+    s.push_str(&format!("{indent}  <Time Value=\"{k}\"/>\n"));
     for (key, value) in metadata {
         s.push_str(&format!(
             "{indent}  <Information Name=\"{}\" Value=\"{}\"/>\n",
@@ -849,7 +904,14 @@ fn constant_attributes(indent: &str, h5: &str, group: &str, n: usize, case: &Cas
         .collect()
 }
 
-fn mesh_grid_xml(h5: &str, mesh: &MeshData, case: &CaseFields, k: usize, indent: &str) -> String {
+/// The triangle grid of `case`, step `k` of its series or (None) a one-state grid.
+fn mesh_grid_xml(
+    h5: &str,
+    mesh: &MeshData,
+    case: &CaseFields,
+    k: Option<usize>,
+    indent: &str,
+) -> String {
     let i2 = format!("{indent}  ");
     let i3 = format!("{indent}    ");
     let mp = format!("/meshes/{}", mesh.key);
@@ -884,7 +946,8 @@ fn mesh_grid_xml(h5: &str, mesh: &MeshData, case: &CaseFields, k: usize, indent:
     s
 }
 
-fn crack_grid_xml(h5: &str, case: &CaseFields, k: usize, indent: &str) -> String {
+/// The crack polylines of `case`, step `k` of its series or (None) a one-state grid.
+fn crack_grid_xml(h5: &str, case: &CaseFields, k: Option<usize>, indent: &str) -> String {
     let i2 = format!("{indent}  ");
     let i3 = format!("{indent}    ");
     let kp = format!("/cases/{}/crack", case.name);
@@ -1142,7 +1205,7 @@ mod tests {
         }
         drop(f);
 
-        let xdmf = fs::read_to_string(dir.join("fields/level1-P1-P0.xdmf")).unwrap();
+        let xdmf = fs::read_to_string(dir.join("fields/level1-P1-P0.series.xdmf")).unwrap();
         assert!(xdmf.contains("<Xdmf Version=\"3.0\">"));
         assert!(xdmf.contains("CollectionType=\"Temporal\""));
         assert!(xdmf.contains(">../fields.h5:/meshes/level1-P1/points<"));
@@ -1155,16 +1218,28 @@ mod tests {
         assert!(xdmf.find("<Time Value=\"0\"/>") < xdmf.find("<Time Value=\"1\"/>"));
         assert!(xdmf.contains("<Information Name=\"delta\" Value=\"1e-2\"/>"));
         assert!(xdmf.contains("<Information Name=\"delta\" Value=\"0\"/>"));
-        let odd = fs::read_to_string(dir.join(format!("fields/{ODD}.crack.xdmf"))).unwrap();
+        let odd = fs::read_to_string(dir.join(format!("fields/{ODD}.crack.series.xdmf"))).unwrap();
         assert!(odd.contains("Name=\"odd &lt;&amp;&gt;&quot;&apos; name/crack\""));
-        let mut want_files = vec![
-            "level1-P1-P0.crack.xdmf".to_string(),
-            "level1-P1-P0.xdmf".to_string(),
-            "level2-P1-P1.crack.xdmf".to_string(),
-            "level2-P1-P1.xdmf".to_string(),
-            format!("{ODD}.crack.xdmf"),
-            format!("{ODD}.xdmf"),
-        ];
+        // one state per case: a single grid, no Time, no Information, the same data items
+        let state = fs::read_to_string(dir.join("fields/level1-P1-P0-delta0.xdmf")).unwrap();
+        assert!(!state.contains("Collection") && !state.contains("<Time"));
+        assert!(!state.contains("<Information"));
+        assert_eq!(state.matches("<Grid ").count(), 1);
+        assert!(state.contains(">../fields.h5:/cases/level1-P1-P0-delta0/u<"));
+        let mut want_files = vec![];
+        for series in ["level1-P1-P0", "level2-P1-P1", ODD] {
+            want_files.push(format!("{series}.series.xdmf"));
+            want_files.push(format!("{series}.crack.series.xdmf"));
+        }
+        for case in [
+            "level1-P1-P0-delta1e-2",
+            "level1-P1-P0-delta0",
+            "level2-P1-P1-delta1.5e-2",
+            ODD,
+        ] {
+            want_files.push(format!("{case}.xdmf"));
+            want_files.push(format!("{case}.crack.xdmf"));
+        }
         want_files.sort();
         assert_eq!(listing(&dir.join("fields")), want_files);
         assert!(!listing(&dir).iter().any(|n| n.starts_with('.')));
@@ -1329,7 +1404,12 @@ mod tests {
         assert_ne!(before[2].1, after[2].1, "xdmf replaced");
         assert_eq!(
             listing(&tmp.path().join("fields")),
-            ["level1-P1-P0.crack.xdmf", "level1-P1-P0.xdmf"]
+            [
+                "level1-P1-P0-delta1e-2.crack.xdmf",
+                "level1-P1-P0-delta1e-2.xdmf",
+                "level1-P1-P0.crack.series.xdmf",
+                "level1-P1-P0.series.xdmf"
+            ]
         );
         assert_eq!(listing(tmp.path()), ["fields", "fields.h5"]);
         let f = hdf5::File::open(tmp.path().join("fields.h5")).unwrap();
@@ -1400,7 +1480,11 @@ mod tests {
 
         let mut cc = c.clone();
         cc[1].series = "level1-P1-P0.crack".into();
-        expect_invalid(&m, &cc, &["level1-P1-P0.crack.xdmf", "clashes"]);
+        expect_invalid(&m, &cc, &["level1-P1-P0.crack.series.xdmf", "clashes"]);
+
+        let mut cc = c.clone();
+        cc[1].name = "level1-P1-P0-delta1e-2.crack".into();
+        expect_invalid(&m, &cc, &["level1-P1-P0-delta1e-2.crack.xdmf", "clashes"]);
 
         let mut cc = c.clone();
         cc[1].series = "level1-P1-P0".into();
@@ -1454,8 +1538,11 @@ mod tests {
             constants: vec![],
         };
         write_fields(tmp.path(), "out", &[m], &[c]).unwrap();
-        assert_eq!(listing(&tmp.path().join("out")), ["bare.xdmf"]);
-        let xdmf = fs::read_to_string(tmp.path().join("out/bare.xdmf")).unwrap();
+        assert_eq!(
+            listing(&tmp.path().join("out")),
+            ["bare.series.xdmf", "bare.xdmf"]
+        );
+        let xdmf = fs::read_to_string(tmp.path().join("out/bare.series.xdmf")).unwrap();
         assert!(!xdmf.contains("crack") && !xdmf.contains("Attribute"));
         let f = hdf5::File::open(tmp.path().join("out.h5")).unwrap();
         assert!(!f.link_exists("cases/bare/crack"));

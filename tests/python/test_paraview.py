@@ -61,8 +61,8 @@ def read_png(path):
 
 def default_series(summary):
     """The series ci/render-field picks: broken-M1 at the finest level that has one."""
-    names = {pathlib.Path(c["fields_series"]).stem for c in summary["cases"]
-             if c.get("fields_series")}
+    names = {pathlib.Path(c["fields_series"]).name.removesuffix(".series.xdmf")
+             for c in summary["cases"] if c.get("fields_series")}
     m1 = [n for n in names if n.endswith("-broken-M1")]
     return max(m1, key=lambda n: int(n.split("-")[0][len("level"):])) if m1 else sorted(names)[0]
 
@@ -99,7 +99,7 @@ def test_render_field_walks_delta_and_draws_u(run_dir, summary, tmp_path, which)
     # The self-check, against summary.json and fields.h5 read here.
     rep = json.loads(check.read_text())
     assert rep["self_check"] == "ok" and rep["series"] == series
-    cases = [c for c in summary["cases"] if c.get("fields_series") == f"fields/{series}.xdmf"]
+    cases = [c for c in summary["cases"] if c.get("fields_series") == f"fields/{series}.series.xdmf"]
     assert len(cases) >= 2
     field, crack = rep["files"]
     assert field["reader"] == crack["reader"]  # ParaView's default for .xdmf (Xdmf3ReaderS)

@@ -2,8 +2,9 @@
 
 The folder comes from SDCRACK_RUN_DIR (ci/test runs the `mixed` scene at level 1 into a temporary
 folder); the tests skip when it is unset. Checks: every case of summary.json with a `fields_grid`
-is a step of its series file (one XDMF temporal collection per level, u space and multiplier, δ
-decreasing), which meshio's TimeSeriesReader reads, with u and p at every point of the (cracked)
+is a step of its series file (`fields/SERIES.series.xdmf`, one XDMF temporal collection per level,
+u space, multiplier and p mass, δ decreasing), which meshio's TimeSeriesReader reads, and has its
+own one-state file (`fields/CASE.xdmf`), which meshio.read reads without exiting the interpreter, with u and p at every point of the (cracked)
 mesh and λ on the crack polyline (per segment for M0, per node otherwise); the values meshio
 returns are the ones stored in fields.h5, whose datasets carry level, h, u space, multiplier and δ.
 """
@@ -49,20 +50,57 @@ def read_series(path):
     return points, cells, steps
 
 
-def test_every_xdmf_file_is_a_time_series_meshio_reads(run_dir, summary):
-    """Every .xdmf under the results folder is one temporal collection that meshio reads, and
-    every one of them is named by summary.json; there is no top-level spatial collection."""
+def finite(point_data, cell_data):
+    return all(np.all(np.isfinite(v))
+               for v in list(point_data.values()) + [a for v in cell_data.values() for a in v])
+
+
+def read_state(path):
+    """meshio.read of a one-state file; a SystemExit (meshio's answer to a file it cannot read:
+    it prints "Unknown section 'Grid'" and exits) fails the test instead of ending the run."""
+    try:
+        return meshio.read(path)
+    except SystemExit as e:  # pragma: no cover - the failure this test exists for
+        pytest.fail(f"meshio.read({path}) exited the interpreter ({e.code})")
+
+
+def test_every_xdmf_file_opens_with_the_meshio_reader_its_name_says(run_dir, summary):
+    """Every .xdmf under the results folder (solver and references): NAME.series.xdmf is one
+    temporal collection that TimeSeriesReader reads, any other NAME.xdmf one state that
+    meshio.read reads; summary.json names every solver file; no top-level spatial collection."""
     files = sorted(run_dir.rglob("*.xdmf"))
+    assert files
     solver_files = [f for f in files if f.parent == run_dir / "fields"]
     assert not (run_dir / "fields.xdmf").exists()
-    named = {run_dir / s for s in series_steps(run_dir, summary)}
-    assert {f for f in solver_files if not f.name.endswith(".crack.xdmf")} == named
-    for f in solver_files:
-        points, cells, steps = read_series(f)
-        assert len(points) > 0 and len(cells) == 1 and steps
-        for t, point_data, cell_data in steps:
-            for v in list(point_data.values()) + [a for v in cell_data.values() for a in v]:
-                assert np.all(np.isfinite(v)), f
+    series = {run_dir / s for s in series_steps(run_dir, summary)}
+    states = {run_dir / c["fields_state"] for c in summary["cases"]}
+    crack = {f.with_name(f.name.replace(".series.xdmf", ".crack.series.xdmf")) for f in series}
+    crack |= {f.with_name(f.name.replace(".xdmf", ".crack.xdmf")) for f in states}
+    assert set(solver_files) == series | states | crack
+    for f in files:
+        if f.name.endswith(".series.xdmf"):
+            points, cells, steps = read_series(f)
+            assert len(points) > 0 and len(cells) == 1 and steps
+            assert all(finite(pd, cd) for _, pd, cd in steps), f
+        else:
+            m = read_state(f)
+            assert len(m.points) > 0 and len(m.cells) == 1 and finite(m.point_data, m.cell_data), f
+
+
+def test_each_state_file_holds_its_case(run_dir, summary):
+    """meshio.read of fields/CASE.xdmf gives the case's u and p from fields.h5, on the same points
+    as its step in the series; the crack file its λ."""
+    with h5py.File(run_dir / "fields.h5", "r") as h5:
+        for case in summary["cases"]:
+            grid, state = case["fields_grid"], run_dir / case["fields_state"]
+            m = read_state(state)
+            np.testing.assert_array_equal(m.point_data["u"], h5[f"cases/{grid}/u"][...])
+            np.testing.assert_array_equal(m.point_data["p"], h5[f"cases/{grid}/p"][...])
+            np.testing.assert_array_equal(m.point_data["delta"], np.full(len(m.points), case["delta"]))
+            c = read_state(state.with_name(state.name.replace(".xdmf", ".crack.xdmf")))
+            lam = (c.cell_data["lambda"][0] if case["multiplier"] == "M0"
+                   else c.point_data["lambda"])
+            np.testing.assert_array_equal(lam, h5[f"cases/{grid}/crack/lambda"][...])
 
 
 def test_every_case_is_a_step_of_its_series(run_dir, summary):
@@ -101,7 +139,8 @@ def test_every_case_is_a_step_of_its_series(run_dir, summary):
 
 def test_lambda_lives_on_the_crack(run_dir, summary):
     for series, steps in series_steps(run_dir, summary).items():
-        points, cells, data = read_series(run_dir / series.replace(".xdmf", ".crack.xdmf"))
+        points, cells, data = read_series(run_dir / series.replace(".series.xdmf",
+                                                                   ".crack.series.xdmf"))
         for case, (_, point_data, cell_data) in zip(steps, data):
             if case["multiplier"] == "M0":
                 lam = cell_data["lambda"][0]

@@ -1,4 +1,5 @@
-"""Read-back check of the sdcrack field files (fields.h5 + fields/<series>.xdmf time series).
+"""Read-back check of the sdcrack field files (fields.h5, the time series
+fields/<series>.series.xdmf and the one-state files fields/<case>.xdmf).
 
 The folder is the one written by the Rust test
 `output::xdmf::tests::fixture_for_python_and_h5_readback` with SDCRACK_FIELDS_DIR set:
@@ -88,10 +89,12 @@ def expected(name):
     )
 
 
-def test_only_series_files_no_spatial_collection(folder):
-    """No file mixes series: no top-level fields.xdmf; one mesh and one crack file per series."""
+def test_only_series_and_state_files_no_spatial_collection(folder):
+    """No file mixes series: no top-level fields.xdmf; one mesh and one crack file per series
+    and per case."""
     assert not (folder / f"{STEM}.xdmf").exists()
-    want = sorted(f"{s}{ext}" for s in SERIES for ext in (".xdmf", ".crack.xdmf"))
+    want = sorted([f"{s}{ext}" for s in SERIES for ext in (".series.xdmf", ".crack.series.xdmf")]
+                  + [f"{c}{ext}" for c in CASES for ext in (".xdmf", ".crack.xdmf")])
     assert sorted(p.name for p in (folder / STEM).iterdir()) == want
 
 
@@ -99,7 +102,7 @@ def test_only_series_files_no_spatial_collection(folder):
 def test_meshio_time_series_reads_mesh_series(folder, series):
     names = SERIES[series]
     first = expected(names[0])
-    with TimeSeriesReader(folder / STEM / f"{series}.xdmf") as r:
+    with TimeSeriesReader(folder / STEM / f"{series}.series.xdmf") as r:
         points, cells = r.read_points_cells()
         np.testing.assert_allclose(points, first["pts"], rtol=0, atol=1e-15)
         assert [c.type for c in cells] == ["triangle"]
@@ -119,7 +122,7 @@ def test_meshio_time_series_reads_mesh_series(folder, series):
 def test_meshio_time_series_reads_crack_series(folder, series):
     names = SERIES[series]
     first = expected(names[0])
-    with TimeSeriesReader(folder / STEM / f"{series}.crack.xdmf") as r:
+    with TimeSeriesReader(folder / STEM / f"{series}.crack.series.xdmf") as r:
         points, cells = r.read_points_cells()
         np.testing.assert_allclose(points, first["crack"], rtol=0, atol=1e-15)
         assert [c.type for c in cells] == ["line"]
@@ -144,7 +147,7 @@ def test_meshio_time_series_reads_crack_series(folder, series):
 @pytest.mark.parametrize("series", sorted(SERIES))
 def test_steps_carry_name_time_and_delta(folder, series):
     """Each step grid is named after its case (δ in the name), has Time k and Information δ."""
-    for ext, suffix in ((".xdmf", ""), (".crack.xdmf", "/crack")):
+    for ext, suffix in ((".series.xdmf", ""), (".crack.series.xdmf", "/crack")):
         root = ET.parse(folder / STEM / f"{series}{ext}").getroot()
         assert root.tag == "Xdmf" and root.attrib["Version"] == "3.0"
         (domain,) = list(root)
@@ -165,14 +168,39 @@ def test_steps_carry_name_time_and_delta(folder, series):
 @pytest.mark.parametrize("series", sorted(SERIES))
 def test_data_items_name_existing_datasets(folder, series):
     with h5py.File(folder / f"{STEM}.h5", "r") as f:
-        for ext in (".xdmf", ".crack.xdmf"):
-            root = ET.parse(folder / STEM / f"{series}{ext}").getroot()
+        files = [f"{series}{ext}" for ext in (".series.xdmf", ".crack.series.xdmf")]
+        files += [f"{c}{ext}" for c in SERIES[series] for ext in (".xdmf", ".crack.xdmf")]
+        for name in files:
+            root = ET.parse(folder / STEM / name).getroot()
             for item in root.iter("DataItem"):
                 assert item.attrib["Format"] == "HDF"
                 fname, path = item.text.strip().split(":")
                 assert fname == f"../{STEM}.h5"
                 dims = tuple(int(d) for d in item.attrib["Dimensions"].split())
                 assert f[path].shape == dims, path
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_meshio_read_reads_each_state(folder, case):
+    """fields/CASE.xdmf and fields/CASE.crack.xdmf: meshio.read returns the case's fields (and
+    does not exit the interpreter, as it does on a temporal collection)."""
+    e = expected(case)
+    try:
+        m = meshio.read(folder / STEM / f"{case}.xdmf")
+        c = meshio.read(folder / STEM / f"{case}.crack.xdmf")
+    except SystemExit as exc:  # pragma: no cover - the failure this test exists for
+        pytest.fail(f"meshio.read exited the interpreter ({exc.code})")
+    np.testing.assert_allclose(m.points, e["pts"], rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(m.cells_dict["triangle"], e["tris"])
+    assert sorted(m.point_data) == sorted(e["point_data"])
+    for key, v in e["point_data"].items():
+        np.testing.assert_allclose(m.point_data[key], v, rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(c.points, e["crack"], rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(c.cells_dict["line"], e["segs"])
+    if e["centering"] == "Node":
+        np.testing.assert_allclose(c.point_data["lambda"], e["lam"], rtol=1e-15)
+    elif e["centering"] == "Cell":
+        np.testing.assert_allclose(c.cell_data["lambda"][0], e["lam"], rtol=1e-15)
 
 
 def test_h5_data_and_attributes(folder):
