@@ -290,8 +290,9 @@ def rerun_command(results_dir, summary, scene_file, k):
     recorded), the folder's own copy of the scene (RESULTS_DIR/scene.toml, absolute), the case's
     level, u space and multiplier (and `--p-mass lumped` for a lumped case) with the δ sweep of
     the run (each δ warm-started from the previous one, as in the run, so the numbers come back
-    exactly; `--delta` only when the run was restricted to one δ), into
-    ./rerun/<scene>-l<L>-<u>-<m>[-lumped]/ under the current directory."""
+    exactly; `--delta` only when the run was restricted to one δ), into the absolute folder
+    RERUN/<scene>-l<L>-<u>-<m>[-lumped][-d<δ>], RERUN the folder `rerun` beside the results
+    folder (OUT/rerun/ for OUT/<scene>/): the command ci/cases prints for the same folder."""
     import shlex
 
     from .settings import scene_lists
@@ -313,5 +314,6 @@ def rerun_command(results_dir, summary, scene_file, k):
         d = fmt_delta(k["delta"])
         args += ["--delta", d]
         name += f"-d{d}"
-    args += ["--out", f"./{RERUN_FOLDER}/{name}"]
+    rerun = os.path.join(os.path.dirname(os.path.abspath(results_dir)), RERUN_FOLDER)
+    args += ["--out", os.path.join(rerun, name)]
     return shlex.join(args)
