@@ -141,3 +141,50 @@ def test_render_field_without_paraview_skips(run_dir, tmp_path):
     rc, out, err = render(run_dir, "--out", tmp_path / "u.png", env=env)
     assert (rc, out) == (0, "render-field: ParaView (pvpython) not installed; skipped\n"), err
     assert not (tmp_path / "u.png").exists()
+
+
+PV_OPEN = r"""
+import json, sys
+from paraview.simple import OpenDataFile, UpdatePipeline, servermanager
+out = []
+for path in sys.argv[1:]:
+    reader = OpenDataFile(path)
+    times = list(getattr(reader, "TimestepValues", []) or [])
+    if times:  # a series: the last step, as a user's time slider at its end
+        UpdatePipeline(time=times[-1], proxy=reader)
+    else:
+        UpdatePipeline(proxy=reader)
+    data = servermanager.Fetch(reader)
+    if data.IsA("vtkMultiBlockDataSet"):
+        data = data.GetBlock(0)
+    pd = data.GetPointData()
+    out.append({"path": path, "reader": reader.GetXMLName(), "points": data.GetNumberOfPoints(),
+                "times": times,
+                "arrays": sorted(pd.GetArrayName(i) for i in range(pd.GetNumberOfArrays()))})
+print(json.dumps(out))
+"""
+
+
+def test_paraview_default_reader_opens_every_kind_of_xdmf(run_dir, summary):
+    """One file of each kind of the XDMF convention (a series, a one-state file and its crack, a
+    reference's level): ParaView's default reader opens it with the points and arrays the file
+    names, and a series has one time step per δ, a state none."""
+    if not pvpython():
+        pytest.skip("ParaView (pvpython) not installed")
+    case = next(c for c in summary["cases"] if c["u_space"] == "broken" and c["multiplier"] == "M1")
+    series, state = run_dir / case["fields_series"], run_dir / case["fields_state"]
+    ref = sorted(f for f in (run_dir / "dolfinx" / "fields").glob("level*.xdmf")
+                 if not f.name.endswith(".crack.xdmf"))
+    files = [series, state, state.with_name(state.name.replace(".xdmf", ".crack.xdmf"))] + ref[:1]
+    p = subprocess.run([pvpython(), "-c", PV_OPEN, *map(str, files)], capture_output=True,
+                       text=True, timeout=600)
+    assert p.returncode == 0, p.stderr[-2000:]
+    got = json.loads(p.stdout.strip().splitlines()[-1])
+    steps = sum(1 for c in summary["cases"] if c.get("fields_series") == case["fields_series"])
+    assert len(got) == len(files)
+    assert all(g["points"] > 0 for g in got), got
+    assert len(got[0]["times"]) == steps > 1 and {"u", "p", "delta"} <= set(got[0]["arrays"])
+    assert len(got[1]["times"]) <= 1 and {"u", "p", "delta"} <= set(got[1]["arrays"])
+    assert "lambda" in got[2]["arrays"]
+    if ref:
+        assert "u" in got[3]["arrays"]
