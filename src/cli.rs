@@ -475,8 +475,14 @@ fn check_meshes(scene: &Scene, origin: &str) -> Result<(), Failure> {
     scene
         .mesh_source()
         .map_err(|e| match e.crack().and_then(|c| scene.crack_names.get(c)) {
-            Some(name) => usage(format!("invalid scene {origin}: {name}: {e}")),
-            None => usage(format!("invalid scene {origin}: {e}")),
+            Some(name) => usage(format!(
+                "invalid scene {origin}: {}",
+                scene.locate(format!("{name}: {e}"))
+            )),
+            None => usage(format!(
+                "invalid scene {origin}: {}",
+                scene.locate(e.to_string())
+            )),
         })?;
     Ok(())
 }
@@ -543,7 +549,10 @@ fn run(
     let study = run_study(scene, &plan, &mut progress).map_err(|e| match e {
         StudyError::Linalg(_) => runtime(e),
         // Non-finite data at a quadrature point, a crack off a finer mesh: the scene's fault.
-        _ => usage(format!("invalid scene {origin}: {e}")),
+        _ => usage(format!(
+            "invalid scene {origin}: {}",
+            scene.locate(e.to_string())
+        )),
     })?;
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();

@@ -73,7 +73,7 @@ pub enum GeometryError {
     PolygonCollinear,
     /// Two non-adjacent domain edges cross or touch.
     #[error(
-        "domain.polygon is not a simple polygon: edge {first} ({}) crosses edge {second} ({})",
+        "geometry.domain.polygon is not a simple polygon: edge {first} ({}) crosses edge {second} ({})",
         seg(.first_edge),
         seg(.second_edge)
     )]
@@ -89,7 +89,7 @@ pub enum GeometryError {
     },
     /// Two adjacent domain edges run back along the same line and overlap.
     #[error(
-        "domain.polygon is not a simple polygon: edge {first} ({}) folds back onto edge {second} ({})",
+        "geometry.domain.polygon is not a simple polygon: edge {first} ({}) folds back onto edge {second} ({})",
         seg(.first_edge),
         seg(.second_edge)
     )]
@@ -938,7 +938,7 @@ mod tests {
         ));
         assert_eq!(
             err.to_string(),
-            "domain.polygon is not a simple polygon: edge 0 (from (0, 0) to (1, 1)) \
+            "geometry.domain.polygon is not a simple polygon: edge 0 (from (0, 0) to (1, 1)) \
              crosses edge 2 (from (1, 0) to (0, 1))"
         );
     }
@@ -984,7 +984,7 @@ mod tests {
         );
         assert_eq!(
             err.to_string(),
-            "domain.polygon is not a simple polygon: edge 0 (from (0, 0) to (2, 0)) \
+            "geometry.domain.polygon is not a simple polygon: edge 0 (from (0, 0) to (2, 0)) \
              folds back onto edge 1 (from (2, 0) to (1, 0))"
         );
         // Fold back across the closing vertex (edges 3 and 0).

@@ -27,6 +27,7 @@ pub mod multiplier;
 pub mod norms;
 pub mod ordering;
 pub mod output;
+pub mod plain;
 pub mod problem;
 pub mod references;
 pub mod scene;

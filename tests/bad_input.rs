@@ -398,7 +398,7 @@ fn catalogue() -> Vec<Case> {
             "self-intersecting polygon",
             "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
             "domain = { polygon = [[-1, -1], [1, 1], [1, -1], [-1, 1]] }",
-            "domain.polygon is not a simple polygon: edge 0 (from (-1, -1) to (1, 1)) crosses edge 2 (from (1, -1) to (-1, 1))",
+            "geometry.domain.polygon is not a simple polygon: edge 0 (from (-1, -1) to (1, 1)) crosses edge 2 (from (1, -1) to (-1, 1))",
         ),
         edit(
             "crack crossing the boundary of an L",
@@ -701,7 +701,7 @@ fn catalogue() -> Vec<Case> {
         case(
             "missing scene file",
             Input::Missing,
-            "cannot read scene file {scene}: No such file or directory",
+            "cannot read scene file {scene}: there is no such file or folder",
         ),
         case(
             "directory as the scene",
@@ -711,7 +711,7 @@ fn catalogue() -> Vec<Case> {
         case(
             "unreadable scene file",
             Input::Unreadable,
-            "cannot read scene file {scene}: Permission denied",
+            "cannot read scene file {scene}: permission denied",
         ),
         Case {
             args: vec!["run", "/dev/zero", "--out", "{out}", "--quiet"],
@@ -994,6 +994,20 @@ fn catalogue_of_bad_inputs() {
         );
         assert!(err.ends_with('\n'), "{what}: {err:?}");
         assert!(err.starts_with("sdcrack: error: "), "{what}: {err}");
+        // An error in a scene file says where (issue 25, item 7): the line and column of the
+        // key, of the table a missing key belongs to, or of the bad byte or TOML syntax. Only
+        // what is absent from the file has no place to point at.
+        let absent = [
+            "the scene is empty",
+            "missing table [",
+            "missing key `name` at the top level",
+        ];
+        if err.contains(": invalid scene ") && !absent.iter().any(|a| err.contains(a)) {
+            assert!(
+                err.contains(" line "),
+                "{what}: no line and column in: {err}"
+            );
+        }
         let needle = fill(&c.needle);
         assert!(
             err.contains(&needle),

@@ -54,25 +54,6 @@ pub enum ResultsError {
     },
 }
 
-/// An operating-system error in plain words, without its "(os error N)" code: what a user reads
-/// in a one-line message about a file or a folder.
-pub fn plain_reason(e: &std::io::Error) -> String {
-    match e.raw_os_error() {
-        Some(1 | 13) => "permission denied".into(),
-        Some(17) => "a file of that name exists".into(),
-        Some(20) => "a part of the path is a file, not a folder".into(),
-        Some(28) => "no space left on the device".into(),
-        Some(30) => "the file system is read-only".into(),
-        _ => {
-            let text = e.to_string();
-            match text.find(" (os error") {
-                Some(i) => text[..i].to_string(),
-                None => text,
-            }
-        }
-    }
-}
-
 /// A results folder being written.
 #[derive(Debug)]
 pub struct ResultsDir {
@@ -86,7 +67,7 @@ impl ResultsDir {
     pub fn create(out: &Path, name: &str) -> Result<ResultsDir, ResultsError> {
         let unwritable = |path: &Path, e: std::io::Error| ResultsError::Unwritable {
             path: path.to_path_buf(),
-            reason: plain_reason(&e),
+            reason: crate::plain::io_reason(&e),
         };
         if out.exists() && !out.is_dir() {
             return Err(ResultsError::OutIsAFile(out.to_path_buf()));

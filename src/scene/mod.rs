@@ -46,7 +46,7 @@ pub enum SceneError {
     #[error("invalid scene: {0}")]
     Toml(String),
     /// An expression does not parse.
-    #[error("invalid expression in {key} = {source_text:?}: {}", escape_controls(&error.to_string()))]
+    #[error("invalid expression in {key} = {source_text:?}: {}{at}", escape_controls(&error.to_string()))]
     Expression {
         /// Scene key holding the expression (e.g. `data.f`).
         key: String,
@@ -54,6 +54,8 @@ pub enum SceneError {
         source_text: String,
         /// Parser error with its column.
         error: ExprError,
+        /// Where the key is in the scene file, ` (at line L, column C)`, or empty.
+        at: String,
     },
     /// A value is out of its allowed range.
     #[error("invalid scene: {0}")]
@@ -334,7 +336,8 @@ impl Scene {
             path: shown.clone(),
             reason,
         };
-        let meta = std::fs::metadata(path).map_err(|e| read_error(e.to_string()))?;
+        let plain = |e: std::io::Error| read_error(crate::plain::io_reason(&e));
+        let meta = std::fs::metadata(path).map_err(plain)?;
         if meta.is_dir() {
             return Err(read_error("it is a directory, not a TOML file".into()));
         }
@@ -344,13 +347,13 @@ impl Scene {
                 meta.len()
             )));
         }
-        let file = std::fs::File::open(path).map_err(|e| read_error(e.to_string()))?;
+        let file = std::fs::File::open(path).map_err(plain)?;
         let mut bytes = Vec::new();
         std::io::Read::read_to_end(
             &mut std::io::Read::take(file, MAX_SCENE_BYTES as u64 + 1),
             &mut bytes,
         )
-        .map_err(|e| read_error(e.to_string()))?;
+        .map_err(plain)?;
         if bytes.len() > MAX_SCENE_BYTES {
             return Err(read_error(format!(
                 "it has more than the 1 MiB ({MAX_SCENE_BYTES} bytes) a scene may have"
@@ -399,9 +402,16 @@ impl Scene {
         }
         let raw: SceneToml =
             toml::from_str(text).map_err(|e| SceneError::Toml(toml_message(&e, text)))?;
-        let mut scene = raw.validate(base_dir)?;
+        let mut scene = raw.validate(base_dir).map_err(|e| located(e, text))?;
         scene.source = text.to_string();
         Ok(scene)
+    }
+
+    /// `message` about this scene, naming a key first (`data.f = "…" evaluates to NaN …`,
+    /// `geometry.cracks[1]: crack segment … is not along a mesh line`), with that key's line and
+    /// column in the scene file appended, as the scene's own validation errors have them.
+    pub fn locate(&self, message: String) -> String {
+        locate_message(message, &self.source)
     }
 
     /// The scene's meshes (runs gmsh for a `mesh_size` scene).
@@ -432,6 +442,152 @@ fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |i| i + 1);
     (line, before[line_start..].chars().count() + 1)
+}
+
+/// `error` with the line and column of the key it is about, ` (at line L, column C)` as TOML
+/// syntax errors have them: a value error names its key first (`discretization.levels: …`,
+/// `geometry.cracks[1].polyline must …`), an expression error in `key`. Unchanged when the key is
+/// not written in `text` (a missing table, a default).
+fn located(error: SceneError, text: &str) -> SceneError {
+    let at =
+        |key: &str| key_position(text, key).map(|(l, c)| format!(" (at line {l}, column {c})"));
+    match error {
+        SceneError::Value(m) => SceneError::Value(locate_message(m, text)),
+        SceneError::Expression {
+            key,
+            source_text,
+            error,
+            at: _,
+        } => SceneError::Expression {
+            at: at(&key).unwrap_or_default(),
+            key,
+            source_text,
+            error,
+        },
+        other => other,
+    }
+}
+
+/// ` (the table is at line L, column C)` for a table written in `text` (inline tables too),
+/// where a missing key belongs; empty when it is not written.
+fn table_position(text: &str, table: &str) -> String {
+    key_position(text, table)
+        .map(|(l, c)| format!(" (the table is at line {l}, column {c})"))
+        .unwrap_or_default()
+}
+
+/// `message`, which names a scene key first (`discretization.levels: …`, `data.f = …`,
+/// `geometry.cracks[1]: …`), with the key's line and column in the TOML `text` appended as
+/// ` (at line L, column C)`; unchanged when the text does not write that key.
+fn locate_message(message: String, text: &str) -> String {
+    if let Some(rest) = message.strip_prefix("missing key `") {
+        // a key that is not there: where its table is
+        let table = rest
+            .split_once(" in [")
+            .and_then(|(_, t)| t.split_once(']'));
+        return match table {
+            Some((t, _)) => format!("{message}{}", table_position(text, t)),
+            None => message,
+        };
+    }
+    let key: String = match message.strip_prefix('[') {
+        // `[geometry] must be left out …`: a table
+        Some(rest) => rest.split(']').next().unwrap_or("").to_string(),
+        None => message
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.' | '[' | ']'))
+            .collect(),
+    };
+    match key_position(text, key.trim_end_matches('.')) {
+        Some((l, c)) => format!("{message} (at line {l}, column {c})"),
+        None => message,
+    }
+}
+
+/// The steps of a key path: names and, for an array of tables, an index (`expected_failure[1]`).
+fn key_steps(path: &str) -> Vec<(String, Option<usize>)> {
+    path.split('.')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| match s.split_once('[') {
+            Some((name, rest)) => (
+                name.to_string(),
+                rest.trim_end_matches(']').parse::<usize>().ok(),
+            ),
+            None => (s.to_string(), None),
+        })
+        .collect()
+}
+
+/// Whether key path `a` is a prefix of `b` (names equal; indices equal where both have one).
+fn key_prefix(a: &[(String, Option<usize>)], b: &[(String, Option<usize>)]) -> bool {
+    a.len() <= b.len()
+        && a.iter()
+            .zip(b)
+            .all(|(x, y)| x.0 == y.0 && (x.1.is_none() || y.1.is_none() || x.1 == y.1))
+}
+
+/// 1-based line and column of the key `path` (`data.f`, `discretization.grading.beta`,
+/// `verification.expected_failure[1].u_space`) in the TOML `text`: the `key =` that sets it, a
+/// key of an inline table on its line, or the `[table]` header when the path is a table. None
+/// when the text does not write it. A line scan, enough for the scene layout (dotted keys, inline
+/// tables on one line, arrays of tables); an index into an inline array points at its key.
+fn key_position(text: &str, path: &str) -> Option<(usize, usize)> {
+    let want = key_steps(path);
+    if want.is_empty() {
+        return None;
+    }
+    let mut header: Vec<(String, Option<usize>)> = Vec::new();
+    let mut counts: std::collections::HashMap<String, usize> = Default::default();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.trim_start();
+        let indent = raw.chars().count() - line.chars().count();
+        if line.starts_with('[') {
+            let name = line
+                .trim_start_matches('[')
+                .split(']')
+                .next()
+                .unwrap_or("")
+                .trim();
+            header = key_steps(name);
+            if line.starts_with("[[") {
+                let n = counts.entry(name.to_string()).or_insert(0);
+                if let Some(last) = header.last_mut() {
+                    last.1 = Some(*n);
+                }
+                *n += 1;
+            }
+            if header.len() == want.len() && key_prefix(&header, &want) {
+                return Some((i + 1, indent + 1));
+            }
+            continue;
+        }
+        let Some(eq) = line.find('=') else { continue };
+        if line.starts_with('#') {
+            continue;
+        }
+        let mut full = header.clone();
+        full.extend(key_steps(line[..eq].trim().trim_matches(['"', '\''])));
+        if full.is_empty() || !key_prefix(&full, &want) {
+            continue;
+        }
+        // deeper than the line's key: the keys of an inline table written on this line
+        let mut column = indent + 1;
+        let mut from = eq + 1;
+        for (name, _) in &want[full.len()..] {
+            let rest = &line[from..];
+            let found = rest.match_indices(name.as_str()).find(|(k, _)| {
+                let before = rest[..*k].trim_end();
+                rest[k + name.len()..].trim_start().starts_with('=')
+                    && (before.ends_with('{') || before.ends_with(','))
+            });
+            let Some((k, _)) = found else { break };
+            column = indent + 1 + line[..from + k].chars().count();
+            from += k + name.len();
+        }
+        return Some((i + 1, column));
+    }
+    None
 }
 
 /// The `[table]` header in force at byte `offset` (`""` before the first header).
@@ -551,7 +707,7 @@ fn toml_message(e: &toml::de::Error, text: &str) -> String {
         // Every key belongs to one table; the span may point at the next table's header.
         return match TABLE_KEYS.iter().find(|(_, keys)| keys.contains(&key)) {
             Some(("", _)) => format!("missing key `{key}` at the top level"),
-            Some((t, _)) => format!("missing key `{key}` in [{t}]"),
+            Some((t, _)) => format!("missing key `{key}` in [{t}]{}", table_position(text, t)),
             None => match (table_here(), start) {
                 (t, Some(_)) if !t.is_empty() => {
                     format!("missing key `{key}` in [{t}] (near {at})")
@@ -755,6 +911,7 @@ fn parse_expr(key: &str, text: &str) -> Result<Expr, SceneError> {
         key: key.to_string(),
         source_text: text.to_string(),
         error,
+        at: String::new(),
     })
 }
 
@@ -1328,6 +1485,49 @@ fn validate_references(refs: &[String]) -> Result<Vec<String>, SceneError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Where a value error points: a key of a table, a dotted key, a key of an inline table, a
+    /// key in the second of an array of tables, a table header; nothing for an absent key.
+    #[test]
+    fn key_positions_in_the_scene_text() {
+        let text = "name = \"x\"\n\n[data]\nf = \"1\"\n  g = \"0\"\n[discretization]\n\
+                    grading = { beta = 0.5, radius = 0.25 }\nlevels = [0, 1]\n\
+                    [[verification.expected_failure]]\nu_space = \"continuous\"\n\
+                    [[verification.expected_failure]]\nmultiplier = \"M0\"\nu_space = \"broken\"\n";
+        assert_eq!(key_position(text, "name"), Some((1, 1)));
+        assert_eq!(key_position(text, "data.f"), Some((4, 1)));
+        assert_eq!(key_position(text, "data.g"), Some((5, 3)));
+        assert_eq!(key_position(text, "data"), Some((3, 1)));
+        assert_eq!(key_position(text, "discretization.grading"), Some((7, 1)));
+        assert_eq!(
+            key_position(text, "discretization.grading.radius"),
+            Some((7, 25))
+        );
+        assert_eq!(key_position(text, "discretization.levels"), Some((8, 1)));
+        assert_eq!(
+            key_position(text, "verification.expected_failure[0].u_space"),
+            Some((10, 1))
+        );
+        assert_eq!(
+            key_position(text, "verification.expected_failure[1].u_space"),
+            Some((13, 1))
+        );
+        assert_eq!(
+            key_position(text, "verification.expected_failure[1]"),
+            Some((11, 1))
+        );
+        assert_eq!(key_position(text, "discretization.deltas"), None);
+        assert_eq!(key_position(text, "geometry"), None);
+        assert_eq!(
+            locate_message("data.g = \"0\" evaluates to NaN".into(), text),
+            "data.g = \"0\" evaluates to NaN (at line 5, column 3)"
+        );
+        assert_eq!(
+            locate_message("missing key `cells` in [discretization]".into(), text),
+            "missing key `cells` in [discretization] (the table is at line 6, column 1)"
+        );
+        assert_eq!(locate_message("no key here".into(), text), "no key here");
+    }
 
     /// The template is a valid scene, names every table and key (commented or not), and its
     /// optional tables, uncommented, are valid too.
