@@ -135,7 +135,9 @@ def scene_row(root, name):
     verdict = report.get("verdict") if isinstance(report, dict) else None
     failed = failed_jobs(root, name)
     row = {"name": name, "verdict": "FAIL", "reason": None, "report": None,
-           "report_verdict": verdict, "failed_jobs": failed}
+           "report_verdict": verdict, "failed_jobs": failed,
+           "converged": converged_line(report) if isinstance(report, dict) else None,
+           "first_problem": first_problem(report) if isinstance(report, dict) else None}
     if os.path.isfile(os.path.join(root, name, "report", "index.html")):
         row["report"] = f"{name}/report/index.html"
     if verdict is None:
@@ -152,6 +154,48 @@ def scene_row(root, name):
     return row
 
 
+# one symbol per quantity, as the report's plots write them
+SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p_X", "lambda_l2": "λ"}
+
+
+def converged_line(report):
+    """What converged and at which rates, in one line, from report.json's series: the variants
+    (u space/multiplier[/lumped]) whose every quantity converges, the range of their last rates
+    per quantity, and the declared expected failures."""
+    variants = {}
+    for s in report.get("series") or []:
+        key = f"{s.get('u_space')}/{s.get('multiplier')}" + (
+            "/lumped" if s.get("p_mass") == "lumped" else "")
+        variants.setdefault(key, []).append(s)
+    ok = {k: ss for k, ss in variants.items() if all(s.get("status") == "converges" for s in ss)}
+    xfail = sorted(k for k, ss in variants.items()
+                   if all(s.get("status") == "expected failure" for s in ss))
+    if not variants:
+        return "no series measured"
+    rates = {}
+    for ss in ok.values():
+        for s in ss:
+            last = (s.get("rates") or [None])[-1]
+            if isinstance(last, (int, float)):
+                rates.setdefault(s["quantity"], []).append(float(last))
+    parts = [f"{len(ok)} of {len(variants)} variants converge"
+             + (f" ({', '.join(sorted(ok))})" if ok and len(ok) <= 4 else "")]
+    if rates:
+        parts.append("last rates " + ", ".join(
+            f"{SYMBOL.get(q, q)} {min(v):.2f}" + (f"–{max(v):.2f}" if max(v) > min(v) + 5e-3 else "")
+            for q, v in sorted(rates.items(), key=lambda kv: list(SYMBOL).index(kv[0])
+                               if kv[0] in SYMBOL else 9)))
+    if xfail:
+        parts.append(f"{len(xfail)} declared expected failure(s)")
+    return "; ".join(parts)
+
+
+def first_problem(report):
+    """The report's first reason for its verdict, or None."""
+    reasons = report.get("reasons") or []
+    return str(reasons[0]) if reasons else None
+
+
 def write_atomic(path, text):
     tmp = f"{path}.tmp-{os.getpid()}"
     with open(tmp, "w", encoding="utf-8") as fh:
@@ -163,20 +207,25 @@ def render_html(rows, verdict, created):
     e = html.escape
     out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
            "<title>sdcrack campaign: " + e(verdict) + "</title>",
+           '<meta name="viewport" content="width=device-width, initial-scale=1">',
            "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
+           "div.scroll{overflow-x:auto;max-width:100%}td.t{min-width:14em}"
            "td,th{border:1px solid #ccc;padding:.3em .6em;text-align:left;vertical-align:top}"
            ".PASS{color:#060;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
            "pre{background:#f6f6f6;padding:.5em;overflow-x:auto;max-width:100em}</style>",
            "</head><body>",
            f'<h1>sdcrack campaign: <span class="{e(verdict)}">{e(verdict)}</span></h1>',
            f"<p>{len(rows)} scene(s), index written {e(created)}.</p>",
-           "<table><tr><th>scene</th><th>verdict</th><th>report</th><th>details</th></tr>"]
+           "<div class='scroll'><table><tr><th>scene</th><th>verdict</th>"
+           "<th>what converged, at which rates</th><th>first problem</th><th>report</th></tr>"]
     for r in rows:
-        link = (f'<a href="{e(r["report"])}">{e(r["report"])}</a>' if r["report"] else "none")
-        detail = e(r["reason"] or "")
+        link = (f'<a href="{e(r["report"])}">report</a>' if r["report"] else "none")
+        problem = " — ".join(x for x in (r["reason"] if r["verdict"] != "PASS" else None,
+                                          r.get("first_problem")) if x) or "none"
         out.append(f'<tr><td>{e(r["name"])}</td><td class="{e(r["verdict"])}">{e(r["verdict"])}'
-                   f"</td><td>{link}</td><td>{detail}</td></tr>")
-    out.append("</table>")
+                   f'</td><td class="t">{e(r.get("converged") or "–")}</td>'
+                   f'<td class="t">{e(problem)}</td><td>{link}</td></tr>')
+    out.append("</table></div>")
     for r in rows:
         if not r["failed_jobs"]:
             continue

@@ -10,8 +10,15 @@ from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 from .render import fmt_delta  # noqa: E402
 
 QLABEL = {"u_l2": "‖u_h−u‖_L²", "p_l2": "‖p_h−∇u‖_L²", "p_x": "‖p_h−∇u‖_X", "lambda_l2": "‖λ_h−[u]‖_L²(Γc)"}
+# one spelling per symbol in every plot: λ, never "lambda"
+SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p", "lambda_l2": "λ"}
 STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
+# colour per (u space, p mass): each combination its own hue, so consistent and lumped differ by
+# more than dashing; the line style repeats the p mass (solid consistent, dashed lumped) for
+# grey-scale prints, the marker is the multiplier, hollow for the continuous u space
+VARIANT_COLOR = {("broken", "consistent"): "tab:blue", ("broken", "lumped"): "tab:orange",
+                 ("continuous", "consistent"): "tab:green", ("continuous", "lumped"): "tab:purple"}
 # The references: told apart by marker, line style and label as well as colour (a grey-scale print
 # or a colour-blind reader still sees two), and unlike any solver variant's marker and line.
 REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "markersize": 9,
@@ -20,12 +27,9 @@ REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "ma
                          "markerfacecolor": "none", "label": "reference FreeFEM"}}
 # Two lines whose points all agree to this relative distance (on a log axis) look like one line.
 OVERLAP_REL = 0.02
-# A run with the lumped p mass: colour and marker per multiplier, the consistent p mass solid and
-# the lumped one dashed, hollow markers for the continuous u space, labels broken/M1/lumped (the
-# references' dash-dot and dotted lines stay theirs). A consistent-only run keeps the plots of
-# before p masses (STYLE per u space, MARK, the colour cycle).
-MULT_COLOR = {"M0": "tab:blue", "M1": "tab:orange", "M1star": "tab:green"}
 PM_STYLE = {"consistent": "-", "lumped": "--"}
+# a series that does not converge is drawn pale (its status is in the tables)
+PALE = 0.35
 
 
 def _has_lumped(entries):
@@ -33,15 +37,15 @@ def _has_lumped(entries):
 
 
 def _variant_style(e, lumped_run):
-    """(kwargs of plot(), label) of a series / δ-limit / timing entry."""
+    """(kwargs of plot(), label) of a series / δ-limit / timing entry: colour per u space and p
+    mass, marker per multiplier (hollow for continuous u), solid consistent and dashed lumped p;
+    labels broken/M1 and broken/M1/lumped (the latter only in a run with both p masses)."""
     u, m, pm = e["u_space"], e["multiplier"], e.get("p_mass", "consistent")
-    if not lumped_run:
-        return {"linestyle": STYLE.get(u, ":"), "marker": MARK.get(m, "x")}, f"{u}/{m}"
-    kw = {"linestyle": PM_STYLE.get(pm, "--"), "marker": MARK.get(m, "x"),
-          "color": MULT_COLOR.get(m, "black")}
+    kw = {"linestyle": PM_STYLE.get(pm, ":"), "marker": MARK.get(m, "x"),
+          "color": VARIANT_COLOR.get((u, pm), "black")}
     if u != "broken":
         kw["markerfacecolor"] = "none"
-    return kw, f"{u}/{m}" + ("" if pm == "consistent" else f"/{pm}")
+    return kw, f"{u}/{m}" + ("" if pm == "consistent" or not lumped_run else f"/{pm}")
 
 
 def _delta_axis(ax):
@@ -69,16 +73,30 @@ def _overlap(a, b):
                                     for (xa, ya), (xb, yb) in zip(a, b))
 
 
-def _legend(ax):
-    """A legend only when something was drawn with a label (e.g. no δ-differences on a fully
-    closed crack, where λ_δ = λ_0 = 0)."""
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize=7)
+def _figure_legend(fig, axes, note=None):
+    """One legend for the whole figure, below the panels and off the data: each label once (the
+    panels share their variants), in columns; `note` (e.g. what pale lines mean) under it."""
+    seen = {}
+    for ax in axes:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if not lab.startswith("_"):
+                seen.setdefault(lab, h)
+    if not seen:
+        return
+    ncol = min(len(seen), 6)
+    rows = -(-len(seen) // ncol)
+    height = fig.get_size_inches()[1]
+    note_band = 0.2 / height if note else 0.0  # a line of small text, in figure fractions
+    fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=ncol, fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, note_band))
+    if note:
+        fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=7, color="0.3")
+    fig._legend_band = min(0.45, note_band + (0.22 * rows + 0.1) / height)  # read by _save
 
 
 def _save(fig, folder, name):
     path = os.path.join(folder, name)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, getattr(fig, "_legend_band", 0.0), 1, 1))
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return name
@@ -96,30 +114,47 @@ def rate_plot(folder, scene, rate_entries):
         return None
     qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
     lumped_run = _has_lumped(ents)
-    fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
+    fig, axes = plt.subplots(1, len(qs), figsize=(4.2 * len(qs), 4.6), squeeze=False)
+    graded = any(r.get("mesh_parameter") == "N^-1/2" for r in ents)
+    hname = "N^-1/2" if graded else "h"
+    pale = False
     for ax, q in zip(axes[0], qs):
         for r in (r for r in ents if r["quantity"] == q):
             pts = [(h, e) for h, e in zip(r["h"], r["errors"]) if _positive(e)]
             if not pts:
                 continue
             kw, label = _variant_style(r, lumped_run)
-            ax.loglog(*zip(*pts), **kw,
-                      label=label + ("" if r["status"] == "converges" else f" ({r['status']})"))
-        h = [x for r in ents for x in r["h"]]
-        if h:
-            h0, h1 = max(h), min(h)
-            ref = [e for r in ents if r["quantity"] == q for e in r["errors"] if _positive(e)]
-            if ref:
-                e0 = min(ref)
-                for p in (0.5, 1.0, 2.0):
-                    ax.loglog([h0, h1], [e0 * 4, e0 * 4 * (h1 / h0) ** p], "k:", lw=0.7)
-                    ax.annotate(f"h^{p:g}", (h1, e0 * 4 * (h1 / h0) ** p), fontsize=7)
-        ax.set_xlabel("h")
-        against = sorted({r["against"] for r in ents if r["quantity"] == q and r["against"]})
-        ax.set_title(f"{scene}: {QLABEL[q]}" + (f", u = {' / '.join(against)}" if against else ""))
+            if r["status"] != "converges":
+                kw["alpha"], pale = PALE, True
+            ax.loglog(*zip(*pts), **kw, label=label)
+        _slope_guides(ax, [x for r in ents for x in r["h"] if _positive(x)],
+                      [e for r in ents if r["quantity"] == q for e in r["errors"] if _positive(e)],
+                      hname)
+        ax.set_xlabel(hname)
+        ax.set_title(QLABEL[q], fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
-        _legend(ax)
+    against = sorted({r["against"] for r in ents if r["against"]})
+    fig.suptitle(f"{scene}: errors against {hname}"
+                 + (f" (u = {' / '.join(against)})" if against else ""), fontsize=11)
+    _figure_legend(fig, axes[0], "pale: a series that does not converge (see the tables)"
+                   if pale else None)
     return _save(fig, folder, f"rates-{scene}.png")
+
+
+def _slope_guides(ax, h, errors, hname):
+    """Dotted slopes 1/2, 1 and 2 over the last two halvings of h, ending below the smallest
+    error, labelled at their low end (below every data point, never on one)."""
+    if len(set(h)) < 2 or not errors:
+        return
+    hs = sorted(set(h))
+    h1, h0 = hs[0], hs[min(2, len(hs) - 1)]
+    e1 = min(errors) / 3
+    for p in (0.5, 1.0, 2.0):
+        ax.loglog([h1, h0], [e1, e1 * (h0 / h1) ** p], color="0.4", ls=":", lw=0.8)
+    ax.annotate(f"{hname}^½, ^1, ^2", (h1, e1), xytext=(0, -10), textcoords="offset points",
+                fontsize=7, color="0.3", ha="left", va="top")
+    lo, hi = ax.get_ylim()
+    ax.set_ylim(min(lo, e1 / 4), hi)
 
 
 def delta_plot(folder, scene, delta_entries):
@@ -129,7 +164,7 @@ def delta_plot(folder, scene, delta_entries):
     lvl = levels[-1]
     qs = [q for q in ("u_l2", "p_l2", "lambda_l2") if any(d["quantity"] == q for d in delta_entries)]
     lumped_run = _has_lumped(delta_entries)
-    fig, axes = plt.subplots(1, len(qs), figsize=(4.6 * len(qs), 4), squeeze=False)
+    fig, axes = plt.subplots(1, len(qs), figsize=(4.2 * len(qs), 4.6), squeeze=False)
     for ax, q in zip(axes[0], qs):
         xs = set()
         for d in delta_entries:
@@ -140,8 +175,7 @@ def delta_plot(folder, scene, delta_entries):
                 s = d["slope"]
                 xs.update(x for x, _ in pts)
                 kw, label = _variant_style(d, lumped_run)
-                ax.loglog(*zip(*pts), **kw, markersize=6, label=label
-                          + ("" if len(pts) < 2 else " slope –" if s is None else f" slope {s:.2f}"))
+                ax.loglog(*zip(*pts), **kw, markersize=6, label=label)
         if len(xs) == 1:
             _single_x(ax, sorted(xs), f"one δ > 0 (δ = {fmt_delta(min(xs))}): no slope")
         elif not xs:
@@ -150,18 +184,23 @@ def delta_plot(folder, scene, delta_entries):
         if xs:
             _delta_axis(ax)
         ax.set_xlabel("δ")
-        ax.set_title(f"{scene} level {lvl}: ‖{q.split('_')[0]}_δ − {q.split('_')[0]}_0‖")
+        ax.set_title(f"‖{SYMBOL[q]}_δ − {SYMBOL[q]}_0‖", fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
-        _legend(ax)
+    fig.suptitle(f"{scene}, level {lvl}: distance to the δ = 0 solution (slopes in the table)",
+                 fontsize=11)
+    _figure_legend(fig, axes[0])
     return _save(fig, folder, f"delta-{scene}.png")
 
 
 def work_precision_plot(folder, scene, timing_rows, ref_rows):
+    """Error against the time spent on each level: the solver's sum of timings_s, a reference's
+    total without its start-up (dolfinx's form compilation, cached between runs, which would
+    draw a zigzag of cache hits and misses); the start-up range is written under the plot."""
     pts = [t for t in timing_rows if t["u_l2"] is not None and t["u_l2"] > 0 and t["total_s"] > 0]
     rpts = [r for r in ref_rows if (r.get("errors") or {}).get("u_l2") and r.get("total_s")]
     if not pts and not rpts:
         return None
-    fig, ax = plt.subplots(figsize=(6, 4.5))
+    fig, ax = plt.subplots(figsize=(6.4, 5.2))
     lumped_run = _has_lumped(pts)
     variants = sorted({(t["u_space"], t["multiplier"], t.get("p_mass", "consistent")) for t in pts})
     for u, m, pm in variants:
@@ -171,7 +210,10 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
         if sel:
             kw, label = _variant_style(sel[0], lumped_run)
             ax.loglog([t["total_s"] for t in sel], [t["u_l2"] for t in sel], **kw, label=label)
-    ref_pts = {tool: [(r["total_s"], r["errors"]["u_l2"]) for r in sorted(
+
+    def work(r):
+        return max(r["total_s"] - (r.get("startup_s") or 0.0), 1e-6)
+    ref_pts = {tool: [(work(r), r["errors"]["u_l2"]) for r in sorted(
         (r for r in rpts if r["tool"] == tool), key=lambda r: r["level"])]
         for tool in sorted({r["tool"] for r in rpts})}
     overlapping = len(ref_pts) == 2 and _overlap(*ref_pts.values())
@@ -181,11 +223,15 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
         if overlapping:
             style["label"] += " (overlapping)"
         ax.loglog(*zip(*xy), **style)
-    ax.set_xlabel("total time per case [s] (sum of timings_s)")
-    ax.set_ylabel("‖u − u_ex‖_L²")
-    ax.set_title(f"{scene}: work–precision")
+    startup = {tool: [r.get("startup_s") or 0.0 for r in rpts if r["tool"] == tool]
+               for tool in ref_pts}
+    note = "; ".join(f"{tool} start-up {min(s):.2g}–{max(s):.2g} s per level, not plotted"
+                     for tool, s in startup.items() if s and max(s) > 0)
+    ax.set_xlabel("time per level [s] (solver: sum of timings_s; references: without start-up)")
+    ax.set_ylabel("‖u_h − u‖_L²")
+    ax.set_title(f"{scene}: work–precision", fontsize=11)
     ax.grid(True, which="both", alpha=0.3)
-    _legend(ax)
+    _figure_legend(fig, [ax], note or None)
     return _save(fig, folder, f"work-precision-{scene}.png")
 
 
@@ -201,7 +247,7 @@ def delta_reference_plot(folder, scene, agreement):
                     key=lambda k: (k[0], k[1] != "consistent", k[1]))
     if not spaces:  # δ = 0 only: the reference tables say it all
         return None
-    fig, axes = plt.subplots(1, len(spaces), figsize=(5.2 * len(spaces), 4), squeeze=False)
+    fig, axes = plt.subplots(1, len(spaces), figsize=(4.6 * len(spaces), 4.6), squeeze=False)
     for ax, (u, pm) in zip(axes[0], spaces):
         sel = [a for a in rows if a["reference"] == tool and a["multiplier"] == mult
                and a["u_space"] == u and a.get("p_mass", "consistent") == pm]
@@ -218,8 +264,8 @@ def delta_reference_plot(folder, scene, agreement):
             _single_x(ax, deltas, f"one δ > 0 (δ = {fmt_delta(deltas[0])}): one point per level")
         _delta_axis(ax)
         ax.set_xlabel("δ (dotted: δ = 0, the floor of the level)")
-        ax.set_title(f"{scene}: ‖u_δh − u_{tool}‖_L², {u}/{mult}"
-                     + ("" if pm == "consistent" else f"/{pm}"))
+        ax.set_title(f"{u}/{mult}" + ("" if pm == "consistent" else f"/{pm}"), fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
-        _legend(ax)
+    fig.suptitle(f"{scene}: ‖u_δh − u_{tool}‖_L² at each level", fontsize=11)
+    _figure_legend(fig, axes[0])
     return _save(fig, folder, f"delta-reference-{scene}.png")

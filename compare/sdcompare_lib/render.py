@@ -73,17 +73,26 @@ def _fold_summary(headers, rows, caption):
     return f"{what} ({len(rows)} rows, click to open)"
 
 
+def _folded(section, rows):
+    """A section's `fold`: True (default) folds tables longer than FOLD_ROWS, "always" every
+    table (provenance: long cells of command lines), False none."""
+    fold = section.get("fold", True)
+    return fold == "always" or (bool(fold) and len(rows) > FOLD_ROWS)
+
+
 def markdown(title, sections):
     out = [f"# {title}", ""]
     for s in sections:
         out += [f"## {s['title']}", ""]
         for p in s.get("paras", []):
             out += [p, ""]
+        for img in s.get("lead_images", []):
+            out += [f"![{img}]({img})", ""]
         for t in s.get("tables", []):
             headers, rows, caption = _table_parts(t)
             if not rows:
                 continue
-            fold = s.get("fold", True) and len(rows) > FOLD_ROWS
+            fold = _folded(s, rows)
             if fold:
                 out += [f"<details><summary>{html.escape(_fold_summary(headers, rows, caption))}"
                         "</summary>", ""]
@@ -120,43 +129,58 @@ def _td(text):
     return f"<td class='{'s' if len(text) <= SHORT_CELL else 't'}'>{_inline_md(text)}</td>"
 
 
+def _img(folder, img):
+    """An image inlined as base64, its id the file name's stem (rates-SCENE, delta-SCENE, …)."""
+    with open(os.path.join(folder, img), "rb") as fh:
+        b64 = base64.b64encode(fh.read()).decode("ascii")
+    ident = html.escape(os.path.splitext(img)[0])
+    return f"<p><img id='{ident}' alt='{html.escape(img)}' src='data:image/png;base64,{b64}'></p>"
+
+
+# The page's style: at most 1200 px wide, never wider than the window (tables scroll in their
+# own box, long text cells wrap but keep a readable width, images shrink).
+CSS = ("body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}"
+       "table{border-collapse:collapse;margin:0.5em 0;font-size:13px}"
+       "div.scroll{overflow-x:auto;max-width:100%}"
+       "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
+       "th{background:#eee;text-align:center}.PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
+       "img{max-width:100%;height:auto}code{font-size:11px;text-align:left;overflow-wrap:anywhere}"
+       "td.s{white-space:nowrap}td.t{text-align:left;min-width:14em}"
+       "details{margin:0.4em 0}summary{cursor:pointer;color:#035;font-size:14px}"
+       "p{overflow-wrap:anywhere}p.caption{margin:0.6em 0 0;font-style:italic}"
+       "@media (max-width:900px){body{padding:0.4em}td.t{min-width:11em}}")
+
+
 def html_page(title, sections, folder):
-    css = ("body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}"
-           "table{border-collapse:collapse;margin:0.5em 0;font-size:13px}"
-           "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
-           "th{background:#eee;text-align:center}.PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
-           "img{max-width:100%}code{font-size:11px;text-align:left}"
-           "td.s{white-space:nowrap}td.t{text-align:left}"
-           "details{margin:0.4em 0}summary{cursor:pointer;color:#035;font-size:14px}"
-           "p.caption{margin:0.6em 0 0;font-style:italic}")
+    css = CSS
     out = ["<!DOCTYPE html>", "<html><head><meta charset='utf-8'>",
+           "<meta name='viewport' content='width=device-width, initial-scale=1'>",
            f"<title>{html.escape(title)}</title><style>{css}</style></head><body>",
            f"<h1>{html.escape(title)}</h1>"]
     for s in sections:
         out.append(f"<h2>{html.escape(s['title'])}</h2>")
         for p in s.get("paras", []):
             out.append(f"<p>{_inline_md(p)}</p>")
+        out += [_img(folder, img) for img in s.get("lead_images", [])]
         for t in s.get("tables", []):
             headers, rows, caption = _table_parts(t)
             if not rows:
                 continue
-            fold = s.get("fold", True) and len(rows) > FOLD_ROWS
+            fold = _folded(s, rows)
             if fold:
                 out.append(f"<details><summary>{_inline_md(_fold_summary(headers, rows, caption))}"
                            "</summary>")
             elif caption:
                 out.append(f"<p class='caption'>{_inline_md(caption)}</p>")
-            out.append("<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in headers)
-                       + "</tr>")
+            # a wide table scrolls inside its box; the page itself never scrolls sideways
+            out.append("<div class='scroll'><table><tr>"
+                       + "".join(f"<th>{html.escape(h)}</th>" for h in headers) + "</tr>")
             for r in rows:
                 out.append("<tr>" + "".join(_td(cell(c)) for c in r) + "</tr>")
-            out.append("</table>")
+            out.append("</table></div>")
             if fold:
                 out.append("</details>")
-        for img in s.get("images", []):
-            with open(os.path.join(folder, img), "rb") as fh:
-                b64 = base64.b64encode(fh.read()).decode("ascii")
-            out.append(f"<p><img alt='{html.escape(img)}' src='data:image/png;base64,{b64}'></p>")
+        out += [_img(folder, img) for img in s.get("images", [])]
         for p in s.get("paras_after", []):
             out.append(f"<p>{_inline_md(p)}</p>")
     out.append("</body></html>")

@@ -426,7 +426,11 @@ def test_real_small_run_of_sdcrack(open_run, empty_exps):
     assert rr and all(a["max_vertex_diff"] < 1e-8 for a in rr)
     md = open(rep / "report.md").read()
     first = md.split("\n## ")[1]
-    assert first.startswith("Summary: PASS") and "| u space | mult. | quantity | against |" in first
+    # the summary: verdict, plots, the short variant table; the series table opens h → 0
+    assert first.startswith("Summary: PASS") and "| u space | mult. | status | u_l2 rate (≥) |" in first
+    assert first.index("**Verdict: PASS**") < first.index("![rates-") < first.index("| u space |")
+    h0 = md.split("\n## h → 0")[1].split("\n## ")[0]
+    assert "| u space | mult. | quantity | against |" in h0
     assert "EXPECTED FAILURE" in first and "continuous P1 u cannot carry the jump" in first
     assert "0e0" not in md and "None" not in md
     html = open(rep / "index.html").read()
@@ -639,7 +643,9 @@ def test_references_are_told_apart_in_plots(monkeypatch):
         suffix = " (overlapping)" if overlapping else ""
         ld, lf = lines["reference dolfinx" + suffix], lines["reference FreeFEM" + suffix]
         assert ld.get_marker() != lf.get_marker() and ld.get_linestyle() != lf.get_linestyle()
-        assert {t.get_text() for t in ax.get_legend().get_texts()} >= {ld.get_label(), lf.get_label()}
+        (legend,) = figs[0].legends  # one legend for the figure, off the data
+        assert ax.get_legend() is None
+        assert {t.get_text() for t in legend.get_texts()} >= {ld.get_label(), lf.get_label()}
         plots.plt.close(figs[0])
 
 
@@ -904,8 +910,11 @@ def test_consistent_and_lumped_are_separate_series(lumped_run, empty_exps, tmp_p
     assert not any("--p-mass" in k["rerun"] for k in r["kkt"] if k["p_mass"] == "consistent")
     md = open(lumped_run / "report" / "report.md").read()
     first = md.split("\n## ")[1]
-    assert "| u space | mult. | p mass | quantity | against |" in first
-    assert "| broken | M1 | lumped | p_x | exact | converges |" in first
+    h0 = md.split("\n## h → 0")[1].split("\n## ")[0]
+    assert "| u space | mult. | p mass | status |" in first
+    assert "| broken | M1 | lumped | converges |" in first
+    assert "| u space | mult. | p mass | quantity | against |" in h0
+    assert "| broken | M1 | lumped | p_x | exact | converges |" in h0
     assert "**Converges**: broken/M1 (last rates u_l2" in first
     assert "; broken/M1/lumped (last rates u_l2" in first
     assert "continuous/M1, continuous/M1/lumped" in first

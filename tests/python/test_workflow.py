@@ -460,3 +460,30 @@ def test_a_scene_on_a_mesh_file_runs_from_its_copy(tmp_path):
     jobs = dry_run_jobs(r.stdout)
     # levels 0-1 × 2 u spaces × 3 multipliers × 2 p masses, 2 tools × 2 levels, 1 report
     assert len(jobs) == 2 * 2 * 3 * 2 + 2 * 2 + 1, sorted(jobs)
+
+
+def test_index_lines_say_what_converged_and_the_first_problem():
+    """The index's one-line summaries, from a hand-made report.json: the variants whose every
+    quantity converges and the range of their last rates, the expected failures, and the
+    report's first reason."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("campaign_index", ROOT / "ci" / "campaign_index.py")
+    ci = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(ci)
+
+    def s(u, m, q, status, rate, pm="consistent"):
+        return {"u_space": u, "multiplier": m, "p_mass": pm, "quantity": q, "status": status,
+                "rates": [1.0, rate]}
+    report = {"reasons": ["broken/M0 p_l2: rate 0.21 < 0.4", "second"], "series": [
+        s("broken", "M1", "u_l2", "converges", 0.95), s("broken", "M1", "lambda_l2", "converges", 0.88),
+        s("broken", "M1", "u_l2", "converges", 0.99, "lumped"),
+        s("broken", "M1", "lambda_l2", "converges", 0.86, "lumped"),
+        s("broken", "M0", "u_l2", "converges", 0.9), s("broken", "M0", "p_l2", "does not converge", 0.21),
+        s("continuous", "M1", "u_l2", "expected failure", -0.03)]}
+    assert ci.converged_line(report) == ("2 of 4 variants converge (broken/M1, broken/M1/lumped); "
+                                         "last rates u 0.95–0.99, λ 0.86–0.88; "
+                                         "1 declared expected failure(s)")
+    assert ci.first_problem(report) == "broken/M0 p_l2: rate 0.21 < 0.4"
+    assert ci.first_problem({"series": []}) is None
+    assert ci.converged_line({"series": []}) == "no series measured"
