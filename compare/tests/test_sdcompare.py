@@ -969,3 +969,45 @@ def test_a_consistent_only_run_shows_no_p_mass(open_run, empty_exps):
     r = json.load(open(open_run / "report" / "report.json"))
     assert {s["p_mass"] for s in r["series"]} == {"consistent"}
     assert not any("--p-mass" in k["rerun"] for k in r["kkt"])
+
+
+def test_plots_are_readable(monkeypatch):
+    """Issue 25, item 4, on the h → 0 and δ → 0 plots of a run with both p masses and both u
+    spaces: one legend for the figure and none over a panel's data; consistent and lumped differ
+    in colour, not only dashing; the slope-guide labels lie below every data point; λ is never
+    spelled "lambda"; every title fits inside the figure."""
+    plots, figs = _captured_figures(monkeypatch)
+    rate_entries, delta_entries = [], []
+    for u in ("broken", "continuous"):
+        for m in ("M0", "M1", "M1star"):
+            for pm in ("consistent", "lumped"):
+                for q in ("u_l2", "p_l2", "lambda_l2"):
+                    rate_entries.append({"u_space": u, "multiplier": m, "p_mass": pm, "quantity": q,
+                                         "h": [0.2, 0.1, 0.05], "errors": [0.1, 0.05, 0.025],
+                                         "status": "converges" if u == "broken" else "expected failure",
+                                         "against": "exact"})
+                    delta_entries.append({"level": 2, "u_space": u, "multiplier": m, "p_mass": pm,
+                                          "quantity": q, "deltas": [1e-2, 1e-4], "diffs": [1e-3, 1e-5],
+                                          "slope": 1.0})
+    assert plots.rate_plot("/nonexistent", "s", rate_entries)
+    assert plots.delta_plot("/nonexistent", "s", delta_entries)
+    for fig in figs:
+        fig.canvas.draw()
+        box = fig.bbox
+        assert len(fig.legends) == 1 and all(ax.get_legend() is None for ax in fig.axes)
+        texts = [t.get_text() for t in fig.findobj(plots.matplotlib.text.Text)]
+        assert not any("lambda" in t for t in texts), [t for t in texts if "lambda" in t]
+        for title in [ax.title for ax in fig.axes] + ([fig._suptitle] if fig._suptitle else []):
+            ext = title.get_window_extent()
+            assert box.x0 <= ext.x0 and ext.x1 <= box.x1 and ext.y1 <= box.y1, title.get_text()
+        for ax in fig.axes:
+            colour = {ln.get_label(): ln.get_color() for ln in ax.get_lines() if ln.get_label()
+                      and not ln.get_label().startswith("_")}
+            assert colour["broken/M1"] != colour["broken/M1/lumped"]
+            assert colour["broken/M1"] != colour["continuous/M1"]
+            data = [y for ln in ax.get_lines() if not ln.get_label().startswith("_")
+                    for y in ln.get_ydata()]
+            for note in ax.texts:  # the slope-guide label: below every point of the data
+                assert note.xy[1] < min(data), note.get_text()
+    for fig in figs:
+        plots.plt.close(fig)
