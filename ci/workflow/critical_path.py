@@ -11,7 +11,9 @@ else, and scenes are independent, so with one node per job (and no queueing) the
     critical path = max over scenes (longest shard job of the scene + its report job)
 
 and the scene and jobs on that path are printed. Also printed: the sum of all job durations (the
-campaign's wall time on one core, without the engine's overhead) and the totals per rule.
+campaign's wall time on one core, without the engine's overhead), the totals per rule, and the two
+goals of issue 26 with MET or MISSED: the report jobs take at most 15 % of the job-seconds, and
+the critical path is at most 1.2 × the longest solver or reference job.
 Standard library only. Exit 2 (one line) when OUT has no measurements.
 """
 
@@ -78,6 +80,22 @@ def critical_path(scenes):
             "jobs": sum(len(j) for j in scenes.values()), "per_scene": per_scene}
 
 
+REPORT_SHARE_GOAL = 0.15  # report jobs' share of all job-seconds, at most
+CRITICAL_PATH_GOAL = 1.2  # critical path over the longest solver or reference job, at most
+
+
+def goals(cp):
+    """[(text, met)] of the two goals (module documentation) for critical_path()'s result."""
+    share = cp["per_rule_s"].get("report", 0.0) / cp["sum_s"] if cp["sum_s"] > 0 else 0.0
+    longest = max((p["shard_s"] for p in cp["per_scene"].values()), default=0.0)
+    ratio = cp["critical_s"] / longest if longest > 0 else float("inf")
+    return [(f"report jobs {100 * share:.1f} % of the job-seconds (goal ≤ "
+             f"{100 * REPORT_SHARE_GOAL:.0f} %)", share <= REPORT_SHARE_GOAL),
+            (f"critical path {cp['critical_s']:.1f} s = {ratio:.2f} × the longest solver or "
+             f"reference job ({longest:.1f} s; goal ≤ {CRITICAL_PATH_GOAL:g} ×)",
+             ratio <= CRITICAL_PATH_GOAL)]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out", help="campaign folder (ci/campaign --out)")
@@ -88,6 +106,7 @@ def main(argv=None):
         print(f"critical_path: no job measurements under {args.out}/benchmarks/", file=sys.stderr)
         return 2
     cp = critical_path(scenes)
+    cp["goals"] = [{"goal": text, "met": met} for text, met in goals(cp)]
     if args.json:
         print(json.dumps(cp, indent=2))
         return 0
@@ -99,6 +118,8 @@ def main(argv=None):
           f"({cp['scene']}: {cp['shard']} {cp['shard_s']:.1f} s + report {cp['report_s']:.1f} s)")
     print(f"sum of all {cp['jobs']} jobs: {cp['sum_s']:.1f} s ("
           + ", ".join(f"{r} {s:.1f}" for r, s in cp["per_rule_s"].items()) + ")")
+    for g in cp["goals"]:
+        print(f"goal: {g['goal']}: {'MET' if g['met'] else 'MISSED'}")
     return 0
 
 

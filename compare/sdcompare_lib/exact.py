@@ -60,6 +60,8 @@ import numpy as np
 
 import sdexpr  # the references' shared modules: see sdcompare_lib/__init__.py
 
+from .norms import LastResults, digest
+
 __all__ = ["ExactSolution", "Quadrature", "load_scene", "solver_case_errors", "solver_case_errors_h5",
            "read_h5_case", "p1_field_errors", "recover_bubble", "stroud_rule", "tip_rule",
            "integrate_on_triangle", "SharedEvaluator", "ExactError", "scene_cracks", "crack_tips"]
@@ -517,20 +519,44 @@ def _point_batches(P, tris, tips, quad, chunk_tris=1024):
         yield owner, np.einsum("qv,kvb->kqb", Ls, V), ratio[:, None] * Ws[None, :]
 
 
+# The quadrature of a mesh with the exact solution's values at its points, kept for the next
+# cases: every δ, multiplier and p mass of a level share the mesh (the evaluation of the exact
+# solution is most of the cost of an independent error).
+_MESH_QUADRATURE = LastResults(2)
+
+
+def _quadrature_with_exact(P, tris, exact, tips, quad, names):
+    """[(ids, L, w, vals)]: the batches of _point_batches with weights w (K,q) in area units and
+    the exact solution's `names` (of "u", "px", "py", "f") at their points."""
+    X, area, _, _ = _geometry(P, tris)
+
+    def compute():
+        out = []
+        for ids, L, W in _point_batches(P, tris, tips, quad):
+            xy = L @ X[ids]  # (K,q,2); matmul broadcasts a shared (q,3) L
+            vals = exact.evaluate(xy[..., 0], xy[..., 1], u="u" in names,
+                                  grad="px" in names, f="f" in names)
+            out.append((ids, L, W * area[ids][:, None], vals))
+        return out
+    key = (digest(P, tris, np.asarray(tips, dtype=float).reshape(-1, 2)), repr(quad), id(exact),
+           names)
+    # the entry keeps `exact` alive, so its id cannot be reused by another solution meanwhile
+    return _MESH_QUADRATURE.get(key, lambda: (exact, compute()))[1]
+
+
 def _domain_errors(P, tris, exact, tips, quad, u_tri=None, p_tri=None, bubble=None, want_div=True):
     """Σ_T ∫_T (u_h − u)², (p_h − ∇u)², h_T² (div p_h + f)² with
     u_tri (T,3) vertex values of u_h per triangle, p_tri (T,3,2) vertex values of the P1 part of
     p_h per triangle, bubble (T,2) bubble coefficients of b_T = 27 λ0 λ1 λ2 (or None)."""
-    X, area, G, hT = _geometry(P, tris)
+    _, _, G, hT = _geometry(P, tris)
     f_zero = exact.f_tree[0] == "num" and exact.f_tree[1] == 0.0
     want_div = want_div and p_tri is not None
     div_lin = np.einsum("tvd,tvd->t", p_tri, G) if p_tri is not None else None
+    names = tuple(n for n, want in (("u", u_tri is not None), ("px", p_tri is not None),
+                                    ("py", p_tri is not None), ("f", want_div and not f_zero))
+                  if want)
     su = sp = sd = 0.0
-    for ids, L, W in _point_batches(P, tris, tips, quad):
-        w = W * area[ids][:, None]  # (K,q)
-        xy = L @ X[ids]  # (K,q,2); matmul broadcasts a shared (q,3) L
-        x, y = xy[..., 0], xy[..., 1]
-        vals = exact.evaluate(x, y, u=u_tri is not None, grad=p_tri is not None, f=want_div and not f_zero)
+    for ids, L, w, vals in _quadrature_with_exact(P, tris, exact, tips, quad, names):
         if u_tri is not None:
             d = (L @ u_tri[ids][:, :, None])[..., 0] - vals["u"]
             su += float(np.sum(w * d * d))

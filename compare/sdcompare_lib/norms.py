@@ -13,6 +13,9 @@ by the meshes' kind (the export's mesh.json "kind"): "structured", the SW–NE g
 grid cell (locate_structured); "refined", uniform refinements with the numbering 4t + c (child c of
 triangle t), by t_coarse = t_fine // 4^(refinements) (locate_refined).
 """
+import hashlib
+from collections import OrderedDict
+
 import numpy as np
 
 
@@ -259,6 +262,41 @@ def nesting(meshes, coarse, fine):
     return kind, owner
 
 
+def digest(*arrays):
+    """A key for the contents of numpy arrays (shape, type and bytes): what a cache of results
+    computed from them may be keyed by."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(repr((a.shape, a.dtype.str)).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+class LastResults:
+    """The `size` results last computed, by key: meshes shared by many cases (every δ, multiplier
+    and p mass of a level) are prepared once. Results are returned as stored: callers must not
+    modify them."""
+
+    def __init__(self, size):
+        self.size, self.items = size, OrderedDict()
+
+    def get(self, key, compute):
+        if key in self.items:
+            self.items.move_to_end(key)
+            return self.items[key]
+        value = compute()
+        self.items[key] = value
+        while len(self.items) > self.size:
+            self.items.popitem(last=False)
+        return value
+
+
+# the nesting of a (coarse, fine) mesh pair: every case of a level is compared with the finest
+# reference on the same pair
+_NESTED = LastResults(8)
+
+
 def _barycentrics(cp, ct, owner, corners):
     """(T,3,3) barycentric coordinates of the fine corners (T,3,2) in their coarse owners."""
     a, b, c = cp[ct[owner, 0]], cp[ct[owner, 1]], cp[ct[owner, 2]]
@@ -283,6 +321,19 @@ def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine
     ct = np.asarray(coarse_tris, dtype=np.int64)
     fp = np.asarray(fine_points, dtype=float)[:, :2]
     ft = np.asarray(fine_tris, dtype=np.int64)
+    key = (kind, digest(cp, ct, fp, ft, np.asarray(
+        refinements if refinements is not None else [], dtype=np.int64)))
+    owner, lam = _NESTED.get(key, lambda: _nesting(cp, ct, fp, ft, kind, refinements))
+    v = np.asarray(coarse_values, dtype=float)[ct[owner]]  # (T,3[,C])
+    # batched 3×3 products (matmul: several times faster than einsum's generic loops here)
+    if v.ndim == 2:
+        return (lam @ v[:, :, None])[..., 0]
+    return lam @ v
+
+
+def _nesting(cp, ct, fp, ft, kind, refinements):
+    """(owner (T_f,), barycentrics (T_f,3,3)): each fine triangle's coarse triangle and its corners'
+    barycentric coordinates there (prolong_to_fine); NormError when a corner lies outside."""
     corners = fp[ft]  # (T,3,2)
     if kind == "structured":
         owner = locate_structured(cp, ct, corners.mean(axis=1))
@@ -303,10 +354,7 @@ def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine
         t = int(outside[0])
         raise NormError(f"fine triangle {t} does not lie in coarse triangle {int(owner[t])} ({kind} "
                         f"nesting; {len(outside)} such triangles)")
-    v = np.asarray(coarse_values, dtype=float)[ct[owner]]  # (T,3[,C])
-    if v.ndim == 2:
-        return np.einsum("tkm,tm->tk", lam, v)
-    return np.einsum("tkm,tmc->tkc", lam, v)
+    return owner, lam
 
 
 def prolonged_l2_diff(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris, fine_values,

@@ -261,6 +261,7 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
     fpts, ftris = meshes[finest].points, meshes[finest].tris
     uf = ref["u"][finest]
     grad_f = norms.p1_gradients(fpts, ftris, uf)
+    area_f = norms.triangle_areas(fpts, ftris)
     for c in sorted((c for c in cases if fields.has_case(c.get("fields_grid"))), key=case_key):
         lvl = int(c["level"])
         f = fields.case(c["fields_grid"])
@@ -300,8 +301,7 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
                                                         *nesting)
             if p is not None:
                 pf = norms.prolong_to_fine(f["points"], f["tris"], p, fpts, ftris, *nesting)
-                area = norms.triangle_areas(fpts, ftris)
-                row["e_p_finest"] = float(np.sqrt(norms._local_sq(area, pf - grad_f[:, None, :])))
+                row["e_p_finest"] = float(np.sqrt(norms._local_sq(area_f, pf - grad_f[:, None, :])))
         except norms.NormError as exc:
             row.setdefault("e_u", None)
             row["note"] = str(exc)

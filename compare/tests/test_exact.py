@@ -519,3 +519,58 @@ def test_p1_field_errors_on_the_exported_cracked_mesh(solver_run):
     q = E.p1_field_errors(P, t, d["u"], pairs, ex, ranges=m.ranges)
     assert q["u_l2"] == pytest.approx(E.solver_case_errors_h5(folder / "fields.h5", c["fields_grid"], ex)["u_l2"],
                                       rel=1e-13)
+
+
+def test_cached_mesh_quadrature_gives_the_uncached_errors():
+    """The exact solution's values at a mesh's quadrature points are kept for the next case on
+    the same mesh (issue 26: the compare tool's cost). A case computed from the cache equals, to
+    the bit, the same case computed with an empty cache; a mesh with other coordinates (same
+    shape) and another exact solution are not served from the cache."""
+    ex = E.ExactSolution("x*x - y + sin(x*y)", crack=((-0.5, 0.0), (0.5, 0.0)))
+    n = 4
+    P = np.array([[-1 + 2 * i / n, -1 + 2 * j / n] for j in range(n + 1) for i in range(n + 1)])
+    tris = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            tris += [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
+    tris = np.array(tris)
+    crack = np.array([[-0.5, 0.0], [0.0, 0.0], [0.5, 0.0]])
+
+    def errors(points, u_scale, exact=ex):
+        u = u_scale * (points[:, 0] - points[:, 1])
+        p = np.column_stack([u, -u])
+        return E.solver_case_errors(points, tris, u, p, None, crack, np.zeros(3), exact)
+
+    E._MESH_QUADRATURE.items.clear()
+    first = [errors(P, s) for s in (1.0, 2.0)]
+    assert len(E._MESH_QUADRATURE.items) == 1  # the second case reused the first one's values
+    E._MESH_QUADRATURE.items.clear()
+    assert errors(P, 2.0) == first[1]
+    moved = P * np.array([1.0, 0.75])  # other coordinates, the same array shape
+    E._MESH_QUADRATURE.items.clear()
+    alone = errors(moved, 1.0)
+    errors(P, 1.0)
+    assert errors(moved, 1.0) == alone and alone != first[0]
+    other = E.ExactSolution("x*x - y", crack=((-0.5, 0.0), (0.5, 0.0)))
+    assert errors(P, 1.0, other) != first[0]
+    assert norms.digest(np.zeros(4)) != norms.digest(np.zeros((2, 2)))
+
+
+def test_cached_nesting_gives_the_uncached_prolongation():
+    """prolong_to_fine keeps each (coarse, fine) pair's nesting; the prolongation of new values on
+    a cached pair equals the uncached one, and a wrong nesting is still an error."""
+    cp = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    ct = np.array([[0, 1, 2]])
+    fp = np.array([[0.0, 0.0], [0.5, 0.0], [0.0, 0.5], [1.0, 0.0], [0.5, 0.5], [0.0, 1.0]])
+    ft = np.array([[0, 1, 2], [1, 3, 4], [2, 4, 5], [1, 4, 2]])
+    owner = np.zeros(4, dtype=np.int64)
+    norms._NESTED.items.clear()
+    a = norms.prolong_to_fine(cp, ct, np.array([1.0, 2.0, 3.0]), fp, ft, "graded", owner)
+    b = norms.prolong_to_fine(cp, ct, np.array([4.0, 5.0, 7.0]), fp, ft, "graded", owner)
+    norms._NESTED.items.clear()
+    assert np.array_equal(b, norms.prolong_to_fine(cp, ct, np.array([4.0, 5.0, 7.0]), fp, ft,
+                                                   "graded", owner))
+    assert np.allclose(a[0], [1.0, 1.5, 2.0])
+    with pytest.raises(norms.NormError):
+        norms.prolong_to_fine(cp, ct, np.zeros(3), fp + 2.0, ft, "graded", owner)

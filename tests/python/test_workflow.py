@@ -409,6 +409,18 @@ def test_critical_path_of_known_durations(tmp_path):
     assert cp["sum_s"] == 17.0 and cp["jobs"] == 5
     assert cp["per_rule_s"] == {"dolfinx": 5.0, "freefem": 3.0, "report": 8.0, "solver": 1.0}
     assert cp["per_scene"]["a"]["path_s"] == 7.0
+    # issue 26's goals: report 8 of 17 s = 47 % > 15 %; path 9 s = 1.8 × the longest shard (5 s)
+    assert [g["met"] for g in cp["goals"]] == [False, False]
+    assert cp["goals"][0]["goal"].startswith("report jobs 47.1 % of the job-seconds")
+    assert "= 1.80 × the longest solver or reference job (5.0 s" in cp["goals"][1]["goal"]
+    text = critical_path(tmp_path).stdout
+    assert text.count(": MISSED\n") == 2
+    # reports of 0.1 s: 0.2 of 9.2 s = 2.2 %, path 5.1 s = 1.02 × 5 s: both met
+    for scene in ("a", "b"):
+        (tmp_path / "benchmarks" / scene / "report.tsv").write_text(
+            header + "0.1\t0:00:00\t1\t1\t1\t1\t0\t0\t0\t0.1\n")
+    cp = json.loads(critical_path(tmp_path, "--json").stdout)
+    assert [g["met"] for g in cp["goals"]] == [True, True], cp["goals"]
     r = critical_path(tmp_path / "nothing")
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
 
