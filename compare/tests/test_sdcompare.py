@@ -643,6 +643,10 @@ def test_references_are_told_apart_in_plots(monkeypatch):
         suffix = " (overlapping)" if overlapping else ""
         ld, lf = lines["reference dolfinx" + suffix], lines["reference FreeFEM" + suffix]
         assert ld.get_marker() != lf.get_marker() and ld.get_linestyle() != lf.get_linestyle()
+        if scale == 3.0:  # dolfinx's start-up (form compilation) is left out and said apart
+            assert list(ld.get_xdata()) == [1.0, 2.0]
+            notes = [x.get_text() for x in figs[0].texts]
+            assert notes == [], notes
         (legend,) = figs[0].legends  # one legend for the figure, off the data
         assert ax.get_legend() is None
         assert {t.get_text() for t in legend.get_texts()} >= {ld.get_label(), lf.get_label()}
@@ -1011,3 +1015,24 @@ def test_plots_are_readable(monkeypatch):
                 assert note.xy[1] < min(data), note.get_text()
     for fig in figs:
         plots.plt.close(fig)
+
+
+def test_work_precision_leaves_start_up_apart(monkeypatch):
+    """dolfinx's form compilation (its summary's timings_s.forms, cached between runs) is not
+    plotted as work on the level: the points are total − forms, and the range is written under the
+    plot (issue 25, item 4: it drew a zigzag of cache hits and misses)."""
+    plots, figs = _captured_figures(monkeypatch)
+    from sdcompare_lib import verdict
+
+    assert verdict.startup_time({"forms": 0.7, "total": 1.0}) == 0.7
+    assert verdict.startup_time({"freefem": 0.2, "total": 0.3}) == 0.0
+    refs = [{"tool": "dolfinx", "level": lv, "total_s": t, "startup_s": s,
+             "errors": {"u_l2": 0.1 / (1 + lv)}}
+            for lv, (t, s) in enumerate([(1.2, 1.0), (0.5, 0.1), (1.8, 0.6)])]
+    assert plots.work_precision_plot("/nonexistent", "s", [], refs)
+    (ax,) = figs[0].axes
+    line = next(x for x in ax.get_lines() if x.get_label().startswith("reference dolfinx"))
+    assert list(line.get_xdata()) == pytest.approx([0.2, 0.4, 1.2])  # monotone: no zigzag
+    assert [x.get_text() for x in figs[0].texts] == [
+        "dolfinx start-up 0.1–1 s per level, not plotted"]
+    plots.plt.close(figs[0])
