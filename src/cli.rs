@@ -475,16 +475,16 @@ fn check_meshes(scene: &Scene, origin: &str) -> Result<(), Failure> {
     scene
         .mesh_source()
         .map_err(|e| match e.crack().and_then(|c| scene.crack_names.get(c)) {
-            Some(name) => usage(format!(
-                "invalid scene {origin}: {}",
-                scene.locate(format!("{name}: {e}"))
-            )),
-            None => usage(format!(
-                "invalid scene {origin}: {}",
-                scene.locate(e.to_string())
-            )),
+            Some(name) => invalid_scene(scene, origin, format!("{name}: {e}")),
+            None => invalid_scene(scene, origin, e.to_string()),
         })?;
     Ok(())
+}
+
+/// A usage failure found after the scene file was read (a crack off a finer mesh, NaN data):
+/// `invalid scene ORIGIN: MESSAGE (at line L, column C)`, where the message names the key.
+fn invalid_scene(scene: &Scene, origin: &str, message: String) -> Failure {
+    usage(format!("invalid scene {origin}: {}", scene.locate(message)))
 }
 
 /// Checks a `--level` (which need not be listed in the scene) like the scene's own levels:
@@ -549,10 +549,7 @@ fn run(
     let study = run_study(scene, &plan, &mut progress).map_err(|e| match e {
         StudyError::Linalg(_) => runtime(e),
         // Non-finite data at a quadrature point, a crack off a finer mesh: the scene's fault.
-        _ => usage(format!(
-            "invalid scene {origin}: {}",
-            scene.locate(e.to_string())
-        )),
+        _ => invalid_scene(scene, origin, e.to_string()),
     })?;
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();

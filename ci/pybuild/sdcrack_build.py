@@ -15,7 +15,6 @@ import os
 import subprocess
 import sys
 
-from setuptools import build_meta as _setuptools
 from setuptools.build_meta import *  # noqa: F401,F403  every hook of setuptools' backend
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -47,4 +46,3 @@ def _prepare():
 
 
 _prepare()
-assert _setuptools  # the hooks above are setuptools' own
