@@ -528,9 +528,8 @@ _MESH_QUADRATURE = LastResults(2)
 def _quadrature_with_exact(P, tris, exact, tips, quad, names):
     """[(ids, L, w, vals)]: the batches of _point_batches with weights w (K,q) in area units and
     the exact solution's `names` (of "u", "px", "py", "f") at their points."""
-    X, area, _, _ = _geometry(P, tris)
-
     def compute():
+        X, area, _, _ = _geometry(P, tris)
         out = []
         for ids, L, W in _point_batches(P, tris, tips, quad):
             xy = L @ X[ids]  # (K,q,2); matmul broadcasts a shared (q,3) L
