@@ -317,27 +317,36 @@ def rerun_command(results_dir, summary, scene_file, k):
     exactly; `--delta` only when the run was restricted to one δ), into the absolute folder
     RERUN/<scene>-l<L>-<u>-<m>[-lumped][-d<δ>], RERUN the folder `rerun` beside the results
     folder (OUT/rerun/ for OUT/<scene>/): the command ci/cases prints for the same folder."""
-    import shlex
-
     from .settings import scene_lists
 
     prov = summary.get("provenance")
     exe = prov.get("executable") if isinstance(prov, dict) else None
     if not (isinstance(exe, str) and os.path.isabs(exe)):
         exe = "sdcrack"
-    scene = os.path.join(os.path.abspath(results_dir), "scene.toml")
-    args = [exe, "run", scene, "--level", str(k["level"]), "--u-space", str(k["u_space"]),
+    plan_deltas = sorted({float(d) for d in ((summary.get("plan") or {}).get("deltas") or [])})
+    restricted = plan_deltas != sorted(set(scene_lists(scene_file)[3]))
+    return rerun_args(exe, os.path.join(os.path.abspath(results_dir), "scene.toml"),
+                      summary.get("scene", "scene"), k, k["delta"] if restricted else None,
+                      os.path.join(os.path.dirname(os.path.abspath(results_dir)), RERUN_FOLDER))
+
+
+def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir):
+    """The shell command `exe run SCENE_PATH` of one rerunnable unit `k` (level, u space,
+    multiplier, p mass): the whole δ sweep, or `--delta` alone when `only_delta` is given, into
+    RERUN_DIR/<scene>-l<L>-<u>-<m>[-lumped][-d<δ>]. One home for the commands of the reports
+    (rerun_command) and of ci/cases."""
+    import shlex
+
+    args = [exe, "run", scene_path, "--level", str(k["level"]), "--u-space", str(k["u_space"]),
             "--multiplier", str(k["multiplier"])]
-    name = f"{summary.get('scene', 'scene')}-l{k['level']}-{k['u_space']}-{k['multiplier']}"
+    name = f"{scene_name}-l{k['level']}-{k['u_space']}-{k['multiplier']}"
     pm = k.get("p_mass", "consistent")
     if pm != "consistent":  # the consistent command is the one of a run without p masses
         args += ["--p-mass", str(pm)]
         name += f"-{pm}"
-    plan_deltas = sorted({float(d) for d in ((summary.get("plan") or {}).get("deltas") or [])})
-    if plan_deltas != sorted(set(scene_lists(scene_file)[3])):
-        d = fmt_delta(k["delta"])
+    if only_delta is not None:
+        d = fmt_delta(only_delta)
         args += ["--delta", d]
         name += f"-d{d}"
-    rerun = os.path.join(os.path.dirname(os.path.abspath(results_dir)), RERUN_FOLDER)
-    args += ["--out", os.path.join(rerun, name)]
+    args += ["--out", os.path.join(rerun_dir, name)]
     return shlex.join(args)
