@@ -1,22 +1,26 @@
-//! Error norms against an exact solution (docs/design.md, Error norms), with quadrature graded toward the crack tips.
+//! Error norms against an exact solution (docs/design.md, Error norms), with quadrature collapsed at the crack tips.
 //!
 //! e_u = ‖u_h − u‖_{L²(Ω)}, e_p = ‖p_h − ∇u‖_{L²(Ω_c)} (p_h with its bubbles), e_λ = ‖λ_h − [u]‖_{L²(Γc)},
 //! and the paper's mesh-dependent X-norm of the p error (§4):
 //! ‖p_h − ∇u‖²_X = Σ_T ‖p_h − ∇u‖²_T + h_T² ‖div p_h − Δu‖²_T with Δu = −f off the crack.
 //! Each triangle lies on one side of the crack, so u and ∇u are smooth on it except at a tip vertex,
-//! where u ~ r^{1/2}. Triangles having a tip as a vertex are split recursively toward the tip
-//! (`tip_depth` times: the corner child is split again, giving geometric grading); crack segments
-//! at a tip likewise. Pieces of triangles near a tip get the collapsed Gauss rule of degree
-//! `tip_degree`, the other triangles that of degree `degree` ([`NormQuadrature`]); their points are
-//! interior, so data are never evaluated on Γc. Cross-checked by the compare tool's independent
-//! computation from the stored fields (compare/sdcompare_lib/exact.py): agreement ≤ 1e-10 relative. On Γc the exact jump is the scene's `jump`
-//! expression or u⁺ − u⁻ evaluated with the signed-zero side convention of [`crate::problem::eval_on_face`].
+//! where u ~ r^{1/2}. A triangle with a tip as a vertex gets the Duffy rule collapsed at the tip
+//! with r = σ² ([`collapsed_tip_rule`], [`TipRule::Collapsed`]); crack segments ending at a tip get
+//! the same substitution in their length coordinate. The triangles around them get the Gauss rule
+//! of degree `tip_degree`, the others that of degree `degree` ([`NormQuadrature`]). All points are
+//! interior, so data are never evaluated on Γc. [`TipRule::Graded`] (recursive splits toward the
+//! tip, the rule before issue 26) is kept as the check of the collapsed one: they agree to 1e-10
+//! relative on every repository scene with a tip (tests/convergence.rs). Cross-checked by the
+//! compare tool's independent computation from the stored fields (compare/sdcompare_lib/exact.py):
+//! agreement ≤ 1e-10 relative. On Γc the exact jump is the scene's `jump` expression or u⁺ − u⁻
+//! evaluated with the signed-zero side convention of [`crate::problem::eval_on_face`].
 
 use crate::expr::{BatchScratch, ExprBatch};
 use crate::fe::mini::mini_value;
 use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{
-    gauss_legendre, physical_points, triangle_rule, PhysicalPoint, REFERENCE_TRIANGLE,
+    collapsed_tip_rule, gauss_legendre, physical_points, triangle_rule, PhysicalPoint,
+    TriangleRule, REFERENCE_TRIANGLE,
 };
 use crate::mesh::{Mesh, UTopology};
 use crate::multiplier::CrackField;
@@ -35,21 +39,44 @@ pub struct ErrorNorms {
     pub lambda_l2: f64,
 }
 
+/// The rule on triangles and crack segments that end at a crack tip.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TipRule {
+    /// The Duffy rule collapsed at the tip with r = σ² ([`collapsed_tip_rule`]), `points`
+    /// Gauss–Legendre points in σ and in the angle (`points`² per tip triangle); tip segments
+    /// with s = σ² from the tip. A triangle with two or three tips as vertices is split into its
+    /// four midpoint children, each child at a tip collapsed there.
+    Collapsed {
+        /// Gauss points per direction.
+        points: usize,
+    },
+    /// Recursive splits toward the tip (the corner child split again `depth` times), each piece
+    /// with the `tip_degree` rule; tip segments cut at 2^{-i}, i = 1..depth. The norms' rule up to
+    /// issue 26: ~7 000 points per tip triangle at depth 30, against 256 for `Collapsed { points:
+    /// 16 }`; kept to check the collapsed rule.
+    Graded {
+        /// Recursive splits toward each tip.
+        depth: usize,
+    },
+}
+
 /// Quadrature used by the norms.
 ///
 /// The defaults were set against an independent computation (compare/sdcompare_lib/exact.py:
 /// Duffy rules collapsed at the tips): with a degree-10 rule and 16 splits everywhere, the p error
 /// of the open crack (∇u ~ r^{-1/2}) came out 5e-8 to 1.3e-7 too small, from the tip triangles and
-/// their neighbours; with degree 20 and 40 splits near the tips they agree to ~1e-11.
+/// their neighbours; with degree 20 around the tips they agree to ~1e-11 (graded tips, depth 30 to
+/// 40, or collapsed tips with 16 points).
 #[derive(Clone, Copy, Debug)]
 pub struct NormQuadrature {
     /// Total degree of the rule on triangles away from the tips.
     pub degree: usize,
-    /// Total degree of the rule near the tips: on the (sub)triangles of triangles that touch a tip
-    /// or share a vertex with one that does, and on the crack segments.
+    /// Total degree of the rule near the tips: on the triangles that share a vertex with a
+    /// triangle touching a tip (the pieces of graded tip triangles included), and of the Gauss
+    /// rule on crack segments (tip_degree / 2 + 1 points).
     pub tip_degree: usize,
-    /// Recursive splits toward each tip.
-    pub tip_depth: usize,
+    /// The rule on triangles and segments ending at a tip.
+    pub tip: TipRule,
 }
 
 impl Default for NormQuadrature {
@@ -57,7 +84,7 @@ impl Default for NormQuadrature {
         NormQuadrature {
             degree: 10,
             tip_degree: 20,
-            tip_depth: 30,
+            tip: TipRule::Collapsed { points: 16 },
         }
     }
 }
@@ -99,9 +126,69 @@ fn graded_pieces(corner: Option<usize>, depth: usize) -> Vec<[[f64; 2]; 3]> {
     pieces
 }
 
+/// Which rule a piece of a triangle gets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum PieceRule {
+    /// Degree `degree`: away from the tips.
+    Regular,
+    /// Degree `tip_degree`: near a tip, or a piece of a graded tip triangle.
+    NearTip,
+    /// Collapsed at the piece's first vertex, a tip.
+    Collapsed,
+}
+
+/// A piece of a triangle in its reference coordinates, with its rule.
+type Piece = (PieceRule, [[f64; 2]; 3]);
+
+/// The pieces of a triangle whose local vertices `at_tip` are crack tips (`near_tip`: it shares a
+/// vertex with a triangle touching a tip), appended to `out`.
+fn pieces(at_tip: [bool; 3], near_tip: bool, tip: TipRule, out: &mut Vec<Piece>) {
+    let corner = (0..3).find(|&k| at_tip[k]);
+    let Some(c) = corner else {
+        let rule = if near_tip {
+            PieceRule::NearTip
+        } else {
+            PieceRule::Regular
+        };
+        out.push((rule, REFERENCE_TRIANGLE));
+        return;
+    };
+    match tip {
+        TipRule::Graded { depth } => out.extend(
+            graded_pieces(corner, depth)
+                .into_iter()
+                .map(|p| (PieceRule::NearTip, p)),
+        ),
+        TipRule::Collapsed { .. } if at_tip.iter().filter(|&&b| b).count() == 1 => {
+            let mut piece = REFERENCE_TRIANGLE;
+            piece.rotate_left(c);
+            out.push((PieceRule::Collapsed, piece));
+        }
+        TipRule::Collapsed { .. } => {
+            // several tips: the four midpoint children, each corner child first at its corner
+            let v = REFERENCE_TRIANGLE;
+            let mid = |p: [f64; 2], q: [f64; 2]| [(p[0] + q[0]) / 2.0, (p[1] + q[1]) / 2.0];
+            for k in 0..3 {
+                let (a, b, d) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+                let rule = if at_tip[k] {
+                    PieceRule::Collapsed
+                } else {
+                    PieceRule::NearTip
+                };
+                out.push((rule, [a, mid(a, b), mid(a, d)]));
+            }
+            out.push((
+                PieceRule::NearTip,
+                [mid(v[0], v[1]), mid(v[1], v[2]), mid(v[0], v[2])],
+            ));
+        }
+    }
+}
+
 /// Buffers of one thread's triangles: their quadrature points and the exact data there.
 #[derive(Default)]
 struct ElementWork {
+    pieces: Vec<Piece>,
     points: Vec<PhysicalPoint>,
     xs: Vec<f64>,
     ys: Vec<f64>,
@@ -119,7 +206,19 @@ pub fn error_norms(
     quad: NormQuadrature,
 ) -> ErrorNorms {
     use rayon::prelude::*;
-    let (rule, tip_rule) = (triangle_rule(quad.degree), triangle_rule(quad.tip_degree));
+    let regular = triangle_rule(quad.degree);
+    let near = triangle_rule(quad.tip_degree);
+    let collapsed = match quad.tip {
+        TipRule::Collapsed { points } => collapsed_tip_rule(points),
+        TipRule::Graded { .. } => near.clone(),
+    };
+    let rule_of = |r: PieceRule| -> &TriangleRule {
+        match r {
+            PieceRule::Regular => &regular,
+            PieceRule::NearTip => &near,
+            PieceRule::Collapsed => &collapsed,
+        }
+    };
     let tips = mesh.tips();
     // vertices of the triangles touching a tip: a triangle with one of them is near a tip
     let mut tip_patch = vec![false; mesh.vertices.len()];
@@ -132,27 +231,23 @@ pub fn error_norms(
             tip_patch[v] = true;
         }
     }
-    let plain = graded_pieces(None, 0);
     // u, ∂u/∂x, ∂u/∂y and f evaluated together, a triangle's points at once.
     let program = ExprBatch::new(&[&exact.u, &exact.px, &exact.py, sol.source]);
     // One triangle's contributions (∫ (u_h − u)², ∫ |p_h − ∇u|², h_T² ∫ (div p_h + f)²).
     let element = |ti: usize, t: &[usize; 3], work: &mut ElementWork| -> (f64, f64, f64) {
         let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
-        let corner = (0..3).find(|&k| tips.contains(&t[k]));
         let near_tip = t.iter().any(|&v| tip_patch[v]);
-        let rule = if near_tip { &tip_rule } else { &rule };
-        let graded;
-        let pieces = match corner {
-            Some(_) => {
-                graded = graded_pieces(corner, quad.tip_depth);
-                &graded
-            }
-            None => &plain,
-        };
+        work.pieces.clear();
+        pieces(
+            t.map(|v| tips.contains(&v)),
+            near_tip,
+            quad.tip,
+            &mut work.pieces,
+        );
         work.points.clear();
-        for piece in pieces {
+        for &(rule, piece) in &work.pieces {
             work.points
-                .extend(physical_points(rule, geo.vertices, *piece));
+                .extend(physical_points(rule_of(rule), geo.vertices, piece));
         }
         let n = work.points.len();
         work.xs.clear();
@@ -232,7 +327,7 @@ pub fn exact_jump(exact: &Exact, p: [f64; 2], normal: [f64; 2]) -> f64 {
     }
 }
 
-/// ‖λ_h − [u]‖_{L²(Γc)} over every crack, with segments graded toward the tips.
+/// ‖λ_h − [u]‖_{L²(Γc)} over every crack, with the tip rule on the segments at the chains' ends.
 fn lambda_error(mesh: &Mesh, exact: &Exact, lambda: &CrackField, quad: NormQuadrature) -> f64 {
     let g = gauss_legendre(quad.tip_degree / 2 + 1);
     let mut total = 0.0;
@@ -262,20 +357,15 @@ fn chain_lambda_error(
     for k in 0..nodes.len() - 1 {
         let (a, b) = (mesh.vertices[nodes[k]], mesh.vertices[nodes[k + 1]]);
         let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-        // sub-intervals of [0, 1] in the local coordinate s (0 at a), graded toward tip ends
-        let mut cuts = vec![0.0, 1.0];
-        if k == 0 {
-            cuts.extend((1..=quad.tip_depth).map(|i| 0.5f64.powi(i as i32)));
-        }
-        if k == last {
-            cuts.extend((1..=quad.tip_depth).map(|i| 1.0 - 0.5f64.powi(i as i32)));
-        }
-        cuts.sort_by(f64::total_cmp);
-        cuts.dedup();
-        for w2 in cuts.windows(2) {
-            let (s0, s1) = (w2[0], w2[1]);
+        let (from_tip, to_tip) = (k == 0, k == last);
+        for (s0, s1, collapsed) in segment_pieces(from_tip, to_tip, quad.tip) {
             for (&t, &w) in g.points.iter().zip(&g.weights) {
-                let s = s0 + t * (s1 - s0);
+                // s from s0 (a tip where `collapsed`) toward s1; s − s0 = (s1 − s0) σ² there
+                let (s, ds) = if collapsed {
+                    (s0 + t * t * (s1 - s0), 2.0 * t * (s1 - s0).abs())
+                } else {
+                    (s0 + t * (s1 - s0), (s1 - s0).abs())
+                };
                 let p = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
                 let lh = match lambda {
                     CrackField::PerSegment(v) => v[offsets.1 + k],
@@ -284,11 +374,37 @@ fn chain_lambda_error(
                     }
                 };
                 let d = lh - exact_jump(exact, p, chain.normals[k]);
-                total += w * (s1 - s0) * len * d * d;
+                total += w * ds * len * d * d;
             }
         }
     }
     total
+}
+
+/// The pieces (s0, s1, collapsed at s0) of a crack segment [0, 1] in its local coordinate s, for
+/// a segment starting (`from_tip`) or ending (`to_tip`) at a chain's end: graded cuts at 2^{-i}
+/// toward those ends, or one piece from each such end collapsed there (halves when both are).
+fn segment_pieces(from_tip: bool, to_tip: bool, tip: TipRule) -> Vec<(f64, f64, bool)> {
+    match tip {
+        TipRule::Graded { depth } => {
+            let mut cuts = vec![0.0, 1.0];
+            if from_tip {
+                cuts.extend((1..=depth).map(|i| 0.5f64.powi(i as i32)));
+            }
+            if to_tip {
+                cuts.extend((1..=depth).map(|i| 1.0 - 0.5f64.powi(i as i32)));
+            }
+            cuts.sort_by(f64::total_cmp);
+            cuts.dedup();
+            cuts.windows(2).map(|w| (w[0], w[1], false)).collect()
+        }
+        TipRule::Collapsed { .. } => match (from_tip, to_tip) {
+            (true, true) => vec![(0.0, 0.5, true), (1.0, 0.5, true)],
+            (true, false) => vec![(0.0, 1.0, true)],
+            (false, true) => vec![(1.0, 0.0, true)],
+            (false, false) => vec![(0.0, 1.0, false)],
+        },
+    }
 }
 
 #[cfg(test)]
