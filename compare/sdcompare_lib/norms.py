@@ -42,7 +42,7 @@ def p1_l2_norm(points, tris, values):
     """‖v‖_{L²} of a P1 field (scalar (N,) or vector (N,C)) on one mesh."""
     v = np.asarray(values, dtype=float)
     t = np.asarray(tris, dtype=np.int64)
-    return np.sqrt(_local_sq(triangle_areas(points, t), v[t]))
+    return np.sqrt(_local_sq(_areas_of(points, tris), v[t]))
 
 
 def p1_l2_diff(points, tris, a, b):
@@ -53,7 +53,13 @@ def p1_l2_diff(points, tris, a, b):
 def corner_map(points_a, tris_a, points_b, tris_b, tol=1e-9):
     """For two meshes with the same triangle order (triangle k is the same triangle) return perm
     (T,3) such that vertex tris_b[k, perm[k, i]] is at the position of tris_a[k, i].
-    Raises NormError if some triangle's corners do not coincide."""
+    Raises NormError if some triangle's corners do not coincide. Remembered for the last mesh
+    pairs (by the digests of their arrays): every case of a level matches the same pair."""
+    key = tuple(_digest_of(a) for a in (points_a, tris_a, points_b, tris_b)) + (tol,)
+    return _CORNERS.get(key, lambda: _corner_map(points_a, tris_a, points_b, tris_b, tol))
+
+
+def _corner_map(points_a, tris_a, points_b, tris_b, tol):
     pa = np.asarray(points_a, dtype=float)[:, :2][np.asarray(tris_a, dtype=np.int64)]  # (T,3,2)
     pb = np.asarray(points_b, dtype=float)[:, :2][np.asarray(tris_b, dtype=np.int64)]
     if pa.shape != pb.shape:
@@ -78,7 +84,7 @@ def p1_l2_diff_two_meshes(points_a, tris_a, a, points_b, tris_b, b):
     tb_aligned = np.take_along_axis(tb, perm, axis=1)
     va = np.asarray(a, dtype=float)[ta]
     vb = np.asarray(b, dtype=float)[tb_aligned]
-    return np.sqrt(_local_sq(triangle_areas(points_a, ta), va - vb))
+    return np.sqrt(_local_sq(_areas_of(points_a, tris_a), va - vb))
 
 
 def crack_segments(crack_points, segments=None):
@@ -147,7 +153,7 @@ def p1_vs_piecewise_constant_l2(points, tris, values, const):
     v = np.asarray(values, dtype=float)[t]
     c = np.asarray(const, dtype=float)
     d = v - (c[:, None] if c.ndim == 1 else c[:, None, :])
-    return float(np.sqrt(_local_sq(triangle_areas(points, t), d)))
+    return float(np.sqrt(_local_sq(_areas_of(points, tris), d)))
 
 
 def mini_vs_piecewise_constant_l2(points, tris, values, bubble, const):
@@ -155,7 +161,7 @@ def mini_vs_piecewise_constant_l2(points, tris, values, bubble, const):
     coefficients c_b (T,C) of b_T = 27 λ0 λ1 λ2, against c constant per triangle (T,C), exact:
     ∫ b_T λ_i = 3|T|/20 and ∫ b_T² = 81|T|/280 added to the P1 mass formula of d_i = v_i − c_T."""
     t = np.asarray(tris, dtype=np.int64)
-    area = triangle_areas(points, t)
+    area = _areas_of(points, tris)
     d = np.asarray(values, dtype=float)[t] - np.asarray(const, dtype=float)[:, None, :]
     cb = np.asarray(bubble, dtype=float)
     if cb.shape != (t.shape[0], d.shape[2]):
@@ -273,6 +279,37 @@ def digest(*arrays):
     return h.hexdigest()
 
 
+class _PerArray:
+    """f(array) remembered for the last `size` array objects seen, by identity: the reference's
+    finest mesh is passed, as the same objects, with every case compared to it. Each remembered
+    array is kept alive, so its id cannot be taken by another array; the arrays must not be
+    modified in place (the compare tool reads them and never writes them)."""
+
+    def __init__(self, f, size=16):
+        self.f, self.size, self.items = f, size, OrderedDict()
+
+    def __call__(self, a):
+        hit = self.items.get(id(a))
+        if hit is not None and hit[0] is a:
+            self.items.move_to_end(id(a))
+            return hit[1]
+        value = self.f(a)
+        self.items[id(a)] = (a, value)
+        while len(self.items) > self.size:
+            self.items.popitem(last=False)
+        return value
+
+
+_digest_of = _PerArray(lambda a: digest(a))
+
+
+def _areas_of(points, tris):
+    """triangle_areas of a mesh, remembered for the last meshes' arrays (by identity)."""
+    key = (_digest_of(points), _digest_of(tris))
+    return _AREAS.get(key, lambda: triangle_areas(points, tris))
+
+
+
 class LastResults:
     """The `size` results last computed, by key: meshes shared by many cases (every δ, multiplier
     and p mass of a level) are prepared once. Results are returned as stored: callers must not
@@ -295,6 +332,10 @@ class LastResults:
 # the nesting of a (coarse, fine) mesh pair: every case of a level is compared with the finest
 # reference on the same pair
 _NESTED = LastResults(8)
+# meshes' triangle areas, by the digests of their arrays
+_AREAS = LastResults(8)
+# corner maps of mesh pairs (corner_map)
+_CORNERS = LastResults(8)
 
 
 def _barycentrics(cp, ct, owner, corners):
@@ -321,8 +362,8 @@ def prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine
     ct = np.asarray(coarse_tris, dtype=np.int64)
     fp = np.asarray(fine_points, dtype=float)[:, :2]
     ft = np.asarray(fine_tris, dtype=np.int64)
-    key = (kind, digest(cp, ct, fp, ft, np.asarray(
-        refinements if refinements is not None else [], dtype=np.int64)))
+    key = (kind, tuple(_digest_of(a) for a in (coarse_points, coarse_tris, fine_points, fine_tris)),
+           digest(np.asarray(refinements if refinements is not None else [], dtype=np.int64)))
     owner, lam = _NESTED.get(key, lambda: _nesting(cp, ct, fp, ft, kind, refinements))
     v = np.asarray(coarse_values, dtype=float)[ct[owner]]  # (T,3[,C])
     # batched 3×3 products (matmul: several times faster than einsum's generic loops here)
@@ -364,4 +405,4 @@ def prolonged_l2_diff(coarse_points, coarse_tris, coarse_values, fine_points, fi
     vc = prolong_to_fine(coarse_points, coarse_tris, coarse_values, fine_points, fine_tris, kind,
                          refinements)
     vf = np.asarray(fine_values, dtype=float)[np.asarray(fine_tris, dtype=np.int64)]
-    return float(np.sqrt(_local_sq(triangle_areas(fine_points, fine_tris), vc - vf)))
+    return float(np.sqrt(_local_sq(_areas_of(fine_points, fine_tris), vc - vf)))

@@ -99,12 +99,21 @@ class Fields:
 
     def case(self, grid):
         """dict(points, tris, u, p, p_bubble, crack_points, crack_segments, lam); missing datasets are
-        None (crack_segments: the segments within each crack, absent in files written before several
+        None; the mesh arrays are shared by the cases of one mesh and must not be modified (crack_segments: the segments within each crack, absent in files written before several
         cracks, whose crack points form one crack)."""
+        import h5py
+
         g = self.h5[f"cases/{grid}"]
-        mesh = g["mesh"]
-        pts = np.asarray(mesh["points"][()], dtype=float)
-        tris = np.asarray(mesh["triangles"][()], dtype=np.int64)
+        link = g.get("mesh", getlink=True)
+        if isinstance(link, h5py.SoftLink) and link.path.startswith("/meshes/") \
+                and self.has_mesh(link.path[len("/meshes/"):]):
+            # the cases of a mesh link to it (sdcrack's layout): one pair of arrays for all of
+            # them, which the norms' caches then recognise by identity
+            pts, tris = self.mesh_by_key(link.path[len("/meshes/"):])
+        else:
+            mesh = g["mesh"]
+            pts = np.asarray(mesh["points"][()], dtype=float)
+            tris = np.asarray(mesh["triangles"][()], dtype=np.int64)
 
         def get(name):
             return np.asarray(g[name][()], dtype=float) if name in g else None

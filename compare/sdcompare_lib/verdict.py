@@ -251,7 +251,10 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
     """e_u, e_p (p with its bubble; the lumped p has none), e_λ of every solver case against the
     reference of the same level, and e_u, e_p (P1 part of p) against the reference's finest level (nested meshes: the
     coarse field is evaluated exactly at the fine triangles' corners, the fine triangles located in
-    the coarse ones by the export's mesh kind), all exact on shared (sub)triangles."""
+    the coarse ones by the export's mesh kind), all exact on shared (sub)triangles. The distances
+    to the finest level, the costliest (each on the finest mesh), are computed for the cases of
+    δ = ref_delta only: the series, the yardsticks and the report's table read them there and
+    nowhere else (issue 26: they were computed for every δ)."""
     out = []
     meshes = ref.get("mesh") or {}
     if not meshes:
@@ -262,6 +265,7 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
     uf = ref["u"][finest]
     grad_f = norms.p1_gradients(fpts, ftris, uf)
     area_f = norms.triangle_areas(fpts, ftris)
+    delta_finest = ref_delta(cases)
     for c in sorted((c for c in cases if fields.has_case(c.get("fields_grid"))), key=case_key):
         lvl = int(c["level"])
         f = fields.case(c["fields_grid"])
@@ -296,12 +300,14 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
             else:
                 _check_same_cracks(f, pts[crack[:, 0]], m.segments())
                 row["e_lambda"] = norms.crack_diff_vs_p1(pts[crack[:, 0]], f["lam"], jump, m.segments())
-            nesting = norms.nesting(meshes, lvl, finest)
-            row["e_u_finest"] = norms.prolonged_l2_diff(f["points"], f["tris"], f["u"], fpts, ftris, uf,
-                                                        *nesting)
-            if p is not None:
-                pf = norms.prolong_to_fine(f["points"], f["tris"], p, fpts, ftris, *nesting)
-                row["e_p_finest"] = float(np.sqrt(norms._local_sq(area_f, pf - grad_f[:, None, :])))
+            if float(c["delta"]) == delta_finest:
+                nesting = norms.nesting(meshes, lvl, finest)
+                row["e_u_finest"] = norms.prolonged_l2_diff(f["points"], f["tris"], f["u"], fpts,
+                                                            ftris, uf, *nesting)
+                if p is not None:
+                    pf = norms.prolong_to_fine(f["points"], f["tris"], p, fpts, ftris, *nesting)
+                    row["e_p_finest"] = float(np.sqrt(norms._local_sq(area_f,
+                                                                      pf - grad_f[:, None, :])))
         except norms.NormError as exc:
             row.setdefault("e_u", None)
             row["note"] = str(exc)

@@ -294,6 +294,9 @@ def test_references_agreement(tmp_path):
     assert {a["u_space"] for a in sv} == {"broken", "continuous"}
     assert all(a["e_u"] == pytest.approx(0.0, abs=1e-14) for a in sv)
     assert all(a["e_u_finest"] == pytest.approx(0.0, abs=1e-14) for a in sv)
+    # the distances to the finest reference level are computed at δ = 0 (ref_delta) only
+    others = [a for a in agreement if a["kind"] == "solver_vs_reference" and a["delta"] != 0.0]
+    assert others and all("e_u_finest" not in a and "e_p_finest" not in a for a in others)
     # p is (cos x, 0) at the vertices with bubble coefficients (0.1, −0.2); ∇u_ref is the slope of
     # sin x's interpolant per triangle: the exact MINI-vs-constant norm, checked by quadrature
     g = norms.p1_gradients(pts, tris, u1)
