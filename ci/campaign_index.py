@@ -25,7 +25,7 @@ import re
 import sys
 
 TAIL = 40
-RESERVED = {"inputs", "shards", "logs", "benchmarks"}
+RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks"}
 
 
 def load_json(path):
@@ -66,6 +66,8 @@ def job_output(root, name, job):
     """The output a job's log belongs to (None: not a log of the workflow)."""
     if job == "report":
         return os.path.join(root, name, "report", "report.json")
+    if job.startswith("check-"):
+        return os.path.join(root, "checks", name, job[len("check-"):] + ".json")
     m = re.fullmatch(r"([A-Za-z0-9]+)-(l\d+(?:-.+)?)", job)
     if not m:
         return None

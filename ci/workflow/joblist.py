@@ -3,9 +3,10 @@
 
     RULE  OUTPUT  (REASON)
 
-sorted by rule (solver, reference, report) and output, then one summary line:
+sorted by rule (solver, reference, check, report; the rules check_solver and check_references
+are both listed as check) and output, then one summary line:
 
-    campaign: dry run: N of TOTAL jobs would run (solver S, reference R, report P)
+    campaign: dry run: N of TOTAL jobs would run (solver S, reference R, check C, report P)
 
 Usage: joblist.py DRY_RUN_OUTPUT_FILE TOTAL_JOBS. Standard library only.
 """
@@ -13,7 +14,9 @@ Usage: joblist.py DRY_RUN_OUTPUT_FILE TOTAL_JOBS. Standard library only.
 import re
 import sys
 
-ORDER = {"solver": 0, "reference": 1, "report": 2}
+ORDER = {"solver": 0, "reference": 1, "check": 2, "report": 3}
+# the workflow's rule names, as listed
+LISTED = {"check_solver": "check", "check_references": "check"}
 
 
 def parse(text):
@@ -21,7 +24,7 @@ def parse(text):
     for line in text.splitlines():
         m = re.match(r"^(?:local)?rule (\w+):$", line)
         if m:
-            job = {"rule": m.group(1), "output": "", "reason": ""}
+            job = {"rule": LISTED.get(m.group(1), m.group(1)), "output": "", "reason": ""}
             jobs.append(job)
             continue
         m = re.match(r"^\s+(output|reason): (.*)$", line)

@@ -94,13 +94,18 @@ def parse_levels(text):
 
 
 def jobs_of(plan):
-    """(solver shard folders, reference shard folders, report folder) of one scene's plan."""
+    """(solver shard folders, reference shard folders, the check files (one per level and u
+    space, one per level for the references), report folder) of one scene's plan."""
     name = plan["name"]
     solver = [f"shards/{name}/solver/l{lv}-{u}-{m}-{pm}"
               for lv in plan["levels"] for u in plan["u_spaces"]
               for m in plan["multipliers"] for pm in plan["p_masses"]]
     refs = [f"shards/{name}/{tool}/l{lv}" for tool in plan["references"] for lv in plan["levels"]]
-    return solver, refs, name
+    checks = [f"checks/{name}/solver-l{lv}-{u}.json" for lv in plan["levels"]
+              for u in plan["u_spaces"]]
+    if plan["references"]:
+        checks += [f"checks/{name}/references-l{lv}.json" for lv in plan["levels"]]
+    return solver, refs, checks, name
 
 
 def check_scene(exe, path):
@@ -185,10 +190,10 @@ def prepare(args):
 
     total = 0
     for name, plan in plans.items():
-        solver, refs, report = jobs_of(plan)
-        total += len(solver) + len(refs) + 1
+        solver, refs, checks, report = jobs_of(plan)
+        total += len(solver) + len(refs) + len(checks) + 1
         if binary_changed or name in changed:
-            forcerun += solver + refs + [report]
+            forcerun += solver + refs + checks + [report]
 
     baselines = {}
     if args.baseline:

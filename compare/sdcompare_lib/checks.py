@@ -6,7 +6,7 @@ Each check returns rows (for the report) and problems (one line each); any probl
 """
 import math
 
-from . import exact
+from . import exact, precomputed
 from .read import DEFAULT_P_MASS, InputError, case_key, finite_number, p_mass, plan_p_masses, pm_suffix
 from .render import fmt_delta
 from .settings import QUANTITIES, scene_lists, scene_p_masses
@@ -237,7 +237,8 @@ def independent_errors(res, scene_file):
             problems.append(f"sdcrack's case {what} is of p mass {pm} in summary.json but "
                             f"{stored} in fields.h5 (/cases/{c['fields_grid']})")
         try:
-            ours = exact.solver_case_errors_h5(fields.h5, c["fields_grid"], ex, p_mass=pm)
+            ours = precomputed.solver_case_errors_h5(fields.h5, c["fields_grid"], ex,
+                                                     scene_file, pm)
         except exact.ExactError as exc:
             ours = {"bubble": None}
             problems.append(f"sdcrack's errors of {what} cannot be recomputed: {exc}")
@@ -264,7 +265,7 @@ def independent_errors(res, scene_file):
             if lv not in meshes or lv not in ref["u"] or not isinstance(c.get("errors"), dict):
                 continue
             m = meshes[lv]
-            ours = exact.p1_field_errors(m.points, m.tris, ref["u"][lv], m.crack, ex, ranges=m.ranges)
+            ours = precomputed.p1_field_errors(m, ref["u"][lv], ex, scene_file)
             row = _error_row(tool, c, c["errors"], ours, quantities=("u_l2", "p_l2", "lambda_l2"))
             rows.append(row)
             reported.setdefault(lv, {})[tool] = c["errors"]

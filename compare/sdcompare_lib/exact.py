@@ -23,7 +23,7 @@ with references/common/sdexpr.py; missing px / py are the symbolic derivatives o
 signed-zero convention of ``eval_on_face`` (src/scene/mod.rs).
 
 Quadrature (deliberately not the solver's: src/norms.rs uses collapsed Gauss–Legendre rules of
-degree 10 and 16 dyadic splits toward each tip)
+degree 10 and 20, no splitting of the tips' neighbours, and its own Duffy rule at the tips)
 ----------------------------------------------------------------------------------------------
 All rules are tensor rules on [0, 1]² mapped to the triangle; every point is strictly inside the
 triangle, so data are never evaluated on the crack or on an edge.

@@ -33,6 +33,7 @@ LEVELS = [0, 1, 2]
 U_SPACES, MULTIPLIERS, P_MASSES, TOOLS = 2, 3, 2, 2
 SOLVER_JOBS = len(LEVELS) * U_SPACES * MULTIPLIERS * P_MASSES  # per scene
 REFERENCE_JOBS = len(LEVELS) * TOOLS
+CHECK_JOBS = len(LEVELS) * (U_SPACES + 1)  # per level: one per u space, one for the references
 
 
 def _skip_reason():
@@ -170,15 +171,17 @@ def expected_jobs(out, names):
                 for m in ("M0", "M1", "M1star"):
                     for pm in ("consistent", "lumped"):
                         jobs.add(("solver", f"shards/{name}/solver/l{lv}-{u}-{m}-{pm}"))
+                jobs.add(("check", f"checks/{name}/solver-l{lv}-{u}.json"))
             for tool in ("dolfinx", "freefem"):
                 jobs.add(("reference", f"shards/{name}/{tool}/l{lv}"))
+            jobs.add(("check", f"checks/{name}/references-l{lv}.json"))
         jobs.add(("report", name))
     return jobs
 
 
 def dry_run_jobs(stdout):
     return {tuple(line.split()[:2]) for line in stdout.splitlines()
-            if re.match(r"^  (solver|reference|report) ", line)}
+            if re.match(r"^  (solver|reference|check|report) ", line)}
 
 
 def test_bad_arguments_one_line_exit_2(tmp_path):
@@ -196,10 +199,11 @@ def test_dry_run_lists_every_job(scenes, tmp_path):
                  check=0)
     jobs = dry_run_jobs(r.stdout)
     assert jobs == expected_jobs(tmp_path / "out", ["closed-exact", "mixed"])
-    total = 2 * (SOLVER_JOBS + REFERENCE_JOBS + 1)
-    assert len(jobs) == total == 86
+    total = 2 * (SOLVER_JOBS + REFERENCE_JOBS + CHECK_JOBS + 1)
+    assert len(jobs) == total == 104
     assert (f"campaign: dry run: {total} of {total} jobs would run "
-            f"(solver {2 * SOLVER_JOBS}, reference {2 * REFERENCE_JOBS}, report 2)") in r.stdout
+            f"(solver {2 * SOLVER_JOBS}, reference {2 * REFERENCE_JOBS}, "
+            f"check {2 * CHECK_JOBS}, report 2)") in r.stdout
     # the Slurm profile parses under the pinned Snakemake and plans the same jobs
     r = campaign(*files, "--out", tmp_path / "out", "--dry-run", "--expectations", expectations,
                  "--profile", "slurm", check=0)
@@ -227,7 +231,7 @@ def test_same_numbers_as_one_process(full_run, single_run):
     assert 'href="mixed/report/index.html"' in html
     # every job has its log, ending in its status line
     logs = sorted(p.name for p in (out / "logs" / "mixed").glob("*.log"))
-    assert len(logs) == SOLVER_JOBS + REFERENCE_JOBS + 1
+    assert len(logs) == SOLVER_JOBS + REFERENCE_JOBS + CHECK_JOBS + 1
     assert re.search(r"campaign: sdcompare done \(exit [01]\)$",
                      (out / "logs" / "mixed" / "report.log").read_text().strip())
 
@@ -241,11 +245,11 @@ def test_second_run_reruns_nothing(full_run, scenes):
     before = {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in summaries}
     r = campaign(*files, "--out", out, "--cores", 2, "--expectations", expectations)
     assert r.returncode in (0, 1), r.stderr[-3000:]
-    assert "campaign: nothing to rerun, all 86 jobs up to date" in r.stdout
+    assert "campaign: nothing to rerun, all 104 jobs up to date" in r.stdout
     assert before == {p: (p.stat().st_ino, p.stat().st_mtime_ns) for p in summaries}
     # and a dry run says the same
     r = campaign(*files, "--out", out, "--dry-run", "--expectations", expectations, check=0)
-    assert "campaign: dry run: nothing to rerun, all 86 jobs up to date" in r.stdout
+    assert "campaign: dry run: nothing to rerun, all 104 jobs up to date" in r.stdout
 
 
 def test_dry_run_after_changes_lists_what_depends_on_them(full_run, scenes, tmp_path):
@@ -411,7 +415,8 @@ def test_critical_path_of_known_durations(tmp_path):
     assert cp["per_scene"]["a"]["path_s"] == 7.0
     # issue 26's goals: report 8 of 17 s = 47 % > 15 %; path 9 s = 1.8 × the longest shard (5 s)
     assert [g["met"] for g in cp["goals"]] == [False, False]
-    assert cp["goals"][0]["goal"].startswith("report jobs 47.1 % of the job-seconds")
+    assert cp["goals"][0]["goal"].startswith(
+        "compare tool (report and check jobs) 47.1 % of the job-seconds")
     assert "= 1.80 × the longest solver or reference job (5.0 s" in cp["goals"][1]["goal"]
     text = critical_path(tmp_path).stdout
     assert text.count(": MISSED\n") == 2
@@ -425,6 +430,40 @@ def test_critical_path_of_known_durations(tmp_path):
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1
 
 
+def test_check_jobs_on_the_critical_path(tmp_path):
+    """A check job starts when the last of its shards ends: scene a's check of level 0's broken
+    solver shards (1 s and 2 s) takes 7 s, a chain of 9 s, longer than its dolfinx shard (5 s)
+    and that level's reference check (1 s); with its report (2 s) the path is 11 s, against scene
+    b's 9 s. The compare tool's share counts the checks: (2 + 6 + 7 + 1) of 27 s. The goal's
+    yardstick stays the longest solver or reference job (5 s)."""
+    header = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
+    for scene, jobs in (("a", {"solver-l0-broken-M1-consistent": 1,
+                               "solver-l0-broken-M0-consistent": 2, "dolfinx-l1": 5, "report": 2,
+                               "check-solver-l0-broken": 7, "check-references-l1": 1}),
+                        ("b", {"freefem-l0": 3, "report": 6})):
+        (tmp_path / "benchmarks" / scene).mkdir(parents=True)
+        for job, s in jobs.items():
+            (tmp_path / "benchmarks" / scene / f"{job}.tsv").write_text(
+                header + f"{s}\t0:00:0{s}\t1\t1\t1\t1\t0\t0\t0\t0.1\n")
+    cp = json.loads(critical_path(tmp_path, "--json").stdout)
+    assert (cp["critical_s"], cp["scene"], cp["shard"], cp["check"]) == (
+        11.0, "a", "solver-l0-broken-M0-consistent", "check-solver-l0-broken")
+    assert (cp["shard_s"], cp["check_s"], cp["report_s"]) == (2.0, 7.0, 2.0)
+    assert cp["per_rule_s"]["check"] == 8.0 and cp["sum_s"] == 27.0
+    assert cp["goals"][0]["goal"].startswith(
+        "compare tool (report and check jobs) 59.3 % of the job-seconds")
+    assert "= 2.20 × the longest solver or reference job (5.0 s" in cp["goals"][1]["goal"]
+    # the reference check follows dolfinx-l1: 5 + 1 s, a path of 8 s once the solver check is fast
+    (tmp_path / "benchmarks" / "a" / "check-solver-l0-broken.tsv").write_text(
+        header + "0.5\t0:00:00\t1\t1\t1\t1\t0\t0\t0\t0.1\n")
+    cp = json.loads(critical_path(tmp_path, "--json").stdout)
+    assert cp["per_scene"]["a"]["path_s"] == 8.0
+    assert (cp["per_scene"]["a"]["shard"], cp["per_scene"]["a"]["check"]) == (
+        "dolfinx-l1", "check-references-l1")
+    text = critical_path(tmp_path).stdout
+    assert "check-references-l1" in text
+
+
 def test_every_job_is_measured(full_run):
     """Snakemake measures every job (benchmark files), and the critical path is the longest
     shard plus the report of one scene, at most the sum of all jobs."""
@@ -432,7 +471,8 @@ def test_every_job_is_measured(full_run):
     r = critical_path(out, "--json")
     assert r.returncode == 0, r.stderr
     cp = json.loads(r.stdout)
-    assert cp["jobs"] == 2 * (SOLVER_JOBS + REFERENCE_JOBS + 1)
+    assert cp["jobs"] == 2 * (SOLVER_JOBS + REFERENCE_JOBS + CHECK_JOBS + 1)
+    assert cp["per_rule_s"]["check"] > 0
     assert 0 < cp["critical_s"] < cp["sum_s"]
     assert cp["scene"] in ("closed-exact", "mixed") and cp["report_s"] > 0
 
@@ -470,8 +510,9 @@ def test_a_scene_on_a_mesh_file_runs_from_its_copy(tmp_path):
     digest = hashlib.sha256(mesh.read_bytes()).hexdigest()
     assert copy.rstrip().endswith(f"# mesh file sha256: {digest}"), copy[-200:]
     jobs = dry_run_jobs(r.stdout)
-    # levels 0-1 × 2 u spaces × 3 multipliers × 2 p masses, 2 tools × 2 levels, 1 report
-    assert len(jobs) == 2 * 2 * 3 * 2 + 2 * 2 + 1, sorted(jobs)
+    # levels 0-1 × 2 u spaces × 3 multipliers × 2 p masses, 2 tools × 2 levels, checks of
+    # 2 levels × (2 u spaces + the references), 1 report
+    assert len(jobs) == 2 * 2 * 3 * 2 + 2 * 2 + 2 * 3 + 1, sorted(jobs)
 
 
 def test_index_lines_say_what_converged_and_the_first_problem():
