@@ -23,7 +23,7 @@ def sdcrack_bin():
 
 def sdcompare(*args):
     env = dict(os.environ, MPLBACKEND="Agg")
-    return subprocess.run(["/usr/bin/python3", SDCOMPARE, *map(str, args)], capture_output=True,
+    return subprocess.run([sys.executable, SDCOMPARE, *map(str, args)], capture_output=True,
                           text=True, env=env, timeout=600)
 
 
