@@ -30,8 +30,9 @@ import re
 import shutil
 import subprocess
 import sys
+import tomllib
 
-RESERVED = {"inputs", "shards", "logs", "benchmarks", "index.html", "index.json"}
+RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks", "index.html", "index.json"}
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")
 LEVELS_RE = re.compile(r"(?m)^levels[ \t]*=[ \t]*\[[^\]\n]*\][ \t]*$")
 
@@ -95,16 +96,19 @@ def parse_levels(text):
 
 def jobs_of(plan):
     """(solver shard folders, reference shard folders, the check files (one per level and u
-    space, one per level for the references), report folder) of one scene's plan."""
+    space, one per level for the references; none for a scene without [exact], whose report
+    recomputes no error), report folder) of one scene's plan."""
     name = plan["name"]
     solver = [f"shards/{name}/solver/l{lv}-{u}-{m}-{pm}"
               for lv in plan["levels"] for u in plan["u_spaces"]
               for m in plan["multipliers"] for pm in plan["p_masses"]]
     refs = [f"shards/{name}/{tool}/l{lv}" for tool in plan["references"] for lv in plan["levels"]]
-    checks = [f"checks/{name}/solver-l{lv}-{u}.json" for lv in plan["levels"]
-              for u in plan["u_spaces"]]
-    if plan["references"]:
-        checks += [f"checks/{name}/references-l{lv}.json" for lv in plan["levels"]]
+    checks = []
+    if plan.get("exact", True):
+        checks = [f"checks/{name}/solver-l{lv}-{u}.json" for lv in plan["levels"]
+                  for u in plan["u_spaces"]]
+        if plan["references"]:
+            checks += [f"checks/{name}/references-l{lv}.json" for lv in plan["levels"]]
     return solver, refs, checks, name
 
 
@@ -177,6 +181,11 @@ def prepare(args):
                           f"(letters, digits, . _ + - only; not {', '.join(sorted(RESERVED))})")
         if name in plans:
             raise Refused(f"{scene}: two scenes named '{name}' ({sources[name]} and {scene})")
+        # whether the compare tool has errors to recompute: the check jobs run for [exact] scenes
+        try:
+            plan["exact"] = "exact" in tomllib.loads(text)
+        except tomllib.TOMLDecodeError:  # sdcrack check accepted it: not expected
+            plan["exact"] = True
         plans[name], sources[name] = plan, scene
         target = os.path.join(inputs, f"{name}.toml")
         old = read_bytes(target)
