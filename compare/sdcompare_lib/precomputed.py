@@ -80,6 +80,12 @@ def _code_digest():
 _CODE = None
 
 
+def _exact_tables(scene_file):
+    """What ExactSolution.from_scene reads of a scene: [exact], [geometry] and [data] f."""
+    return {"exact": scene_file.get("exact"), "geometry": scene_file.get("geometry"),
+            "f": (scene_file.get("data") or {}).get("f")}
+
+
 def _key(kind, arrays, scene_file, extra):
     """sha256 of the arrays (name, dtype, shape, bytes; None as such), the scene's exact solution,
     the quadrature, `extra` and the code."""
@@ -88,8 +94,7 @@ def _key(kind, arrays, scene_file, extra):
         _CODE = _code_digest()
     h = hashlib.sha256()
     h.update(json.dumps({"kind": kind, "code": _CODE, "quadrature": repr(exact.Quadrature()),
-                         "exact": {k: scene_file.get(k) for k in ("exact", "geometry")},
-                         "f": (scene_file.get("data") or {}).get("f"), "extra": extra},
+                         "exact": _exact_tables(scene_file), "extra": extra},
                         sort_keys=True, default=str).encode())
     for name in sorted(arrays):
         a = arrays[name]
@@ -160,8 +165,7 @@ _EXACT = {}
 def _exact_of(scene_file):
     """One ExactSolution per exact solution (the shards of a check share it, and with it the
     quadrature with exact values that exact.py keeps per mesh and ExactSolution)."""
-    key = json.dumps({k: scene_file.get(k) for k in ("exact", "geometry")} |
-                     {"f": (scene_file.get("data") or {}).get("f")}, sort_keys=True, default=str)
+    key = json.dumps(_exact_tables(scene_file), sort_keys=True, default=str)
     if key not in _EXACT:
         _EXACT[key] = exact.ExactSolution.from_scene(scene_file)
     return _EXACT[key]

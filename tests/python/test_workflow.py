@@ -197,6 +197,17 @@ def test_bad_arguments_one_line_exit_2(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_scene_named_like_a_campaign_folder_is_refused(scenes, tmp_path):
+    """A scene named `checks` (or `shards`, `logs`, …) would write into the campaign's own
+    folder: one line, exit 2, nothing run."""
+    files, _ = scenes
+    for reserved in ("checks", "shards"):
+        scene = tmp_path / f"{reserved}.toml"
+        scene.write_text(set_key(files[0].read_text(), "name", f'"{reserved}"'))
+        r = campaign(scene, "--out", tmp_path / "out", "--dry-run", check=2)
+        assert len(r.stderr.strip().splitlines()) == 1 and "cannot name a campaign folder" in r.stderr
+
+
 def test_dry_run_lists_every_job(scenes, tmp_path):
     files, expectations = scenes
     r = campaign(*files, "--out", tmp_path / "out", "--dry-run", "--expectations", expectations,
