@@ -180,28 +180,33 @@ mod tests {
         }
     }
 
+    /// Asserts that `r` has all its points strictly inside the reference triangle and integrates
+    /// every monomial ξ^a η^b of total degree ≤ r.degree exactly: a! b! / (a + b + 2)!.
+    fn assert_exact_on_monomials(r: &TriangleRule, label: &str) {
+        assert!(r
+            .points
+            .iter()
+            .all(|p| p[0] > 0.0 && p[1] > 0.0 && p[0] + p[1] < 1.0));
+        for a in 0..=r.degree as u32 {
+            for b in 0..=(r.degree as u32 - a) {
+                let exact = factorial(a) * factorial(b) / factorial(a + b + 2);
+                let q: f64 = r
+                    .points
+                    .iter()
+                    .zip(&r.weights)
+                    .map(|(p, w)| w * p[0].powi(a as i32) * p[1].powi(b as i32))
+                    .sum();
+                assert!((q - exact).abs() < 1e-15, "{label}: x^{a} y^{b}");
+            }
+        }
+    }
+
     #[test]
     fn triangle_rule_exact_on_monomials_up_to_degree() {
         for degree in [0, 2, 4, 6, 8, 10, 12] {
             let r = triangle_rule(degree);
             assert!(r.degree >= degree);
-            assert!(r
-                .points
-                .iter()
-                .all(|p| p[0] > 0.0 && p[1] > 0.0 && p[0] + p[1] < 1.0));
-            for a in 0..=r.degree as u32 {
-                for b in 0..=(r.degree as u32 - a) {
-                    // ∫ ξ^a η^b over the reference triangle = a! b! / (a + b + 2)!
-                    let exact = factorial(a) * factorial(b) / factorial(a + b + 2);
-                    let q: f64 = r
-                        .points
-                        .iter()
-                        .zip(&r.weights)
-                        .map(|(p, w)| w * p[0].powi(a as i32) * p[1].powi(b as i32))
-                        .sum();
-                    assert!((q - exact).abs() < 1e-15, "degree {degree}: x^{a} y^{b}");
-                }
-            }
+            assert_exact_on_monomials(&r, &format!("degree {degree}"));
         }
     }
 
@@ -210,22 +215,7 @@ mod tests {
         for n in [2, 6, 12, 16] {
             let r = collapsed_tip_rule(n);
             assert_eq!(r.degree, n - 2);
-            assert!(r
-                .points
-                .iter()
-                .all(|p| p[0] > 0.0 && p[1] > 0.0 && p[0] + p[1] < 1.0));
-            for a in 0..=r.degree as u32 {
-                for b in 0..=(r.degree as u32 - a) {
-                    let exact = factorial(a) * factorial(b) / factorial(a + b + 2);
-                    let q: f64 = r
-                        .points
-                        .iter()
-                        .zip(&r.weights)
-                        .map(|(p, w)| w * p[0].powi(a as i32) * p[1].powi(b as i32))
-                        .sum();
-                    assert!((q - exact).abs() < 1e-15, "n {n}: x^{a} y^{b}");
-                }
-            }
+            assert_exact_on_monomials(&r, &format!("n {n}"));
         }
     }
 
