@@ -1,13 +1,9 @@
 """ci/bench_norms.py's goal: the norms cost ≤ 0.25 × the solve phases at every measured level;
 one level over it, a missing ratio or nothing measured fails."""
 
-import importlib.util
-import pathlib
+import ci_script
 
-SCRIPT = pathlib.Path(__file__).resolve().parents[2] / "ci" / "bench_norms.py"
-spec = importlib.util.spec_from_file_location("bench_norms", SCRIPT)
-bench = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(bench)
+bench = ci_script.load("ci/bench_norms.py")
 
 
 def test_the_bound_is_the_issues():

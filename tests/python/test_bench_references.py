@@ -4,7 +4,6 @@ The arithmetic is checked on hand-made rows whose expected ratios are worked out
 one end-to-end run times the real binary on levels 0–1 of scenes/open-exact.toml (sdcrack alone).
 """
 
-import importlib.util
 import json
 import math
 import pathlib
@@ -13,19 +12,14 @@ import sys
 
 import pytest
 
+import ci_script
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "ci" / "bench_references.py"
 EXE = ROOT / "target" / "release" / "sdcrack"
 
 
-def load_module():
-    spec = importlib.util.spec_from_file_location("bench_references", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-br = load_module()
+br = ci_script.load("ci/bench_references.py")
 
 
 def entry(u_l2, solver_s, wall_s, norms_s=None):

@@ -1,13 +1,9 @@
 """ci/bench_unstructured.py's verdict: the issue's bound of 1.5 × holds for every measured level,
 and a ratio above it, a missing ratio or no measurement at all fails."""
 
-import importlib.util
-import pathlib
+import ci_script
 
-SCRIPT = pathlib.Path(__file__).resolve().parents[2] / "ci" / "bench_unstructured.py"
-spec = importlib.util.spec_from_file_location("bench_unstructured", SCRIPT)
-bench = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(bench)
+bench = ci_script.load("ci/bench_unstructured.py")
 
 
 def test_the_bound_is_the_issues():

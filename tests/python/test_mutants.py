@@ -5,17 +5,16 @@ compare tool, each still applying to this checkout (its text found exactly once)
 verdict must be FAIL (exit 1) on a survivor or a mutant that no longer applies, so that a rotted
 catalogue cannot report success.
 """
-import importlib.util
 import os
 import subprocess
 import sys
 
 import pytest
 
+import ci_script
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-spec = importlib.util.spec_from_file_location("mutants", os.path.join(ROOT, "ci", "mutants.py"))
-mutants = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(mutants)
+mutants = ci_script.load("ci/mutants.py")
 
 CATALOGUE = mutants.load_catalogue()
 

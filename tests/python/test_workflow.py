@@ -536,11 +536,9 @@ def test_index_lines_say_what_converged_and_the_first_problem():
     """The index's one-line summaries, from a hand-made report.json: the variants whose every
     quantity converges and the range of their last rates, the expected failures, and the
     report's first reason."""
-    import importlib.util
+    import ci_script
 
-    spec = importlib.util.spec_from_file_location("campaign_index", ROOT / "ci" / "campaign_index.py")
-    ci = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(ci)
+    ci = ci_script.load("ci/campaign_index.py")
 
     def s(u, m, q, status, rate, pm="consistent"):
         return {"u_space": u, "multiplier": m, "p_mass": pm, "quantity": q, "status": status,
