@@ -237,10 +237,24 @@ impl SymCsc {
 
     /// `‖K‖₁ = max_j Σ_i |K_ij|` over both triangles of the symmetric matrix.
     pub fn norm1(&self) -> f64 {
+        self.norm1_with(&self.values)
+    }
+
+    /// The 1-norm of the symmetric matrix with this pattern and the entries `values` (e.g.
+    /// `∂K/∂δ`, stored on the pattern of `K`).
+    ///
+    /// # Panics
+    /// If `values.len()` differs from the pattern's (caller bug).
+    pub fn norm1_with(&self, values: &[f64]) -> f64 {
+        assert_eq!(
+            values.len(),
+            self.row_idx.len(),
+            "SymCsc::norm1_with: pattern"
+        );
         let mut sums = vec![0.0f64; self.n];
         for j in 0..self.n {
             for k in self.col_ptr[j]..self.col_ptr[j + 1] {
-                let (i, v) = (self.row_idx[k], self.values[k].abs());
+                let (i, v) = (self.row_idx[k], values[k].abs());
                 sums[j] += v;
                 if i != j {
                     sums[i] += v;
@@ -870,54 +884,91 @@ pub struct CholeskyTimings {
 /// Invalid structure, [`LinalgError::Symbolic`], [`LinalgError::Numeric`] when `A` is not
 /// positive definite or memory runs out.
 pub fn cholesky_solve(matrix: &SymCsc, b: &mut [f64]) -> Result<CholeskyTimings, LinalgError> {
-    use faer::linalg::cholesky::llt::factor::LltRegularization;
-    use faer::sparse::linalg::cholesky::LltRef;
-    use std::time::Instant;
-    matrix.validate()?;
-    let t0 = Instant::now();
-    let symbolic = factorize_symbolic_cholesky(
-        matrix.faer_symbolic(),
-        Side::Lower,
-        SymmetricOrdering::Amd,
-        CholeskySymbolicParams::default(),
-    )
-    .map_err(|e| LinalgError::Symbolic(format!("{e:?}")))?;
-    let symbolic_s = t0.elapsed().as_secs_f64();
-    let t1 = Instant::now();
-    let par = Par::rayon(0);
-    let mut values = factor_buffer(symbolic.len_val())?;
-    let mut mem =
-        MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Spec::default()))
-            .map_err(|_| LinalgError::Numeric("out of memory for the workspace".into()))?;
-    let a = SparseColMatRef::new(matrix.faer_symbolic(), &matrix.values);
-    symbolic
-        .factorize_numeric_llt(
-            &mut values,
-            a,
+    let (factor, mut timings) = Cholesky::factor(matrix)?;
+    let t2 = std::time::Instant::now();
+    factor.solve_in_place(b);
+    timings.solve_s = t2.elapsed().as_secs_f64();
+    Ok(timings)
+}
+
+/// faer's sparse Cholesky `A = LLᵀ` (AMD ordering, default settings) of an SPD matrix, kept for
+/// repeated solves: the yardstick of `sdcrack bench` and the preconditioner of
+/// [`crate::krylov`].
+pub struct Cholesky {
+    n: usize,
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+}
+
+impl Cholesky {
+    /// Factors `matrix`; the timings' `solve_s` is 0.
+    ///
+    /// # Errors
+    /// Invalid structure, [`LinalgError::Symbolic`], [`LinalgError::Numeric`] when `A` is not
+    /// positive definite or memory runs out.
+    pub fn factor(matrix: &SymCsc) -> Result<(Cholesky, CholeskyTimings), LinalgError> {
+        use faer::linalg::cholesky::llt::factor::LltRegularization;
+        use std::time::Instant;
+        matrix.validate()?;
+        let t0 = Instant::now();
+        let symbolic = factorize_symbolic_cholesky(
+            matrix.faer_symbolic(),
             Side::Lower,
-            LltRegularization::default(),
-            par,
-            MemStack::new(&mut mem),
-            Spec::default(),
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
         )
-        .map_err(|e| LinalgError::Numeric(format!("Cholesky: {e:?}")))?;
-    drop(mem);
-    let numeric_s = t1.elapsed().as_secs_f64();
-    let t2 = Instant::now();
-    let mut mem = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-    let rhs = MatMut::from_column_major_slice_mut(b, matrix.n, 1);
-    LltRef::new(&symbolic, &values).solve_in_place_with_conj(
-        Conj::No,
-        rhs,
-        Par::Seq,
-        MemStack::new(&mut mem),
-    );
-    Ok(CholeskyTimings {
-        symbolic_s,
-        numeric_s,
-        solve_s: t2.elapsed().as_secs_f64(),
-        factor_nnz: symbolic.len_val(),
-    })
+        .map_err(|e| LinalgError::Symbolic(format!("{e:?}")))?;
+        let symbolic_s = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let par = Par::rayon(0);
+        let mut values = factor_buffer(symbolic.len_val())?;
+        let mut mem =
+            MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Spec::default()))
+                .map_err(|_| LinalgError::Numeric("out of memory for the workspace".into()))?;
+        let a = SparseColMatRef::new(matrix.faer_symbolic(), &matrix.values);
+        symbolic
+            .factorize_numeric_llt(
+                &mut values,
+                a,
+                Side::Lower,
+                LltRegularization::default(),
+                par,
+                MemStack::new(&mut mem),
+                Spec::default(),
+            )
+            .map_err(|e| LinalgError::Numeric(format!("Cholesky: {e:?}")))?;
+        let timings = CholeskyTimings {
+            symbolic_s,
+            numeric_s: t1.elapsed().as_secs_f64(),
+            solve_s: 0.0,
+            factor_nnz: symbolic.len_val(),
+        };
+        Ok((
+            Cholesky {
+                n: matrix.n,
+                symbolic,
+                values,
+            },
+            timings,
+        ))
+    }
+
+    /// Overwrites `b` with `A⁻¹ b`.
+    ///
+    /// # Panics
+    /// If `b.len()` is not the dimension (caller bug).
+    pub fn solve_in_place(&self, b: &mut [f64]) {
+        use faer::sparse::linalg::cholesky::LltRef;
+        assert_eq!(b.len(), self.n, "Cholesky::solve_in_place: dimension");
+        let mut mem = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let rhs = MatMut::from_column_major_slice_mut(b, self.n, 1);
+        LltRef::new(&self.symbolic, &self.values).solve_in_place_with_conj(
+            Conj::No,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut mem),
+        );
+    }
 }
 
 impl Ldlt {
@@ -1028,17 +1079,23 @@ impl Ldlt {
     /// `K⁻ᵀ = K⁻¹`), plus Higham's alternating-sign test vector, solved together with the first.
     /// The result is a lower bound of the true condition number, usually within a factor 3.
     pub fn condition_estimate(&self, matrix: &SymCsc) -> f64 {
-        let mut probes = condition_probes(self.n);
-        self.solve_many_in_place(&mut probes, 2);
-        self.condition_estimate_from_probes(matrix, &probes)
+        matrix.norm1() * self.inverse_norm1_estimate()
     }
 
-    /// [`Ldlt::condition_estimate`] given `K⁻¹` applied to the two [`condition_probes`]
+    /// The estimate of `‖K⁻¹‖₁` behind [`Ldlt::condition_estimate`] (a lower bound, usually
+    /// within a factor 3).
+    pub fn inverse_norm1_estimate(&self) -> f64 {
+        let mut probes = condition_probes(self.n);
+        self.solve_many_in_place(&mut probes, 2);
+        self.inverse_norm1_from_probes(&probes)
+    }
+
+    /// [`Ldlt::inverse_norm1_estimate`] given `K⁻¹` applied to the two [`condition_probes`]
     /// (column-major `n × 2`).
     ///
     /// # Panics
     /// If `solved_probes.len() != 2 n` (caller bug).
-    fn condition_estimate_from_probes(&self, matrix: &SymCsc, solved_probes: &[f64]) -> f64 {
+    fn inverse_norm1_from_probes(&self, solved_probes: &[f64]) -> f64 {
         let n = self.n;
         assert_eq!(solved_probes.len(), 2 * n, "condition probes: n × 2");
         if n == 0 {
@@ -1077,7 +1134,7 @@ impl Ldlt {
             }
             estimate = next;
         }
-        matrix.norm1() * estimate.max(alternating)
+        estimate.max(alternating)
     }
 }
 

@@ -380,7 +380,9 @@ def kkt_rows(scene, cases):
                      "active_multipliers": c.get("active_multipliers"),
                      "multipliers": c.get("multipliers"),
                      "regularized_pivots": c.get("regularized_pivots"),
-                     "condition_estimate": c.get("condition_estimate")})
+                     "condition_estimate": c.get("condition_estimate"),
+                     # the δ' whose ‖K⁻¹‖₁ estimate κ₁ uses (δ itself in summaries before issue 26)
+                     "condition_estimate_delta": c.get("condition_estimate_delta", c["delta"])})
     rows.sort(key=lambda r: (r["converged"], r["level"], r["u_space"], r["multiplier"],
                              r["p_mass"] != DEFAULT_P_MASS, r["p_mass"], -r["delta"]))
     return rows

@@ -448,6 +448,12 @@ def test_real_small_run_of_sdcrack(open_run, empty_exps):
         for lvl in (1, 2):
             assert 4.0 / 3.0 <= per_level[lvl + 1] / per_level[lvl] <= 12.0, per_level
     assert "## Condition of the factored systems (worst five)" in md
+    # each δ's ‖K⁻¹‖₁ estimate comes from δ itself or from an earlier (larger) δ' of its sweep,
+    # and the report's table says which
+    assert all(c["condition_estimate_delta"] >= c["delta"] for c in summary["cases"])
+    assert any(c["condition_estimate_delta"] > c["delta"] for c in summary["cases"])
+    cond = md.split("## Condition of the factored systems (worst five)")[1].split("\n## ")[0]
+    assert "| κ₁ estimate | ‖K⁻¹‖₁ from δ' |" in cond
 
 
 def test_report_is_never_overwritten_but_replaced_atomically(open_run, empty_exps):
@@ -726,7 +732,8 @@ def test_report_provenance_and_rerun_from_another_directory(open_run, empty_exps
     for c in rerun["cases"]:
         o = original[key(c)]
         for name in ("h", "unknowns", "multipliers", "iterations", "converged", "kkt",
-                     "active_multipliers", "regularized_pivots", "errors", "condition_estimate"):
+                     "active_multipliers", "regularized_pivots", "errors", "condition_estimate",
+                     "condition_estimate_delta"):
             assert c.get(name) == o.get(name), (key(c), name, c.get(name), o.get(name))
 
 

@@ -162,6 +162,9 @@ pub struct CaseSummary {
     pub regularized_pivots: usize,
     /// Estimate of κ₁(K(δ)) = ‖K‖₁‖K⁻¹‖₁ (Hager–Higham, a lower bound usually within 3×).
     pub condition_estimate: f64,
+    /// The δ' at which ‖K⁻¹‖₁ was estimated: δ, or an earlier δ of the sweep whose estimate
+    /// holds for K(δ) to within a factor 1.1 by a perturbation bound.
+    pub condition_estimate_delta: f64,
     /// Seconds per phase.
     pub timings_s: Timings,
     /// Errors against `[exact]`, when the scene has it.
@@ -236,6 +239,7 @@ impl CaseSummary {
             active_multipliers: c.active,
             regularized_pivots: c.regularized_pivots,
             condition_estimate: c.condition_estimate,
+            condition_estimate_delta: c.condition_delta,
             timings_s: c.timings,
             errors: c.errors,
             fields_grid: case_name(c),
@@ -281,6 +285,7 @@ mod tests {
             active: 5,
             regularized_pivots: 0,
             condition_estimate: 1e17 / 7.0,
+            condition_delta: 1e-6 / 3.0,
             timings: Timings::default(),
             errors: Some(ErrorNorms {
                 u_l2: 1.0 / 3.0,
@@ -337,6 +342,7 @@ mod tests {
             ("h", c.h),
             ("delta", c.delta),
             ("condition_estimate", c.condition_estimate),
+            ("condition_estimate_delta", c.condition_delta),
         ] {
             assert_eq!(bits(got, key), want.to_bits(), "{key}");
         }
