@@ -15,9 +15,12 @@
 
 use std::time::Instant;
 
+use crate::assembly::assemble;
 use crate::fe::p1::TriangleGeometry;
+use crate::krylov::{self, KrylovError};
 use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, MeshError};
+use crate::multiplier::CrackOperators;
 use crate::problem::{Meshing, MultiplierSpace, PMass, USpace};
 use crate::scene::{FieldSet, Scene};
 use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
@@ -37,6 +40,9 @@ pub enum BenchError {
     /// The solver failed.
     #[error(transparent)]
     Study(#[from] StudyError),
+    /// The iterative route failed.
+    #[error("preconditioned CG on S: {0}")]
+    Krylov(#[from] KrylovError),
     /// The scene is not meshed by the structured grid.
     #[error("sdcrack bench scales a structured scene (discretization.cells); this scene is meshed by gmsh: bench its levels with ci/bench-unstructured")]
     NotStructured,
@@ -107,6 +113,39 @@ pub struct BenchReport {
     pub peak_reset_supported: bool,
     /// Threads in the rayon pool.
     pub threads: usize,
+    /// The iterative route, measured for comparison (the solver keeps the direct route).
+    pub iterative: IterativeRoute,
+}
+
+/// The iterative route of issue 26 (item 3), measured on the lumped case's system (broken, δ = 0):
+/// PCG on the Schur operator ([`crate::krylov`]) for x₀, and what a whole case by that route needs.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct IterativeRoute {
+    /// Assembly of the lumped system again (not part of the route's cost below).
+    pub system_assembly_s: f64,
+    /// Preconditioner: assembly of its matrix.
+    pub preconditioner_assembly_s: f64,
+    /// Preconditioner: its Cholesky (symbolic, numeric).
+    pub preconditioner: CholeskyTimings,
+    /// One PCG solve to [`crate::krylov::ROUTE_TOLERANCE`].
+    pub solve_s: f64,
+    /// Its iterations.
+    pub iterations: usize,
+    /// The tolerance of the recursive residual `‖r‖₂ / ‖b‖₂` at which PCG stops.
+    pub tolerance: f64,
+    /// Its final true relative residual `‖b − A u‖₂ / ‖b‖₂` (the recursion's residual drifts from
+    /// it once it nears round-off).
+    pub relative_residual: f64,
+    /// Max-norm distance of its u from the direct route's, relative to the direct u's max norm.
+    pub distance_to_direct: f64,
+    /// Solves a case needs by this route at least: one per trace row of N (H_N = N K⁻¹ Nᵀ column by
+    /// column), x₀ and the recovery.
+    pub solves_per_case: usize,
+    /// A lower bound of one case by this route: the direct case's mesh + assembly, the
+    /// preconditioner, and `solves_per_case` solves (no LCP, no KKT).
+    pub case_lower_bound_s: f64,
+    /// Peak resident memory of the measurement (system, preconditioner, PCG vectors).
+    pub peak_rss_mb: f64,
 }
 
 /// One performance goal against what was measured: a ratio and its bound.
@@ -317,7 +356,47 @@ impl BenchReport {
             self.all_converged,
         );
         out += &goal_lines(&self.goals);
+        out += &self.iterative_lines();
         out
+    }
+
+    /// The iterative route's lines: its phases in yardsticks and the route kept.
+    fn iterative_lines(&self) -> String {
+        let y = self.bare_cholesky_s;
+        let it = &self.iterative;
+        let direct = self.case_lumped_s / y;
+        let bound = it.case_lower_bound_s / y;
+        format!(
+            "\npreconditioned CG on S (issue 26; lumped, broken, δ = 0; preconditioner: Cholesky of \
+             the P1 stiffness + boundary mass / h):\n\
+             \x20 preconditioner: assembly {:.2} s, Cholesky {:.2} s ({:.2} yardsticks)\n\
+             \x20 one solve: {} iterations (recursive residual ≤ {:.0e}; true relative residual \
+             {:.1e}), {:.2} s ({:.2} yardsticks); u within {:.1e} (relative) of the direct route's\n\
+             \x20 a case by this route needs ≥ {} solves (H_N column by column over the crack's trace \
+             rows, x₀, the recovery): ≥ {:.1} yardsticks against the direct route's {:.2}; peak \
+             memory of one solve {:.0} MB ({:.2} × the yardstick's)\n\
+             \x20 route kept: {}\n",
+            it.preconditioner_assembly_s,
+            it.preconditioner.symbolic_s + it.preconditioner.numeric_s,
+            (it.preconditioner_assembly_s + it.preconditioner.symbolic_s + it.preconditioner.numeric_s)
+                / y,
+            it.iterations,
+            it.tolerance,
+            it.relative_residual,
+            it.solve_s,
+            it.solve_s / y,
+            it.distance_to_direct,
+            it.solves_per_case,
+            bound,
+            direct,
+            it.peak_rss_mb,
+            it.peak_rss_mb / self.yardstick_peak_rss_mb,
+            if bound < direct {
+                "the iterative route's lower bound is below the direct case: worth building"
+            } else {
+                "direct (the iterative route's lower bound exceeds the direct case)"
+            },
+        )
     }
 }
 
@@ -406,6 +485,10 @@ pub fn run_bench(
     let sweep_lumped = run_study(&bench_scene, &sweep_lumped_plan, observer)?;
     let sweep_lumped_s = t3.elapsed().as_secs_f64();
 
+    observer.phase("lumped p mass: preconditioned CG on S");
+    reset_peak_rss();
+    let iterative = iterative_route(&bench_scene, &case_lumped)?;
+
     let first = &case.cases[0];
     let sweep_lumped_phases = sweep_phases(&sweep_lumped, sweep_plan.multipliers.len());
     let sweep_lumped_factorization_s = sweep_lumped_phases.factorization;
@@ -447,9 +530,56 @@ pub fn run_bench(
             .max(case_lumped_peak_rss_mb),
         peak_reset_supported,
         threads: rayon::current_num_threads(),
+        iterative,
     };
     report.goals = lumped_goals(&report);
     Ok(report)
+}
+
+/// Measures [`IterativeRoute`] on the mesh of `lumped`'s case (broken u, δ = 0), and the distance of
+/// its u from the direct route's u (that case's fields are not kept; the direct u comes from
+/// one LDLᵀ solve of the same system here, after the route's peak memory is read).
+fn iterative_route(scene: &Scene, lumped: &StudyResult) -> Result<IterativeRoute, BenchError> {
+    use crate::linalg::{Ldlt, SymbolicLdlt};
+    let mesh = scene.mesh_source()?.level(0)?;
+    let topo = mesh.u_topology(USpace::Broken);
+    let t0 = Instant::now();
+    let system =
+        assemble(&mesh, &topo, &scene.f, &scene.g, PMass::Lumped).map_err(StudyError::from)?;
+    let system_assembly_s = t0.elapsed().as_secs_f64();
+    let solve = krylov::solve_u(&mesh, &topo, &system, 0.0, krylov::ROUTE_TOLERANCE)?;
+    let peak_rss_mb = peak_rss_mb();
+    let trace_rows = CrackOperators::new(&mesh).rows.len();
+    let solves_per_case = trace_rows + 2;
+    let assembly = lumped.cases.first().map_or(0.0, |c| c.timings.assembly);
+    let case_lower_bound_s = assembly
+        + solve.preconditioner_assembly_s
+        + solve.preconditioner.symbolic_s
+        + solve.preconditioner.numeric_s
+        + solves_per_case as f64 * solve.solve_s;
+    let k = system.matrix(0.0);
+    let symbolic = SymbolicLdlt::analyze(&k)?;
+    let mut x = system.rhs.clone();
+    Ldlt::factor(&symbolic, &k, &system.signs)?.solve_in_place(&mut x);
+    let direct = &x[system.n_p..];
+    let scale = direct.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let distance = direct
+        .iter()
+        .zip(&solve.u)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    Ok(IterativeRoute {
+        system_assembly_s,
+        preconditioner_assembly_s: solve.preconditioner_assembly_s,
+        preconditioner: solve.preconditioner,
+        solve_s: solve.solve_s,
+        iterations: solve.report.iterations,
+        tolerance: krylov::ROUTE_TOLERANCE,
+        relative_residual: solve.report.relative_residual,
+        distance_to_direct: distance / scale,
+        solves_per_case,
+        case_lower_bound_s,
+        peak_rss_mb,
+    })
 }
 
 /// The sweep's phases: mesh-level ones once, δ-level ones once per δ, the rest summed over cases.
@@ -611,5 +741,18 @@ mod tests {
             assert!(json.get(key).is_some(), "{key}");
         }
         assert!(report.table().contains("yardstick"));
+        // the iterative route: its u is the direct route's, and the direct route is kept (a case
+        // by PCG needs a solve per row of N, one per crack node here (9, as many as M1 has
+        // multipliers), plus x₀ and the recovery)
+        let it = &report.iterative;
+        assert!(it.distance_to_direct <= 1e-10, "{}", it.distance_to_direct);
+        assert_eq!(report.multipliers, 9);
+        assert_eq!(it.solves_per_case, 9 + 2);
+        assert!(it.iterations > 0 && it.solve_s > 0.0);
+        assert!(
+            report.table().contains("route kept: direct"),
+            "{}",
+            report.table()
+        );
     }
 }

@@ -6,6 +6,8 @@
 //! 2. [`mesh`]: structured nested triangulations, the crack chain, the u-space topologies;
 //! 3. [`fe`] + [`assembly`]: P1/MINI elements, bubbles condensed, the system of paper (15);
 //! 4. [`linalg`] + [`contact`]: sparse LDLᵀ of K(δ), the crack LCP of M0 | M1 | M1star;
+//!    [`krylov`]: PCG on the lumped Schur complement, the iterative alternative that
+//!    `sdcrack bench` measures (the solver keeps the direct route);
 //! 5. [`norms`] + [`output`]: errors against exact solutions, `summary.json`, HDF5/XDMF fields.
 //!
 //! [`study`] drives the stages over levels, u spaces, δ and multipliers; [`references`] runs the
@@ -21,6 +23,7 @@ pub mod contact;
 pub mod expr;
 pub mod fe;
 pub mod geometry;
+pub mod krylov;
 pub mod linalg;
 pub mod mesh;
 pub mod multiplier;
