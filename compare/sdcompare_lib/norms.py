@@ -34,8 +34,12 @@ def _local_sq(area, d):
     """d: (T,3) or (T,3,C) vertex differences -> Σ_T |T|/12 (Σ d_i² + (Σ d_i)²)."""
     if d.ndim == 2:
         d = d[:, :, None]
-    s = (d * d).sum(axis=1) + d.sum(axis=1) ** 2  # (T, C)
-    return float((area[:, None] * s).sum() / 12.0)
+    # numpy's reductions over the short middle axis were most of a report's time: the corner sum
+    # as two additions and the squares by einsum are 3–5 × faster (same terms, summed in another
+    # order: the last bits may differ)
+    total = d[:, 0] + d[:, 1] + d[:, 2]  # (T, C)
+    s = np.einsum("tic,tic->t", d, d) + np.einsum("tc,tc->t", total, total)
+    return float(area @ s / 12.0)
 
 
 def p1_l2_norm(points, tris, values):
