@@ -52,10 +52,16 @@ pub struct System {
     pub n_p: usize,
     /// Number of u unknowns.
     pub n_u: usize,
-    /// K(0): lower-triangular CSC with the δ-independent values.
+    /// K(0): lower-triangular CSC with the δ-independent values. The study moves it out for its
+    /// δ sweep (then this is an empty matrix).
     pub base: SymCsc,
-    /// Values (same pattern as `base`) of ∂K/∂δ = −M on the u–u block.
-    pub delta_values: Vec<f64>,
+    /// The entries of ∂K/∂δ = −M (the u–u block) that are not zero: their positions in the
+    /// pattern of `base`, with K(0)'s and ∂K/∂δ's values there. A sweep writes K(δ) into one
+    /// matrix of `base`'s pattern through these ([`System::set_delta`]) instead of holding K(0)
+    /// and K(δ) side by side (issue 26).
+    pub delta_entries: Vec<DeltaEntry>,
+    /// `‖∂K/∂δ‖₁`.
+    pub delta_norm1: f64,
     /// Right-hand side [G_Γ; −F].
     pub rhs: Vec<f64>,
     /// Expected pivot signs: +1 for p rows, −1 for u rows.
@@ -68,16 +74,47 @@ impl System {
         self.n_p + self.n_u
     }
 
-    /// K(δ) = K(0) + δ ∂K/∂δ.
+    /// K(δ) = K(0) + δ ∂K/∂δ, a new matrix.
     pub fn matrix(&self, delta: f64) -> SymCsc {
         let mut k = self.base.clone();
-        if delta != 0.0 {
-            for (v, d) in k.values.iter_mut().zip(&self.delta_values) {
-                *v += delta * d;
-            }
-        }
+        self.set_delta(&mut k, delta);
         k
     }
+
+    /// Overwrites `k`, a matrix with the pattern of `base` holding K(δ') for any δ', with K(δ):
+    /// the same values, bit for bit, as [`System::matrix`].
+    ///
+    /// # Panics
+    /// If `k` has fewer entries than `base`'s pattern (caller bug).
+    pub fn set_delta(&self, k: &mut SymCsc, delta: f64) {
+        for e in &self.delta_entries {
+            k.values[e.position] = if delta != 0.0 {
+                e.base + delta * e.derivative
+            } else {
+                e.base
+            };
+        }
+    }
+
+    /// ∂K/∂δ on the pattern of `base` (zeros included).
+    pub fn delta_values(&self) -> Vec<f64> {
+        let mut d = vec![0.0; self.base.values.len()];
+        for e in &self.delta_entries {
+            d[e.position] = e.derivative;
+        }
+        d
+    }
+}
+
+/// One entry of K whose value depends on δ.
+#[derive(Clone, Copy, Debug)]
+pub struct DeltaEntry {
+    /// Position in the values of K's pattern.
+    pub position: usize,
+    /// K(0) there.
+    pub base: f64,
+    /// ∂K/∂δ there (not zero).
+    pub derivative: f64,
 }
 
 /// Number of Gauss points per direction for the load vector ∫ f v (degree 8 exact).
@@ -100,6 +137,18 @@ pub fn assemble(
     let n_u = topo.n_dofs;
     let n = n_p + n_u;
     let (base, delta_values) = assemble_matrix(mesh, topo, n_p, p_mass);
+    let delta_norm1 = base.norm1_with(&delta_values);
+    let delta_entries = delta_values
+        .iter()
+        .enumerate()
+        .filter(|(_, &d)| d != 0.0)
+        .map(|(position, &derivative)| DeltaEntry {
+            position,
+            base: base.values[position],
+            derivative,
+        })
+        .collect();
+    drop(delta_values);
     let mut rhs = vec![0.0; n];
     boundary_term(mesh, g, &mut rhs[..n_p])?;
     let load = load_vector(mesh, topo, f)?;
@@ -112,7 +161,8 @@ pub fn assemble(
         n_p,
         n_u,
         base,
-        delta_values,
+        delta_entries,
+        delta_norm1,
         rhs,
         signs,
     })
@@ -405,6 +455,45 @@ mod tests {
         d
     }
 
+    /// A sweep writes every δ into one matrix: after any earlier δ its values are bit for bit
+    /// K(0) + δ ∂K/∂δ computed afresh from the full ∂K/∂δ (the formula of the code before issue
+    /// 26), and ‖∂K/∂δ‖₁ is the mass matrix's, |Ω|-sized (row sums of M are the hat functions'
+    /// integrals: at most the area of a vertex's patch / 3).
+    #[test]
+    fn set_delta_writes_k_of_delta_bit_for_bit_after_any_sweep() {
+        let m = mesh(1);
+        let topo = m.u_topology(USpace::Broken);
+        for p_mass in [PMass::Consistent, PMass::Lumped] {
+            let f = Expr::parse("sin(x)*y").unwrap();
+            let sys = assemble(&m, &topo, &f, &Expr::constant(0.0), p_mass).unwrap();
+            let full = sys.delta_values();
+            assert!(
+                sys.delta_entries.len() < full.len() / 2,
+                "only the u–u block"
+            );
+            let mut k = sys.base.clone();
+            for delta in [1.0, 1e-2, 0.0, 1e-4, 3e-7] {
+                sys.set_delta(&mut k, delta);
+                for (i, (&got, (&v, &d))) in k
+                    .values
+                    .iter()
+                    .zip(sys.base.values.iter().zip(&full))
+                    .enumerate()
+                {
+                    let want = if delta != 0.0 { v + delta * d } else { v };
+                    assert_eq!(
+                        got.to_bits(),
+                        want.to_bits(),
+                        "{p_mass} δ = {delta} entry {i}"
+                    );
+                }
+            }
+            let norm = sys.base.norm1_with(&full);
+            assert_eq!(sys.delta_norm1, norm);
+            assert!(norm > 0.0 && norm < 4.0, "{norm}");
+        }
+    }
+
     #[test]
     fn mass_sums_to_area_and_b_exact_on_linear_fields() {
         for space in [USpace::Continuous, USpace::Broken] {
@@ -420,12 +509,13 @@ mod tests {
             .unwrap();
             let n_p = sys.n_p;
             // Σ_ij M_ij = |Ω| = 4 (−∂K/∂δ on the u block)
+            let delta_values = sys.delta_values();
             let total: f64 = {
                 let mut s = 0.0;
                 for c in 0..sys.base.n {
                     for idx in sys.base.col_ptr[c]..sys.base.col_ptr[c + 1] {
                         let r = sys.base.row_idx[idx];
-                        let v = -sys.delta_values[idx];
+                        let v = -delta_values[idx];
                         s += if r == c { v } else { 2.0 * v };
                     }
                 }

@@ -160,7 +160,7 @@ pub enum LinalgError {
 /// `col_ptr[n] == row_idx.len() == values.len()`, and in column `j` the row indices
 /// are strictly increasing, `>= j` and `< n`. Explicit zeros are kept (they are
 /// part of the pattern).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct SymCsc {
     /// Dimension of the (square) matrix.
     pub n: usize,

@@ -296,12 +296,14 @@ pub fn run_study(
                     "level {level}, {u_space}, {p_mass} p mass: assembling"
                 ));
                 let t1 = Instant::now();
-                let system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass)?;
+                let mut system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass)?;
                 let assembly = topo_time + t1.elapsed().as_secs_f64();
                 let t2 = Instant::now();
                 let order = elimination_order(&mesh, &topo, &ops, system.n_p, p_mass);
                 let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order)?;
                 let symbolic_time = t2.elapsed().as_secs_f64();
+                // the sweep's only copy of K: each δ is written into it (System::set_delta)
+                let k = std::mem::take(&mut system.base);
                 let ctx = LevelContext {
                     scene,
                     mesh: &mesh,
@@ -317,7 +319,7 @@ pub fn run_study(
                         ..Timings::default()
                     },
                 };
-                ctx.run_deltas(plan, observer, &mut result.cases)?;
+                ctx.run_deltas(k, plan, observer, &mut result.cases)?;
             }
         }
     }
@@ -384,8 +386,10 @@ struct Reduced {
 }
 
 impl LevelContext<'_> {
+    /// The δ sweep on `k`, K's pattern with K(δ') for any δ' (the system's `base`, moved out).
     fn run_deltas(
         &self,
+        mut k: crate::linalg::SymCsc,
         plan: &CasePlan,
         observer: &mut dyn Observer,
         out: &mut Vec<CaseResult>,
@@ -393,7 +397,7 @@ impl LevelContext<'_> {
         let mut warm: Vec<Option<Vec<bool>>> = vec![None; self.multipliers.len()];
         let mut spare: Option<Ldlt> = None;
         let mut inverse_norm: Option<InverseNorm> = None;
-        let dk_norm1 = self.system.base.norm1_with(&self.system.delta_values);
+        let dk_norm1 = self.system.delta_norm1;
         for &delta in &plan.deltas {
             observer.phase(&format!(
                 "level {}, {}, δ = {delta:e}: factorising",
@@ -401,11 +405,11 @@ impl LevelContext<'_> {
             ));
             let mut timings = self.base_timings;
             let t0 = Instant::now();
-            let matrix = self.system.matrix(delta);
-            let ldlt = Ldlt::refactor(self.symbolic, &matrix, &self.system.signs, spare.take())?;
+            self.system.set_delta(&mut k, delta);
+            let ldlt = Ldlt::refactor(self.symbolic, &k, &self.system.signs, spare.take())?;
             timings.factorization = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
-            let reduced = self.reduce(ldlt, matrix);
+            let reduced = self.reduce(ldlt, k);
             timings.crack_reduction = t1.elapsed().as_secs_f64();
             let contacts: Vec<Contact> = self
                 .multipliers
@@ -437,6 +441,7 @@ impl LevelContext<'_> {
                 out.push(case);
             }
             spare = Some(reduced.ldlt);
+            k = reduced.matrix;
         }
         Ok(())
     }
