@@ -1071,19 +1071,13 @@ pub fn componentwise_backward_error(residual: &[f64], scale: &[f64]) -> f64 {
 }
 
 impl Ldlt {
-    /// An estimate of the 1-norm condition number `κ₁(K) = ‖K‖₁ ‖K⁻¹‖₁` of the factored matrix
-    /// (`matrix` gives `‖K‖₁`; `K⁻¹` is applied through the factor).
+    /// An estimate of `‖K⁻¹‖₁` of the factored matrix, for the condition number
+    /// `κ₁(K) = ‖K‖₁ ‖K⁻¹‖₁` (`‖K‖₁` by [`SymCsc::norm1`]).
     ///
-    /// `‖K⁻¹‖₁` by Hager's method as refined by Higham (LAPACK `dlacon`; Higham, ACM TOMS 14,
-    /// 1988), at most [`CONDITION_ITERATIONS`] iterations, each two solves (`K` is symmetric, so
-    /// `K⁻ᵀ = K⁻¹`), plus Higham's alternating-sign test vector, solved together with the first.
-    /// The result is a lower bound of the true condition number, usually within a factor 3.
-    pub fn condition_estimate(&self, matrix: &SymCsc) -> f64 {
-        matrix.norm1() * self.inverse_norm1_estimate()
-    }
-
-    /// The estimate of `‖K⁻¹‖₁` behind [`Ldlt::condition_estimate`] (a lower bound, usually
-    /// within a factor 3).
+    /// Hager's method as refined by Higham (LAPACK `dlacon`; Higham, ACM TOMS 14, 1988), at most
+    /// [`CONDITION_ITERATIONS`] iterations, each two solves (`K` is symmetric, so `K⁻ᵀ = K⁻¹`),
+    /// plus Higham's alternating-sign test vector, solved together with the first. The result is
+    /// a lower bound of the true norm, usually within a factor 3.
     pub fn inverse_norm1_estimate(&self) -> f64 {
         let mut probes = condition_probes(self.n);
         self.solve_many_in_place(&mut probes, 2);
@@ -1138,13 +1132,13 @@ impl Ldlt {
     }
 }
 
-/// Hager–Higham iterations of [`Ldlt::condition_estimate`] (LAPACK uses at most 5). One
+/// Hager–Higham iterations of [`Ldlt::inverse_norm1_estimate`] (LAPACK uses at most 5). One
 /// iteration (two solves after the probes) is used: each further one costs two solves per δ,
 /// measured 10 % of a numeric factorisation at 10⁵ vertices, and rarely raises the estimate
 /// (Higham 1988: the first iteration's estimate is usually within a factor 3).
 pub const CONDITION_ITERATIONS: usize = 1;
 
-/// The two right-hand sides whose solves start [`Ldlt::condition_estimate`], column-major
+/// The two right-hand sides whose solves start [`Ldlt::inverse_norm1_estimate`], column-major
 /// `n × 2`: `1/n` (Hager's start) and Higham's `(−1)^i (1 + i/(n−1))`.
 fn condition_probes(n: usize) -> Vec<f64> {
     let mut block = vec![1.0 / n.max(1) as f64; 2 * n];
@@ -1553,7 +1547,7 @@ mod tests {
                 .fold(0.0, f64::max);
             assert!((k.norm1() - k_norm1).abs() <= 1e-12 * k_norm1);
             let exact = k_norm1 * inv_norm1;
-            let est = f.condition_estimate(&k);
+            let est = k.norm1() * f.inverse_norm1_estimate();
             assert!(
                 est <= exact * (1.0 + 1e-10) && est >= exact / 3.0,
                 "m = {m}: {est:e} vs {exact:e}"
