@@ -92,7 +92,7 @@ pub enum Command {
         solver_only: bool,
     },
     /// Run one reference solver on one level of a scene: a shard of a campaign (see `merge`).
-    /// Writes OUT/<scene name>/ with scene.toml, mesh/ (the level's export) and <tool>/.
+    /// Writes `OUT/<scene name>/` with scene.toml, mesh/ (the level's export) and `<tool>/`.
     Reference {
         /// Scene file (TOML); omit for the embedded default scene.
         scene: Option<PathBuf>,
@@ -107,7 +107,7 @@ pub enum Command {
         out: PathBuf,
     },
     /// Merge shards (results folders of `run --solver-only` with filters and of `reference`) of
-    /// one scene into OUT/<scene name>/, the folder a single `sdcrack run` of the scene writes:
+    /// one scene into `OUT/<scene name>/`, the folder a single `sdcrack run` of the scene writes:
     /// same files, same numbers, fields bit for bit; every case of the scene exactly once.
     Merge {
         /// The shards: `<scene name>/` folders written by `run` and `reference`.

@@ -1,6 +1,6 @@
 //! Error norms against an exact solution (docs/design.md, Error norms), with quadrature collapsed at the crack tips.
 //!
-//! e_u = ‖u_h − u‖_{L²(Ω)}, e_p = ‖p_h − ∇u‖_{L²(Ω_c)} (p_h with its bubbles), e_λ = ‖λ_h − [u]‖_{L²(Γc)},
+//! e_u = ‖u_h − u‖_{L²(Ω)}, e_p = ‖p_h − ∇u‖_{L²(Ω_c)} (p_h with its bubbles), e_λ = ‖λ_h − \[u\]‖_{L²(Γc)},
 //! and the paper's mesh-dependent X-norm of the p error (§4):
 //! ‖p_h − ∇u‖²_X = Σ_T ‖p_h − ∇u‖²_T + h_T² ‖div p_h − Δu‖²_T with Δu = −f off the crack.
 //! Each triangle lies on one side of the crack, so u and ∇u are smooth on it except at a tip vertex,
@@ -35,7 +35,7 @@ pub struct ErrorNorms {
     pub p_l2: f64,
     /// ‖p_h − ∇u‖_X, the paper's mesh-dependent norm (L² plus h_T² ‖div(p_h − ∇u)‖²_T).
     pub p_x: f64,
-    /// ‖λ_h − [u]‖_{L²(Γc)}.
+    /// ‖λ_h − \[u\]‖_{L²(Γc)}.
     pub lambda_l2: f64,
 }
 
@@ -319,7 +319,7 @@ pub fn error_norms(
     }
 }
 
-/// The exact jump [u] at a crack point.
+/// The exact jump \[u\] at a crack point.
 pub fn exact_jump(exact: &Exact, p: [f64; 2], normal: [f64; 2]) -> f64 {
     match &exact.jump {
         Some(j) => j.eval(p[0], p[1]),

@@ -258,7 +258,7 @@ pub struct Exact {
     pub px: Expr,
     /// ∂u/∂y (given, or the symbolic derivative of `u`).
     pub py: Expr,
-    /// [u] = u⁺ − u⁻ on Γc, when given explicitly; otherwise it is evaluated from `u` on each face.
+    /// \[u\] = u⁺ − u⁻ on Γc, when given explicitly; otherwise it is evaluated from `u` on each face.
     pub jump: Option<Expr>,
 }
 

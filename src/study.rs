@@ -367,7 +367,7 @@ impl InverseNorm {
     /// `dk_norm1 = ‖∂K/∂δ‖₁`. With `A = K(δ')`, `E = (δ − δ') ∂K/∂δ` and
     /// `ε = ‖A⁻¹‖₁ ‖E‖₁ < 1`, the Neumann series gives
     /// `‖A⁻¹‖₁ / (1 + ε) ≤ ‖K(δ)⁻¹‖₁ ≤ ‖A⁻¹‖₁ / (1 − ε)`; `‖A⁻¹‖₁` is bounded by
-    /// [`ESTIMATOR_SLACK`] × the estimate, and the estimate serves when `1 / (1 − ε)` is at most
+    /// `ESTIMATOR_SLACK` (3) × the estimate, and the estimate serves when `1 / (1 − ε)` is at most
     /// [`CONDITION_REUSE_FACTOR`].
     pub fn serves(&self, delta: f64, dk_norm1: f64) -> bool {
         let eps = (delta - self.delta).abs() * dk_norm1 * ESTIMATOR_SLACK * self.estimate;

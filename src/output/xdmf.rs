@@ -162,7 +162,7 @@ pub struct CaseFields {
     /// Flux / gradient variable, one 2-vector per mesh node (written with z = 0).
     pub p: Option<Vec<[f64; 2]>>,
     /// Bubble coefficients of p, one 2-vector per mesh triangle (same order as the triangles):
-    /// on triangle T, p_h = Σ_i p_i λ_i + p_bubble[T] · 27 λ0 λ1 λ2 (the MINI field). Only with `p`.
+    /// on triangle T, p_h = Σ_i p_i λ_i + p_bubble\[T\] · 27 λ0 λ1 λ2 (the MINI field). Only with `p`.
     pub p_bubble: Option<Vec<[f64; 2]>>,
     /// Crack nodes (every crack's, concatenated; empty for no crack grid).
     pub crack_points: Vec<[f64; 2]>,
