@@ -540,7 +540,6 @@ pub fn run_bench(
 /// its u from the direct route's u (that case's fields are not kept; the direct u comes from
 /// one LDLᵀ solve of the same system here, after the route's peak memory is read).
 fn iterative_route(scene: &Scene, lumped: &StudyResult) -> Result<IterativeRoute, BenchError> {
-    use crate::linalg::{Ldlt, SymbolicLdlt};
     let mesh = scene.mesh_source()?.level(0)?;
     let topo = mesh.u_topology(USpace::Broken);
     let t0 = Instant::now();
@@ -557,16 +556,7 @@ fn iterative_route(scene: &Scene, lumped: &StudyResult) -> Result<IterativeRoute
         + solve.preconditioner.symbolic_s
         + solve.preconditioner.numeric_s
         + solves_per_case as f64 * solve.solve_s;
-    let k = system.matrix(0.0);
-    let symbolic = SymbolicLdlt::analyze(&k)?;
-    let mut x = system.rhs.clone();
-    Ldlt::factor(&symbolic, &k, &system.signs)?.solve_in_place(&mut x);
-    let direct = &x[system.n_p..];
-    let scale = direct.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let distance = direct
-        .iter()
-        .zip(&solve.u)
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let distance_to_direct = krylov::distance_to_direct(&system, 0.0, &solve.u)?;
     Ok(IterativeRoute {
         system_assembly_s,
         preconditioner_assembly_s: solve.preconditioner_assembly_s,
@@ -575,7 +565,7 @@ fn iterative_route(scene: &Scene, lumped: &StudyResult) -> Result<IterativeRoute
         iterations: solve.report.iterations,
         tolerance: krylov::ROUTE_TOLERANCE,
         relative_residual: solve.report.relative_residual,
-        distance_to_direct: distance / scale,
+        distance_to_direct,
         solves_per_case,
         case_lower_bound_s,
         peak_rss_mb,
