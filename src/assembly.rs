@@ -8,7 +8,12 @@
 //! [ B̃   −(δM + C)   ] [U] = [   −F    ]      F   = ∫_Ω f v dx,  C = 7/10 · P1 stiffness,
 //! ```
 //!
-//! symmetric quasi-definite for δ > 0 and nonsingular at δ = 0. The matrix is stored once as a
+//! symmetric quasi-definite for δ > 0 and nonsingular at δ = 0. With the broken-tangential p
+//! space ([`crate::mesh::PTopology`]) the p unknowns of a corner at a doubled crack vertex are
+//! written in the frame (ν, τ): the element's p rows and columns are transformed by the corner's
+//! rotation R = [ν τ] (K_T ← Tᵀ K_T T, T = diag(R_0, R_1, R_2, I₃)), which is the same element
+//! integrals of (15) for the basis functions λ_k ν, λ_k τ; the + and − faces' corners share the
+//! p·ν unknown and each has its own p·τ. The matrix is stored once as a
 //! lower-triangular CSC pattern with two value arrays — the δ-independent part and the part
 //! multiplying δ — so that K(δ) is one axpy and its symbolic factorisation is shared by every δ.
 //!
@@ -21,7 +26,7 @@ use crate::fe::mini::{condensed_element, CondensedElement};
 use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};
 use crate::linalg::SymCsc;
-use crate::mesh::{Mesh, UTopology};
+use crate::mesh::{Mesh, PCorner, PTopology, UTopology};
 use crate::problem::PMass;
 
 /// Errors while assembling.
@@ -48,7 +53,7 @@ pub enum AssemblyError {
 /// The condensed linear system of one mesh and u space, for every δ.
 #[derive(Clone, Debug)]
 pub struct System {
-    /// Number of p unknowns (2 per vertex).
+    /// Number of p unknowns (2 per vertex, plus one per doubled crack vertex).
     pub n_p: usize,
     /// Number of u unknowns.
     pub n_u: usize,
@@ -122,21 +127,24 @@ const LOAD_DEGREE: usize = 8;
 /// Gauss points per boundary edge for ∫_Γ g q·n (exact for g of degree ≤ 8).
 const BOUNDARY_POINTS: usize = 5;
 
-/// Assembles the condensed system for `mesh`, u space `topo`, data `f` (source) and `g`
-/// (Dirichlet), with the p–p block of `p_mass`: G̃, or for [`PMass::Lumped`] its row-sum diagonal
-/// D (element by element: the row sums of G̃_T are |T|/3 − 3·7|T|/90 = |T|/10), which leaves B̃,
-/// C, M and the right-hand side unchanged.
+/// Assembles the condensed system for `mesh`, u space `topo`, p space `ptopo`, data `f` (source)
+/// and `g` (Dirichlet), with the p–p block of `p_mass`: G̃, or for [`PMass::Lumped`] its row-sum
+/// diagonal D (element by element: the row sums of G̃_T are |T|/3 − 3·7|T|/90 = |T|/10), which
+/// leaves B̃, C, M and the right-hand side unchanged. D is a multiple of the identity at each
+/// corner, so it stays diagonal in a corner's (ν, τ) frame: the lumped elimination of p stays
+/// exact with the broken-tangential p.
 pub fn assemble(
     mesh: &Mesh,
     topo: &UTopology,
+    ptopo: &PTopology,
     f: &Expr,
     g: &Expr,
     p_mass: PMass,
 ) -> Result<System, AssemblyError> {
-    let n_p = 2 * mesh.vertices.len();
+    let n_p = ptopo.n_dofs;
     let n_u = topo.n_dofs;
     let n = n_p + n_u;
-    let (base, delta_values) = assemble_matrix(mesh, topo, n_p, p_mass);
+    let (base, delta_values) = assemble_matrix(mesh, topo, ptopo, p_mass);
     let delta_norm1 = base.norm1_with(&delta_values);
     let delta_entries = delta_values
         .iter()
@@ -168,16 +176,81 @@ pub fn assemble(
     })
 }
 
-/// The 9 unknowns of a triangle in the condensed system: p_x, p_y at its 3 vertices (local 0..6,
-/// as `2k + d`), then its 3 u dofs (local 6..9).
-fn element_unknowns(t: &[usize; 3], udofs: &[usize; 3], n_p: usize) -> [usize; 9] {
+/// The 9 unknowns of a triangle in the condensed system: the two p unknowns of each of its 3
+/// corners (local 0..6, as `2k + d`), then its 3 u dofs (local 6..9).
+fn element_unknowns(corners: &[PCorner; 3], udofs: &[usize; 3], n_p: usize) -> [usize; 9] {
     let mut e = [0usize; 9];
     for k in 0..3 {
-        e[2 * k] = 2 * t[k];
-        e[2 * k + 1] = 2 * t[k] + 1;
+        e[2 * k] = corners[k].dofs[0];
+        e[2 * k + 1] = corners[k].dofs[1];
         e[6 + k] = n_p + udofs[k];
     }
     e
+}
+
+/// The corners of triangle `t` as the p space sees them.
+fn element_corners(mesh: &Mesh, ptopo: &PTopology, t: usize) -> [PCorner; 3] {
+    [0, 1, 2].map(|k| ptopo.corner(mesh, t, k))
+}
+
+/// The directions of a corner's two unknowns, row by row: (ν, τ) for a doubled crack vertex
+/// (the rotation R = [ν τ] transposed), the identity for the (x, y) frame.
+fn frame(c: &PCorner) -> [[f64; 2]; 2] {
+    match c.normal {
+        None => [[1.0, 0.0], [0.0, 1.0]],
+        Some([nx, ny]) => [[nx, ny], [ny, -nx]],
+    }
+}
+
+/// R_kᵀ R_l for two corners: exactly the identity when their frames are the same (always for
+/// k = l, and for two corners on one straight crack), so that the lumped diagonal stays diagonal
+/// bit for bit.
+fn frame_product(a: &PCorner, b: &PCorner) -> [[f64; 2]; 2] {
+    if a.normal == b.normal {
+        return [[1.0, 0.0], [0.0, 1.0]];
+    }
+    let (ra, rb) = (frame(a), frame(b));
+    [0, 1].map(|i| [0, 1].map(|j| (0..2).map(|d| ra[i][d] * rb[j][d]).sum()))
+}
+
+/// The condensed element in its corners' frames: p–p block (6 × 6) and B̃ (3 × 6) transformed,
+/// the u–u block unchanged ([`CondensedElement`] holds the (x, y) frame).
+#[derive(Clone, Copy, Debug)]
+struct FramedElement {
+    /// p–p block: G̃[k][l] (R_kᵀ R_l)_{ij} at [2k + i][2l + j].
+    pp: [[f64; 6]; 6],
+    /// B̃ R: at [i][2k + j], Σ_d B̃[i][2k + d] R_k[j][d].
+    b: [[f64; 6]; 3],
+}
+
+impl FramedElement {
+    fn new(ce: &CondensedElement, corners: &[PCorner; 3]) -> FramedElement {
+        let mut pp = [[0.0; 6]; 6];
+        for k in 0..3 {
+            for l in 0..3 {
+                let r = frame_product(&corners[k], &corners[l]);
+                for i in 0..2 {
+                    for j in 0..2 {
+                        pp[2 * k + i][2 * l + j] = ce.g[k][l] * r[i][j];
+                    }
+                }
+            }
+        }
+        let mut b = [[0.0; 6]; 3];
+        for (i, row) in b.iter_mut().enumerate() {
+            for (k, corner) in corners.iter().enumerate() {
+                let r = frame(corner);
+                for j in 0..2 {
+                    row[2 * k + j] = if corner.normal.is_none() {
+                        ce.b[i][2 * k + j]
+                    } else {
+                        r[j][0] * ce.b[i][2 * k] + r[j][1] * ce.b[i][2 * k + 1]
+                    };
+                }
+            }
+        }
+        FramedElement { pp, b }
+    }
 }
 
 /// Local couplings (a, b) of the condensed element matrix: p–p within one component (G is the
@@ -210,21 +283,36 @@ const ELEMENT_PAIRS: [(usize, usize); 45] = {
     pairs
 };
 
-/// The (K(0), ∂K/∂δ) values of a local pair (a, b) of the condensed element.
-fn element_value(ce: &CondensedElement, a: usize, b: usize) -> (f64, f64) {
-    match (a >= 6, b >= 6) {
-        (false, false) => (ce.g[a / 2][b / 2], 0.0),
-        (true, false) => (ce.b[a - 6][b], 0.0),
-        (false, true) => (ce.b[b - 6][a], 0.0),
-        (true, true) => (-ce.c[a - 6][b - 6], -ce.m[a - 6][b - 6]),
+/// The (K(0), ∂K/∂δ) values of a local pair (a, b) of the condensed element, in the (x, y)
+/// frame or, for a triangle at a doubled crack vertex, in its corners' frames.
+fn element_value(
+    ce: &CondensedElement,
+    framed: Option<&FramedElement>,
+    a: usize,
+    b: usize,
+) -> (f64, f64) {
+    match (framed, a >= 6, b >= 6) {
+        (_, true, true) => (-ce.c[a - 6][b - 6], -ce.m[a - 6][b - 6]),
+        (None, false, false) => (ce.g[a / 2][b / 2], 0.0),
+        (None, true, false) => (ce.b[a - 6][b], 0.0),
+        (None, false, true) => (ce.b[b - 6][a], 0.0),
+        (Some(fe), false, false) => (fe.pp[a][b], 0.0),
+        (Some(fe), true, false) => (fe.b[a - 6][b], 0.0),
+        (Some(fe), false, true) => (fe.b[b - 6][a], 0.0),
     }
 }
 
 /// Assembles K(0) and ∂K/∂δ (same pattern, lower triangle) element by element: the pattern
 /// from the element couplings, then the condensed element values scattered into it.
-fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> (SymCsc, Vec<f64>) {
+fn assemble_matrix(
+    mesh: &Mesh,
+    topo: &UTopology,
+    ptopo: &PTopology,
+    p_mass: PMass,
+) -> (SymCsc, Vec<f64>) {
+    let n_p = ptopo.n_dofs;
     let n = n_p + topo.n_dofs;
-    let (col_ptr, row_idx) = lower_pattern(n, mesh, topo, n_p, p_mass);
+    let (col_ptr, row_idx) = lower_pattern(n, mesh, topo, ptopo, p_mass);
     let mut values = vec![0.0; row_idx.len()];
     let mut dvals = vec![0.0; row_idx.len()];
     // element matrices in parallel, a chunk at a time (bounded memory), scattered sequentially
@@ -232,8 +320,9 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> 
     let triangles = mesh
         .triangles
         .chunks(CHUNK)
-        .zip(topo.triangle_dofs.chunks(CHUNK));
-    for (tris, dofs) in triangles {
+        .zip(topo.triangle_dofs.chunks(CHUNK))
+        .enumerate();
+    for (chunk, (tris, dofs)) in triangles {
         let elements: Vec<CondensedElement> = tris
             .par_iter()
             .map(|t| {
@@ -244,9 +333,14 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> 
                 }
             })
             .collect();
-        for ((t, udofs), ce) in tris.iter().zip(dofs).zip(&elements) {
-            let e = element_unknowns(t, udofs, n_p);
-            for &(a, b) in element_pairs(p_mass) {
+        for (i, (udofs, ce)) in dofs.iter().zip(&elements).enumerate() {
+            let t = chunk * CHUNK + i;
+            let corners = element_corners(mesh, ptopo, t);
+            let framed = ptopo
+                .has_frame(mesh, t)
+                .then(|| FramedElement::new(ce, &corners));
+            let e = element_unknowns(&corners, udofs, n_p);
+            for &(a, b) in element_pairs(p_mass, framed.is_some()) {
                 let (r, c) = (e[a], e[b]);
                 if r < c {
                     continue;
@@ -256,7 +350,7 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> 
                     + rows
                         .binary_search(&r)
                         .unwrap_or_else(|_| unreachable!("({r}, {c}) is in the pattern"));
-                let (v, d) = element_value(ce, a, b);
+                let (v, d) = element_value(ce, framed.as_ref(), a, b);
                 values[pos] += v;
                 dvals[pos] += d;
             }
@@ -273,13 +367,40 @@ fn assemble_matrix(mesh: &Mesh, topo: &UTopology, n_p: usize, p_mass: PMass) -> 
 
 /// The local couplings of an element: all of [`ELEMENT_PAIRS`], or for the lumped p mass those
 /// without the off-diagonal p–p pairs (zero there, and left out of the pattern: a structural
-/// p–p coupling would make the p-first elimination of the lumped order fill the p block).
-fn element_pairs(p_mass: PMass) -> &'static [(usize, usize)] {
-    match p_mass {
-        PMass::Consistent => &ELEMENT_PAIRS,
-        PMass::Lumped => &LUMPED_ELEMENT_PAIRS,
+/// p–p coupling would make the p-first elimination of the lumped order fill the p block). A
+/// `framed` element (a corner at a doubled crack vertex) with the consistent mass couples the
+/// two components of different corners as well ([`FRAMED_ELEMENT_PAIRS`]); with the lumped mass
+/// its p–p block is still the diagonal (R_kᵀ R_k = I).
+fn element_pairs(p_mass: PMass, framed: bool) -> &'static [(usize, usize)] {
+    match (p_mass, framed) {
+        (PMass::Consistent, false) => &ELEMENT_PAIRS,
+        (PMass::Consistent, true) => &FRAMED_ELEMENT_PAIRS,
+        (PMass::Lumped, _) => &LUMPED_ELEMENT_PAIRS,
     }
 }
+
+/// Every p–p pair (36), then the 27 u rows: the couplings of a framed element.
+const FRAMED_ELEMENT_PAIRS: [(usize, usize); 63] = {
+    let mut pairs = [(0, 0); 63];
+    let mut n = 0;
+    let mut a = 0;
+    while a < 6 {
+        let mut b = 0;
+        while b < 6 {
+            pairs[n] = (a, b);
+            n += 1;
+            b += 1;
+        }
+        a += 1;
+    }
+    let mut k = 18;
+    while k < 45 {
+        pairs[n] = ELEMENT_PAIRS[k];
+        n += 1;
+        k += 1;
+    }
+    pairs
+};
 
 /// [`ELEMENT_PAIRS`] without the off-diagonal p–p pairs (6 diagonal p pairs, then the 27 u rows).
 const LUMPED_ELEMENT_PAIRS: [(usize, usize); 33] = {
@@ -302,18 +423,19 @@ fn lower_pattern(
     n: usize,
     mesh: &Mesh,
     topo: &UTopology,
-    n_p: usize,
+    ptopo: &PTopology,
     p_mass: PMass,
 ) -> (Vec<usize>, Vec<usize>) {
-    let lower_pairs = |t: &[usize; 3], udofs: &[usize; 3]| {
-        let e = element_unknowns(t, udofs, n_p);
-        element_pairs(p_mass)
+    let n_p = ptopo.n_dofs;
+    let lower_pairs = |t: usize, udofs: &[usize; 3]| {
+        let e = element_unknowns(&element_corners(mesh, ptopo, t), udofs, n_p);
+        element_pairs(p_mass, ptopo.has_frame(mesh, t))
             .iter()
             .map(move |&(a, b)| (e[a], e[b]))
             .filter(|(r, c)| r >= c)
     };
     let mut count = vec![0usize; n + 1];
-    for (t, udofs) in mesh.triangles.iter().zip(&topo.triangle_dofs) {
+    for (t, udofs) in topo.triangle_dofs.iter().enumerate() {
         for (_, c) in lower_pairs(t, udofs) {
             count[c + 1] += 1;
         }
@@ -323,7 +445,7 @@ fn lower_pattern(
     }
     let mut next = count.clone();
     let mut rows = vec![0usize; count[n]];
-    for (t, udofs) in mesh.triangles.iter().zip(&topo.triangle_dofs) {
+    for (t, udofs) in topo.triangle_dofs.iter().enumerate() {
         for (r, c) in lower_pairs(t, udofs) {
             rows[next[c]] = r;
             next[c] += 1;
@@ -422,7 +544,7 @@ fn load_vector(mesh: &Mesh, topo: &UTopology, f: &Expr) -> Result<Vec<f64>, Asse
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::{Rectangle, Segment, USpace};
+    use crate::problem::{PSpace, Rectangle, Segment, USpace};
 
     fn mesh(level: u32) -> Mesh {
         crate::mesh::structured::structured(
@@ -465,7 +587,15 @@ mod tests {
         let topo = m.u_topology(USpace::Broken);
         for p_mass in [PMass::Consistent, PMass::Lumped] {
             let f = Expr::parse("sin(x)*y").unwrap();
-            let sys = assemble(&m, &topo, &f, &Expr::constant(0.0), p_mass).unwrap();
+            let sys = assemble(
+                &m,
+                &topo,
+                &m.p_topology(PSpace::Continuous),
+                &f,
+                &Expr::constant(0.0),
+                p_mass,
+            )
+            .unwrap();
             let full = sys.delta_values();
             assert!(
                 sys.delta_entries.len() < full.len() / 2,
@@ -502,6 +632,7 @@ mod tests {
             let sys = assemble(
                 &m,
                 &topo,
+                &m.p_topology(PSpace::Continuous),
                 &Expr::constant(0.0),
                 &Expr::constant(0.0),
                 PMass::Consistent,
@@ -535,7 +666,15 @@ mod tests {
                 x[n_p + dof] = m.vertices[v][0] + 2.0 * m.vertices[v][1];
             }
             let g = Expr::parse("x + 2*y").unwrap();
-            let sys_g = assemble(&m, &topo, &Expr::constant(0.0), &g, PMass::Consistent).unwrap();
+            let sys_g = assemble(
+                &m,
+                &topo,
+                &m.p_topology(PSpace::Continuous),
+                &Expr::constant(0.0),
+                &g,
+                PMass::Consistent,
+            )
+            .unwrap();
             for r in 0..n_p {
                 let kx: f64 = (0..sys.n()).map(|c| k[r][c] * x[c]).sum();
                 assert!(
@@ -639,7 +778,15 @@ mod tests {
         ];
         for (source, exact) in cases {
             let f = Expr::parse(source).unwrap();
-            let sys = assemble(&m, &topo, &f, &Expr::constant(0.0), PMass::Consistent).unwrap();
+            let sys = assemble(
+                &m,
+                &topo,
+                &m.p_topology(PSpace::Continuous),
+                &f,
+                &Expr::constant(0.0),
+                PMass::Consistent,
+            )
+            .unwrap();
             let mut want = vec![0.0; topo.n_dofs];
             for (t, dofs) in m.triangles.iter().zip(&topo.triangle_dofs) {
                 let geo = TriangleGeometry::new(t.map(|v| m.vertices[v]));

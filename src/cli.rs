@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::output::summary::{delta_text, Provenance};
 use crate::output::{write_run, ResultsDir};
-use crate::problem::{MultiplierSpace, PMass, USpace};
+use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use crate::scene::Scene;
 use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
 
@@ -80,6 +80,10 @@ pub enum Command {
         /// listed in the scene).
         #[arg(long, value_parser = parse_p_mass, value_name = "consistent|lumped")]
         p_mass: Option<PMass>,
+        /// Only this p space: continuous (the paper's) or broken-tangential (p·τ one value per
+        /// crack face; broken u only; need not be listed in the scene).
+        #[arg(long, value_parser = parse_p_space, value_name = "continuous|broken-tangential")]
+        p_space: Option<PSpace>,
         /// Only this δ (≥ 0).
         #[arg(long, value_parser = parse_delta, allow_hyphen_values = true)]
         delta: Option<f64>,
@@ -175,6 +179,11 @@ fn parse_u_space(s: &str) -> Result<USpace, String> {
 fn parse_p_mass(s: &str) -> Result<PMass, String> {
     PMass::from_name(s)
         .ok_or_else(|| format!("unknown p mass '{s}' (expected consistent or lumped)"))
+}
+
+fn parse_p_space(s: &str) -> Result<PSpace, String> {
+    PSpace::from_name(s)
+        .ok_or_else(|| format!("unknown p space '{s}' (expected continuous or broken-tangential)"))
 }
 
 fn parse_multiplier(s: &str) -> Result<MultiplierSpace, String> {
@@ -337,6 +346,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             u_space,
             multiplier,
             p_mass,
+            p_space,
             delta,
             quiet,
             solver_only,
@@ -349,8 +359,10 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                 u_space,
                 multiplier,
                 p_mass,
+                p_space,
                 delta,
             };
+            check_space_pairs(&scene, &filter)?;
             run(&scene, &origin, &filter, &out, quiet, solver_only)
         }
         Command::Reference {
@@ -386,6 +398,7 @@ fn plan_json(scene: &Scene) -> String {
         "u_spaces": names(scene.u_spaces.iter().map(ToString::to_string).collect()),
         "multipliers": names(scene.multipliers.iter().map(ToString::to_string).collect()),
         "p_masses": names(scene.p_masses.iter().map(ToString::to_string).collect()),
+        "p_spaces": names(scene.p_spaces.iter().map(ToString::to_string).collect()),
         "deltas": scene.deltas,
         "references": scene.references,
         "fields": !scene.fields.is_empty(),
@@ -489,6 +502,24 @@ fn invalid_scene(scene: &Scene, origin: &str, message: String) -> Failure {
 
 /// Checks a `--level` (which need not be listed in the scene) like the scene's own levels:
 /// at most [`crate::scene::MAX_LEVEL`] and within the memory estimate.
+/// Refuses a run whose u spaces and p spaces make no case: the broken-tangential p only runs
+/// with broken u ([`PSpace::serves`]).
+fn check_space_pairs(scene: &Scene, filter: &CaseFilter) -> Result<(), Failure> {
+    if !CasePlan::new(scene, filter).space_pairs().is_empty() {
+        return Ok(());
+    }
+    let u: Vec<&str> = filter
+        .u_space
+        .map_or_else(|| scene.u_spaces.clone(), |u| vec![u])
+        .iter()
+        .map(|u| u.name())
+        .collect();
+    Err(usage(format!(
+        "the broken-tangential p needs broken u, and this run's u spaces are {}: a continuous u cannot open the crack (pass --u-space broken, or --p-space continuous)",
+        u.join(", ")
+    )))
+}
+
 fn check_level_option(scene: &Scene, level: Option<u32>) -> Result<(), Failure> {
     match level {
         Some(l) => crate::scene::check_level(scene.level0, l)
@@ -635,17 +666,22 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
         return;
     };
     say!("scene '{}': δ = {}", scene.name, delta_text(delta));
-    let mut keys: Vec<(USpace, MultiplierSpace, PMass)> = cases
+    let mut keys: Vec<(USpace, MultiplierSpace, PMass, PSpace)> = cases
         .iter()
-        .map(|c| (c.u_space, c.multiplier, c.p_mass))
+        .map(|c| (c.u_space, c.multiplier, c.p_mass, c.p_space))
         .collect();
     keys.sort();
     keys.dedup();
-    for (u_space, multiplier, p_mass) in keys {
-        match p_mass {
-            PMass::Consistent => say!("\n{u_space} u, {multiplier}"),
-            PMass::Lumped => say!("\n{u_space} u, {multiplier}, lumped p mass"),
-        }
+    for (u_space, multiplier, p_mass, p_space) in keys {
+        let mass = match p_mass {
+            PMass::Consistent => "",
+            PMass::Lumped => ", lumped p mass",
+        };
+        let space = match p_space {
+            PSpace::Continuous => "",
+            PSpace::BrokenTangential => ", broken-tangential p",
+        };
+        say!("\n{u_space} u, {multiplier}{mass}{space}");
         if scene.exact.is_some() {
             say!("level        h  unknowns  iter     e_u  rate     e_p  rate     e_λ  rate   kkt");
         } else {
@@ -658,6 +694,7 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
             c.u_space == u_space
                 && c.multiplier == multiplier
                 && c.p_mass == p_mass
+                && c.p_space == p_space
                 && c.delta == delta
         }) {
             let flag = if c.converged { "" } else { "  NOT CONVERGED" };

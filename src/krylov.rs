@@ -291,7 +291,7 @@ pub const MAX_ITERATIONS: usize = 2000;
 mod tests {
     use super::*;
     use crate::assembly::assemble;
-    use crate::problem::{PMass, USpace};
+    use crate::problem::{PMass, PSpace, USpace};
     use crate::scene::Scene;
 
     fn load(name: &str) -> Scene {
@@ -313,7 +313,15 @@ mod tests {
             let mesh = source.level(2).unwrap();
             for space in [USpace::Continuous, USpace::Broken] {
                 let topo = mesh.u_topology(space);
-                let system = assemble(&mesh, &topo, &scene.f, &scene.g, PMass::Lumped).unwrap();
+                let system = assemble(
+                    &mesh,
+                    &topo,
+                    &mesh.p_topology(PSpace::Continuous),
+                    &scene.f,
+                    &scene.g,
+                    PMass::Lumped,
+                )
+                .unwrap();
                 for delta in [0.0, 1e-2] {
                     let it = solve_u(&mesh, &topo, &system, delta, ROUTE_TOLERANCE).unwrap();
                     assert!(
@@ -338,7 +346,15 @@ mod tests {
         let scene = load("mixed");
         let mesh = scene.mesh_source().unwrap().level(0).unwrap();
         let topo = mesh.u_topology(USpace::Broken);
-        let system = assemble(&mesh, &topo, &scene.f, &scene.g, PMass::Consistent).unwrap();
+        let system = assemble(
+            &mesh,
+            &topo,
+            &mesh.p_topology(PSpace::Continuous),
+            &scene.f,
+            &scene.g,
+            PMass::Consistent,
+        )
+        .unwrap();
         let err = solve_u(&mesh, &topo, &system, 0.0, 1e-12).err().unwrap();
         assert!(matches!(err, KrylovError::NotLumped { .. }), "{err}");
     }

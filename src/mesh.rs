@@ -21,7 +21,7 @@ pub mod gmsh;
 pub mod refine;
 pub mod structured;
 
-use crate::problem::{Domain, Meshing, Polyline, USpace};
+use crate::problem::{Domain, Meshing, PSpace, Polyline, USpace};
 
 /// Errors in building a mesh for a scene. `crack` is the 0-based index of the scene's crack.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -297,6 +297,152 @@ impl Mesh {
             dof_vertex,
             crack_dofs,
         }
+    }
+
+    /// The p unknowns of `space` on this mesh ([`PTopology`]): for the broken-tangential space
+    /// the interior crack nodes whose two crack edges share one normal are doubled, cracks in
+    /// order.
+    pub fn p_topology(&self, space: PSpace) -> PTopology {
+        let nv = self.vertices.len();
+        let mut doubled = Vec::new();
+        let mut doubled_index = Vec::new();
+        if space == PSpace::BrokenTangential {
+            doubled_index = vec![u32::MAX; nv];
+            for chain in &self.cracks {
+                for j in 1..chain.nodes.len() - 1 {
+                    let normal = chain.normals[j];
+                    if chain.normals[j - 1] == normal {
+                        doubled_index[chain.nodes[j]] = doubled.len() as u32;
+                        doubled.push((chain.nodes[j], normal));
+                    }
+                }
+            }
+        }
+        PTopology {
+            space,
+            n_dofs: 2 * nv + doubled.len(),
+            doubled,
+            doubled_index,
+        }
+    }
+}
+
+/// Degrees of freedom of a p space on a mesh (docs/design.md, The p spaces).
+///
+/// The unknowns 2v, 2v + 1 are p at vertex v, in the (x, y) frame, except at a *doubled* vertex
+/// of [`PSpace::BrokenTangential`] (an interior crack node where the crack is straight, normal
+/// ν): there 2v is p·ν (shared by both faces), 2v + 1 is p⁺·τ (the + face) and one more unknown,
+/// numbered after the 2·(vertices) of the mesh, is p⁻·τ, with τ = ν turned by −90° (the
+/// direction of the crack, so that ν is τ turned by +90°). Tips and kinks are never doubled: at a
+/// kink, q·ν_{k−1} and q·ν_k both shared fix all of q, and at a tip p is shared as u is.
+#[derive(Clone, Debug)]
+pub struct PTopology {
+    /// Which space.
+    pub space: PSpace,
+    /// Number of p unknowns: 2 per vertex plus one per doubled vertex.
+    pub n_dofs: usize,
+    /// The doubled vertices with their normal ν, in the order of their p⁻·τ unknowns.
+    pub doubled: Vec<(usize, [f64; 2])>,
+    /// Per vertex: its index in `doubled`, or `u32::MAX` (empty for the continuous space).
+    doubled_index: Vec<u32>,
+}
+
+/// How a triangle corner sees p: its two unknowns and the frame they are written in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PCorner {
+    /// The two unknowns of p at this corner.
+    pub dofs: [usize; 2],
+    /// `None`: the unknowns are (p_x, p_y); `Some(ν)`: they are (p·ν, p·τ), τ = (ν_y, −ν_x).
+    pub normal: Option<[f64; 2]>,
+}
+
+impl PCorner {
+    /// p in (x, y) at this corner from the unknowns `values` = (P[dofs[0]], P[dofs[1]]).
+    pub fn to_xy(&self, values: [f64; 2]) -> [f64; 2] {
+        match self.normal {
+            None => values,
+            Some([nx, ny]) => {
+                let [a, b] = values;
+                [a * nx + b * ny, a * ny - b * nx]
+            }
+        }
+    }
+
+    /// The corner's value read from the p unknowns `p`, in (x, y).
+    pub fn value(&self, p: &[f64]) -> [f64; 2] {
+        self.to_xy([p[self.dofs[0]], p[self.dofs[1]]])
+    }
+}
+
+impl PTopology {
+    /// The corner `k` of triangle `t` of `mesh`.
+    pub fn corner(&self, mesh: &Mesh, t: usize, k: usize) -> PCorner {
+        let v = mesh.triangles[t][k];
+        let plain = PCorner {
+            dofs: [2 * v, 2 * v + 1],
+            normal: None,
+        };
+        match self.doubled_index.get(v) {
+            Some(&i) if i != u32::MAX => {
+                let (_, normal) = self.doubled[i as usize];
+                let tangential = match mesh.corner_sides[t][k] {
+                    Some(Side::Minus) => 2 * mesh.vertices.len() + i as usize,
+                    _ => 2 * v + 1,
+                };
+                PCorner {
+                    dofs: [2 * v, tangential],
+                    normal: Some(normal),
+                }
+            }
+            _ => plain,
+        }
+    }
+
+    /// Whether triangle `t` has a corner at a doubled vertex.
+    pub fn has_frame(&self, mesh: &Mesh, t: usize) -> bool {
+        !self.doubled.is_empty()
+            && mesh.triangles[t]
+                .iter()
+                .any(|&v| self.doubled_index[v] != u32::MAX)
+    }
+
+    /// The vertex each p unknown sits at.
+    pub fn dof_vertex(&self, vertices: usize) -> Vec<usize> {
+        (0..2 * vertices)
+            .map(|k| k / 2)
+            .chain(self.doubled.iter().map(|&(v, _)| v))
+            .collect()
+    }
+
+    /// The frame normal of vertex `v`'s unknowns 2v, 2v + 1 (`None`: the (x, y) frame).
+    pub fn vertex_normal(&self, v: usize) -> Option<[f64; 2]> {
+        match self.doubled_index.get(v) {
+            Some(&i) if i != u32::MAX => Some(self.doubled[i as usize].1),
+            _ => None,
+        }
+    }
+
+    /// p at every u dof of `topo` (the dof's vertex seen from its face), from the p unknowns:
+    /// what the fields store and the norms integrate, exact for every u space this p space
+    /// serves ([`PSpace::serves`]: a doubled vertex always has one u dof per face).
+    pub fn at_u_dofs(&self, mesh: &Mesh, topo: &UTopology, p: &[f64]) -> Vec<[f64; 2]> {
+        let mut out: Vec<[f64; 2]> = topo
+            .dof_vertex
+            .iter()
+            .map(|&v| [p[2 * v], p[2 * v + 1]])
+            .collect();
+        if self.doubled.is_empty() {
+            return out;
+        }
+        for (t, dofs) in topo.triangle_dofs.iter().enumerate() {
+            for (k, &d) in dofs.iter().enumerate() {
+                let c = self.corner(mesh, t, k);
+                if c.normal.is_some() {
+                    out[d] = c.value(p);
+                }
+            }
+        }
+        out
     }
 }
 
@@ -759,6 +905,70 @@ mod tests {
         assert_ne!(p, q);
         let cont = m.u_topology(USpace::Continuous);
         assert_eq!(cont.n_dofs, m.vertices.len());
+    }
+
+    /// The broken-tangential p (issue 32) doubles exactly the interior nodes with one normal
+    /// (not the tips, not the kink) and stays in H(div, Ω): for any values of the unknowns, at
+    /// every crack node the + and − faces' corners give the same p·ν, bit for bit up to one
+    /// rounding, while at a doubled node their p·τ are the two independent unknowns; at tips and
+    /// at the kink both faces see the same p.
+    #[test]
+    fn broken_tangential_p_keeps_the_normal_component_shared() {
+        let kinked = Polyline {
+            points: vec![[-0.5, 0.0], [0.0, 0.0], [0.5, 0.5]],
+        };
+        let m = structured::structured(UNIT_SQUARE, [4, 4], &[kinked], 1).unwrap();
+        let chain = &m.cracks[0];
+        let kink = chain.nodes[2];
+        assert_ne!(chain.normals[1], chain.normals[2], "node 2 is the kink");
+        let p = m.p_topology(PSpace::BrokenTangential);
+        let interior = chain.nodes.len() - 2;
+        assert_eq!(
+            p.doubled.len(),
+            interior - 1,
+            "every interior node but the kink"
+        );
+        assert_eq!(p.n_dofs, 2 * m.vertices.len() + interior - 1);
+        assert!(p.doubled.iter().all(|&(v, _)| v != kink));
+        let continuous = m.p_topology(PSpace::Continuous);
+        assert_eq!(continuous.n_dofs, 2 * m.vertices.len());
+        // arbitrary unknowns, no two alike
+        let values: Vec<f64> = (0..p.n_dofs)
+            .map(|i| ((i * 7919) % 1013) as f64 / 101.0 - 5.0)
+            .collect();
+        for (j, &v) in chain.nodes.iter().enumerate() {
+            let normals: Vec<[f64; 2]> = [j.checked_sub(1), (j < interior + 1).then_some(j)]
+                .into_iter()
+                .flatten()
+                .map(|k| chain.normals[k])
+                .collect();
+            let mut seen: Vec<(Side, [f64; 2])> = Vec::new();
+            for (t, tri) in m.triangles.iter().enumerate() {
+                for k in 0..3 {
+                    if tri[k] == v {
+                        let side = m.corner_sides[t][k].unwrap_or(Side::Plus);
+                        seen.push((side, p.corner(&m, t, k).value(&values)));
+                    }
+                }
+            }
+            let dot = |a: [f64; 2], b: [f64; 2]| a[0] * b[0] + a[1] * b[1];
+            let plus: Vec<_> = seen.iter().filter(|s| s.0 == Side::Plus).collect();
+            let minus: Vec<_> = seen.iter().filter(|s| s.0 == Side::Minus).collect();
+            for a in &plus {
+                for b in plus.iter().chain(&minus) {
+                    for &nu in &normals {
+                        let (x, y) = (dot(a.1, nu), dot(b.1, nu));
+                        assert!(
+                            (x - y).abs() <= 1e-15 * x.abs().max(1.0),
+                            "node {j}: {x} vs {y}"
+                        );
+                    }
+                }
+            }
+            let doubled = p.doubled.iter().any(|&(w, _)| w == v);
+            let differ = plus.iter().any(|a| minus.iter().any(|b| a.1 != b.1));
+            assert_eq!(differ, doubled, "node {j}: the faces differ iff doubled");
+        }
     }
 
     #[test]

@@ -10,6 +10,11 @@
 //! rows, p(x_j)·ν_{k−1} then p(x_j)·ν_k. Cracks are concatenated in order (nodes, segments and
 //! rows); nothing couples two cracks except through K.
 //!
+//! **p spaces.** With the broken-tangential p a doubled crack node's unknowns are (p·ν, p⁺·τ)
+//! ([`crate::mesh::PTopology`]): its trace row reads p·ν as the unknown p·ν itself, weight
+//! (1, 0), the same for both faces. `row_weights` holds each row's weights on the node's two
+//! unknowns: its normal in the (x, y) frame, (ν_r·ν, ν_r·τ) in a node's (ν, τ) frame.
+//!
 //! **Constraint maps.** With ℓ_k the length of crack edge k (nodes k, k+1 of its crack):
 //! - M0 (12): one multiplier per edge, ∫_{t_k} p·ν_k = ℓ_k/2 (p(x_k) + p(x_{k+1}))·ν_k ≤ 0.
 //! - M1 (13): one per node, ∫ φ_j p·ν = Σ_{k ∋ j} ℓ_k/3 p(x_j)·ν_k + ℓ_k/6 p(x_other)·ν_k ≤ 0: on
@@ -21,7 +26,7 @@
 //!   constant p. λ_h = M_c⁻¹ Λ̃ as on a straight crack (M_c the scalar P1 mass of the polyline).
 
 use crate::contact::KktResiduals;
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, PTopology};
 use crate::problem::MultiplierSpace;
 
 /// A discrete multiplier on the cracks (cracks concatenated in order).
@@ -57,6 +62,9 @@ pub struct CrackOperators {
     pub normals: Vec<[f64; 2]>,
     /// The rows of N.
     pub rows: Vec<TraceRow>,
+    /// Per row: its weights on the two p unknowns of its node (`node_p_dofs`): the row's normal
+    /// in the (x, y) frame; see [`CrackOperators::with_p_topology`].
+    pub row_weights: Vec<[f64; 2]>,
     /// For each edge k: the rows (x_k, ν_k) and (x_{k+1}, ν_k).
     pub segment_rows: Vec<[usize; 2]>,
     /// Per crack: its first node and its node count.
@@ -73,6 +81,7 @@ impl CrackOperators {
             lengths: Vec::new(),
             normals: Vec::new(),
             rows: Vec::new(),
+            row_weights: Vec::new(),
             segment_rows: Vec::new(),
             crack_nodes: Vec::new(),
         };
@@ -108,7 +117,26 @@ impl CrackOperators {
                 ops.segment_rows.push([node_rows[k].1, node_rows[k + 1].0]);
             }
         }
+        ops.row_weights = ops.rows.iter().map(|r| r.normal).collect();
         ops
+    }
+
+    /// The same operators for the p unknowns of `ptopo`: a row at a node whose vertex has the
+    /// (ν, τ) frame weighs its unknowns by (ν_r·ν, ν_r·τ), exactly (1, 0) where ν_r = ν (every
+    /// row there: only nodes with one normal are doubled).
+    pub fn with_p_topology(mut self, ptopo: &PTopology) -> CrackOperators {
+        for (r, w) in self.rows.iter().zip(self.row_weights.iter_mut()) {
+            let v = self.node_p_dofs[r.node][0] / 2;
+            if let Some(nu) = ptopo.vertex_normal(v) {
+                let [a, b] = r.normal;
+                *w = if r.normal == nu {
+                    [1.0, 0.0]
+                } else {
+                    [a * nu[0] + b * nu[1], a * nu[1] - b * nu[0]]
+                };
+            }
+        }
+        self
     }
 
     /// Number of crack nodes (all cracks).
@@ -120,19 +148,20 @@ impl CrackOperators {
     pub fn apply_n(&self, p: &[f64]) -> Vec<f64> {
         self.rows
             .iter()
-            .map(|r| {
+            .zip(&self.row_weights)
+            .map(|(r, w)| {
                 let d = self.node_p_dofs[r.node];
-                p[d[0]] * r.normal[0] + p[d[1]] * r.normal[1]
+                p[d[0]] * w[0] + p[d[1]] * w[1]
             })
             .collect()
     }
 
     /// Adds Nᵀ y (y one value per trace row) to the p part `out`.
     pub fn add_nt(&self, y: &[f64], out: &mut [f64]) {
-        for (r, &v) in self.rows.iter().zip(y) {
+        for ((r, w), &v) in self.rows.iter().zip(&self.row_weights).zip(y) {
             let d = self.node_p_dofs[r.node];
-            out[d[0]] += v * r.normal[0];
-            out[d[1]] += v * r.normal[1];
+            out[d[0]] += v * w[0];
+            out[d[1]] += v * w[1];
         }
     }
 
@@ -141,14 +170,12 @@ impl CrackOperators {
     pub fn h_n_from_node_block(&self, inv: &[f64]) -> Vec<f64> {
         let (m, c) = (self.rows.len(), 2 * self.nodes());
         let mut h_n = vec![0.0; m * m];
-        for (i, ri) in self.rows.iter().enumerate() {
-            for (j, rj) in self.rows.iter().enumerate() {
+        for (i, (ri, wi)) in self.rows.iter().zip(&self.row_weights).enumerate() {
+            for (j, (rj, wj)) in self.rows.iter().zip(&self.row_weights).enumerate() {
                 let mut v = 0.0;
                 for a in 0..2 {
                     for b in 0..2 {
-                        v += ri.normal[a]
-                            * rj.normal[b]
-                            * inv[(2 * ri.node + a) * c + 2 * rj.node + b];
+                        v += wi[a] * wj[b] * inv[(2 * ri.node + a) * c + 2 * rj.node + b];
                     }
                 }
                 h_n[i * m + j] = v;

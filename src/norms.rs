@@ -93,7 +93,8 @@ impl Default for NormQuadrature {
 pub struct DiscreteSolution<'a> {
     /// u dofs.
     pub u: &'a [f64],
-    /// p at the vertices.
+    /// p at the u dofs (the vertex value seen from the dof's face: p⁺, p⁻ where the
+    /// broken-tangential p doubles a crack vertex).
     pub p: &'a [[f64; 2]],
     /// Bubble coefficients of p per triangle.
     pub bubbles: &'a [[f64; 2]],
@@ -260,7 +261,7 @@ pub fn error_norms(
         let (px, rest) = rest.split_at(n);
         let (py, f) = rest.split_at(n);
         let dofs = topo.triangle_dofs[ti];
-        let pv = t.map(|v| sol.p[v]);
+        let pv = dofs.map(|d| sol.p[d]);
         let bc = sol.bubbles[ti];
         // div of the P1 part (constant) and h_T (the longest edge)
         let div_linear: f64 = (0..3)
@@ -441,7 +442,7 @@ mod tests {
         let topo = mesh.u_topology(USpace::Broken);
         let exact = scene.exact.as_ref().expect("exact scene");
         let u = vec![0.0; topo.n_dofs];
-        let p = vec![[0.0; 2]; mesh.vertices.len()];
+        let p = vec![[0.0; 2]; topo.n_dofs];
         let bubbles = vec![[0.0; 2]; mesh.triangles.len()];
         let lambda = CrackField::PerNode(vec![0.0; mesh.cracks[0].nodes.len()]);
         let sol = DiscreteSolution {

@@ -30,6 +30,47 @@ pub enum MultiplierSpace {
     M1Star,
 }
 
+/// The space of p = ∇u (docs/design.md, The p spaces): the paper's continuous MINI field, or
+/// one whose tangential component may jump across the crack (issue 32).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PSpace {
+    /// The paper's X_h: continuous vector P1 ⊕ bubble on Ω.
+    Continuous,
+    /// X_h with the tangential component doubled at every interior crack vertex where the crack
+    /// is straight: p·ν shared, p·τ one value per face; shared at tips and kinks. Still in
+    /// H(div, Ω) (q·ν is one linear function on each crack edge). Runs with broken u only.
+    BrokenTangential,
+}
+
+impl PSpace {
+    /// Name used in scene files, the CLI and result files.
+    pub fn name(self) -> &'static str {
+        match self {
+            PSpace::Continuous => "continuous",
+            PSpace::BrokenTangential => "broken-tangential",
+        }
+    }
+    /// Parses a scene/CLI name.
+    pub fn from_name(s: &str) -> Option<PSpace> {
+        match s {
+            "continuous" => Some(PSpace::Continuous),
+            "broken-tangential" => Some(PSpace::BrokenTangential),
+            _ => None,
+        }
+    }
+    /// Whether this p space can run with `u_space`: a p whose tangential part jumps needs a u
+    /// that may jump (a continuous u cannot open the crack, docs/design.md).
+    pub fn serves(self, u_space: USpace) -> bool {
+        !(self == PSpace::BrokenTangential && u_space == USpace::Continuous)
+    }
+}
+
+impl fmt::Display for PSpace {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The p–p block of the condensed system (issue 14): the paper's consistent MINI mass, or its
 /// row-sum diagonal, which lets p be eliminated exactly (docs/design.md, The lumped p mass).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

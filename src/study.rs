@@ -1,6 +1,7 @@
 //! The driver: the study of one scene, read like the algorithm.
 //!
-//! for each level → mesh → for each u space → assemble, analyse the pattern → for each δ (largest
+//! for each level → mesh → for each u space → for each p space and p mass → assemble, analyse
+//! the pattern → for each δ (largest
 //! first) → factor K(δ), reduce to the crack (x₀ = K⁻¹b, H_N = N K⁻¹ Nᵀ) → for each multiplier →
 //! solve the LCP (warm-started from the previous δ), recover x, refine, measure the KKT residuals,
 //! the errors against `[exact]` and the fields → record the case.
@@ -17,10 +18,10 @@ use crate::contact::{KktResiduals, Lcp, LcpOptions, LcpStatus};
 use crate::fe::mini::bubble_coefficients;
 use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{componentwise_backward_error, Ldlt, LinalgError, SymbolicLdlt};
-use crate::mesh::{Layout, Mesh, MeshError, UTopology};
+use crate::mesh::{Layout, Mesh, MeshError, PTopology, UTopology};
 use crate::multiplier::{CrackField, CrackOperators, Multiplier};
 use crate::norms::{error_norms, DiscreteSolution, ErrorNorms, NormQuadrature};
-use crate::problem::{MultiplierSpace, PMass, USpace};
+use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use crate::scene::Scene;
 
 /// Right-hand sides solved together when reducing K⁻¹ to the crack (bounds memory to 32 n values).
@@ -70,6 +71,8 @@ pub struct CaseFilter {
     pub multiplier: Option<MultiplierSpace>,
     /// Only this p mass.
     pub p_mass: Option<PMass>,
+    /// Only this p space.
+    pub p_space: Option<PSpace>,
     /// Only this δ.
     pub delta: Option<f64>,
 }
@@ -85,6 +88,8 @@ pub struct CasePlan {
     pub multipliers: Vec<MultiplierSpace>,
     /// p masses.
     pub p_masses: Vec<PMass>,
+    /// p spaces; each runs with the u spaces it serves ([`PSpace::serves`]).
+    pub p_spaces: Vec<PSpace>,
     /// δ values, decreasing.
     pub deltas: Vec<f64>,
     /// Quadrature of the error norms.
@@ -112,6 +117,9 @@ impl CasePlan {
             p_masses: filter
                 .p_mass
                 .map_or_else(|| scene.p_masses.clone(), |m| vec![m]),
+            p_spaces: filter
+                .p_space
+                .map_or_else(|| scene.p_spaces.clone(), |s| vec![s]),
             deltas: filter
                 .delta
                 .map_or_else(|| scene.deltas.clone(), |d| vec![d]),
@@ -120,13 +128,27 @@ impl CasePlan {
         }
     }
 
-    /// Number of cases.
+    /// Number of cases: levels × (u space, p space) pairs × multipliers × p masses × δ.
     pub fn len(&self) -> usize {
         self.levels.len()
-            * self.u_spaces.len()
+            * self.space_pairs().len()
             * self.multipliers.len()
             * self.p_masses.len()
             * self.deltas.len()
+    }
+
+    /// The (u space, p space) pairs of the plan, u spaces outermost: every pair the p space
+    /// serves ([`PSpace::serves`]; a continuous u runs with the continuous p only).
+    pub fn space_pairs(&self) -> Vec<(USpace, PSpace)> {
+        self.u_spaces
+            .iter()
+            .flat_map(|&u| {
+                self.p_spaces
+                    .iter()
+                    .filter(move |p| p.serves(u))
+                    .map(move |&p| (u, p))
+            })
+            .collect()
     }
 
     /// True when the plan has no case.
@@ -161,7 +183,8 @@ pub struct Timings {
 pub struct CaseFieldData {
     /// u at each dof.
     pub u: Vec<f64>,
-    /// p at each dof's vertex.
+    /// p at each dof's vertex, seen from the dof's face (p⁺ and p⁻ at a crack vertex doubled
+    /// by the broken-tangential p, [`PTopology::at_u_dofs`]).
     pub p: Vec<[f64; 2]>,
     /// Bubble coefficients of p per triangle (see [`crate::fe::mini::mini_value`]); empty for
     /// the lumped p mass, whose p is P1 without bubble.
@@ -183,9 +206,11 @@ pub struct CaseResult {
     pub multiplier: MultiplierSpace,
     /// p mass of the system solved.
     pub p_mass: PMass,
+    /// p space of the system solved.
+    pub p_space: PSpace,
     /// δ.
     pub delta: f64,
-    /// Unknowns of the condensed system (p vertex values + u dofs) plus multipliers.
+    /// Unknowns of the condensed system (p unknowns + u dofs) plus multipliers.
     pub unknowns: usize,
     /// Number of multipliers.
     pub multipliers: usize,
@@ -269,7 +294,7 @@ pub fn run_study(
         let t0 = Instant::now();
         let mesh = source.level(level)?;
         let ops = CrackOperators::new(&mesh);
-        // S of each multiplier space: the mesh's, shared by every u space, p mass and δ
+        // S of each multiplier space: the mesh's, shared by every u space, p space, p mass and δ
         let multipliers: Vec<Multiplier> = plan
             .multipliers
             .iter()
@@ -291,46 +316,54 @@ pub fn run_study(
                     crack_segments: ops.segments.clone(),
                 });
             }
-            for &p_mass in &plan.p_masses {
-                observer.phase(&format!(
-                    "level {level}, {u_space}, {p_mass} p mass: assembling"
-                ));
-                let t1 = Instant::now();
-                let mut system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass)?;
-                let assembly = topo_time + t1.elapsed().as_secs_f64();
-                let t2 = Instant::now();
-                let order = elimination_order(&mesh, &topo, &ops, system.n_p, p_mass);
-                let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order)?;
-                let symbolic_time = t2.elapsed().as_secs_f64();
-                // the sweep's only copy of K: each δ is written into it (System::set_delta)
-                let k = std::mem::take(&mut system.base);
-                let ctx = LevelContext {
-                    scene,
-                    mesh: &mesh,
-                    topo: &topo,
-                    ops: &ops,
-                    multipliers: &multipliers,
-                    system: &system,
-                    p_mass,
-                    symbolic: &symbolic,
-                    base_timings: Timings {
-                        assembly,
-                        symbolic: symbolic_time,
-                        ..Timings::default()
-                    },
-                };
-                ctx.run_deltas(k, plan, observer, &mut result.cases)?;
+            let p_spaces = plan.p_spaces.iter().filter(|p| p.serves(u_space));
+            for &p_space in p_spaces {
+                let ptopo = mesh.p_topology(p_space);
+                let p_ops = ops.clone().with_p_topology(&ptopo);
+                for &p_mass in &plan.p_masses {
+                    observer.phase(&format!(
+                        "level {level}, {u_space} u, {p_space} p, {p_mass} p mass: assembling"
+                    ));
+                    let t1 = Instant::now();
+                    let mut system = assemble(&mesh, &topo, &ptopo, &scene.f, &scene.g, p_mass)?;
+                    let assembly = topo_time + t1.elapsed().as_secs_f64();
+                    let t2 = Instant::now();
+                    let order = elimination_order(&mesh, &topo, &ptopo, &p_ops, p_mass);
+                    let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order)?;
+                    let symbolic_time = t2.elapsed().as_secs_f64();
+                    // the sweep's only copy of K: each δ is written into it (System::set_delta)
+                    let k = std::mem::take(&mut system.base);
+                    let ctx = LevelContext {
+                        scene,
+                        mesh: &mesh,
+                        topo: &topo,
+                        ptopo: &ptopo,
+                        ops: &p_ops,
+                        multipliers: &multipliers,
+                        system: &system,
+                        p_mass,
+                        symbolic: &symbolic,
+                        base_timings: Timings {
+                            assembly,
+                            symbolic: symbolic_time,
+                            ..Timings::default()
+                        },
+                    };
+                    ctx.run_deltas(k, plan, observer, &mut result.cases)?;
+                }
             }
         }
     }
     Ok(result)
 }
 
-/// What the δ loop of one (level, u space) needs.
+/// What the δ loop of one (level, u space, p space, p mass) needs.
 struct LevelContext<'a> {
     scene: &'a Scene,
     mesh: &'a Mesh,
     topo: &'a UTopology,
+    ptopo: &'a PTopology,
+    /// The crack operators in the p unknowns of `ptopo`.
     ops: &'a CrackOperators,
     /// The plan's multiplier spaces, in its order.
     multipliers: &'a [Multiplier],
@@ -570,12 +603,13 @@ impl LevelContext<'_> {
         let lambda = multiplier.lambda_field(self.ops, &sol.mu);
         let n_p = self.system.n_p;
         let (p, u) = x.split_at(n_p);
-        let p_vertex: Vec<[f64; 2]> = p.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
         let t1 = Instant::now();
+        // p at the u dofs: the vertex values seen from each dof's face
+        let p_dof = self.ptopo.at_u_dofs(self.mesh, self.topo, p);
         // The lumped p is P1 without bubble: zero bubbles in the norms, none in the fields.
         let exact = self.scene.exact.is_some();
         let bubbles = match self.p_mass {
-            PMass::Consistent if exact || plan.keep_fields => self.bubbles(&p_vertex, u),
+            PMass::Consistent if exact || plan.keep_fields => self.bubbles(&p_dof, u),
             PMass::Lumped if exact => vec![[0.0; 2]; self.mesh.triangles.len()],
             _ => Vec::new(),
         };
@@ -586,7 +620,7 @@ impl LevelContext<'_> {
                 exact,
                 &DiscreteSolution {
                     u,
-                    p: &p_vertex,
+                    p: &p_dof,
                     bubbles: &bubbles,
                     lambda: &lambda,
                     source: &self.scene.f,
@@ -598,7 +632,7 @@ impl LevelContext<'_> {
         let t2 = Instant::now();
         let fields = plan.keep_fields.then(|| CaseFieldData {
             u: u.to_vec(),
-            p: self.topo.dof_vertex.iter().map(|&v| p_vertex[v]).collect(),
+            p: p_dof,
             p_bubble: match self.p_mass {
                 PMass::Consistent => bubbles,
                 PMass::Lumped => Vec::new(),
@@ -613,6 +647,7 @@ impl LevelContext<'_> {
             u_space: self.topo.space,
             multiplier: multiplier.space,
             p_mass: self.p_mass,
+            p_space: self.ptopo.space,
             delta,
             unknowns: self.system.n() + multiplier.len(),
             multipliers: multiplier.len(),
@@ -660,14 +695,15 @@ impl LevelContext<'_> {
         k
     }
 
-    fn bubbles(&self, p_vertex: &[[f64; 2]], u: &[f64]) -> Vec<[f64; 2]> {
+    /// The bubble coefficients of every triangle from p and u at the u dofs.
+    fn bubbles(&self, p_dof: &[[f64; 2]], u: &[f64]) -> Vec<[f64; 2]> {
         self.mesh
             .triangles
             .iter()
             .zip(&self.topo.triangle_dofs)
             .map(|(t, dofs)| {
                 let geo = TriangleGeometry::new(t.map(|v| self.mesh.vertices[v]));
-                bubble_coefficients(&geo, &t.map(|v| p_vertex[v]), &dofs.map(|d| u[d]))
+                bubble_coefficients(&geo, &dofs.map(|d| p_dof[d]), &dofs.map(|d| u[d]))
             })
             .collect()
     }
@@ -684,18 +720,20 @@ impl LevelContext<'_> {
 fn elimination_order(
     mesh: &Mesh,
     topo: &UTopology,
+    ptopo: &PTopology,
     ops: &CrackOperators,
-    n_p: usize,
     p_mass: PMass,
 ) -> Vec<usize> {
+    let n_p = ptopo.n_dofs;
     let mut crack_p = vec![false; n_p];
     for &k in ops.node_p_dofs.iter().flatten() {
         crack_p[k] = true;
     }
     match p_mass {
         PMass::Consistent => {
-            let vertex_of: Vec<usize> = (0..n_p)
-                .map(|k| k / 2)
+            let vertex_of: Vec<usize> = ptopo
+                .dof_vertex(mesh.vertices.len())
+                .into_iter()
                 .chain(topo.dof_vertex.iter().copied())
                 .collect();
             let mut last = crack_p;
@@ -789,19 +827,24 @@ mod tests {
     fn h_n_agrees_on(scene: &Scene) {
         let mesh = scene.mesh_source().unwrap().level(1).unwrap();
         let ops = CrackOperators::new(&mesh);
-        for (space, p_mass) in [
-            (USpace::Continuous, PMass::Consistent),
-            (USpace::Broken, PMass::Consistent),
-            (USpace::Broken, PMass::Lumped),
+        for (space, p_mass, p_space) in [
+            (USpace::Continuous, PMass::Consistent, PSpace::Continuous),
+            (USpace::Broken, PMass::Consistent, PSpace::Continuous),
+            (USpace::Broken, PMass::Lumped, PSpace::Continuous),
+            (USpace::Broken, PMass::Consistent, PSpace::BrokenTangential),
+            (USpace::Broken, PMass::Lumped, PSpace::BrokenTangential),
         ] {
             let topo = mesh.u_topology(space);
-            let system = assemble(&mesh, &topo, &scene.f, &scene.g, p_mass).unwrap();
-            let order = elimination_order(&mesh, &topo, &ops, system.n_p, p_mass);
+            let ptopo = mesh.p_topology(p_space);
+            let ops = ops.clone().with_p_topology(&ptopo);
+            let system = assemble(&mesh, &topo, &ptopo, &scene.f, &scene.g, p_mass).unwrap();
+            let order = elimination_order(&mesh, &topo, &ptopo, &ops, p_mass);
             let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
             let ctx = LevelContext {
                 scene,
                 mesh: &mesh,
                 topo: &topo,
+                ptopo: &ptopo,
                 ops: &ops,
                 multipliers: &[],
                 system: &system,
@@ -870,10 +913,29 @@ mod tests {
     /// row sums 0.1 Σ_{T∋i}|T|; S(δ) = C + δM + B̃D⁻¹B̃ᵀ is SPD, also at δ = 0; the solution of
     /// S U = F + B̃D⁻¹G_Γ with P = D⁻¹(G_Γ − B̃ᵀU) is the solver's K⁻¹b; and H_N, the LCP matrix
     /// the solver takes from its factor's trailing block, is N D⁻¹ Nᵀ − Wᵀ S⁻¹ W, W = B̃ D⁻¹ Nᵀ.
-    /// Everything on the right is computed densely, independently of the sparse LDLᵀ.
+    /// Everything on the right is computed densely, independently of the sparse LDLᵀ. With the
+    /// broken-tangential p (issue 32), on an oblique crack (its (ν, τ) frame is no axis), D is
+    /// still diagonal: 0.1 Σ|T| over the vertex's patch for p·ν, over the triangles whose
+    /// centroid lies on the + (−) side of the crack line for p⁺·τ (p⁻·τ).
     #[test]
     fn lumped_p_mass_is_an_exact_elimination() {
-        let scene = Scene::default_scene();
+        lumped_elimination_is_exact(Scene::default_scene(), PSpace::Continuous);
+        let oblique = crate::scene::DEFAULT_SCENE.replace(
+            "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
+            "crack = { segment = [[-0.5, -0.5], [0.5, 0.5]] }",
+        );
+        let scene = Scene::from_toml(&oblique).unwrap();
+        assert_ne!(
+            scene.cracks,
+            Scene::default_scene().cracks,
+            "the replacement took"
+        );
+        for p_space in [PSpace::Continuous, PSpace::BrokenTangential] {
+            lumped_elimination_is_exact(scene.clone(), p_space);
+        }
+    }
+
+    fn lumped_elimination_is_exact(scene: Scene, p_space: PSpace) {
         let mesh = crate::mesh::MeshSource::new(
             &scene.domain,
             &scene.cracks,
@@ -882,25 +944,42 @@ mod tests {
         .unwrap()
         .level(1)
         .unwrap();
-        let ops = CrackOperators::new(&mesh);
         let topo = mesh.u_topology(USpace::Broken);
-        let system = assemble(&mesh, &topo, &scene.f, &scene.g, PMass::Lumped).unwrap();
+        let ptopo = mesh.p_topology(p_space);
+        let ops = CrackOperators::new(&mesh).with_p_topology(&ptopo);
+        let system = assemble(&mesh, &topo, &ptopo, &scene.f, &scene.g, PMass::Lumped).unwrap();
         let (n_p, n_u) = (system.n_p, system.n_u);
-        // D = 0.1 Σ_{T∋i} |T| per component
-        let mut patch = vec![0.0; mesh.vertices.len()];
+        // D = 0.1 Σ_{T∋i} |T| per component; at a doubled vertex p·τ sums one face's triangles
+        let nv = mesh.vertices.len();
+        let crack = scene.cracks[0].segment(0);
+        let nu = crack.normal();
+        let mut patch = vec![0.0; n_p];
         for t in &mesh.triangles {
             let area = TriangleGeometry::new(t.map(|v| mesh.vertices[v])).area;
+            let c = crate::mesh::centroid(&mesh.vertices, t);
+            let plus = (c[0] - crack.a[0]) * nu[0] + (c[1] - crack.a[1]) * nu[1] > 0.0;
             for &v in t {
-                patch[v] += area;
+                patch[2 * v] += area;
+                match ptopo.doubled.iter().position(|&(w, _)| w == v) {
+                    Some(i) if !plus => patch[2 * nv + i] += area,
+                    _ => patch[2 * v + 1] += area,
+                }
             }
         }
-        let order = elimination_order(&mesh, &topo, &ops, n_p, PMass::Lumped);
+        let interior = mesh.cracks[0].nodes.len() - 2;
+        let doubled = if p_space == PSpace::BrokenTangential {
+            interior
+        } else {
+            0
+        };
+        assert_eq!(n_p, 2 * nv + doubled, "{p_space}");
+        let order = elimination_order(&mesh, &topo, &ptopo, &ops, PMass::Lumped);
         let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
         for delta in [0.0, 1e-2] {
             let k = dense(&system.matrix(delta));
             for i in 0..n_p {
                 for j in 0..n_p {
-                    let want = if i == j { 0.1 * patch[i / 2] } else { 0.0 };
+                    let want = if i == j { 0.1 * patch[i] } else { 0.0 };
                     assert!((k[i][j] - want).abs() <= 1e-15, "D[{i}][{j}] = {}", k[i][j]);
                 }
             }
@@ -955,6 +1034,7 @@ mod tests {
                 scene: &scene,
                 mesh: &mesh,
                 topo: &topo,
+                ptopo: &ptopo,
                 ops: &ops,
                 multipliers: &[],
                 system: &system,

@@ -225,7 +225,7 @@ fn catalogue() -> Vec<Case> {
             "unknown key in [discretization]",
             "cells =",
             "cels =",
-            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, mesh_size, mesh, grading, levels, u_spaces, multipliers, p_mass, deltas)",
+            "unknown key `cels` in [discretization] at line 9, column 1; did you mean `cells`? (allowed: cells, mesh_size, mesh, grading, levels, u_spaces, multipliers, p_mass, p_spaces, deltas)",
         ),
         edit(
             "unknown key in [geometry]",
@@ -575,6 +575,18 @@ fn catalogue() -> Vec<Case> {
             r#"discretization.u_spaces: unknown value "brokn" (expected one of continuous, broken); did you mean "broken"?"#,
         ),
         edit(
+            "unknown p space",
+            "deltas = [1e-2, 0.0]",
+            "deltas = [1e-2, 0.0]\np_spaces = [\"broken-tangentail\"]",
+            r#"discretization.p_spaces: unknown value "broken-tangentail" (expected one of continuous, broken-tangential); did you mean "broken-tangential"? (at line 14, column 1)"#,
+        ),
+        edit(
+            "broken-tangential p with continuous u only",
+            r#"u_spaces = ["continuous", "broken"]"#,
+            "u_spaces = [\"continuous\"]\np_spaces = [\"broken-tangential\"]",
+            "discretization.p_spaces = [\"broken-tangential\"] needs broken u: a continuous u cannot open the crack",
+        ),
+        edit(
             "empty multipliers",
             r#"multipliers = ["M0", "M1", "M1star"]"#,
             "multipliers = []",
@@ -801,6 +813,16 @@ fn catalogue() -> Vec<Case> {
             "--u-space unknown",
             &["--u-space", "foo"],
             "unknown u space 'foo' (expected continuous or broken)",
+        ),
+        cli(
+            "--p-space unknown",
+            &["--p-space", "tangential"],
+            "unknown p space 'tangential' (expected continuous or broken-tangential)",
+        ),
+        cli(
+            "--u-space continuous with --p-space broken-tangential",
+            &["--u-space", "continuous", "--p-space", "broken-tangential"],
+            "the broken-tangential p needs broken u, and this run's u spaces are continuous: a continuous u cannot open the crack (pass --u-space broken, or --p-space continuous)",
         ),
         cli(
             "--multiplier unknown",

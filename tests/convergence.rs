@@ -34,7 +34,7 @@
 mod common;
 
 use sdcrack::norms::{NormQuadrature, TipRule};
-use sdcrack::scene::{MultiplierSpace, PMass, Scene, USpace};
+use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, USpace};
 use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
 
 /// The scene `name` at `levels`, δ = 0, no fields, the consistent p mass only (the lumped one
@@ -43,6 +43,7 @@ fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
     let mut s = common::load(name);
     s.levels = levels.to_vec();
     s.p_masses = vec![PMass::Consistent];
+    s.p_spaces = vec![PSpace::Continuous];
     s.deltas = vec![0.0];
     s.fields = Default::default();
     s

@@ -3,7 +3,7 @@
 
 mod common;
 
-use sdcrack::scene::{FieldSet, MultiplierSpace, PMass, USpace};
+use sdcrack::scene::{FieldSet, MultiplierSpace, PMass, PSpace, USpace};
 use sdcrack::study::CaseFilter;
 
 #[test]
@@ -16,10 +16,12 @@ fn distance_to_delta_zero_is_linear_in_delta() {
         p: true,
         lambda: true,
     };
-    for (u_space, p_mass) in [
-        (USpace::Continuous, PMass::Consistent),
-        (USpace::Broken, PMass::Consistent),
-        (USpace::Broken, PMass::Lumped),
+    for (u_space, p_mass, p_space) in [
+        (USpace::Continuous, PMass::Consistent, PSpace::Continuous),
+        (USpace::Broken, PMass::Consistent, PSpace::Continuous),
+        (USpace::Broken, PMass::Lumped, PSpace::Continuous),
+        (USpace::Broken, PMass::Consistent, PSpace::BrokenTangential),
+        (USpace::Broken, PMass::Lumped, PSpace::BrokenTangential),
     ] {
         for m in MultiplierSpace::ALL {
             let cases = common::solve(
@@ -28,6 +30,7 @@ fn distance_to_delta_zero_is_linear_in_delta() {
                     u_space: Some(u_space),
                     multiplier: Some(m),
                     p_mass: Some(p_mass),
+                    p_space: Some(p_space),
                     ..CaseFilter::default()
                 },
             );
@@ -65,7 +68,7 @@ fn distance_to_delta_zero_is_linear_in_delta() {
             let slope = num / den;
             assert!(
                 (slope - 1.0).abs() <= 0.1,
-                "{u_space} {m} {p_mass:?}: slope {slope}, distances {dist:?}"
+                "{u_space} {m} {p_mass:?} {p_space}: slope {slope}, distances {dist:?}"
             );
         }
     }

@@ -6,7 +6,7 @@ mod common;
 
 use common::{error_series, rate, solve};
 use sdcrack::mesh::{Layout, Side};
-use sdcrack::scene::{Meshing, MultiplierSpace, PMass, Polyline, Scene, USpace};
+use sdcrack::scene::{Meshing, MultiplierSpace, PMass, PSpace, Polyline, Scene, USpace};
 use sdcrack::study::CaseFilter;
 
 /// The repository scene `name` at levels 0–3, δ = 0, consistent p mass, no fields.
@@ -15,6 +15,7 @@ fn exact_scene(name: &str) -> Scene {
     scene.levels = vec![0, 1, 2, 3];
     scene.deltas = vec![0.0];
     scene.p_masses = vec![PMass::Consistent];
+    scene.p_spaces = vec![PSpace::Continuous];
     scene.fields = Default::default();
     scene
 }

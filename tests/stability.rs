@@ -40,8 +40,8 @@ use sdcrack::contact::{Lcp, LcpOptions, LcpStatus};
 use sdcrack::linalg::{Ldlt, SymbolicLdlt};
 use sdcrack::multiplier::{CrackField, CrackOperators, Multiplier};
 use sdcrack::scene::{
-    Domain, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass, Polyline, Rectangle,
-    Scene, USpace,
+    Domain, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass, PSpace, Polyline,
+    Rectangle, Scene, USpace,
 };
 use sdcrack::study::{CaseFilter, CaseResult};
 
@@ -609,6 +609,7 @@ fn exact_solutions_converge_on_aspect_4_meshes() {
             // the rates below are the consistent mass's; the lumped one on these meshes is
             // solved by `anisotropic_meshes_solve_to_tolerance`
             scene.p_masses = vec![PMass::Consistent];
+            scene.p_spaces = vec![PSpace::Continuous];
             let cases = common::solve(&scene, CaseFilter::default());
             assert_solved(&cases, name);
             for u in [USpace::Continuous, USpace::Broken] {
@@ -740,6 +741,7 @@ fn crack_reduction(
     let system = assemble(
         &mesh,
         &topo,
+        &mesh.p_topology(sdcrack::problem::PSpace::Continuous),
         &scene.f,
         &scene.g,
         sdcrack::scene::PMass::Consistent,

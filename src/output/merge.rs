@@ -168,20 +168,38 @@ impl Shard {
     }
 }
 
-/// The position of a solver case in a single run's order (level, u space, p mass, δ,
+/// The position of a solver case in a single run's order (level, u space, p space, p mass, δ,
 /// multiplier: the loops of [`crate::study::run_study`]).
-type CaseKey = (usize, usize, usize, usize, usize);
+type CaseKey = (usize, usize, usize, usize, usize, usize);
+
+/// Whether the plan's u space `u` and p space `p` (names) make cases: the broken-tangential p
+/// runs with broken u only ([`crate::problem::PSpace::serves`]).
+fn served(u: &str, p: &str) -> bool {
+    match (
+        crate::problem::USpace::from_name(u),
+        crate::problem::PSpace::from_name(p),
+    ) {
+        (Some(u), Some(p)) => p.serves(u),
+        _ => false,
+    }
+}
 
 /// Where the case `c` (a `summary.json` case) sits in `plan`; `None` when it is not a case of it.
 fn case_key(plan: &PlanSummary, c: &Value) -> Option<CaseKey> {
     let text = |k: &str| c.get(k).and_then(Value::as_str);
     let level = c.get("level").and_then(Value::as_u64)?;
     let delta = c.get("delta").and_then(Value::as_f64)?;
+    if !served(text("u_space")?, text("p_space")?) {
+        return None;
+    }
     Some((
         plan.levels.iter().position(|&l| u64::from(l) == level)?,
         plan.u_spaces
             .iter()
             .position(|s| Some(s.as_str()) == text("u_space"))?,
+        plan.p_spaces
+            .iter()
+            .position(|s| Some(s.as_str()) == text("p_space"))?,
         plan.p_masses
             .iter()
             .position(|s| Some(s.as_str()) == text("p_mass"))?,
@@ -198,11 +216,12 @@ fn case_key(plan: &PlanSummary, c: &Value) -> Option<CaseKey> {
 fn case_words(c: &Value) -> String {
     let get = |k: &str| c.get(k).map(ToString::to_string).unwrap_or_default();
     format!(
-        "level {} {} {} {} δ = {}",
+        "level {} {} {} {} {} p δ = {}",
         get("level"),
         get("u_space"),
         get("multiplier"),
         get("p_mass"),
+        get("p_space"),
         get("delta")
     )
     .replace('"', "")
@@ -381,8 +400,13 @@ fn ordered_cases(solver: &[&Shard], plan: &PlanSummary) -> Result<Vec<Value>, Me
             found.insert(key, (c.clone(), &s.path));
         }
     }
+    let pairs = plan
+        .u_spaces
+        .iter()
+        .map(|u| plan.p_spaces.iter().filter(|p| served(u, p)).count())
+        .sum::<usize>();
     let expected = plan.levels.len()
-        * plan.u_spaces.len()
+        * pairs
         * plan.p_masses.len()
         * plan.deltas.len()
         * plan.multipliers.len();
@@ -400,13 +424,18 @@ fn ordered_cases(solver: &[&Shard], plan: &PlanSummary) -> Result<Vec<Value>, Me
 fn first_missing(plan: &PlanSummary, found: &BTreeMap<CaseKey, (Value, &Path)>) -> String {
     for (l, level) in plan.levels.iter().enumerate() {
         for (u, u_space) in plan.u_spaces.iter().enumerate() {
-            for (p, p_mass) in plan.p_masses.iter().enumerate() {
-                for (d, delta) in plan.deltas.iter().enumerate() {
-                    for (m, multiplier) in plan.multipliers.iter().enumerate() {
-                        if !found.contains_key(&(l, u, p, d, m)) {
-                            return format!(
-                                "level {level} {u_space} {multiplier} {p_mass} δ = {delta}"
-                            );
+            for (s, p_space) in plan.p_spaces.iter().enumerate() {
+                if !served(u_space, p_space) {
+                    continue;
+                }
+                for (p, p_mass) in plan.p_masses.iter().enumerate() {
+                    for (d, delta) in plan.deltas.iter().enumerate() {
+                        for (m, multiplier) in plan.multipliers.iter().enumerate() {
+                            if !found.contains_key(&(l, u, s, p, d, m)) {
+                                return format!(
+                                    "level {level} {u_space} {multiplier} {p_mass} {p_space} p δ = {delta}"
+                                );
+                            }
                         }
                     }
                 }

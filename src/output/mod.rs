@@ -323,6 +323,7 @@ fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xd
                     ("u_space".into(), Meta::Text(c.u_space.to_string())),
                     ("multiplier".into(), Meta::Text(c.multiplier.to_string())),
                     ("p_mass".into(), Meta::Text(c.p_mass.to_string())),
+                    ("p_space".into(), Meta::Text(c.p_space.to_string())),
                     ("delta".into(), Meta::Float(c.delta)),
                 ],
                 constants: vec![("delta".into(), c.delta)],

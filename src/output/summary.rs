@@ -112,6 +112,9 @@ pub struct PlanSummary {
     pub multipliers: Vec<String>,
     /// p masses (`consistent`, `lumped`).
     pub p_masses: Vec<String>,
+    /// p spaces (`continuous`, `broken-tangential`); the broken-tangential p runs with broken u
+    /// only, so the cases are every combination but (continuous u, broken-tangential p).
+    pub p_spaces: Vec<String>,
     /// δ values, decreasing.
     pub deltas: Vec<f64>,
 }
@@ -124,6 +127,7 @@ impl PlanSummary {
             u_spaces: plan.u_spaces.iter().map(ToString::to_string).collect(),
             multipliers: plan.multipliers.iter().map(ToString::to_string).collect(),
             p_masses: plan.p_masses.iter().map(ToString::to_string).collect(),
+            p_spaces: plan.p_spaces.iter().map(ToString::to_string).collect(),
             deltas: plan.deltas.clone(),
         }
     }
@@ -142,6 +146,8 @@ pub struct CaseSummary {
     pub multiplier: String,
     /// `consistent` (the paper's MINI p, with bubble) or `lumped` (p = D⁻¹(…), P1, no bubble).
     pub p_mass: String,
+    /// `continuous` (the paper's p) or `broken-tangential` (p·τ one value per crack face).
+    pub p_space: String,
     /// δ.
     pub delta: f64,
     /// Unknowns (p vertex values, u dofs, multipliers).
@@ -201,14 +207,22 @@ pub fn delta_text(delta: f64) -> String {
 }
 
 /// Name of the δ sweep a case belongs to in the field files, e.g. `level3-broken-M1` (and
-/// `level3-broken-M1-lumped` for the lumped p mass): the time series
+/// `level3-broken-M1-lumped` for the lumped p mass, `level3-broken-M1-ptangential` for the
+/// broken-tangential p, `level3-broken-M1-lumped-ptangential` for both): the time series
 /// `fields/<series>.series.xdmf` whose steps are the sweep's δ.
 pub fn series_name(c: &CaseResult) -> String {
-    let suffix = match c.p_mass {
+    let mass = match c.p_mass {
         crate::problem::PMass::Consistent => "",
         crate::problem::PMass::Lumped => "-lumped",
     };
-    format!("level{}-{}-{}{suffix}", c.level, c.u_space, c.multiplier)
+    let space = match c.p_space {
+        crate::problem::PSpace::Continuous => "",
+        crate::problem::PSpace::BrokenTangential => "-ptangential",
+    };
+    format!(
+        "level{}-{}-{}{mass}{space}",
+        c.level, c.u_space, c.multiplier
+    )
 }
 
 impl CaseSummary {
@@ -220,6 +234,7 @@ impl CaseSummary {
             u_space: c.u_space.name().to_string(),
             multiplier: c.multiplier.name().to_string(),
             p_mass: c.p_mass.name().to_string(),
+            p_space: c.p_space.name().to_string(),
             delta: c.delta,
             unknowns: c.unknowns,
             multipliers: c.multipliers,
@@ -259,7 +274,7 @@ impl CaseSummary {
 mod tests {
     use super::*;
     use crate::contact::LcpStatus;
-    use crate::problem::{MultiplierSpace, PMass, USpace};
+    use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
 
     /// A solved case with awkward numbers: the shortest round trip needs 17 digits, a
     /// subnormal, the smallest normal, an exact zero, huge and tiny exponents.
@@ -270,6 +285,7 @@ mod tests {
             u_space: USpace::Broken,
             multiplier: MultiplierSpace::M1Star,
             p_mass: PMass::Lumped,
+            p_space: PSpace::BrokenTangential,
             delta: 1.5e-8,
             unknowns: 1234,
             multipliers: 17,
@@ -348,8 +364,10 @@ mod tests {
         }
         assert_eq!(
             got["fields_grid"],
-            "level3-broken-M1star-lumped-delta1.5e-8"
+            "level3-broken-M1star-lumped-ptangential-delta1.5e-8"
         );
+        assert_eq!(got["p_space"], "broken-tangential");
+        assert_eq!(got["p_mass"], "lumped");
         assert_eq!(json["recomputation_file"], "fields.h5");
     }
 }

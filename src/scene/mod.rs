@@ -16,8 +16,8 @@ pub use crate::expr::{BatchScratch, Expr, ExprBatch, ExprError, Var};
 // The problem's vocabulary lives in crate::problem (the maths modules use it without this
 // parser); re-exported so that a scene's users find it here too.
 pub use crate::problem::{
-    eval_on_face, Domain, Exact, Meshing, MultiplierSpace, PMass, Polyline, Rectangle, Segment,
-    USpace,
+    eval_on_face, Domain, Exact, Meshing, MultiplierSpace, PMass, PSpace, Polyline, Rectangle,
+    Segment, USpace,
 };
 pub use verification::{ExpectedFailure, Verification};
 
@@ -158,6 +158,9 @@ pub struct Scene {
     pub multipliers: Vec<MultiplierSpace>,
     /// p masses to run (default: the consistent one only).
     pub p_masses: Vec<PMass>,
+    /// p spaces to run (default: the paper's continuous p only); each runs with the u spaces it
+    /// serves ([`PSpace::serves`]).
+    pub p_spaces: Vec<PSpace>,
     /// Regularisation parameters δ ≥ 0 to run.
     pub deltas: Vec<f64>,
     /// Fields to write.
@@ -258,6 +261,8 @@ struct DiscretizationToml {
     multipliers: Vec<String>,
     #[serde(default)]
     p_mass: Option<Vec<String>>,
+    #[serde(default)]
+    p_spaces: Option<Vec<String>>,
     deltas: Vec<f64>,
 }
 
@@ -303,6 +308,7 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
             "u_spaces",
             "multipliers",
             "p_mass",
+            "p_spaces",
             "deltas",
         ],
     ),
@@ -422,13 +428,14 @@ impl Scene {
         )
     }
 
-    /// Total number of cases (level × u space × multiplier × δ).
+    /// Total number of cases (level × served (u space, p space) pair × multiplier × p mass × δ).
     pub fn case_count(&self) -> usize {
-        self.levels.len()
-            * self.u_spaces.len()
-            * self.multipliers.len()
-            * self.p_masses.len()
-            * self.deltas.len()
+        let pairs = self
+            .u_spaces
+            .iter()
+            .map(|&u| self.p_spaces.iter().filter(|p| p.serves(u)).count())
+            .sum::<usize>();
+        self.levels.len() * pairs * self.multipliers.len() * self.p_masses.len() * self.deltas.len()
     }
 }
 
@@ -813,6 +820,11 @@ const KEY_TYPES: &[(&str, &str, &str)] = &[
         "a list of names from \"consistent\", \"lumped\"",
     ),
     (
+        "p_spaces",
+        "discretization.p_spaces",
+        "a list of names from \"continuous\", \"broken-tangential\"",
+    ),
+    (
         "fields",
         "outputs.fields",
         "a list of names from \"u\", \"p\", \"lambda\"",
@@ -1015,6 +1027,23 @@ impl SceneToml {
                 &["consistent", "lumped"],
             )?,
         };
+        let p_spaces = match &d.p_spaces {
+            None => vec![PSpace::Continuous],
+            Some(names) => validate_names(
+                "discretization.p_spaces",
+                names,
+                PSpace::from_name,
+                &["continuous", "broken-tangential"],
+            )?,
+        };
+        if !p_spaces
+            .iter()
+            .any(|p| u_spaces.iter().any(|&u| p.serves(u)))
+        {
+            return Err(SceneError::Value(
+                "discretization.p_spaces = [\"broken-tangential\"] needs broken u: a continuous u cannot open the crack, so u_spaces must list \"broken\" (or p_spaces \"continuous\")".into(),
+            ));
+        }
         let deltas = validate_deltas(&d.deltas)?;
         let (fields, references) = match self.outputs {
             None => (
@@ -1050,6 +1079,7 @@ impl SceneToml {
             u_spaces,
             multipliers,
             p_masses,
+            p_spaces,
             deltas,
             fields,
             references,

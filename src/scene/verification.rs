@@ -23,6 +23,7 @@
 //! u_space = "broken"            # continuous | broken | "*" (default "*")
 //! multiplier = "*"              # M0 | M1 | M1star | "*" (default "*")
 //! p_mass = "*"                  # consistent | lumped | "*" (default "*")
+//! p_space = "*"                 # continuous | broken-tangential | "*" (default "*")
 //! quantity = "u_l2"             # u_l2 | p_l2 | p_x | lambda_l2 | "*" (default "*")
 //! rate = 1.0                    # in (0, 4]: the series must show ≥ rate − 0.1 on its last two steps
 //! reason = "where the order comes from"
@@ -61,6 +62,8 @@ pub struct ExpectedRate {
     pub multiplier: Option<MultiplierSpace>,
     /// `"consistent"`, `"lumped"`, or `None` for both (`"*"`).
     pub p_mass: Option<String>,
+    /// `"continuous"`, `"broken-tangential"`, or `None` for both (`"*"`).
+    pub p_space: Option<String>,
     /// One of [`QUANTITIES`], or `None` for every quantity (`"*"`).
     pub quantity: Option<String>,
     /// The expected order, in (0, 4].
@@ -121,6 +124,7 @@ pub(super) struct ExpectedRateToml {
     u_space: Option<String>,
     multiplier: Option<String>,
     p_mass: Option<String>,
+    p_space: Option<String>,
     quantity: Option<String>,
     rate: f64,
     reason: String,
@@ -160,6 +164,7 @@ pub(super) const EXPECTED_RATE_KEYS: &[&str] = &[
     "u_space",
     "multiplier",
     "p_mass",
+    "p_space",
     "quantity",
     "rate",
     "reason",
@@ -294,6 +299,10 @@ impl ExpectedRateToml {
             )));
         }
         let pms = [(0, "consistent".to_string()), (1, "lumped".to_string())];
+        let pss = [
+            (0, "continuous".to_string()),
+            (1, "broken-tangential".to_string()),
+        ];
         Ok(ExpectedRate {
             u_space: pattern(&key("u_space"), self.u_space.as_deref().unwrap_or("*"), us)?,
             multiplier: pattern(
@@ -303,6 +312,12 @@ impl ExpectedRateToml {
             )?,
             p_mass: pattern(&key("p_mass"), self.p_mass.as_deref().unwrap_or("*"), &pms)?
                 .map(|p| pms[p].1.clone()),
+            p_space: pattern(
+                &key("p_space"),
+                self.p_space.as_deref().unwrap_or("*"),
+                &pss,
+            )?
+            .map(|p| pss[p].1.clone()),
             quantity: pattern(
                 &key("quantity"),
                 self.quantity.as_deref().unwrap_or("*"),

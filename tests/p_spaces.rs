@@ -1,0 +1,230 @@
+//! The broken-tangential p (docs/design.md, The p spaces): observed orders at δ = 0 against the
+//! exact solutions, on the smooth open cracks (straight on the axes, and turned by 45° so that no
+//! frame is an axis), on the graded singular open crack, and on the closed, kinked and
+//! two-crack scenes, whose answers it must leave as they were.
+//!
+//! The orders asserted are the theory's for P1 u and P1 ⊕ bubble p on each side of an open crack
+//! (compare/sdcompare_lib/theory.py): u 2, p 1, λ 2 for the P1 multipliers (M1, M1star) and 1
+//! for the P0 one (M0), each with the verdict's margin 0.1. The continuous p of the same scenes
+//! is held to its own, lower, orders (p 1/2 where the crack opens), so that a change which made
+//! the two spaces the same fails here.
+
+mod common;
+
+use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, USpace};
+use sdcrack::study::{CaseFilter, CaseResult};
+
+/// The repository scene `name` at `levels`, δ = 0, no fields, both p spaces and both p masses.
+fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
+    let mut s = common::load(name);
+    s.levels = levels.to_vec();
+    s.p_masses = vec![PMass::Consistent, PMass::Lumped];
+    s.p_spaces = vec![PSpace::Continuous, PSpace::BrokenTangential];
+    s.deltas = vec![0.0];
+    s.fields = Default::default();
+    s
+}
+
+/// Broken u, every multiplier, both p masses, both p spaces.
+fn solve_broken(scene: &Scene) -> Vec<CaseResult> {
+    let cases = common::solve(
+        scene,
+        CaseFilter {
+            u_space: Some(USpace::Broken),
+            ..CaseFilter::default()
+        },
+    );
+    for c in &cases {
+        assert!(
+            c.converged && c.kkt.max() <= 1e-10,
+            "level {} {} {} {}: {:?}",
+            c.level,
+            c.multiplier,
+            c.p_mass,
+            c.p_space,
+            c.kkt
+        );
+    }
+    cases
+}
+
+/// One series, levels increasing: (size, [e_u, e_p, e_p_x, e_λ]); the size is h, or N^{-1/2}
+/// (N the unknowns) when `by_unknowns`.
+fn series(
+    cases: &[CaseResult],
+    m: MultiplierSpace,
+    p_mass: PMass,
+    p_space: PSpace,
+    by_unknowns: bool,
+) -> Vec<(f64, [f64; 4])> {
+    cases
+        .iter()
+        .filter(|c| c.multiplier == m && c.p_mass == p_mass && c.p_space == p_space)
+        .map(|c| {
+            let e = c.errors.expect("exact scene");
+            let size = if by_unknowns {
+                (c.unknowns as f64).powf(-0.5)
+            } else {
+                c.h
+            };
+            (size, [e.u_l2, e.p_l2, e.p_x, e.lambda_l2])
+        })
+        .collect()
+}
+
+/// The observed rates of the last two steps of quantity `q` of a series.
+fn last_two_rates(s: &[(f64, [f64; 4])], q: usize) -> [f64; 2] {
+    let n = s.len();
+    let r = |a: usize, b: usize| common::rate(s[a].0, s[a].1[q], s[b].0, s[b].1[q]);
+    [r(n - 3, n - 2), r(n - 2, n - 1)]
+}
+
+/// The theory's orders of the broken-tangential p with broken u on a smooth (or graded) open
+/// crack, minus the verdict's margin 0.1: u 2, p 1, p_x 1, λ 2 (M1, M1star) or 1 (M0).
+fn expected(m: MultiplierSpace) -> [f64; 4] {
+    let lambda = if m == MultiplierSpace::M0 { 1.0 } else { 2.0 };
+    [2.0 - 0.1, 1.0 - 0.1, 1.0 - 0.1, lambda - 0.1]
+}
+
+const NAMES: [&str; 4] = ["u", "p", "p_x", "λ"];
+
+fn assert_orders(what: &str, cases: &[CaseResult], by_unknowns: bool, p_floor: f64) {
+    for m in MultiplierSpace::ALL {
+        for p_mass in [PMass::Consistent, PMass::Lumped] {
+            let s = series(cases, m, p_mass, PSpace::BrokenTangential, by_unknowns);
+            let mut want = expected(m);
+            want[1] = want[1].max(p_floor);
+            for q in 0..4 {
+                for r in last_two_rates(&s, q) {
+                    assert!(
+                        r >= want[q],
+                        "{what} {m} {p_mass}: {} rate {r:.3} < {}",
+                        NAMES[q],
+                        want[q]
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// open-smooth (u = sign(y)·max(1/4 − x², 0)³·cos y, no tip singularity), uniform levels 0–5:
+/// the broken-tangential p meets the orders of P1 on each side (measured: u 2.00, p 1.01,
+/// consistent, 1.73 lumped, λ 2.01 for M1 and M1star, 1.00 for M0), while the continuous p of the
+/// same cases stays at p ≈ 1/2 (measured 0.52). The level-4 errors (128 × 64 cells) of broken u,
+/// M1, consistent p are those of the independent prototype (Python, its own assembly
+/// and norms), to its three printed digits: 2.46e-6, 5.08e-4, 4.99e-6 with the doubled
+/// tangential part, 3.10e-5, 2.44e-3, 1.43e-4 with the continuous p.
+#[test]
+fn broken_tangential_p_reaches_the_optimal_orders_on_a_smooth_open_crack() {
+    let cases = solve_broken(&scene_at_levels("open-smooth", &[0, 1, 2, 3, 4, 5]));
+    assert_eq!(cases.len(), 6 * 3 * 2 * 2);
+    assert_orders("open-smooth", &cases, false, 0.9);
+    for p_mass in [PMass::Consistent, PMass::Lumped] {
+        let s = series(
+            &cases,
+            MultiplierSpace::M1,
+            p_mass,
+            PSpace::Continuous,
+            false,
+        );
+        let [_, r] = last_two_rates(&s, 1);
+        assert!(
+            r < 0.6,
+            "continuous p, {p_mass}: p rate {r} (expected ≈ 1/2)"
+        );
+    }
+    for (p_space, want) in [
+        (PSpace::BrokenTangential, [2.46e-6, 5.08e-4, 4.99e-6]),
+        (PSpace::Continuous, [3.10e-5, 2.44e-3, 1.43e-4]),
+    ] {
+        let s = series(
+            &cases,
+            MultiplierSpace::M1,
+            PMass::Consistent,
+            p_space,
+            false,
+        );
+        let e = s[4].1;
+        for (got, want, what) in [
+            (e[0], want[0], "u"),
+            (e[1], want[1], "p"),
+            (e[3], want[2], "λ"),
+        ] {
+            // the prototype prints three digits: a rounding of at most half a unit of the last
+            assert!(
+                (got - want).abs() <= 0.005e-6f64.max(0.0051 * want),
+                "{p_space} level 4 e_{what} = {got:e}, prototype {want:e}"
+            );
+        }
+    }
+}
+
+/// open-smooth-inclined (open-smooth turned by 45°: the frames (ν, τ) are no axes, so the
+/// rotation of the corner unknowns is exercised), uniform levels 1–4, M1: the same orders
+/// (measured u 2.01, p 1.01 consistent and 1.93 lumped, λ 2.01).
+#[test]
+fn broken_tangential_p_converges_on_an_oblique_open_crack() {
+    let mut scene = scene_at_levels("open-smooth-inclined", &[1, 2, 3, 4]);
+    scene.multipliers = vec![MultiplierSpace::M1];
+    let cases = solve_broken(&scene);
+    for p_mass in [PMass::Consistent, PMass::Lumped] {
+        let s = series(
+            &cases,
+            MultiplierSpace::M1,
+            p_mass,
+            PSpace::BrokenTangential,
+            false,
+        );
+        let want = expected(MultiplierSpace::M1);
+        for q in 0..4 {
+            for r in last_two_rates(&s, q) {
+                assert!(r >= want[q], "{p_mass}: {} rate {r:.3}", NAMES[q]);
+            }
+        }
+    }
+}
+
+/// open-graded (the singular open crack, u ~ r^{1/2} at the tips, β = 0.4), levels 0–5, rates per
+/// halving of N^{-1/2}: the broken-tangential p reaches the references' orders (measured, M1: u
+/// 2.15, 2.16; p 1.15, 1.16 consistent and 1.21, 1.22 lumped; λ 2.14, 2.18), where the continuous
+/// p falls back to u ≈ 0.8–0.9, p ≈ 0.6 (docs/design.md). The acceptance asks p ≥ 1.0.
+#[test]
+fn broken_tangential_p_reaches_the_references_orders_on_graded_meshes() {
+    let mut scene = scene_at_levels("open-graded", &[0, 1, 2, 3, 4, 5]);
+    scene.p_spaces = vec![PSpace::BrokenTangential];
+    let cases = solve_broken(&scene);
+    assert_orders("open-graded", &cases, true, 1.0);
+}
+
+/// The closed cracks (smooth u, λ = 0): the extra tangential unknowns change nothing that
+/// matters. closed-exact (structured), kinked-exact (a kink, where p stays shared) and
+/// two-cracks-exact (two cracks, gmsh levels): u within 0.5 % and p within 0.5 % (consistent) or
+/// 4 % (lumped: the recovered p⁻·τ averages half a patch) of the continuous p's at every level,
+/// λ = 0, and the optimal orders u 2, p 1 (measured 2.00–2.01, 1.00–1.01; lumped p 1.57–1.74).
+#[test]
+fn closed_cracks_are_unchanged_by_the_broken_tangential_p() {
+    for name in ["closed-exact", "kinked-exact", "two-cracks-exact"] {
+        let mut scene = scene_at_levels(name, &[1, 2, 3]);
+        scene.multipliers = vec![MultiplierSpace::M1, MultiplierSpace::M1Star];
+        let cases = solve_broken(&scene);
+        for m in &scene.multipliers {
+            for (p_mass, p_band) in [(PMass::Consistent, 0.005), (PMass::Lumped, 0.04)] {
+                let new = series(&cases, *m, p_mass, PSpace::BrokenTangential, false);
+                let old = series(&cases, *m, p_mass, PSpace::Continuous, false);
+                for (a, b) in new.iter().zip(&old) {
+                    let close = |x: f64, y: f64, band: f64| (x - y).abs() <= band * y;
+                    assert!(close(a.1[0], b.1[0], 0.005), "{name} {m} {p_mass}: u");
+                    assert!(close(a.1[1], b.1[1], p_band), "{name} {m} {p_mass}: p");
+                    assert!(a.1[3] < 1e-12, "{name} {m} {p_mass}: e_λ = {}", a.1[3]);
+                }
+                for r in last_two_rates(&new, 0) {
+                    assert!(r >= 1.9, "{name} {m} {p_mass}: u rate {r}");
+                }
+                for r in last_two_rates(&new, 1) {
+                    assert!(r >= 0.9, "{name} {m} {p_mass}: p rate {r}");
+                }
+            }
+        }
+    }
+}
