@@ -40,6 +40,9 @@ def variant(case):
 def table(summary, by="h", delta=None, u_space=None):
     """The Markdown lines of the table."""
     cases = [c for c in summary["cases"] if c.get("errors")]
+    if not cases:
+        raise ValueError("no case has errors (a scene without [exact]: its distances to the "
+                         "references are in the compare tool's report)")
     if delta is None:
         delta = min(c["delta"] for c in cases)
     cases = [c for c in cases if c["delta"] == delta and (u_space is None or c["u_space"] == u_space)]
@@ -73,7 +76,11 @@ def main(argv=None):
     except (OSError, ValueError) as exc:
         print(f"rates_table: cannot read {path}: {exc}", file=sys.stderr)
         return 2
-    print("\n".join(table(summary, args.by, args.delta, args.u_space)))
+    try:
+        print("\n".join(table(summary, args.by, args.delta, args.u_space)))
+    except ValueError as exc:
+        print(f"rates_table: {path}: {exc}", file=sys.stderr)
+        return 2
     return 0
 
 
