@@ -158,17 +158,27 @@ def scene_row(root, name):
 
 # one symbol per quantity, as the report's plots write them
 SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p_X", "lambda_l2": "λ"}
+# the p space's tag in a variant's label, as in the report's labels and the solver's field names
+# (broken/M1/lumped/ptangential); none for the paper's continuous p (a series without `p_space`)
+P_SPACE_TAG = {"continuous": "", "broken-tangential": "ptangential"}
+
+
+def variant_key(s):
+    """"u space/multiplier[/lumped][/ptangential]" of a report.json series: the labels of before
+    the p mass and p space axes for the consistent p mass and the continuous p."""
+    pm, ps = s.get("p_mass"), s.get("p_space")
+    tags = ["" if pm in (None, "consistent") else str(pm),
+            "" if ps is None else P_SPACE_TAG.get(ps, str(ps))]
+    return "/".join([f"{s.get('u_space')}/{s.get('multiplier')}"] + [t for t in tags if t])
 
 
 def converged_line(report):
     """What converged and at which rates, in one line, from report.json's series: the variants
-    (u space/multiplier[/lumped]) whose every quantity converges, the range of their last rates
-    per quantity, and the declared expected failures."""
+    (variant_key: u space/multiplier[/lumped][/ptangential]) whose every quantity converges, the
+    range of their last rates per quantity, and the declared expected failures."""
     variants = {}
     for s in report.get("series") or []:
-        key = f"{s.get('u_space')}/{s.get('multiplier')}" + (
-            "/lumped" if s.get("p_mass") == "lumped" else "")
-        variants.setdefault(key, []).append(s)
+        variants.setdefault(variant_key(s), []).append(s)
     ok = {k: ss for k, ss in variants.items() if all(s.get("status") == "converges" for s in ss)}
     xfail = sorted(k for k, ss in variants.items()
                    if all(s.get("status") == "expected failure" for s in ss))

@@ -94,14 +94,46 @@ def parse_levels(text):
     return list(range(a, b + 1))
 
 
+# The p spaces of sdcrack (`--p-space`) and the suffix each adds to its solver shard's and job's
+# names: none for the paper's continuous p, so that a plan without the axis has the names of before
+# it; "-ptangential" after the p mass for the broken-tangential p, as in the solver's field names
+# (level3-broken-M1-lumped-ptangential-delta0).
+P_SPACE_SUFFIX = {"continuous": "", "broken-tangential": "-ptangential"}
+
+
+def served(u_space, p_space):
+    """Whether sdcrack runs this u space with this p space: the broken-tangential p only with the
+    broken u (`sdcrack run --u-space continuous --p-space broken-tangential` exits 2)."""
+    return not (u_space == "continuous" and p_space == "broken-tangential")
+
+
+def plan_p_spaces(plan):
+    """The plan's p spaces (["continuous"] for a plan of before the axis)."""
+    return list(plan.get("p_spaces") or ["continuous"])
+
+
+def solver_units(plan, level=None, u_space=None):
+    """(level, u space, multiplier, p mass, p space) of each solver job of the plan, in the order
+    levels × u spaces × multipliers × p masses × p spaces, the pairs sdcrack does not run left out;
+    only those of `level` and `u_space` when given (a check job's shards)."""
+    return [(lv, u, m, pm, ps)
+            for lv in plan["levels"] if level is None or int(lv) == int(level)
+            for u in plan["u_spaces"] if u_space is None or u == u_space
+            for m in plan["multipliers"] for pm in plan["p_masses"]
+            for ps in plan_p_spaces(plan) if served(u, ps)]
+
+
+def solver_shard(name, level, u, m, pm, ps):
+    """The solver job's shard folder shards/<name>/solver/l<L>-<u>-<m>-<pm>[-ptangential]."""
+    return f"shards/{name}/solver/l{level}-{u}-{m}-{pm}{P_SPACE_SUFFIX[ps]}"
+
+
 def jobs_of(plan):
     """(solver shard folders, reference shard folders, the check files (one per level and u
     space, one per level for the references; none for a scene without [exact], whose report
     recomputes no error), report folder) of one scene's plan."""
     name = plan["name"]
-    solver = [f"shards/{name}/solver/l{lv}-{u}-{m}-{pm}"
-              for lv in plan["levels"] for u in plan["u_spaces"]
-              for m in plan["multipliers"] for pm in plan["p_masses"]]
+    solver = [solver_shard(name, *unit) for unit in solver_units(plan)]
     refs = [f"shards/{name}/{tool}/l{lv}" for tool in plan["references"] for lv in plan["levels"]]
     checks = []
     if plan.get("exact", True):
@@ -121,9 +153,14 @@ def check_scene(exe, path):
         plan = json.loads(r.stdout)
     except ValueError as exc:
         raise Refused(f"sdcrack check --json printed no JSON object: {exc}") from None
-    for key in ("name", "levels", "u_spaces", "multipliers", "p_masses", "references", "memory_mb"):
+    for key in ("name", "levels", "u_spaces", "multipliers", "p_masses", "p_spaces", "references",
+                "memory_mb"):
         if key not in plan:
             raise Refused(f"sdcrack check --json lacks `{key}` (binary too old?)")
+    unknown = [ps for ps in plan["p_spaces"] if ps not in P_SPACE_SUFFIX]
+    if unknown:
+        raise Refused(f"p space {unknown[0]!r} unknown to the campaign workflow "
+                      f"(it knows {', '.join(P_SPACE_SUFFIX)})")
     return plan
 
 

@@ -12,3 +12,12 @@ def set_key(text, key, value):
     new, n = re.subn(rf"(?m)^{key} = .*$", f"{key} = {value}", text)
     assert n == 1, f"scene line `{key} = ...` not found once"
     return new
+
+
+def add_key(text, after, key, value):
+    """Adds the line `key = value` after the one line `after = ...` of a repository scene (fails
+    loudly if that line moved, or if the scene has a `key = ...` line already)."""
+    assert not re.search(rf"(?m)^{key} = ", text), f"scene line `{key} = ...` already there"
+    new, n = re.subn(rf"(?m)^{after} = .*$", lambda m: f"{m.group(0)}\n{key} = {value}", text)
+    assert n == 1, f"scene line `{after} = ...` not found once"
+    return new

@@ -12,7 +12,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from scene_text import set_key
+from scene_text import add_key, set_key
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack"))
@@ -210,3 +210,118 @@ def test_case_list_of_both_p_masses(tmp_path):
     rows = cases("out/closed-exact", cwd=tmp_path)
     assert len(rows) == 1 and rows[0][:6] == ["closed-exact", "2", "broken", "M1", "lumped", "0"]
     assert "--multiplier M1 --p-mass lumped --out" in rows[0][6]
+
+
+
+BOTH_P_SPACES = '["continuous", "broken-tangential"]'
+
+
+def served_units(levels, multipliers=("M0", "M1", "M1star"), u_spaces=("continuous", "broken"),
+                 p_masses=("consistent", "lumped"), p_spaces=("continuous", "broken-tangential")):
+    """(level, u, m, p mass, p space) of the units a plan serves, counted here: sdcrack runs the
+    broken-tangential p with the broken u only."""
+    return [(lv, u, m, pm, ps) for lv in levels for u in u_spaces for m in multipliers
+            for pm in p_masses for ps in p_spaces
+            if not (u == "continuous" and ps == "broken-tangential")]
+
+
+def test_case_list_of_both_p_spaces(tmp_path):
+    """A scene with p_spaces = ["continuous", "broken-tangential"] and both u spaces: one row per
+    served unit (none for the continuous u with the broken-tangential p). The broken-tangential
+    rows' fifth column is the p mass with `-ptangential`, their commands add `--p-space
+    broken-tangential` and write to their own `-ptangential` folder, and their targets are the
+    workflow's -ptangential shards; the continuous-p rows are those of the scene without p
+    spaces."""
+    text = (ROOT / "scenes" / "closed-exact.toml").read_text()
+    scene = tmp_path / "closed-exact.toml"
+    scene.write_text(add_key(text, "p_mass", "p_spaces", BOTH_P_SPACES))
+    plain_scene = tmp_path / "plain" / "closed-exact.toml"
+    plain_scene.parent.mkdir()
+    plain_scene.write_text(text)
+    plain = cases(plain_scene, cwd=tmp_path)
+    rows_targets = cases_with_targets("--out", "camp", scene, cwd=tmp_path)
+    rows = [r for r, _ in rows_targets]
+    want = served_units(range(5))
+    assert len(rows) == len(want) == 5 * (3 * 2 + 3 * 2 * 2) == 90
+    assert not [r for r in rows if r[2] == "continuous" and r[4].endswith("-ptangential")]
+    tangential = [r for r in rows if r[4].endswith("-ptangential")]
+    continuous = [r for r in rows if not r[4].endswith("-ptangential")]
+    assert len(tangential) == 5 * 3 * 2 and {r[2] for r in tangential} == {"broken"}
+    assert sorted((int(r[1]), r[2], r[3], r[4].removesuffix("-ptangential"),
+                   "broken-tangential" if r[4].endswith("-ptangential") else "continuous")
+                  for r in rows) == sorted(want)
+    assert [r[:6] for r in continuous] == [r[:6] for r in plain]
+    assert [r[6].replace(str(scene), "S") for r in continuous] == \
+        [r[6].replace(str(plain_scene), "S") for r in plain]
+    for r in tangential:
+        cmd = r[6].split()
+        assert cmd[cmd.index("--p-space") + 1] == "broken-tangential"
+        assert cmd.index("--p-space") < cmd.index("--out")
+        assert ("--p-mass lumped" in r[6]) == (r[4] == "lumped-ptangential")
+        lumped = "-lumped" if r[4] == "lumped-ptangential" else ""
+        assert cmd[-1] == str(tmp_path / "results" / "rerun"
+                              / f"closed-exact-l{r[1]}-{r[2]}-{r[3]}{lumped}-ptangential")
+    assert all("--p-space" not in r[6] for r in continuous)
+    outs = [out_of(r[6]) for r in rows]
+    assert len(set(outs)) == len(outs), "one folder per unit"
+    # the targets: the campaign's solver shards, l<L>-<u>-<m>-<column 5>
+    for r, target in rows_targets:
+        assert target == str(tmp_path / "camp" / "shards" / "closed-exact" / "solver"
+                             / f"l{r[1]}-{r[2]}-{r[3]}-{r[4]}")
+    if EXE.is_file():  # and they are exactly the workflow's solver jobs of the scene's plan
+        import sys
+
+        sys.path.insert(0, str(ROOT / "tests" / "python"))
+        import ci_script
+
+        prepare = ci_script.load("ci/workflow/prepare.py")
+        plan = json.loads(subprocess.run([str(EXE), "check", str(scene), "--json"], check=True,
+                                         capture_output=True, text=True).stdout)
+        solver = prepare.jobs_of(dict(plan, exact=True))[0]
+        assert [str(tmp_path / "camp" / s) for s in solver] == [t for _, t in rows_targets]
+
+
+def test_case_list_of_a_p_spaces_results_folder_is_the_reports_rerun_list(tmp_path):
+    """For a results folder with both p spaces in its plan, ci/cases prints exactly the commands
+    the folder's report lists (render.rerun_command with the case's p_space), for the served
+    units only; a folder of a `--p-space broken-tangential` run lists its own units."""
+    import sys
+
+    sys.path.insert(0, str(ROOT / "compare"))
+    import tomllib
+
+    from sdcompare_lib import render
+
+    folder = tmp_path / "runs" / "closed-exact"
+    folder.mkdir(parents=True)
+    text = add_key((ROOT / "scenes" / "closed-exact.toml").read_text(), "p_mass", "p_spaces",
+                   BOTH_P_SPACES)
+    (folder / "scene.toml").write_text(text)
+    exe = str(ROOT / "target" / "release" / "sdcrack")
+    deltas = [1.0, 0.01, 0.0001, 1e-06, 0.0]
+    plan = {"levels": [1, 2], "u_spaces": ["continuous", "broken"], "multipliers": ["M1"],
+            "p_masses": ["consistent", "lumped"], "p_spaces": ["continuous", "broken-tangential"],
+            "deltas": deltas}
+    summary = {"scene": "closed-exact", "plan": plan, "provenance": {"executable": exe}}
+    (folder / "summary.json").write_text(json.dumps(summary))
+    scene = tomllib.loads(text)
+    units = served_units((1, 2), multipliers=("M1",))
+    want = [render.rerun_command(str(folder), summary, scene,
+                                 {"level": lv, "u_space": u, "multiplier": m, "p_mass": pm,
+                                  "p_space": ps, "delta": deltas[0]})
+            for lv, u, m, pm, ps in units]
+    rows = cases(folder, cwd=tmp_path)
+    assert [r[6] for r in rows] == want
+    assert sum("--p-space broken-tangential" in c for c in want) == 2 * 2
+    assert [r[:5] for r in rows] == [
+        ["closed-exact", str(lv), u, m, pm + ("-ptangential" if ps == "broken-tangential" else "")]
+        for lv, u, m, pm, ps in units]
+    # a run restricted to the broken-tangential p (and one δ)
+    (folder / "summary.json").write_text(json.dumps({"plan": {
+        "levels": [2], "u_spaces": ["broken"], "multipliers": ["M1"], "p_masses": ["consistent"],
+        "p_spaces": ["broken-tangential"], "deltas": [0.0]}}))
+    rows = cases(folder, cwd=tmp_path)
+    assert len(rows) == 1 and rows[0][:6] == ["closed-exact", "2", "broken", "M1",
+                                              "consistent-ptangential", "0"]
+    assert "--multiplier M1 --p-space broken-tangential --delta 0 --out" in rows[0][6]
+    assert out_of(rows[0][6]).endswith("/closed-exact-l2-broken-M1-ptangential-d0")

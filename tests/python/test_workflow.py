@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 import pytest
-from scene_text import set_key
+from scene_text import add_key, set_key
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack")).resolve()
@@ -555,3 +555,212 @@ def test_index_lines_say_what_converged_and_the_first_problem():
     assert ci.first_problem(report) == "broken/M0 p_l2: rate 0.21 < 0.4"
     assert ci.first_problem({"series": []}) is None
     assert ci.converged_line({"series": []}) == "no series measured"
+
+
+
+# The p space axis (issue 32): the broken-tangential p runs with the broken u only, so a plan's
+# solver units are levels × u spaces × multipliers × p masses × p spaces minus every (continuous u,
+# broken-tangential p); its shards and jobs carry "-ptangential" after the p mass, the continuous
+# p's keep the names of before the axis.
+BOTH_P_SPACES = '["continuous", "broken-tangential"]'
+
+
+def served_solver_shards(name, levels, u_spaces=("continuous", "broken"),
+                         p_spaces=("continuous", "broken-tangential")):
+    """The solver shards a plan serves, counted here without the workflow's code."""
+    shards = set()
+    for lv in levels:
+        for u in u_spaces:
+            for m in ("M0", "M1", "M1star"):
+                for pm in ("consistent", "lumped"):
+                    for ps in p_spaces:
+                        if u == "continuous" and ps == "broken-tangential":
+                            continue  # sdcrack refuses the pair (exit 2)
+                        suffix = "-ptangential" if ps == "broken-tangential" else ""
+                        shards.add(f"shards/{name}/solver/l{lv}-{u}-{m}-{pm}{suffix}")
+    return shards
+
+
+def test_jobs_of_a_plan_with_and_without_p_spaces():
+    """ci/workflow/prepare.py's list of a plan's jobs (which the Snakefile, the job count and
+    ci/cases share): a plan without p spaces (or with the continuous p alone) has exactly the
+    shard names of before the axis, in the same order; with both p spaces the broken u gets a
+    -ptangential shard per multiplier and p mass, the continuous u none."""
+    import ci_script
+
+    prepare = ci_script.load("ci/workflow/prepare.py")
+    plan = {"name": "s", "levels": [0, 1], "u_spaces": ["continuous", "broken"],
+            "multipliers": ["M0", "M1", "M1star"], "p_masses": ["consistent", "lumped"],
+            "references": ["dolfinx"], "exact": True}
+    before = [f"shards/s/solver/l{lv}-{u}-{m}-{pm}" for lv in (0, 1)
+              for u in ("continuous", "broken") for m in ("M0", "M1", "M1star")
+              for pm in ("consistent", "lumped")]
+    checks = [f"checks/s/solver-l{lv}-{u}.json" for lv in (0, 1) for u in ("continuous", "broken")]
+    checks += [f"checks/s/references-l{lv}.json" for lv in (0, 1)]
+    for p_spaces in (None, ["continuous"]):
+        p = dict(plan) if p_spaces is None else dict(plan, p_spaces=p_spaces)
+        assert prepare.jobs_of(p) == (before, ["shards/s/dolfinx/l0", "shards/s/dolfinx/l1"],
+                                      checks, "s")
+    both = dict(plan, p_spaces=["continuous", "broken-tangential"])
+    solver, _, checks_both, _ = prepare.jobs_of(both)
+    assert len(solver) == len(set(solver)) == 2 * (3 * 2 + 3 * 2 * 2) == 36
+    assert set(solver) == served_solver_shards("s", (0, 1))
+    assert not [s for s in solver if "-continuous-" in s and s.endswith("-ptangential")]
+    assert checks_both == checks  # one check per level and u space, whatever the p spaces
+    # a check's shards: its level's and u space's, both p spaces of the broken u
+    assert prepare.solver_units(both, level="1", u_space="continuous") == [
+        (1, "continuous", m, pm, "continuous") for m in ("M0", "M1", "M1star")
+        for pm in ("consistent", "lumped")]
+    assert len(prepare.solver_units(both, level=1, u_space="broken")) == 12
+    # the broken-tangential p alone, on the broken u: a -ptangential shard per unit
+    alone = dict(plan, u_spaces=["broken"], p_spaces=["broken-tangential"])
+    assert prepare.jobs_of(alone)[0] == [s + "-ptangential" for s in before if "-broken-" in s]
+
+
+def dry_run_blocks(text):
+    """The jobs of `snakemake --dry-run --printshellcmds`: dicts of rule, input (a list), output,
+    shell."""
+    jobs, job = [], None
+    for line in text.splitlines():
+        m = re.match(r"^(?:local)?rule (\w+):$", line)
+        if m:
+            job = {"rule": m.group(1), "input": [], "output": "", "shell": ""}
+            jobs.append(job)
+        elif job is not None and (m := re.match(r"^\s+(input|output): (.*)$", line)):
+            job[m.group(1)] = m.group(2).split(", ") if m.group(1) == "input" else m.group(2)
+        elif job is not None and line.startswith("Shell command: "):
+            job["shell"] = line[len("Shell command: "):]
+    return jobs
+
+
+def test_dry_run_of_both_p_spaces(scenes, tmp_path):
+    """A scene with p_spaces = ["continuous", "broken-tangential"] and both u spaces: the dry run
+    lists exactly the served solver jobs (no continuous u with the broken-tangential p), each
+    broken-tangential job runs `--p-space broken-tangential` into its -ptangential shard, every
+    continuous-p job `--p-space continuous` into the shard of before; each level's check of the
+    broken u reads both p spaces' shards, and the report merges every shard."""
+    files, expectations = scenes
+    scene = tmp_path / "closed-exact.toml"
+    scene.write_text(add_key(files[0].read_text(), "p_mass", "p_spaces", BOTH_P_SPACES))
+    out = tmp_path / "out"
+    r = campaign(scene, "--out", out, "--dry-run", "--expectations", expectations, check=0)
+    jobs = dry_run_jobs(r.stdout)
+    want = served_solver_shards("closed-exact", LEVELS)
+    assert len(want) == len(LEVELS) * (MULTIPLIERS * P_MASSES + MULTIPLIERS * P_MASSES * 2) == 54
+    assert {o for rule, o in jobs if rule == "solver"} == want
+    assert not [o for _, o in jobs if "-continuous-" in o and o.endswith("-ptangential")]
+    others = {j for j in expected_jobs(out, ["closed-exact"]) if j[0] != "solver"}
+    assert jobs == {("solver", o) for o in want} | others
+    checks = len(LEVELS) * (U_SPACES + 1)
+    total = len(want) + REFERENCE_JOBS + checks + 1
+    assert (f"campaign: dry run: {total} of {total} jobs would run (solver {len(want)}, "
+            f"reference {REFERENCE_JOBS}, check {checks}, report 1)") in r.stdout
+    assert sum(o.endswith("-ptangential") for _, o in jobs) == len(LEVELS) * MULTIPLIERS * P_MASSES
+    # the jobs' commands: Snakemake's own dry run of the same config, with the shell commands
+    sm = subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "ci" / "workflow" / "Snakefile"),
+                         "--directory", str(out), "--configfile",
+                         str(out / "inputs" / "config.dry-run.json"), "--cores", "1",
+                         "--dry-run", "--printshellcmds"], capture_output=True, text=True)
+    assert sm.returncode == 0, sm.stdout[-3000:] + sm.stderr[-3000:]
+    blocks = dry_run_blocks(sm.stdout)
+    solver = {b["output"]: b["shell"] for b in blocks if b["rule"] == "solver"}
+    assert set(solver) == want
+    for shard, shell in solver.items():
+        lv, u, m, pm = re.fullmatch(r"shards/closed-exact/solver/l(\d+)-(\w+)-(\w+)-(\w+)"
+                                    r"(?:-ptangential)?", shard).groups()
+        ps = "broken-tangential" if shard.endswith("-ptangential") else "continuous"
+        assert (f" --level {lv} --u-space {u} --multiplier {m} --p-mass {pm} --p-space {ps} "
+                f"--solver-only --quiet --out {shard}") in shell, shell
+    assert sum("--p-space broken-tangential" in s for s in solver.values()) == 18
+    assert not [s for s in solver.values() if "--u-space continuous" in s
+                and "--p-space broken-tangential" in s]
+    checks = {b["output"]: {i for i in b["input"] if i.startswith("shards/")}
+              for b in blocks if b["rule"] == "check_solver"}
+    assert set(checks) == {f"checks/closed-exact/solver-l{lv}-{u}.json" for lv in LEVELS
+                           for u in ("continuous", "broken")}
+    for check, shards in checks.items():
+        lv, u = re.fullmatch(r"checks/closed-exact/solver-l(\d+)-(\w+)\.json", check).groups()
+        assert shards == {s for s in want if s.startswith(f"shards/closed-exact/solver/l{lv}-{u}-")}
+        assert len(shards) == (12 if u == "broken" else 6)
+    (report,) = [b for b in blocks if b["rule"] == "report"]
+    assert {i for i in report["input"] if i.startswith("shards/closed-exact/solver/")} == want
+    for shard in want:
+        assert f" {shard}/closed-exact " in report["shell"]
+
+
+def test_index_labels_of_the_p_spaces():
+    """The index's variants tell the p spaces apart (broken/M1/ptangential,
+    broken/M1/lumped/ptangential); the continuous p's labels are those of before the axis, whether
+    report.json writes its p_space (a run with both p spaces) or not (a run without the axis)."""
+    import ci_script
+
+    ci = ci_script.load("ci/campaign_index.py")
+
+    def s(u, m, q, status, rate, pm="consistent", ps=None):
+        row = {"u_space": u, "multiplier": m, "p_mass": pm, "quantity": q, "status": status,
+               "rates": [1.0, rate]}
+        if ps is not None:
+            row["p_space"] = ps
+        return row
+    assert ci.variant_key(s("broken", "M1", "u_l2", "converges", 1.0)) == "broken/M1"
+    assert ci.variant_key(s("broken", "M1", "u_l2", "converges", 1.0, ps="continuous")) == \
+        "broken/M1"
+    assert ci.variant_key(s("broken", "M1", "u_l2", "converges", 1.0, "lumped", "continuous")) == \
+        "broken/M1/lumped"
+    assert ci.variant_key(s("broken", "M1", "u_l2", "converges", 1.0,
+                            ps="broken-tangential")) == "broken/M1/ptangential"
+    assert ci.variant_key(s("broken", "M1", "u_l2", "converges", 1.0, "lumped",
+                            "broken-tangential")) == "broken/M1/lumped/ptangential"
+    report = {"series": [
+        s("broken", "M1", "u_l2", "converges", 0.95, ps="continuous"),
+        s("broken", "M1", "u_l2", "converges", 0.99, ps="broken-tangential"),
+        s("broken", "M1", "u_l2", "converges", 0.97, "lumped", "broken-tangential"),
+        s("broken", "M0", "u_l2", "does not converge", 0.2, ps="broken-tangential"),
+        s("continuous", "M1", "u_l2", "expected failure", -0.03, ps="continuous")]}
+    assert ci.converged_line(report) == (
+        "3 of 5 variants converge (broken/M1, broken/M1/lumped/ptangential, "
+        "broken/M1/ptangential); last rates u 0.95–0.99; 1 declared expected failure(s)")
+
+
+def test_both_p_spaces_merge_as_one_process(tmp_path):
+    """A campaign of a scene with both p spaces (closed-exact at levels 0-1, no references) runs
+    the served solver jobs, its checks cover both p spaces' shards, and the merge gives the
+    folder a single `sdcrack run` writes: same plan (with p_spaces), cases, fields and XDMF
+    (the -ptangential ones included) and the same verdict."""
+    text = (ROOT / "scenes" / "closed-exact.toml").read_text()
+    for key, value in (("levels", "[0, 1]"), ("references", "[]")):
+        text = set_key(text, key, value)
+    scene = tmp_path / "closed-exact.toml"
+    scene.write_text(add_key(text, "p_mass", "p_spaces", BOTH_P_SPACES))
+    expectations = tmp_path / "expectations.toml"
+    expectations.write_text(
+        '[[expectation]]\nscene = "closed-exact"\nu_space = "*"\nmultiplier = "*"\n'
+        'quantity = "u_l2"\nlevel = 1\nmax_error = 1.0\n')
+    out = tmp_path / "out"
+    r = campaign(scene, "--out", out, "--cores", 2, "--expectations", expectations)
+    assert r.returncode in (0, 1), r.stdout[-3000:] + r.stderr[-3000:]
+    shards = {str(p.relative_to(out)) for p in out.glob("shards/closed-exact/solver/*")}
+    assert shards == served_solver_shards("closed-exact", (0, 1))
+    for shard in shards:  # each shard holds its own p space's cases, and only those
+        summary = json.loads((out / shard / "closed-exact" / "summary.json").read_text())
+        ps = "broken-tangential" if shard.endswith("-ptangential") else "continuous"
+        assert summary["plan"]["p_spaces"] == [ps]
+        assert {c["p_space"] for c in summary["cases"]} == {ps}
+    assert sorted(p.name for p in (out / "checks" / "closed-exact").iterdir()) == [
+        f"solver-l{lv}-{u}.json" for lv in (0, 1) for u in ("broken", "continuous")]
+    single = tmp_path / "single"
+    r = subprocess.run([str(EXE), "run", str(out / "inputs" / "closed-exact.toml"), "--out",
+                        str(single), "--quiet"], capture_output=True, text=True)
+    assert r.returncode in (0, 3), r.stderr
+    r = subprocess.run(["/usr/bin/python3", str(ROOT / "compare" / "sdcompare"),
+                        str(single / "closed-exact"), "--quiet", "--expectations",
+                        str(expectations)],
+                       capture_output=True, text=True)
+    assert r.returncode in (0, 1), r.stderr
+    assert_same_results(out / "closed-exact", single / "closed-exact")
+    merged = json.loads((out / "closed-exact" / "summary.json").read_text())
+    assert merged["plan"]["p_spaces"] == ["continuous", "broken-tangential"]
+    assert len(merged["cases"]) == 2 * 18 * 5  # levels × served units × δ
+    assert any("-ptangential" in c["fields_grid"] for c in merged["cases"])
+    assert not [c for c in merged["cases"]
+                if (c["u_space"], c["p_space"]) == ("continuous", "broken-tangential")]
