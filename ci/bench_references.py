@@ -5,8 +5,15 @@ For one scene with an `[exact]` solution and each level, runs (one process per t
 timed from outside with a wall clock):
 
 * sdcrack: `sdcrack run` of one case (broken u, M1, δ = 0; no fields, no reference run), once per
-  p mass of `--p-masses`: row key `sdcrack` (`--p-mass consistent`, the paper's) and row key
-  `sdcrack-lumped` (`--p-mass lumped`);
+  p mass of `--p-masses` and p space of `--p-spaces` (`--p-mass PM --p-space PS`), under the row
+  keys
+    `sdcrack`                    consistent p mass (the paper's), continuous p (the paper's),
+    `sdcrack-lumped`             lumped p mass, continuous p,
+    `sdcrack-ptangential`        consistent p mass, broken-tangential p (p's tangential component
+                                 may jump across the crack; broken u only),
+    `sdcrack-lumped-ptangential` lumped p mass, broken-tangential p
+  (labels `sdcrack`, `sdcrack (lumped p)`, `sdcrack (broken-tangential p)`, `sdcrack (lumped,
+  broken-tangential p)`);
 * dolfinx / FreeFEM: `sdcrack mesh` (not timed: it is shared input), then the reference script.
 
 Each tool reports its own ‖u_h − u‖_{L²} against the exact solution, each with a tip-graded
@@ -16,8 +23,9 @@ error evaluation), and the solve time by each tool's own timer without start-up 
 error evaluation (sdcrack: its phases but `norms`; dolfinx: assembly + solve; FreeFEM: the
 FreeFem++ run). The speed-up at equal error interpolates each reference's (error, time) curve
 log-log at each sdcrack variant's errors and divides by that variant's time of the same kind; the
-lumped variant is also compared with the consistent one the same way (consistent's time at
-lumped's error / lumped's time).
+lumped variant of each p space is also compared with the consistent one the same way
+(consistent's time at lumped's error / lumped's time), and the broken-tangential variant of each p
+mass with the continuous one (continuous's time at broken-tangential's error / its time).
 
 Load control: before each measurement (one tool at one level) the script waits until the machine
 is idle (1-min load average < 1.0 and other processes < 0.1 core over 2 s; it gives up after
@@ -28,24 +36,47 @@ from os.times()) / wall; at ≥ 0.2 core the measurement is rejected and repeate
 One line per try goes to OUT/work_precision.load.txt.
 
 Writes OUT/work_precision.{json,md,png} and prints the Markdown table. The JSON has
-`scene`, `p_masses`, `levels` (one object per level: `level` and, per tool present at that level,
-an object with wall_s, solver_s, u_l2, unknowns, kkt, the load check `load` {status, tries,
-foreign_cores} and, for sdcrack, norms_s; tool keys `sdcrack`, `sdcrack-lumped`, `dolfinx`,
-`freefem`), `speedup_solver_time` and `speedup_wall_time` (dicts keyed by sdcrack variant,
-`sdcrack` / `sdcrack-lumped`, each a list of {level, u_l2, dolfinx, freefem}, the ratios or null
-outside the reference's range) and `lumped_vs_consistent` (a list of {level, u_l2, solve, wall}:
-consistent's time at lumped's error / lumped's time, null outside consistent's range).
+`scene`, `p_masses`, `p_spaces`, `levels` (one object per level: `level` and, per tool present at
+that level, an object with wall_s, solver_s, u_l2, unknowns, kkt, the load check `load` {status,
+tries, foreign_cores} and, for sdcrack, norms_s; tool keys the four sdcrack row keys above,
+`dolfinx`, `freefem`), `speedup_solver_time` and `speedup_wall_time` (dicts keyed by sdcrack
+variant row key, each a list of {level, u_l2, dolfinx, freefem}, the ratios or null outside the
+reference's range), `lumped_vs_consistent` (continuous p) and `lumped_vs_consistent_ptangential`
+(broken-tangential p), each a list of {level, u_l2, solve, wall}: consistent's time at lumped's
+error / lumped's time, null outside consistent's range, [] unless both p masses ran, and
+`ptangential_vs_continuous` (a dict keyed by the broken-tangential row key, `sdcrack-ptangential`,
+`sdcrack-lumped-ptangential` and, with a graded scene, the same with `@graded`; each a list of
+{level, u_l2, solve, wall}: the continuous variant's time, same p mass and meshes, at its error /
+its time; {} unless both p spaces ran).
 
 With `--graded-scene` (the same problem on meshes graded towards the crack tips, e.g.
 scenes/open-graded.toml) every tool also runs on that scene's levels, under row keys with the
-suffix `@graded` (`sdcrack@graded`, `dolfinx@graded`, …). Each graded sdcrack variant is then
-compared by wall time, at its own errors, with both references on the uniform meshes, both on the
-graded meshes and itself on the uniform meshes (JSON `speedup_graded_wall_time`, keyed by the
-graded row key, entries {level, u_l2, dolfinx, freefem, dolfinx@graded, freefem@graded, sdcrack
-or sdcrack-lumped}), and held to issue 24's goal: ≥ 100× faster than the faster uniform
-reference at the finest error that reference reaches (JSON `graded_goal`, one line per variant
-printed with MET or MISSED). The plot draws uniform meshes dashed with open markers and graded
-meshes solid with filled ones, one colour per tool and p mass.
+suffix `@graded` (`sdcrack@graded`, `sdcrack-ptangential@graded`, `dolfinx@graded`, …). Each
+graded sdcrack variant is then compared by wall time, at its own errors, with both references on
+the uniform meshes, both on the graded meshes and itself on the uniform meshes (JSON
+`speedup_graded_wall_time`, keyed by the graded row key, entries {level, u_l2, dolfinx, freefem,
+dolfinx@graded, freefem@graded, and the variant's own uniform row key}), and held to two goals,
+each printed as one line per variant with MET or MISSED:
+
+* issue 24 (every variant): ≥ 100× faster than the faster uniform reference at the finest error
+  that reference reaches (JSON `graded_goal`, a list of {variant, reference, reference_level,
+  u_l2, reference_wall_s, graded_wall_s, ratio, met});
+* issue 32 (the broken-tangential variants): "graded sdcrack reaches every graded reference error
+  faster than dolfinx and FreeFEM by wall time, ≥ 10× at every matched error". At each level of
+  dolfinx@graded and freefem@graded whose error lies within the variant's own graded errors, the
+  reference's wall time / the variant's wall time interpolated log-log at that error must be
+  ≥ 10. A reference error outside the variant's range is not matched: listed as such, never
+  counted as met; with none matched the goal is MISSED. The line gives the worst (smallest)
+  factor, the reference and level where it occurs, and how many reference errors were matched.
+  JSON `graded_goal_issue32`, a list of {variant, goal, points (one per reference level:
+  {reference, level, u_l2, reference_wall_s, wall_s, ratio, matched}; wall_s and ratio null when
+  not matched), errors ([smallest, largest] of the variant's graded errors), n_references,
+  n_matched, n_below_goal, worst (the point of the smallest ratio, or null), ratio (its ratio),
+  met}.
+
+The plot draws uniform meshes dashed with open markers and graded meshes solid with filled ones,
+one colour per tool and p mass, sdcrack's p space by the marker (continuous: circle for the
+consistent, diamond for the lumped p mass; broken-tangential: plus, cross).
 """
 
 import argparse
@@ -63,14 +94,25 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 SDCRACK = ROOT / "target" / "release" / "sdcrack"
 TOOLS = ("dolfinx", "freefem")
-# sdcrack's p masses → row key and label
-VARIANTS = {"consistent": "sdcrack", "lumped": "sdcrack-lumped"}
-LABELS = {"sdcrack": "sdcrack", "sdcrack-lumped": "sdcrack (lumped p)"}
+# sdcrack's p masses and p spaces (`--p-mass`, `--p-space`); a variant is one of each
+P_MASSES = ("consistent", "lumped")
+P_SPACES = ("continuous", "broken-tangential")
+# (p mass, p space) → row key: `sdcrack`, `sdcrack-lumped` (continuous p, the keys from before the
+# p spaces), `sdcrack-ptangential`, `sdcrack-lumped-ptangential`
+VARIANTS = {(m, s): "sdcrack" + ("-lumped" if m == "lumped" else "")
+            + ("-ptangential" if s == "broken-tangential" else "")
+            for s in P_SPACES for m in P_MASSES}
+LABELS = {"sdcrack": "sdcrack", "sdcrack-lumped": "sdcrack (lumped p)",
+          "sdcrack-ptangential": "sdcrack (broken-tangential p)",
+          "sdcrack-lumped-ptangential": "sdcrack (lumped, broken-tangential p)"}
 # a row key on the graded scene's meshes: the tool's key with this suffix
 GRADED = "@graded"
 # the goal of issue 24: graded sdcrack this many times faster by wall time than the faster
 # uniform reference at the finest error that reference reaches
 GRADED_GOAL = 100.0
+# the goal of issue 32: graded sdcrack with the broken-tangential p this many times faster by wall
+# time than each graded reference at every error of that reference its own errors reach
+GRADED_GOAL_ISSUE32 = 10.0
 IDLE_LOAD = 1.0  # 1-min load average below which the machine counts as idle
 IDLE_FOREIGN = 0.1  # cores used by other processes below which the machine counts as idle
 REJECT_FOREIGN = 0.2  # cores used by other processes during a measurement that reject it
@@ -187,19 +229,42 @@ def graded(key):
     return key + GRADED
 
 
+def variant_key(p_mass="consistent", p_space="continuous"):
+    """The row key of the sdcrack variant with this p mass and p space."""
+    return VARIANTS[(p_mass, p_space)]
+
+
+def variant_of(key):
+    """(p mass, p space) of an sdcrack variant's row key (with or without the graded suffix)."""
+    base = key.removesuffix(GRADED)
+    return next(v for v, k in VARIANTS.items() if k == base)
+
+
+def variant_name(key):
+    """The variant column of the speed-up tables: 'consistent', 'lumped', 'consistent,
+    broken-tangential p', 'lumped, broken-tangential p'."""
+    mass, space = variant_of(key)
+    return mass if space == "continuous" else f"{mass}, {space} p"
+
+
 def label(key):
     """'sdcrack (lumped p), graded' for 'sdcrack-lumped@graded'."""
     base = key.removesuffix(GRADED)
     return LABELS.get(base, base) + (", graded" if key.endswith(GRADED) else "")
 
 
-def run_sdcrack(scene_file, level, work, p_mass="consistent", tag=""):
+def sdcrack_command(scene_file, level, out, p_mass="consistent", p_space="continuous"):
+    """The `sdcrack run` of one case: broken u, M1, δ = 0, this p mass and p space."""
+    return [SDCRACK, "run", scene_file, "--level", str(level), "--u-space", "broken",
+            "--multiplier", "M1", "--p-mass", p_mass, "--p-space", p_space, "--delta", "0",
+            "--out", out, "--quiet"]
+
+
+def run_sdcrack(scene_file, level, work, p_mass="consistent", tag="", p_space="continuous"):
     """One sdcrack case; `tag` keeps the graded scene's folders apart from the uniform one's."""
-    out = work / f"sd{tag}{level}-{p_mass}"
+    out = work / f"sd{tag}{level}-{p_mass}-{p_space}"
     shutil.rmtree(out, ignore_errors=True)  # a repeated try writes afresh
-    wall = run_timed([SDCRACK, "run", scene_file, "--level", str(level), "--u-space", "broken",
-                      "--multiplier", "M1", "--p-mass", p_mass, "--delta", "0", "--out", out,
-                      "--quiet"])
+    wall = run_timed(sdcrack_command(scene_file, level, out, p_mass, p_space))
     (summary,) = out.glob("*/summary.json")
     case = json.loads(summary.read_text())["cases"][0]
     return {
@@ -314,13 +379,89 @@ def goal_line(g):
                    f"{g['graded_wall_s']:.2f} s)")
 
 
-def lumped_vs_consistent(rows):
-    """For each lumped row: consistent's time at lumped's error / lumped's time (both timers)."""
-    lumped = VARIANTS["lumped"]
-    return [{"level": r["level"], "u_l2": r[lumped]["u_l2"],
-             **{name: ratio_at_error(rows, "sdcrack", key, r[lumped]["u_l2"], r[lumped][key])
+def graded_goal_issue32(rows, variants):
+    """Issue 32's goal for each graded sdcrack variant with the broken-tangential p among
+    `variants` (row keys without the suffix; the others are skipped): at every error of each
+    graded reference (every level of dolfinx@graded and freefem@graded) that the graded variant's
+    own errors bracket, the reference's wall time / the variant's wall time interpolated log-log
+    at that error must be ≥ GRADED_GOAL_ISSUE32. An error outside the variant's range is not
+    matched (ratio None) and never counts as met; with no error matched the goal is MISSED. [] when
+    no graded reference ran."""
+    refs = [graded(t) for t in TOOLS]
+    points_ref = [(tool, r["level"], r[tool]["u_l2"], r[tool]["wall_s"])
+                  for tool in refs for r in rows if tool in r]
+    if not points_ref:
+        return []
+    out = []
+    for v in variants:
+        if variant_of(v)[1] != "broken-tangential":
+            continue
+        curve = [(r[graded(v)]["u_l2"], r[graded(v)]["wall_s"]) for r in rows if graded(v) in r]
+        if not curve:
+            continue
+        points = []
+        for tool, level, e, t in points_ref:
+            tv = time_at_error(curve, e)
+            points.append({"reference": tool, "level": level, "u_l2": e, "reference_wall_s": t,
+                           "wall_s": tv, "ratio": None if tv is None else t / tv,
+                           "matched": tv is not None})
+        matched = [x for x in points if x["matched"]]
+        worst = min(matched, key=lambda x: x["ratio"], default=None)
+        out.append({"variant": v, "goal": GRADED_GOAL_ISSUE32, "points": points,
+                    "errors": [min(e for e, _ in curve), max(e for e, _ in curve)],
+                    "n_references": len(points), "n_matched": len(matched),
+                    "n_below_goal": sum(x["ratio"] < GRADED_GOAL_ISSUE32 for x in matched),
+                    "worst": worst, "ratio": None if worst is None else worst["ratio"],
+                    "met": worst is not None and worst["ratio"] >= GRADED_GOAL_ISSUE32})
+    return out
+
+
+def goal_line_issue32(g):
+    """One printed line per graded broken-tangential variant: MET or MISSED, the worst factor and
+    where it occurs, and how many reference errors were matched (the others listed)."""
+    head = (f"goal (issue 32): {label(graded(g['variant']))} >= {g['goal']:.0f}x faster by wall "
+            "time than dolfinx and FreeFEM on graded meshes at every graded reference error it "
+            "reaches: ")
+    lo, hi = g["errors"]
+    missed = [x for x in g["points"] if not x["matched"]]
+    tail = ""
+    if missed:
+        tail = (f"; not matched, outside its errors {lo:.3e}..{hi:.3e}: "
+                + ", ".join(f"{label(x['reference'])} L{x['level']} ({x['u_l2']:.3e})"
+                            for x in missed))
+    if g["worst"] is None:
+        return head + (f"MISSED (none of the {g['n_references']} graded reference errors "
+                       f"matched{tail})")
+    w = g["worst"]
+    return head + (f"{'MET' if g['met'] else 'MISSED'} (worst {w['ratio']:.1f}x against "
+                   f"{label(w['reference'])} at level {w['level']}, error {w['u_l2']:.3e}: "
+                   f"{w['reference_wall_s']:.2f} s vs {w['wall_s']:.3f} s; {g['n_matched']} of "
+                   f"{g['n_references']} graded reference errors matched, {g['n_below_goal']} "
+                   f"below {g['goal']:.0f}x{tail})")
+
+
+def versus(rows, variant, baseline):
+    """For each row of sdcrack `variant` (a row key): `baseline`'s time (another variant's row
+    key) interpolated log-log at the variant's error / the variant's time, by both timers (None
+    outside the baseline's range)."""
+    return [{"level": r["level"], "u_l2": r[variant]["u_l2"],
+             **{name: ratio_at_error(rows, baseline, key, r[variant]["u_l2"], r[variant][key])
                 for name, key in (("solve", "solver_s"), ("wall", "wall_s"))}}
-            for r in rows if lumped in r]
+            for r in rows if variant in r]
+
+
+def lumped_vs_consistent(rows, p_space="continuous"):
+    """For each lumped row of this p space: consistent's time at lumped's error / lumped's time
+    (both timers)."""
+    return versus(rows, variant_key("lumped", p_space), variant_key("consistent", p_space))
+
+
+def ptangential_vs_continuous(rows, p_mass="consistent", suffix=""):
+    """For each row of the broken-tangential variant of this p mass (on the graded meshes with
+    `suffix` GRADED): the continuous-p variant's time (same p mass, same meshes) at its error / its
+    time (both timers)."""
+    return versus(rows, variant_key(p_mass, "broken-tangential") + suffix,
+                  variant_key(p_mass) + suffix)
 
 
 def fmt_x(v):
@@ -337,18 +478,38 @@ def level_line(level, tool, x):
             f"{x['wall_s']:.2f} | {x['solver_s']:.2f} | {norms} | {ratio} |")
 
 
+def versus_table(intro, first, entries, with_variant=False):
+    """A table of versus() entries ({level, u_l2, solve, wall}); `first`: the error column's
+    title; `with_variant`: entries are (row key, entry) pairs and get a variant column."""
+    head = "| level | variant " if with_variant else "| level "
+    lines = ["", intro, "", f"{head}| {first} | solve | wall |",
+             "|---|---|---|---|" + ("---|" if with_variant else "")]
+    for item in entries:
+        key, x = item if with_variant else (None, item)
+        mid = f"| {label(key)} " if with_variant else ""
+        lines.append(f"| {x['level']} {mid}| {x['u_l2']:.3e} | {fmt_x(x['solve'])} | "
+                     f"{fmt_x(x['wall'])} |")
+    return lines
+
+
 def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=(), graded_fast=None, goals=(),
-             graded_scene=None):
+             graded_scene=None, ptangential_fast=None, goals32=()):
     """The report; `fast_internal` / `fast_wall`: speedups() per sdcrack variant (row key);
+    `lumped_fast`: lumped_vs_consistent(), a list (continuous p) or a dict keyed by p space;
     `graded_fast`: wall-time speedups() of each graded variant (row key) against
-    graded_against(); `goals`: graded_goal()."""
+    graded_against(); `goals`: graded_goal(); `ptangential_fast`: ptangential_vs_continuous()
+    keyed by the broken-tangential variant's row key (uniform or graded); `goals32`:
+    graded_goal_issue32()."""
     lines = [f"# Work-precision: scene `{scene}` (broken u, M1, δ = 0 for sdcrack)", "",
              "Times in seconds, one process per tool and level on this machine. `wall`: the whole "
              "process (start-up, imports, solve and error evaluation); `solve`: the tool's own "
              "timer without start-up and without error evaluation (sdcrack: its phases but the "
              "error norms; dolfinx: assembly + solve; FreeFEM: the FreeFem++ run); `norms`: "
              "sdcrack's error-norm evaluation. `sdcrack`: consistent p mass (the paper's); "
-             "`sdcrack (lumped p)`: lumped p mass.", "",
+             "`sdcrack (lumped p)`: lumped p mass; both with the continuous p (the paper's). "
+             "`sdcrack (broken-tangential p)`, `sdcrack (lumped, broken-tangential p)`: the same "
+             "p masses with `--p-space broken-tangential` (p's tangential component may jump "
+             "across the crack).", "",
              "| level | tool | unknowns | ‖u_h − u‖_L² | wall s | solve s | norms s "
              "| norms / solve |", "|---|---|---|---|---|---|---|---|"]
     keys = (*VARIANTS.values(), *TOOLS)
@@ -361,19 +522,30 @@ def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=(), graded_fast=
               "| level | variant | sdcrack ‖u_h − u‖ | vs dolfinx (solve) "
               "| vs FreeFEM (solve) | vs dolfinx (wall) | vs FreeFEM (wall) |",
               "|---|---|---|---|---|---|---|"]
-    entries = sorted(((a["level"], mass, a, b) for mass, key in VARIANTS.items()
+    order = list(VARIANTS.values())
+    entries = sorted(((a["level"], key, a, b) for key in order
                       for a, b in zip(fast_internal.get(key, []), fast_wall.get(key, []))),
-                     key=lambda x: (x[0], list(VARIANTS).index(x[1])))
-    for level, mass, a, b in entries:
-        lines.append(f"| {level} | {mass} | {a['u_l2']:.3e} | {fmt_x(a['dolfinx'])} | "
+                     key=lambda x: (x[0], order.index(x[1])))
+    for level, key, a, b in entries:
+        lines.append(f"| {level} | {variant_name(key)} | {a['u_l2']:.3e} | {fmt_x(a['dolfinx'])} | "
                      f"{fmt_x(a['freefem'])} | {fmt_x(b['dolfinx'])} | {fmt_x(b['freefem'])} |")
-    if lumped_fast:
-        lines += ["", "Lumped against consistent p mass at equal error (consistent's time "
-                  "interpolated log-log at lumped's error, divided by lumped's time; – outside "
-                  "consistent's range):", "",
-                  "| level | lumped ‖u_h − u‖ | solve | wall |", "|---|---|---|---|"]
-        lines += [f"| {x['level']} | {x['u_l2']:.3e} | {fmt_x(x['solve'])} | {fmt_x(x['wall'])} |"
-                  for x in lumped_fast]
+    if not isinstance(lumped_fast, dict):
+        lumped_fast = {"continuous": lumped_fast}
+    for space in P_SPACES:
+        if not lumped_fast.get(space):
+            continue
+        which = "" if space == "continuous" else f", both with the {space} p"
+        lines += versus_table(
+            f"Lumped against consistent p mass at equal error{which} (consistent's time "
+            "interpolated log-log at lumped's error, divided by lumped's time; – outside "
+            "consistent's range):", "lumped ‖u_h − u‖", lumped_fast[space])
+    if ptangential_fast:
+        lines += versus_table(
+            "Broken-tangential against continuous p at equal error (the continuous-p variant's "
+            "time, same p mass and meshes, interpolated log-log at the broken-tangential "
+            "variant's error, divided by its time; – outside the continuous variant's range):",
+            "‖u_h − u‖", [(k, x) for k, xs in ptangential_fast.items() for x in xs],
+            with_variant=True)
     if graded_fast:
         lines += ["", f"sdcrack on the graded meshes of `{graded_scene}` at equal error, by wall "
                   "time (the other curve's wall time interpolated log-log at the graded variant's "
@@ -383,18 +555,20 @@ def markdown(scene, rows, fast_internal, fast_wall, lumped_fast=(), graded_fast=
                   "|---|---|---|---|---|---|---|---|"]
         for key, entries in graded_fast.items():
             base = key.removesuffix(GRADED)
-            mass = next(m for m, k in VARIANTS.items() if k == base)
-            lines += [f"| {a['level']} | {mass} | {a['u_l2']:.3e} | "
+            lines += [f"| {a['level']} | {variant_name(base)} | {a['u_l2']:.3e} | "
                       + " | ".join(fmt_x(a[o]) for o in graded_against(base)) + " |"
                       for a in entries]
-    if goals:
-        lines += [""] + [goal_line(g) for g in goals]
+    if goals or goals32:
+        lines += [""] + [goal_line(g) for g in goals] + [goal_line_issue32(g) for g in goals32]
     return "\n".join(lines) + "\n"
 
 
-# marker and colour per tool and p mass; uniform meshes: dashed, open markers; graded: solid, filled
-PLOT_STYLE = {"sdcrack": ("o", "C0"), "sdcrack-lumped": ("D", "C1"), "dolfinx": ("s", "C2"),
-              "freefem": ("^", "C3")}
+# colour per tool and p mass, marker per tool and p space (sdcrack's continuous p: round/diamond,
+# broken-tangential p: filled plus/cross); uniform meshes: dashed, open markers; graded: solid,
+# filled
+PLOT_STYLE = {"sdcrack": ("o", "C0"), "sdcrack-lumped": ("D", "C1"),
+              "sdcrack-ptangential": ("P", "C0"), "sdcrack-lumped-ptangential": ("X", "C1"),
+              "dolfinx": ("s", "C2"), "freefem": ("^", "C3")}
 
 
 def plot(rows, path, scene):
@@ -403,12 +577,14 @@ def plot(rows, path, scene):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(12.5, 4.4))
-    for key in (k + suffix for suffix in ("", GRADED) for k in PLOT_STYLE):
+    keys = [k + suffix for suffix in ("", GRADED) for k in PLOT_STYLE
+            if any(k + suffix in r for r in rows)]
+    # the broken-tangential p's labels are longer, and there are up to 12 of them
+    wide = any("ptangential" in k for k in keys)
+    fig, axes = plt.subplots(1, 2, figsize=(14.5 if wide else 12.5, 4.4 if len(keys) <= 8 else 5.0))
+    for key in keys:
         pts = [(r[key]["wall_s"], r[key]["u_l2"], r[key].get("solver_s"), r[key]["unknowns"])
                for r in rows if key in r]
-        if not pts:
-            continue
         marker, colour = PLOT_STYLE[key.removesuffix(GRADED)]
         kw = dict(marker=marker, color=colour, label=label(key))
         kw.update(linestyle="-") if key.endswith(GRADED) else kw.update(linestyle="--",
@@ -425,7 +601,7 @@ def plot(rows, path, scene):
         ax.grid(True, which="both", alpha=0.3)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="center right", fontsize="small")
-    fig.tight_layout(rect=(0, 0, 0.8, 1))
+    fig.tight_layout(rect=(0, 0, 0.75 if wide else 0.8, 1))
     fig.savefig(path, dpi=110)
     return fig
 
@@ -438,13 +614,26 @@ def parse_levels(text):
     return [int(x) for x in text.split(",")]
 
 
+def parse_names(text, allowed, what):
+    """'a,b' → ['a', 'b'] (in the order given, repeats dropped), each among `allowed`; raises
+    argparse.ArgumentTypeError naming the bad ones."""
+    names = list(dict.fromkeys(x.strip() for x in text.split(",") if x.strip()))
+    bad = [x for x in names if x not in allowed]
+    if bad or not names:
+        raise argparse.ArgumentTypeError(
+            f"{what} must be among {', '.join(allowed)}: {text!r}"
+            + (f" ({', '.join(map(repr, bad))} unknown)" if bad else " (none given)"))
+    return names
+
+
 def parse_p_masses(text):
-    """'consistent,lumped' → a list of p masses (keys of VARIANTS)."""
-    masses = [m for m in text.split(",") if m]
-    bad = [m for m in masses if m not in VARIANTS]
-    if bad or not masses:
-        raise argparse.ArgumentTypeError(f"p masses must be among {', '.join(VARIANTS)}: {text!r}")
-    return masses
+    """'consistent,lumped' → a list of p masses (of P_MASSES)."""
+    return parse_names(text, P_MASSES, "p masses")
+
+
+def parse_p_spaces(text):
+    """'continuous,broken-tangential' → a list of p spaces (of P_SPACES)."""
+    return parse_names(text, P_SPACES, "p spaces")
 
 
 def run_level(level, measured, log, **control):
@@ -477,8 +666,11 @@ def main(argv=None):
                     help="the references' levels on the graded scene (default: --graded-levels)")
     ap.add_argument("--tools", default="dolfinx,freefem",
                     help="references to time ('' for sdcrack alone)")
-    ap.add_argument("--p-masses", type=parse_p_masses, default="consistent,lumped",
+    ap.add_argument("--p-masses", default="consistent,lumped",
                     help="sdcrack's p masses to time, e.g. consistent,lumped or lumped")
+    ap.add_argument("--p-spaces", default="continuous,broken-tangential",
+                    help="sdcrack's p spaces to time, each with every p mass, e.g. "
+                         "continuous,broken-tangential or broken-tangential")
     ap.add_argument("--idle-timeout", type=float, default=300.0,
                     help="seconds to wait for an idle machine before each measurement, then "
                          "measure anyway (marked IDLE-TIMEOUT)")
@@ -490,6 +682,13 @@ def main(argv=None):
     ap.add_argument("--out", required=True,
                     help="folder for work_precision.{json,md,png} and work_precision.load.txt")
     a = ap.parse_args(argv)
+    try:
+        a.p_masses = parse_p_masses(a.p_masses)
+        a.p_spaces = parse_p_spaces(a.p_spaces)
+    except argparse.ArgumentTypeError as e:  # one line, no usage
+        print(f"bench-references: {e}", file=sys.stderr)
+        sys.exit(2)
+    variants = [(m, sp) for sp in a.p_spaces for m in a.p_masses]
     levels = parse_levels(a.levels)
     ref_levels = (parse_levels(a.ref_levels) if a.ref_levels
                   else list(range(min(levels), max(levels) + 4)))
@@ -524,35 +723,48 @@ def main(argv=None):
         if graded_path is not None:
             g_solo.write_text(sdcrack_only_scene(graded_path.read_text()))
         for level in sorted(set(levels) | set(ref_levels) | set(g_levels) | set(g_ref_levels)):
-            measured = [(VARIANTS[m], lambda m=m: run_sdcrack(solo, level, work, m))
-                        for m in a.p_masses if level in levels]
+            measured = [(VARIANTS[v], lambda v=v: run_sdcrack(solo, level, work, v[0],
+                                                              p_space=v[1]))
+                        for v in variants if level in levels]
             measured += [(t, lambda t=t: run_reference(t, scene_path, level, work))
                          for t in tools if level in ref_levels]
-            measured += [(graded(VARIANTS[m]),
-                          lambda m=m: run_sdcrack(g_solo, level, work, m, tag="graded"))
-                         for m in a.p_masses if level in g_levels]
+            measured += [(graded(VARIANTS[v]),
+                          lambda v=v: run_sdcrack(g_solo, level, work, v[0], tag="graded",
+                                                  p_space=v[1]))
+                         for v in variants if level in g_levels]
             measured += [(graded(t),
                           lambda t=t: run_reference(t, graded_path, level, work, tag="graded"))
                          for t in tools if level in g_ref_levels]
             rows.append(run_level(level, measured, log, check=not a.no_idle_wait,
                                   idle_timeout=a.idle_timeout, max_tries=a.max_tries))
-    keys = [VARIANTS[m] for m in a.p_masses]
+    keys = [VARIANTS[v] for v in variants]
     fast_internal = {k: speedups(rows, "solver_s", k) for k in keys}
     fast_wall = {k: speedups(rows, "wall_s", k) for k in keys}
-    lumped_fast = lumped_vs_consistent(rows) if len(keys) == 2 else []
+    both_masses = len(a.p_masses) == 2
+    lumped_fast = {sp: lumped_vs_consistent(rows, sp) if both_masses else [] for sp in P_SPACES}
+    ptangential_fast = {}
+    if len(a.p_spaces) == 2:
+        for suffix in ("", GRADED) if g_levels else ("",):
+            ptangential_fast.update({variant_key(m, "broken-tangential") + suffix:
+                                     ptangential_vs_continuous(rows, m, suffix)
+                                     for m in a.p_masses})
     graded_fast = {graded(k): speedups(rows, "wall_s", graded(k), graded_against(k))
                    for k in keys if g_levels}
     goals = graded_goal(rows, keys) if g_levels else []
+    goals32 = graded_goal_issue32(rows, keys) if g_levels else []
     graded_name = (re.search(r'(?m)^name\s*=\s*"([^"]+)"', graded_path.read_text()).group(1)
                    if graded_path else None)
     md = markdown(name, rows, fast_internal, fast_wall, lumped_fast, graded_fast, goals,
-                  graded_name)
+                  graded_name, ptangential_fast, goals32)
     (out / "work_precision.md").write_text(md)
     (out / "work_precision.json").write_text(json.dumps(
-        {"scene": name, "p_masses": a.p_masses, "levels": rows,
+        {"scene": name, "p_masses": a.p_masses, "p_spaces": a.p_spaces, "levels": rows,
          "speedup_solver_time": fast_internal, "speedup_wall_time": fast_wall,
-         "lumped_vs_consistent": lumped_fast, "graded_scene": graded_name,
-         "speedup_graded_wall_time": graded_fast, "graded_goal": goals}, indent=2))
+         "lumped_vs_consistent": lumped_fast["continuous"],
+         "lumped_vs_consistent_ptangential": lumped_fast["broken-tangential"],
+         "ptangential_vs_continuous": ptangential_fast, "graded_scene": graded_name,
+         "speedup_graded_wall_time": graded_fast, "graded_goal": goals,
+         "graded_goal_issue32": goals32}, indent=2))
     plot(rows, out / "work_precision.png", name if not graded_name else f"{name} and {graded_name}")
     print(md)
 

@@ -1,9 +1,12 @@
-"""ci/bench_references.py: equal-error speed-ups of both p masses, the report, load control.
+"""ci/bench_references.py: equal-error speed-ups of both p masses and both p spaces, the report,
+the goals of issues 24 and 32, load control.
 
 The arithmetic is checked on hand-made rows whose expected ratios are worked out by hand below;
-one end-to-end run times the real binary on levels 0–1 of scenes/open-exact.toml (sdcrack alone).
+two end-to-end runs time the real binary on levels 0–1 of scenes/open-exact.toml and
+scenes/open-graded.toml (sdcrack alone).
 """
 
+import argparse
 import json
 import math
 import pathlib
@@ -226,8 +229,11 @@ def test_measure_marks_an_idle_timeout(monkeypatch, tmp_path):
     assert (tmp_path / "load.txt").read_text().rstrip().endswith("OK IDLE-TIMEOUT")
 
 
+FOUR = ("sdcrack", "sdcrack-lumped", "sdcrack-ptangential", "sdcrack-lumped-ptangential")
+
+
 @pytest.mark.skipif(not EXE.exists(), reason="target/release/sdcrack not built")
-def test_end_to_end_both_p_masses(tmp_path):
+def test_end_to_end_both_p_masses_and_p_spaces(tmp_path):
     scene = ROOT / "scenes" / "open-exact.toml"
     subprocess.run([sys.executable, str(SCRIPT), "--scene", str(scene), "--levels", "0-1",
                     "--tools", "", "--no-idle-wait", "--out", str(tmp_path)],
@@ -235,26 +241,56 @@ def test_end_to_end_both_p_masses(tmp_path):
     wp = json.loads((tmp_path / "work_precision.json").read_text())
     assert wp["scene"] == "open-exact"
     assert wp["p_masses"] == ["consistent", "lumped"]
+    assert wp["p_spaces"] == ["continuous", "broken-tangential"]
     assert [r["level"] for r in wp["levels"]] == [0, 1]
     for row in wp["levels"]:
-        assert set(row) == {"level", "sdcrack", "sdcrack-lumped"}
-        for key in ("sdcrack", "sdcrack-lumped"):
+        assert set(row) == {"level", *FOUR}
+        for key in FOUR:
             x = row[key]
             assert x["wall_s"] > 0 and x["solver_s"] > 0 and x["norms_s"] > 0
             assert x["kkt"] < 1e-10 and x["load"]["tries"] == 1
         assert row["sdcrack"]["unknowns"] == row["sdcrack-lumped"]["unknowns"]
+        # p·τ gets one value per crack face: more unknowns than the continuous p
+        assert row["sdcrack-ptangential"]["unknowns"] > row["sdcrack"]["unknowns"]
     # docs/performance.md: sdcrack's level-0 error on open-exact (consistent p mass)
     assert f"{wp['levels'][0]['sdcrack']['u_l2']:.3e}" == "4.430e-02"
-    assert not math.isclose(wp["levels"][0]["sdcrack-lumped"]["u_l2"],
-                            wp["levels"][0]["sdcrack"]["u_l2"], rel_tol=1e-6)
-    assert set(wp["speedup_solver_time"]) == set(wp["speedup_wall_time"]) \
-        == {"sdcrack", "sdcrack-lumped"}
+    level0 = wp["levels"][0]
+    assert not math.isclose(level0["sdcrack-lumped"]["u_l2"], level0["sdcrack"]["u_l2"],
+                            rel_tol=1e-6)
+    assert not math.isclose(level0["sdcrack-ptangential"]["u_l2"], level0["sdcrack"]["u_l2"],
+                            rel_tol=1e-6)
+    assert set(wp["speedup_solver_time"]) == set(wp["speedup_wall_time"]) == set(FOUR)
     assert [x["level"] for x in wp["lumped_vs_consistent"]] == [0, 1]
+    assert [x["level"] for x in wp["lumped_vs_consistent_ptangential"]] == [0, 1]
+    assert set(wp["ptangential_vs_continuous"]) == {"sdcrack-ptangential",
+                                                   "sdcrack-lumped-ptangential"}
+    assert wp["graded_goal"] == wp["graded_goal_issue32"] == []
     md = (tmp_path / "work_precision.md").read_text()
     assert "| 0 | sdcrack (lumped p) |" in md and "| 1 | sdcrack |" in md
+    assert "| 0 | sdcrack (broken-tangential p) |" in md
+    assert "| 1 | sdcrack (lumped, broken-tangential p) |" in md
     assert (tmp_path / "work_precision.png").stat().st_size > 0
     load = (tmp_path / "work_precision.load.txt").read_text().splitlines()
-    assert sum(" try 1: " in x for x in load) == 4
+    assert sum(" try 1: " in x for x in load) == 8
+
+
+@pytest.mark.skipif(not EXE.exists(), reason="target/release/sdcrack not built")
+def test_end_to_end_graded_broken_tangential_only(tmp_path):
+    scenes = ROOT / "scenes"
+    subprocess.run([sys.executable, str(SCRIPT), "--scene", str(scenes / "open-exact.toml"),
+                    "--graded-scene", str(scenes / "open-graded.toml"), "--levels", "0",
+                    "--graded-levels", "0-1", "--tools", "", "--p-masses", "lumped",
+                    "--p-spaces", "broken-tangential", "--no-idle-wait", "--out", str(tmp_path)],
+                   check=True, capture_output=True, text=True)
+    wp = json.loads((tmp_path / "work_precision.json").read_text())
+    assert wp["p_masses"] == ["lumped"] and wp["p_spaces"] == ["broken-tangential"]
+    assert [set(r) for r in wp["levels"]] == [
+        {"level", "sdcrack-lumped-ptangential", "sdcrack-lumped-ptangential@graded"},
+        {"level", "sdcrack-lumped-ptangential@graded"}]
+    assert set(wp["speedup_graded_wall_time"]) == {"sdcrack-lumped-ptangential@graded"}
+    # one p mass, one p space: nothing to compare them with; no graded reference: no issue-32 goal
+    assert wp["lumped_vs_consistent"] == wp["lumped_vs_consistent_ptangential"] == []
+    assert wp["ptangential_vs_continuous"] == {} and wp["graded_goal_issue32"] == []
 
 
 def graded_rows():
@@ -322,3 +358,248 @@ def test_markdown_has_the_graded_table_and_goal_lines():
     assert "| 1 | dolfinx, graded | 100 | 1.000e-02 | 0.20 | 0.10 | – | – |" in lines
     assert "| 0 | consistent | 2.000e-02 | 1600.0× | 800.0× | 14.1× | 28.3× | 25.0× |" in lines
     assert sum(x.startswith("goal: ") for x in lines) == 2
+
+
+def test_variant_row_keys_labels_and_commands():
+    # continuous p keeps the keys from before the p spaces; the broken-tangential p adds two
+    assert br.VARIANTS == {("consistent", "continuous"): "sdcrack",
+                           ("lumped", "continuous"): "sdcrack-lumped",
+                           ("consistent", "broken-tangential"): "sdcrack-ptangential",
+                           ("lumped", "broken-tangential"): "sdcrack-lumped-ptangential"}
+    assert [br.label(k) for k in FOUR] == [
+        "sdcrack", "sdcrack (lumped p)", "sdcrack (broken-tangential p)",
+        "sdcrack (lumped, broken-tangential p)"]
+    assert br.label("sdcrack-lumped-ptangential@graded") \
+        == "sdcrack (lumped, broken-tangential p), graded"
+    assert [br.variant_name(k) for k in FOUR] == [
+        "consistent", "lumped", "consistent, broken-tangential p", "lumped, broken-tangential p"]
+    assert br.variant_of("sdcrack-ptangential@graded") == ("consistent", "broken-tangential")
+    cmd = [str(x) for x in br.sdcrack_command("s.toml", 3, "out", "lumped", "broken-tangential")]
+    assert cmd[1:] == ["run", "s.toml", "--level", "3", "--u-space", "broken", "--multiplier",
+                       "M1", "--p-mass", "lumped", "--p-space", "broken-tangential", "--delta",
+                       "0", "--out", "out", "--quiet"]
+    # the default p space is the paper's, named on the command line all the same
+    assert "continuous" in [str(x) for x in br.sdcrack_command("s.toml", 0, "out")]
+
+
+def test_parse_p_spaces():
+    assert br.parse_p_spaces("continuous,broken-tangential") == ["continuous", "broken-tangential"]
+    assert br.parse_p_spaces("broken-tangential") == ["broken-tangential"]
+    assert br.parse_p_spaces("broken-tangential,continuous,broken-tangential,") \
+        == ["broken-tangential", "continuous"]
+    for bad in ("", ",", "broken", "continuous,tangential"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            br.parse_p_spaces(bad)
+
+
+@pytest.mark.parametrize("args, bad", [(["--p-spaces", "continuous,broken"], "'broken' unknown"),
+                                       (["--p-spaces", ""], "(none given)"),
+                                       (["--p-masses", "heavy"], "'heavy' unknown")])
+def test_a_bad_p_space_exits_2_with_one_line(tmp_path, args, bad):
+    out = tmp_path / "out"
+    p = subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 2 and p.stdout == ""
+    lines = p.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("bench-references: p ") and bad in lines[0]
+    assert not out.exists()  # nothing ran, nothing written
+
+
+def issue32_rows(speed=20.0):
+    """Graded references at errors 0.08, 0.02, 0.005, 0.00125 (levels 0–3): dolfinx walls
+    1, 4, 18, 64 s, FreeFEM 2, 9, 36, 128 s. Graded sdcrack, broken-tangential p, at errors
+    0.04, 0.01, 0.0025 (levels 0–2) on the power law t = 0.08 / (speed·e), so that at the
+    references' errors inside its range, 0.02 and 0.005, its wall times are 4/speed and
+    16/speed: `speed`× faster than dolfinx at 0.02, 18/16·speed× at 0.005, 2.25·speed× than
+    FreeFEM at both. 0.08 and 0.00125 are outside its range. The same p mass with the continuous
+    p (never held to issue 32's goal) is as fast; the lumped broken-tangential variant at errors
+    0.03, 0.025 reaches no reference error."""
+    ref = [(0.08, 1.0, 2.0), (0.02, 4.0, 9.0), (0.005, 18.0, 36.0), (0.00125, 64.0, 128.0)]
+    rows = [{"level": k, "dolfinx@graded": entry(e, td / 2, td),
+             "freefem@graded": entry(e, tf / 2, tf)} for k, (e, td, tf) in enumerate(ref)]
+    for k, e in enumerate((0.04, 0.01, 0.0025)):
+        t = 0.08 / (speed * e)
+        rows[k]["sdcrack-ptangential@graded"] = entry(e, t / 2, t)
+        rows[k]["sdcrack@graded"] = entry(e, t / 2, t)
+    for k, e in enumerate((0.03, 0.025)):
+        rows[k]["sdcrack-lumped-ptangential@graded"] = entry(e, 0.01, 0.02)
+    return rows
+
+
+def test_issue32_goal_met_when_20x_faster():
+    goals = br.graded_goal_issue32(issue32_rows(20.0), list(FOUR))
+    # only the broken-tangential variants are held to it
+    assert [g["variant"] for g in goals] == ["sdcrack-ptangential", "sdcrack-lumped-ptangential"]
+    g = goals[0]
+    assert g["goal"] == 10 and g["met"]
+    assert g["n_references"] == 8 and g["n_matched"] == 4 and g["n_below_goal"] == 0
+    assert g["errors"] == [0.0025, 0.04]
+    ratios = {(x["reference"], x["level"]): x["ratio"] for x in g["points"]}
+    assert ratios[("dolfinx@graded", 1)] == pytest.approx(20, rel=1e-12)  # 4 / 0.2
+    assert ratios[("dolfinx@graded", 2)] == pytest.approx(22.5, rel=1e-12)  # 18 / 0.8
+    assert ratios[("freefem@graded", 1)] == pytest.approx(45, rel=1e-12)  # 9 / 0.2
+    assert ratios[("freefem@graded", 2)] == pytest.approx(45, rel=1e-12)  # 36 / 0.8
+    # the worst factor and where it occurs
+    w = g["worst"]
+    assert (w["reference"], w["level"], w["u_l2"]) == ("dolfinx@graded", 1, 0.02)
+    assert w["wall_s"] == pytest.approx(0.2, rel=1e-12) and g["ratio"] == pytest.approx(20)
+    line = br.goal_line_issue32(g)
+    assert line.startswith("goal (issue 32): sdcrack (broken-tangential p), graded >= 10x faster "
+                           "by wall time than dolfinx and FreeFEM")
+    assert (": MET (worst 20.0x against dolfinx, graded at level 1, error 2.000e-02: 4.00 s vs "
+            "0.200 s; 4 of 8 graded reference errors matched, 0 below 10x; not matched") in line
+    assert json.loads(json.dumps(goals)) == goals  # JSON as it is
+
+
+def test_issue32_goal_missed_when_5x_faster():
+    goals = br.graded_goal_issue32(issue32_rows(5.0), ["sdcrack-ptangential"])
+    (g,) = goals
+    assert not g["met"] and g["n_matched"] == 4
+    # 5× and 5.625× against dolfinx, 11.25× against FreeFEM: two of four below the goal
+    assert g["ratio"] == pytest.approx(5, rel=1e-12) and g["n_below_goal"] == 2
+    assert (g["worst"]["reference"], g["worst"]["level"]) == ("dolfinx@graded", 1)
+    line = br.goal_line_issue32(g)
+    assert ": MISSED (worst 5.0x against dolfinx, graded at level 1" in line
+    assert "4 of 8 graded reference errors matched, 2 below 10x" in line
+
+
+def test_issue32_goal_reports_unmatched_errors_and_never_counts_them():
+    goals = {g["variant"]: g for g in br.graded_goal_issue32(issue32_rows(20.0), list(FOUR))}
+    g = goals["sdcrack-ptangential"]
+    unmatched = [(x["reference"], x["level"]) for x in g["points"] if not x["matched"]]
+    assert unmatched == [("dolfinx@graded", 0), ("dolfinx@graded", 3), ("freefem@graded", 0),
+                         ("freefem@graded", 3)]
+    assert all(x["ratio"] is None and x["wall_s"] is None for x in g["points"]
+               if not x["matched"])
+    assert br.goal_line_issue32(g).endswith(
+        "; not matched, outside its errors 2.500e-03..4.000e-02: dolfinx, graded L0 (8.000e-02), "
+        "dolfinx, graded L3 (1.250e-03), freefem, graded L0 (8.000e-02), freefem, graded L3 "
+        "(1.250e-03))")
+    # a variant whose errors reach no reference error: MISSED, not met by default
+    g = goals["sdcrack-lumped-ptangential"]
+    assert g["n_matched"] == 0 and g["worst"] is None and g["ratio"] is None and not g["met"]
+    line = br.goal_line_issue32(g)
+    assert ": MISSED (none of the 8 graded reference errors matched; not matched" in line
+    # an unmatched error far slower for the reference does not rescue a missed goal either way
+    rows = issue32_rows(5.0)
+    rows[0]["dolfinx@graded"]["wall_s"] = 1e6
+    assert not br.graded_goal_issue32(rows, ["sdcrack-ptangential"])[0]["met"]
+    # no graded reference ran: no goal to hold
+    bare = [{k: v for k, v in r.items() if "@graded" not in k or k.startswith("sdcrack")}
+            for r in issue32_rows()]
+    assert br.graded_goal_issue32(bare, list(FOUR)) == []
+
+
+def four_variant_rows():
+    """graded_rows() plus the broken-tangential variants.
+    Uniform, consistent: e 0.025 → 0.00625, solve 0.01 → 0.04, wall 0.1 → 0.4 (t ∝ 1/e);
+    lumped: e 0.0125 → 0.0025, solve 0.01 → 0.04, wall 0.4.
+    Graded, consistent: e 0.01 → 0.001 at wall 0.01 → 0.04; lumped: e 0.02 → 0.004."""
+    rows = graded_rows()
+    rows[0].update({"sdcrack-ptangential": entry(0.025, 0.01, 0.1, 0.02),
+                    "sdcrack-lumped-ptangential": entry(0.0125, 0.01, 0.4, 0.03),
+                    "sdcrack-ptangential@graded": entry(0.01, 0.005, 0.01),
+                    "sdcrack-lumped-ptangential@graded": entry(0.02, 0.005, 0.01)})
+    rows[1].update({"sdcrack-ptangential": entry(0.00625, 0.04, 0.4, 0.05),
+                    "sdcrack-lumped-ptangential": entry(0.0025, 0.04, 0.4, 0.05),
+                    "sdcrack-ptangential@graded": entry(0.001, 0.02, 0.04),
+                    "sdcrack-lumped-ptangential@graded": entry(0.004, 0.02, 0.04)})
+    return rows
+
+
+def test_p_space_comparisons_by_hand():
+    rows = four_variant_rows()
+    # broken-tangential at e 0.025: the continuous consistent curve (t ∝ 1/e through
+    # 0.05 → 0.0125) takes solve 0.02, wall 0.2 there; the broken-tangential one 0.01 and 0.1
+    pt = br.ptangential_vs_continuous(rows, "consistent")
+    assert pt[0]["solve"] == pytest.approx(2.0, rel=1e-12)
+    assert pt[0]["wall"] == pytest.approx(2.0, rel=1e-12)
+    assert pt[1]["solve"] is None  # 0.00625 is below the continuous curve's 0.0125
+    # graded: the continuous curve (t ∝ e⁻², 0.02 → 0.01) at 0.01: wall 0.04, solve 0.02
+    g = br.ptangential_vs_continuous(rows, "consistent", br.GRADED)
+    assert g[0]["wall"] == pytest.approx(4.0, rel=1e-12)
+    assert g[0]["solve"] == pytest.approx(4.0, rel=1e-12)
+    # lumped against consistent, both broken-tangential: as for the continuous p
+    lvc = br.lumped_vs_consistent(rows, "broken-tangential")
+    assert lvc[0]["solve"] == pytest.approx(2.0, rel=1e-12)
+    assert lvc[0]["wall"] == pytest.approx(0.5, rel=1e-12)
+    assert lvc[1]["solve"] is None
+    assert br.lumped_vs_consistent(rows) == br.lumped_vs_consistent(hand_rows())
+    # the speed-ups of a broken-tangential variant against the references
+    s = br.speedups(rows, "solver_s", "sdcrack-ptangential")
+    w = br.speedups(rows, "wall_s", "sdcrack-ptangential")
+    assert s[0]["dolfinx"] == pytest.approx(102.4) and w[0]["freefem"] == pytest.approx(51.2)
+    # the graded broken-tangential variant against itself on uniform meshes
+    f = br.speedups(rows, "wall_s", "sdcrack-ptangential@graded",
+                    br.graded_against("sdcrack-ptangential"))
+    assert set(f[0]) == {"level", "u_l2", "dolfinx", "freefem", "dolfinx@graded",
+                         "freefem@graded", "sdcrack-ptangential"}
+    # e 0.01 on the uniform curve t ∝ 1/e through (0.025, 0.1): 0.25, over 0.01
+    assert f[0]["sdcrack-ptangential"] == pytest.approx(25, rel=1e-12)
+
+
+def test_markdown_covers_every_variant_and_both_goals():
+    rows = four_variant_rows()
+    fast = {k: br.speedups(rows, "solver_s", k) for k in FOUR}
+    wall = {k: br.speedups(rows, "wall_s", k) for k in FOUR}
+    lumped = {sp: br.lumped_vs_consistent(rows, sp) for sp in br.P_SPACES}
+    gf = {br.graded(k): br.speedups(rows, "wall_s", br.graded(k), br.graded_against(k))
+          for k in FOUR}
+    pt = {br.variant_key(m, "broken-tangential") + suffix:
+          br.ptangential_vs_continuous(rows, m, suffix)
+          for suffix in ("", br.GRADED) for m in br.P_MASSES}
+    md = br.markdown("hand", rows, fast, wall, lumped, gf, br.graded_goal(rows, list(FOUR)),
+                     "hand-graded", pt, br.graded_goal_issue32(rows, list(FOUR)))
+    lines = md.splitlines()
+    # the level table: every variant, uniform and graded
+    assert "| 0 | sdcrack (broken-tangential p) | 100 | 2.500e-02 | 0.10 | 0.01 | 0.02 | 2.0 |" \
+        in lines
+    assert "| 1 | sdcrack (lumped, broken-tangential p), graded | 100 | 4.000e-03 | 0.04 | 0.02 " \
+           "| – | – |" in lines
+    # the speed-up table, in the order of the variants at each level
+    speed = [x for x in lines if x.startswith("| 0 | ") and x.count("|") == 8
+             and "e-0" in x.split("|")[3]][:4]
+    assert [x.split(" | ")[1] for x in speed] == [
+        "consistent", "lumped", "consistent, broken-tangential p", "lumped, broken-tangential p"]
+    assert ("| 0 | consistent, broken-tangential p | 2.500e-02 | 102.4× | 204.8× | 102.4× "
+            "| 51.2× |") in lines
+    # lumped against consistent: one table per p space, the same columns
+    assert lines.count("| level | lumped ‖u_h − u‖ | solve | wall |") == 2
+    assert any("both with the broken-tangential p" in x for x in lines)
+    # broken-tangential against continuous p, uniform and graded
+    assert "| level | variant | ‖u_h − u‖ | solve | wall |" in lines
+    assert "| 0 | sdcrack (broken-tangential p) | 2.500e-02 | 2.0× | 2.0× |" in lines
+    assert "| 0 | sdcrack (broken-tangential p), graded | 1.000e-02 | 4.0× | 4.0× |" in lines
+    assert "| 1 | sdcrack (broken-tangential p) | 6.250e-03 | – | – |" in lines
+    # the graded table: a line per graded variant and level
+    assert sum(x.startswith("| 0 | lumped, broken-tangential p | 2.000e-02 |") for x in lines) == 1
+    # issue 24's line for every variant, issue 32's for the broken-tangential ones
+    assert sum(x.startswith("goal: ") for x in lines) == 4
+    g32 = [x for x in lines if x.startswith("goal (issue 32): ")]
+    assert len(g32) == 2
+    # graded consistent broken-tangential: at 0.01 (its level 0, 0.01 s) dolfinx graded takes
+    # 0.2 s, FreeFEM 0.4 s; the references' 0.04 is above its errors
+    assert g32[0].startswith("goal (issue 32): sdcrack (broken-tangential p), graded")
+    assert ": MET (worst 20.0x against dolfinx, graded at level 1" in g32[0]
+    assert "2 of 4 graded reference errors matched" in g32[0]
+
+
+def test_plot_tells_the_p_spaces_apart(tmp_path):
+    fig = br.plot(four_variant_rows(), tmp_path / "wp.png", "hand")
+    lines = {x.get_label(): x for x in fig.axes[0].get_lines()}
+    # four sdcrack variants and two references, on uniform and graded meshes
+    assert len(lines) == 12 and len(fig.axes[1].get_lines()) == 12
+    for mass, cont, tang in (("sdcrack", "sdcrack", "sdcrack (broken-tangential p)"),
+                             ("lumped", "sdcrack (lumped p)",
+                              "sdcrack (lumped, broken-tangential p)")):
+        for suffix in ("", ", graded"):
+            c, t = lines[cont + suffix], lines[tang + suffix]
+            # same colour (tool and p mass), same dashing (mesh kind), another marker (p space)
+            assert c.get_color() == t.get_color() and c.get_linestyle() == t.get_linestyle()
+            assert c.get_marker() != t.get_marker()
+    assert lines["sdcrack (broken-tangential p)"].get_markerfacecolor() == "none"
+    assert lines["sdcrack (broken-tangential p), graded"].get_linestyle() == "-"
+    # every (colour, marker, dashing) is a different curve
+    assert len({(x.get_color(), x.get_marker(), x.get_linestyle()) for x in lines.values()}) == 12
+    assert len(fig.legends) == 1 and len(fig.legends[0].get_texts()) == 12
+    assert (tmp_path / "wp.png").stat().st_size > 0
