@@ -7,9 +7,10 @@ Each check returns rows (for the report) and problems (one line each); any probl
 import math
 
 from . import exact, precomputed
-from .read import DEFAULT_P_MASS, InputError, case_key, finite_number, p_mass, plan_p_masses, pm_suffix
+from .read import (InputError, case_key, finite_number, p_mass, p_space, plan_p_masses,
+                   plan_p_spaces, runs_together, variant_suffix)
 from .render import fmt_delta
-from .settings import QUANTITIES, scene_lists, scene_p_masses
+from .settings import QUANTITIES, scene_lists, scene_p_masses, scene_p_spaces
 
 # The solver's errors against the compare tool's own (exact.py: another rule family, Duffy rules
 # at the tips). Both quadratures are converged to < 1e-10 relative (tests/convergence.rs,
@@ -69,27 +70,32 @@ def completeness(res, scene_file):
     if sorted(plan["levels"]) != levels and len(plan["levels"]) != 1:
         problems.append(f"the run's levels {plan['levels']} are neither the scene's {levels} "
                         "nor one level (--level)")
-    p_masses = plan_p_masses(plan)
+    p_masses, p_spaces = plan_p_masses(plan), plan_p_spaces(plan)
     for key, mine, scene in (("u_spaces", plan["u_spaces"], u_spaces),
                              ("multipliers", plan["multipliers"], multipliers),
                              ("p_masses", p_masses, scene_p_masses(scene_file)),
+                             ("p_spaces", p_spaces, scene_p_spaces(scene_file)),
                              ("deltas", plan["deltas"], deltas)):
         extra = [v for v in mine if v not in scene]
         if extra:
             problems.append(f"the run's {key} {extra} are not in the scene file")
-    want = {(int(lv), u, m, float(d), pm) for lv in plan["levels"] for u in plan["u_spaces"]
-            for m in plan["multipliers"] for d in plan["deltas"] for pm in p_masses}
+    want = {(int(lv), u, m, float(d), pm, ps) for lv in plan["levels"] for u in plan["u_spaces"]
+            for m in plan["multipliers"] for d in plan["deltas"] for pm in p_masses
+            for ps in p_spaces if runs_together(u, ps)}
     have = [case_key(c) for c in s["cases"]]
     missing = sorted(want - set(have))
     if missing:
-        k = missing[0]
         problems.append(f"{len(missing)} case(s) asked for are missing from summary.json, e.g. "
-                        f"level {k[0]} {k[1]} {k[2]}{pm_suffix(k[4])} δ={fmt_delta(k[3])}")
-    extra = sorted(set(have) - want)
+                        f"{_case_text(missing[0])}")
+    never = [k for k in have if not runs_together(k[1], k[5])]
+    if never:
+        problems.append(f"{len(never)} case(s) in summary.json pair the {never[0][1]} u space with "
+                        f"the {never[0][5]} p space, which sdcrack never runs (a p whose "
+                        f"tangential part jumps needs a broken u), e.g. {_case_text(never[0])}")
+    extra = sorted(set(have) - want - set(never))
     if extra:
-        k = extra[0]
         problems.append(f"{len(extra)} case(s) in summary.json were not asked for, e.g. "
-                        f"level {k[0]} {k[1]} {k[2]}{pm_suffix(k[4])} δ={fmt_delta(k[3])}")
+                        f"{_case_text(extra[0])}")
     if len(set(have)) != len(have):
         problems.append("summary.json lists a case twice")
     if "exact" in scene_file:
@@ -99,7 +105,7 @@ def completeness(res, scene_file):
             k = case_key(bad[0])
             problems.append(f"{len(bad)} case(s) of an exact scene lack a finite error "
                             f"({', '.join(QUANTITIES)}), e.g. level {k[0]} {k[1]} {k[2]}"
-                            f"{pm_suffix(k[4])}")
+                            f"{variant_suffix(k[4], k[5])}")
     if _fields_asked(scene_file):
         if res["fields"] is None:
             problems.append("the scene asks for fields but fields.h5 is missing")
@@ -130,6 +136,11 @@ def completeness(res, scene_file):
     return problems
 
 
+def _case_text(k):
+    """"level L u m[ lumped][ ptangential] δ=D" of a case key (read.case_key)."""
+    return f"level {k[0]} {k[1]} {k[2]}{variant_suffix(k[4], k[5])} δ={fmt_delta(k[3])}"
+
+
 def worst_residual(kkt):
     """The largest KKT residual of a case; absent residuals, or one that is not a finite number
     (null, NaN), count as infinite (max() over a NaN keeps whichever comes first, so a NaN after a
@@ -150,7 +161,7 @@ def solver_values(kkt_rows, tol):
     k = bad[0]
     return [f"{len(bad)} solver case(s) not converged or with KKT residual > {tol:g}, e.g. level "
             f"{k['level']} {k['u_space']} {k['multiplier']}"
-            f"{pm_suffix(k.get('p_mass', DEFAULT_P_MASS))} δ={fmt_delta(k['delta'])} (status "
+            f"{variant_suffix(p_mass(k), p_space(k))} δ={fmt_delta(k['delta'])} (status "
             f"{k['status'] or 'missing'}, converged {k['converged']}, residuals "
             f"{_residuals(k['kkt'])})"]
 
@@ -194,7 +205,7 @@ def delta_slopes(delta_limit, tol):
     out = []
     for e in delta_limit:
         what = (f"level {e['level']} {e['u_space']} {e['multiplier']}"
-                f"{pm_suffix(e.get('p_mass', DEFAULT_P_MASS))} {e['quantity']}")
+                f"{variant_suffix(p_mass(e), p_space(e))} {e['quantity']}")
         if e["points_fitted"] >= 2 and e["slope"] is not None and not abs(e["slope"] - 1.0) <= tol:
             out.append(f"δ → 0 slope {e['slope']:.3f} of {what} is not 1 ± {tol:g}")
         for d, r in zip(e["deltas"], e.get("residuals") or []):
@@ -208,9 +219,11 @@ def delta_slopes(delta_limit, tol):
 def independent_errors(res, scene_file):
     """Recomputes every reported error against the exact solution from the stored fields with the
     compare tool's own quadrature (exact.py): the solver's cases with fields (the consistent p_h
-    with its stored bubble, which must be there; the lumped p_h, P1 without bubble, with bubble 0)
-    and each reference's P1 field on the exported cracked mesh. Returns (rows, problems);
-    rows: dict(source, level, u_space, multiplier, p_mass, delta, quantity → (reported, ours),
+    with its stored bubble, which must be there; the lumped p_h, P1 without bubble, with bubble 0;
+    p_h per triangle from the triangle's own dofs, so a broken-tangential p is integrated on each
+    face with its own copy) and each reference's P1 field on the exported cracked mesh; the p mass
+    and p space of fields.h5's attributes must be the summary's. Returns (rows, problems); rows:
+    dict(source, level, u_space, multiplier, p_mass, p_space, delta, quantity → (reported, ours),
     worst)."""
     if "exact" not in scene_file:
         return [], []
@@ -224,21 +237,15 @@ def independent_errors(res, scene_file):
     for c in sorted(res["summary"]["cases"], key=case_key):
         if not isinstance(c.get("errors"), dict):
             continue  # completeness reports the missing errors
-        pm = p_mass(c)
-        what = (f"level {c['level']} {c['u_space']} {c['multiplier']}{pm_suffix(pm)} "
-                f"δ={fmt_delta(c['delta'])}")
+        pm, ps = p_mass(c), p_space(c)
+        what = _case_text(case_key(c))
         if fields is None or not fields.has_case(c.get("fields_grid")):
             unrecomputed.append(what)
             continue
-        stored = fields.h5[f"cases/{c['fields_grid']}"].attrs.get("p_mass")
-        if isinstance(stored, bytes):
-            stored = stored.decode()
-        if stored is not None and str(stored) != pm:
-            problems.append(f"sdcrack's case {what} is of p mass {pm} in summary.json but "
-                            f"{stored} in fields.h5 (/cases/{c['fields_grid']})")
+        problems += _stored_axes(fields, c, what)
         try:
             ours = precomputed.solver_case_errors_h5(fields.h5, c["fields_grid"], ex,
-                                                     scene_file, pm)
+                                                     scene_file, pm, ps)
         except exact.ExactError as exc:
             ours = {"bubble": None}
             problems.append(f"sdcrack's errors of {what} cannot be recomputed: {exc}")
@@ -283,11 +290,26 @@ def independent_errors(res, scene_file):
     return rows, problems
 
 
+def _stored_axes(fields, c, what):
+    """Problems: the case's group in fields.h5 carries a p_mass or p_space attribute other than
+    the case's in summary.json (an absent attribute: a file older than the axis)."""
+    attrs = fields.h5[f"cases/{c['fields_grid']}"].attrs
+    out = []
+    for key, word, mine in (("p_mass", "p mass", p_mass(c)), ("p_space", "p space", p_space(c))):
+        stored = attrs.get(key)
+        if isinstance(stored, bytes):
+            stored = stored.decode()
+        if stored is not None and str(stored) != mine:
+            out.append(f"sdcrack's case {what} is of {word} {mine} in summary.json but {stored} "
+                       f"in fields.h5 (/cases/{c['fields_grid']})")
+    return out
+
+
 def _error_row(source, c, reported, ours, quantities=QUANTITIES):
     row = {"source": source, "level": int(c["level"]), "u_space": c.get("u_space"),
            "multiplier": c.get("multiplier"), "delta": c.get("delta")}
     if source == "sdcrack":
-        row["p_mass"] = p_mass(c)
+        row["p_mass"], row["p_space"] = p_mass(c), p_space(c)
     worst = 0.0
     for q in quantities:
         a, b = reported.get(q), ours.get(q)
@@ -315,17 +337,17 @@ def theorem21_rows(cases, delta_limit):
     for d in delta_limit:
         if d["quantity"] not in THEOREM21_QUANTITIES:
             continue
-        base = rep.get((d["level"], d["u_space"], d["multiplier"], d["delta_ref"], d["p_mass"]))
+        base = rep.get(case_key(dict(d, delta=d["delta_ref"])))
         if base is None or not finite_number(base.get(d["quantity"])):
             continue
         e0 = float(base[d["quantity"]])
         for delta, diff in zip(d["deltas"], d["diffs"]):
-            e = (rep.get((d["level"], d["u_space"], d["multiplier"], delta, d["p_mass"])) or {}).get(
-                d["quantity"])
+            e = (rep.get(case_key(dict(d, delta=delta))) or {}).get(d["quantity"])
             ok = finite_number(e) and abs(e - e0) <= diff * (1 + THEOREM21_RTOL) + ERRORS_ATOL * 10 \
                 + THEOREM21_RTOL * e0
             rows.append({"level": d["level"], "u_space": d["u_space"], "multiplier": d["multiplier"],
-                         "p_mass": d["p_mass"], "quantity": d["quantity"], "delta": delta,
+                         "p_mass": d["p_mass"], "p_space": p_space(d), "quantity": d["quantity"],
+                         "delta": delta,
                          "error": e, "floor": e0, "diff": diff, "ok": bool(ok)})
     return rows
 
@@ -336,7 +358,8 @@ def theorem21(rows):
         return []
     r = bad[0]
     return [f"{len(bad)} reported error(s) at δ > 0 disagree with the stored fields, e.g. level "
-            f"{r['level']} {r['u_space']} {r['multiplier']}{pm_suffix(r['p_mass'])} "
+            f"{r['level']} {r['u_space']} {r['multiplier']}"
+            f"{variant_suffix(r['p_mass'], p_space(r))} "
             f"{r['quantity']} δ={fmt_delta(r['delta'])}: |e(δ) − e(0)| = "
             f"{_num(abs(r['error'] - r['floor']) if finite_number(r['error']) else None, '.3e')} > "
             f"‖x_δ − x_0‖ = {r['diff']:.3e}"]

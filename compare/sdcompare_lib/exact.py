@@ -665,8 +665,11 @@ def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exa
     """Errors of one solver case against ``exact`` (an ExactSolution).
 
     points (N,2|3), triangles (T,3) of the case mesh (the cracked mesh for the broken u space, the
-    plain mesh for the continuous one; u is P1 per triangle on it), u (N,), p (N,2|3) vertex values
-    of p_h, p_bubble (T,2) its bubble coefficients (b_T = 27 λ0λ1λ2, triangle order of the mesh;
+    plain mesh for the continuous one; u is P1 per triangle on it), u (N,), p (N,2|3) the values of
+    p_h's P1 part at the same vertices (a broken-tangential p, issue 32, has different values on
+    the two copies of a crack vertex: each triangle reads its own copy through `triangles`, so p_h
+    is integrated on each face with that face's value, never merged), p_bubble (T,2) its bubble
+    coefficients (b_T = 27 λ0λ1λ2, triangle order of the mesh;
     None: recovered from u and p by ``recover_bubble``), crack_points (I,2|3) the nodes of every crack,
     crack_segments (S,2) the segments within each crack (None: one crack, consecutive nodes), lam (S,)
     per segment or (I,) per node. Any of u, p, lam may be None (its errors are None).

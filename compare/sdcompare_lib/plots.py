@@ -7,6 +7,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 
+from .read import p_mass, p_space, variant_label, variant_of, variant_order  # noqa: E402
 from .render import fmt_delta  # noqa: E402
 
 QLABEL = {"u_l2": "‖u_h−u‖_L²", "p_l2": "‖p_h−∇u‖_L²", "p_x": "‖p_h−∇u‖_X", "lambda_l2": "‖λ_h−[u]‖_L²(Γc)"}
@@ -14,11 +15,16 @@ QLABEL = {"u_l2": "‖u_h−u‖_L²", "p_l2": "‖p_h−∇u‖_L²", "p_x": "�
 SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p", "lambda_l2": "λ"}
 STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
-# colour per (u space, p mass): each combination its own hue, so consistent and lumped differ by
-# more than dashing; the line style repeats the p mass (solid consistent, dashed lumped) for
-# grey-scale prints, the marker is the multiplier, hollow for the continuous u space
-VARIANT_COLOR = {("broken", "consistent"): "tab:blue", ("broken", "lumped"): "tab:orange",
-                 ("continuous", "consistent"): "tab:green", ("continuous", "lumped"): "tab:purple"}
+# colour per (u space, p mass, p space): each combination its own hue, so consistent and lumped,
+# continuous and broken-tangential p differ by more than dashing; the line style repeats the p mass
+# and p space (PM_STYLE) for grey-scale prints, the marker is the multiplier, hollow for the
+# continuous u space (which never runs the broken-tangential p)
+VARIANT_COLOR = {("broken", "consistent", "continuous"): "tab:blue",
+                 ("broken", "lumped", "continuous"): "tab:orange",
+                 ("continuous", "consistent", "continuous"): "tab:green",
+                 ("continuous", "lumped", "continuous"): "tab:purple",
+                 ("broken", "consistent", "broken-tangential"): "tab:red",
+                 ("broken", "lumped", "broken-tangential"): "tab:brown"}
 # The references: told apart by marker, line style and label as well as colour (a grey-scale print
 # or a colour-blind reader still sees two), and unlike any solver variant's marker and line.
 REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "markersize": 9,
@@ -27,25 +33,26 @@ REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "ma
                          "markerfacecolor": "none", "label": "reference FreeFEM"}}
 # Two lines whose points all agree to this relative distance (on a log axis) look like one line.
 OVERLAP_REL = 0.02
-PM_STYLE = {"consistent": "-", "lumped": "--"}
+# line style per (p mass, p space): solid consistent, dashed lumped; the broken-tangential p
+# dash-dotted (consistent) and dash-dot-dotted (lumped)
+PM_STYLE = {("consistent", "continuous"): "-", ("lumped", "continuous"): "--",
+            ("consistent", "broken-tangential"): "-.",
+            ("lumped", "broken-tangential"): (0, (6, 2, 1, 2, 1, 2))}
 # a series that does not converge is drawn pale (its status is in the tables)
 PALE = 0.35
 
 
-def _has_lumped(entries):
-    return any(e.get("p_mass", "consistent") != "consistent" for e in entries)
-
-
-def _variant_style(e, lumped_run):
-    """(kwargs of plot(), label) of a series / δ-limit / timing entry: colour per u space and p
-    mass, marker per multiplier (hollow for continuous u), solid consistent and dashed lumped p;
-    labels broken/M1 and broken/M1/lumped (the latter only in a run with both p masses)."""
-    u, m, pm = e["u_space"], e["multiplier"], e.get("p_mass", "consistent")
-    kw = {"linestyle": PM_STYLE.get(pm, ":"), "marker": MARK.get(m, "x"),
-          "color": VARIANT_COLOR.get((u, pm), "black")}
+def _variant_style(e):
+    """(kwargs of plot(), label) of a series / δ-limit / timing entry: colour per u space, p mass
+    and p space, marker per multiplier (hollow for continuous u), line style per p mass and p space
+    (PM_STYLE); labels as the tables' (read.variant_label: broken/M1, broken/M1/lumped,
+    broken/M1/ptangential)."""
+    u, m, pm, ps = variant_of(e)
+    kw = {"linestyle": PM_STYLE.get((pm, ps), ":"), "marker": MARK.get(m, "x"),
+          "color": VARIANT_COLOR.get((u, pm, ps), "black")}
     if u != "broken":
         kw["markerfacecolor"] = "none"
-    return kw, f"{u}/{m}" + ("" if pm == "consistent" or not lumped_run else f"/{pm}")
+    return kw, variant_label(u, m, pm, ps)
 
 
 def _delta_axis(ax):
@@ -113,7 +120,6 @@ def rate_plot(folder, scene, rate_entries):
     if not ents:
         return None
     qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
-    lumped_run = _has_lumped(ents)
     fig, axes = plt.subplots(1, len(qs), figsize=(4.2 * len(qs), 4.6), squeeze=False)
     graded = any(r.get("mesh_parameter") == "N^-1/2" for r in ents)
     hname = "N^-1/2" if graded else "h"
@@ -123,7 +129,7 @@ def rate_plot(folder, scene, rate_entries):
             pts = [(h, e) for h, e in zip(r["h"], r["errors"]) if _positive(e)]
             if not pts:
                 continue
-            kw, label = _variant_style(r, lumped_run)
+            kw, label = _variant_style(r)
             if r["status"] != "converges":
                 kw["alpha"], pale = PALE, True
             ax.loglog(*zip(*pts), **kw, label=label)
@@ -163,7 +169,6 @@ def delta_plot(folder, scene, delta_entries):
     levels = sorted({d["level"] for d in delta_entries})
     lvl = levels[-1]
     qs = [q for q in ("u_l2", "p_l2", "lambda_l2") if any(d["quantity"] == q for d in delta_entries)]
-    lumped_run = _has_lumped(delta_entries)
     fig, axes = plt.subplots(1, len(qs), figsize=(4.2 * len(qs), 4.6), squeeze=False)
     for ax, q in zip(axes[0], qs):
         xs = set()
@@ -174,7 +179,7 @@ def delta_plot(folder, scene, delta_entries):
             if pts:
                 s = d["slope"]
                 xs.update(x for x, _ in pts)
-                kw, label = _variant_style(d, lumped_run)
+                kw, label = _variant_style(d)
                 ax.loglog(*zip(*pts), **kw, markersize=6, label=label)
         if len(xs) == 1:
             _single_x(ax, sorted(xs), f"one δ > 0 (δ = {fmt_delta(min(xs))}): no slope")
@@ -201,14 +206,11 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
     if not pts and not rpts:
         return None
     fig, ax = plt.subplots(figsize=(6.4, 5.2))
-    lumped_run = _has_lumped(pts)
-    variants = sorted({(t["u_space"], t["multiplier"], t.get("p_mass", "consistent")) for t in pts})
-    for u, m, pm in variants:
-        sel = sorted((t for t in pts if t["u_space"] == u and t["multiplier"] == m
-                      and t.get("p_mass", "consistent") == pm
+    for v in sorted({variant_of(t) for t in pts}):
+        sel = sorted((t for t in pts if variant_of(t) == v
                       and t["delta"] == min(x["delta"] for x in pts)), key=lambda t: t["level"])
         if sel:
-            kw, label = _variant_style(sel[0], lumped_run)
+            kw, label = _variant_style(sel[0])
             ax.loglog([t["total_s"] for t in sel], [t["u_l2"] for t in sel], **kw, label=label)
 
     def work(r):
@@ -243,14 +245,13 @@ def delta_reference_plot(folder, scene, agreement):
         return None
     tool = sorted({a["reference"] for a in rows})[0]
     mult = sorted({a["multiplier"] for a in rows})[-1]
-    spaces = sorted({(a["u_space"], a.get("p_mass", "consistent")) for a in rows if a["delta"] > 0},
-                    key=lambda k: (k[0], k[1] != "consistent", k[1]))
+    spaces = sorted({(a["u_space"], mult, p_mass(a), p_space(a)) for a in rows if a["delta"] > 0},
+                    key=variant_order)
     if not spaces:  # δ = 0 only: the reference tables say it all
         return None
     fig, axes = plt.subplots(1, len(spaces), figsize=(4.6 * len(spaces), 4.6), squeeze=False)
-    for ax, (u, pm) in zip(axes[0], spaces):
-        sel = [a for a in rows if a["reference"] == tool and a["multiplier"] == mult
-               and a["u_space"] == u and a.get("p_mass", "consistent") == pm]
+    for ax, v in zip(axes[0], spaces):
+        sel = [a for a in rows if a["reference"] == tool and variant_of(a) == v]
         deltas = sorted({a["delta"] for a in sel if a["delta"] > 0})
         if not deltas:
             continue
@@ -264,7 +265,7 @@ def delta_reference_plot(folder, scene, agreement):
             _single_x(ax, deltas, f"one δ > 0 (δ = {fmt_delta(deltas[0])}): one point per level")
         _delta_axis(ax)
         ax.set_xlabel("δ (dotted: δ = 0, the floor of the level)")
-        ax.set_title(f"{u}/{mult}" + ("" if pm == "consistent" else f"/{pm}"), fontsize=10)
+        ax.set_title(variant_label(*v), fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
     fig.suptitle(f"{scene}: ‖u_δh − u_{tool}‖_L² at each level", fontsize=11)
     _figure_legend(fig, axes[0])

@@ -10,7 +10,7 @@ solution, stored under a sha256 of everything it depends on:
 * the arrays it is computed from (mesh, u, p, bubble, crack points and segments, λ; for a
   reference its cracked mesh, crack pairs and ranges), dtype, shape and bytes;
 * the scene's exact solution: its ``[exact]``, ``[data] f`` and ``[geometry]`` tables;
-* the quadrature (``exact.Quadrature``'s repr) and the p mass;
+* the quadrature (``exact.Quadrature``'s repr), the p mass and the p space;
 * the source of the code that computes it (exact.py, norms.py and the expression parser).
 
 The report reads the same arrays from the merged folder (``sdcrack merge`` copies them bit for bit)
@@ -108,10 +108,11 @@ def _key(kind, arrays, scene_file, extra):
     return h.hexdigest()
 
 
-def solver_case_errors_h5(h5, case, ex, scene_file, p_mass):
-    """``exact.solver_case_errors_h5`` through the store."""
+def solver_case_errors_h5(h5, case, ex, scene_file, p_mass, p_space):
+    """``exact.solver_case_errors_h5`` through the store (the p space is part of the key: the same
+    arrays of another p space are another case)."""
     d = exact.read_h5_case(h5, case)
-    key = _key("solver", d, scene_file, {"p_mass": p_mass})
+    key = _key("solver", d, scene_file, {"p_mass": p_mass, "p_space": p_space})
     return STORE.lookup(key, lambda: exact.solver_case_errors(
         d["points"], d["triangles"], d["u"], d["p"], d["p_bubble"], d["crack_points"], d["lam"],
         ex, p_mass=p_mass, crack_segments=d["crack_segments"]))
@@ -184,7 +185,8 @@ def _precompute_solver(folder, read, ex, scene_file):
             if not isinstance(c.get("errors"), dict) or not data.has_case(c.get("fields_grid")):
                 continue
             try:
-                solver_case_errors_h5(data.h5, c["fields_grid"], ex, scene_file, read.p_mass(c))
+                solver_case_errors_h5(data.h5, c["fields_grid"], ex, scene_file, read.p_mass(c),
+                                      read.p_space(c))
                 n += 1
             except exact.ExactError:
                 continue

@@ -34,34 +34,96 @@ def finite_number(v):
 # without the key (an sdcrack older than the lumped p mass) is consistent.
 P_MASSES = ("consistent", "lumped")
 DEFAULT_P_MASS = "consistent"
+# The spaces of p (issue 32; summary.json: each case's `p_space`, the plan's `p_spaces`): the
+# paper's continuous MINI p, or "broken-tangential", whose tangential component has one value per
+# crack face at the interior vertices of a straight crack (p·ν shared; kinks and tips shared). A
+# case without the key (an sdcrack older than the axis) is continuous. The broken-tangential p runs
+# with broken u only: the plan is the product of its lists minus (continuous u, broken-tangential p).
+DEFAULT_P_SPACE = "continuous"
+BROKEN_TANGENTIAL = "broken-tangential"
+P_SPACES = (DEFAULT_P_SPACE, BROKEN_TANGENTIAL)
+# The p space's tag in labels (broken/M1/ptangential), as in the solver's field names
+# (level3-broken-M1-lumped-ptangential-delta0); none for the continuous p.
+P_SPACE_TAG = {DEFAULT_P_SPACE: "", BROKEN_TANGENTIAL: "ptangential"}
 
 
 def p_mass(c):
-    """The case's p mass: its `p_mass` ("consistent" when absent)."""
+    """The case's (or row's) p mass: its `p_mass` ("consistent" when absent)."""
     v = c.get("p_mass")
     return DEFAULT_P_MASS if v is None else str(v)
 
 
-def variant_label(u_space, multiplier, pm=DEFAULT_P_MASS):
-    """"broken/M1" (consistent p mass, as before the lumped one existed), "broken/M1/lumped"."""
-    return f"{u_space}/{multiplier}" + ("" if pm == DEFAULT_P_MASS else f"/{pm}")
+def p_space(c):
+    """The case's (or row's) p space: its `p_space` ("continuous" when absent)."""
+    v = c.get("p_space")
+    return DEFAULT_P_SPACE if v is None else str(v)
 
 
-def pm_suffix(pm):
-    """" lumped" after a case's "level L u m" in a problem line; nothing for consistent."""
-    return "" if pm == DEFAULT_P_MASS else f" {pm}"
+def runs_together(u_space, ps):
+    """Whether sdcrack runs this u space with this p space: a p whose tangential part jumps needs
+    a u that may jump (never continuous u with the broken-tangential p)."""
+    return not (u_space == "continuous" and ps == BROKEN_TANGENTIAL)
+
+
+def p_space_tag(ps):
+    """"ptangential" of the broken-tangential p space, "" of the continuous one."""
+    return P_SPACE_TAG.get(ps, ps)
+
+
+def variant_label(u_space, multiplier, pm=DEFAULT_P_MASS, ps=DEFAULT_P_SPACE):
+    """"broken/M1" (consistent p mass, continuous p: as before either axis existed),
+    "broken/M1/lumped", "broken/M1/ptangential", "broken/M1/lumped/ptangential"."""
+    return "/".join([f"{u_space}/{multiplier}"] + [t for t in ("" if pm == DEFAULT_P_MASS else pm,
+                                                              p_space_tag(ps)) if t])
+
+
+def variant_suffix(pm=DEFAULT_P_MASS, ps=DEFAULT_P_SPACE):
+    """" lumped", " ptangential", " lumped ptangential" after a case's "level L u m" in a problem
+    line; nothing for the consistent p mass and the continuous p."""
+    return "".join(f" {t}" for t in ("" if pm == DEFAULT_P_MASS else pm, p_space_tag(ps)) if t)
+
+
+def variant_of(x):
+    """(u space, multiplier, p mass, p space) of a case or of a series, table or plot row."""
+    return str(x["u_space"]), str(x["multiplier"]), p_mass(x), p_space(x)
+
+
+def variant_order(v):
+    """Sort key of a variant (u, m, p mass, p space): the consistent p mass and the continuous p
+    first, as a run without them lists its variants."""
+    u, m, pm, ps = v
+    return u, m, pm != DEFAULT_P_MASS, pm, ps != DEFAULT_P_SPACE, ps
 
 
 def case_key(c):
-    """(level, u space, multiplier, δ, p mass): the p mass last, so k[:4] reads as before."""
+    """(level, u space, multiplier, δ, p mass, p space): the p axes last, so k[:4] reads as
+    before them."""
     return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), float(c["delta"]),
-            p_mass(c))
+            p_mass(c), p_space(c))
 
 
 def plan_p_masses(plan):
     """The plan's p masses (["consistent"] for a plan written before the lumped p mass)."""
     v = plan.get("p_masses") if isinstance(plan, dict) else None
     return list(v) if isinstance(v, list) else [DEFAULT_P_MASS]
+
+
+def plan_p_spaces(plan):
+    """The plan's p spaces (["continuous"] for a plan written before the p space axis)."""
+    v = plan.get("p_spaces") if isinstance(plan, dict) else None
+    return list(v) if isinstance(v, list) else [DEFAULT_P_SPACE]
+
+
+def without_default_p_space(obj):
+    """`obj` (report.json's content) without the `p_space` keys whose value is the continuous p
+    or "*": what a run without the broken-tangential p space writes, so that its report.json is
+    byte for byte the one of before the axis."""
+    if isinstance(obj, dict):
+        return {k: without_default_p_space(v) for k, v in obj.items()
+                if not (k == "p_space" and v in (DEFAULT_P_SPACE, "*"))}
+    if isinstance(obj, list):
+        return [without_default_p_space(v) for v in obj]
+    return obj
 
 
 def total_time(c):
@@ -214,8 +276,9 @@ def load_results(folder):
     if not (isinstance(plan, dict) and all(isinstance(plan.get(k), list) for k in PLAN_KEYS)):
         raise InputError(f"{folder}/summary.json has no 'plan' ({', '.join(PLAN_KEYS)}): it was "
                          "written by an sdcrack older than the scene copy; rerun the scene")
-    if "p_masses" in plan and not isinstance(plan["p_masses"], list):
-        raise InputError(f"{folder}/summary.json: plan.p_masses is not a list")
+    for key in ("p_masses", "p_spaces"):
+        if key in plan and not isinstance(plan[key], list):
+            raise InputError(f"{folder}/summary.json: plan.{key} is not a list")
     mesh_scene = os.path.join(folder, "mesh", "scene.json")
     fpath = os.path.join(folder, "fields.h5")
     fields = Fields(fpath) if os.path.exists(fpath) else None

@@ -14,6 +14,8 @@ import os
 import shutil
 import tempfile
 
+from .read import DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag
+
 # Tables longer than this are folded (<details>) outside the summary section.
 FOLD_ROWS = 8
 # Modes of the published report folder and its files, whatever the umask (mkdtemp gives 0700).
@@ -312,10 +314,12 @@ def rerun_command(results_dir, summary, scene_file, k):
     """The shell command that reruns one case of this results folder from any working directory:
     the binary that wrote it (provenance `executable`, absolute; `sdcrack` from PATH when not
     recorded), the folder's own copy of the scene (RESULTS_DIR/scene.toml, absolute), the case's
-    level, u space and multiplier (and `--p-mass lumped` for a lumped case) with the δ sweep of
-    the run (each δ warm-started from the previous one, as in the run, so the numbers come back
-    exactly; `--delta` only when the run was restricted to one δ), into the absolute folder
-    RERUN/<scene>-l<L>-<u>-<m>[-lumped][-d<δ>], RERUN the folder `rerun` beside the results
+    level, u space and multiplier (and `--p-mass lumped` for a lumped case, `--p-space
+    broken-tangential` for a broken-tangential one) with the δ sweep of the run (each δ
+    warm-started from the previous one, as in the run, so the numbers come back exactly; `--delta`
+    only when the run was restricted to one δ), into the absolute folder
+    RERUN/<scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>], RERUN the folder `rerun` beside the
+    results
     folder (OUT/rerun/ for OUT/<scene>/): the command ci/cases prints for the same folder."""
     from .settings import scene_lists
 
@@ -332,18 +336,22 @@ def rerun_command(results_dir, summary, scene_file, k):
 
 def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir):
     """The shell command `exe run SCENE_PATH` of one rerunnable unit `k` (level, u space,
-    multiplier, p mass): the whole δ sweep, or `--delta` alone when `only_delta` is given, into
-    RERUN_DIR/<scene>-l<L>-<u>-<m>[-lumped][-d<δ>]. One home for the commands of the reports
-    (rerun_command) and of ci/cases."""
+    multiplier, p mass, p space; absent p_mass / p_space: consistent / continuous): the whole δ
+    sweep, or `--delta` alone when `only_delta` is given, into
+    RERUN_DIR/<scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>] (the suffixes of the solver's
+    field names). One home for the commands of the reports (rerun_command) and of ci/cases."""
     import shlex
 
     args = [exe, "run", scene_path, "--level", str(k["level"]), "--u-space", str(k["u_space"]),
             "--multiplier", str(k["multiplier"])]
     name = f"{scene_name}-l{k['level']}-{k['u_space']}-{k['multiplier']}"
-    pm = k.get("p_mass", "consistent")
-    if pm != "consistent":  # the consistent command is the one of a run without p masses
-        args += ["--p-mass", str(pm)]
+    pm, ps = p_mass(k), p_space(k)
+    if pm != DEFAULT_P_MASS:  # the consistent command is the one of a run without p masses
+        args += ["--p-mass", pm]
         name += f"-{pm}"
+    if ps != DEFAULT_P_SPACE:  # the continuous command is the one of a run without p spaces
+        args += ["--p-space", ps]
+        name += f"-{p_space_tag(ps)}"
     if only_delta is not None:
         d = fmt_delta(only_delta)
         args += ["--delta", d]

@@ -19,7 +19,7 @@ and declare a check that does not apply to it, with a reason ([[verification.not
 """
 import math
 
-from .read import InputError
+from .read import DEFAULT_P_SPACE, P_SPACES, InputError
 
 DEFAULTS = {"kkt_tolerance": 1e-10, "reference_agreement": 1e-8, "delta_slope_tolerance": 0.1,
             "min_rate": 0.4}
@@ -40,6 +40,12 @@ def scene_p_masses(scene):
     """The p masses the scene file asks for ([discretization] p_mass, default ["consistent"])."""
     d = scene.get("discretization") or {}
     return list(d.get("p_mass", ["consistent"]))
+
+
+def scene_p_spaces(scene):
+    """The p spaces the scene file asks for ([discretization] p_spaces, default ["continuous"])."""
+    d = scene.get("discretization") or {}
+    return list(d.get("p_spaces", [DEFAULT_P_SPACE]))
 
 
 def verification(scene, where):
@@ -87,7 +93,8 @@ def _series_keys(e, known, name):
 
 
 def _expected_rates(v, known, where):
-    """[[verification.expected_rate]]: dict(u_space, multiplier, p_mass, quantity, rate, reason)."""
+    """[[verification.expected_rate]]: dict(u_space, multiplier, p_mass, p_space, quantity, rate,
+    reason); p_mass and p_space "*" when not given."""
     out = []
     for i, e in enumerate(v.get("expected_rate", [])):
         name = f"{where}: verification.expected_rate[{i}]"
@@ -98,11 +105,15 @@ def _expected_rates(v, known, where):
         if not isinstance(rate, (int, float)) or isinstance(rate, bool) or not math.isfinite(rate) \
                 or not 0 < rate <= 4:
             raise InputError(f"{name}.rate = {rate!r} must be a number in (0, 4]")
-        d = {"rate": float(rate), "reason": reason, "p_mass": e.get("p_mass", "*")}
+        d = {"rate": float(rate), "reason": reason, "p_mass": e.get("p_mass", "*"),
+             "p_space": e.get("p_space", "*")}
         if d["p_mass"] not in ("*", "consistent", "lumped"):
             raise InputError(f"{name}.p_mass = {d['p_mass']!r} is none of consistent, lumped, '*'")
+        if d["p_space"] not in ("*",) + P_SPACES:
+            raise InputError(f"{name}.p_space = {d['p_space']!r} is none of "
+                             f"{', '.join(P_SPACES)}, '*'")
         d.update(_series_keys(e, known, name))
-        bad = set(e) - {"u_space", "multiplier", "p_mass", "quantity", "rate", "reason"}
+        bad = set(e) - {"u_space", "multiplier", "p_mass", "p_space", "quantity", "rate", "reason"}
         if bad:
             raise InputError(f"{name}: unknown key(s) {sorted(bad)}")
         out.append(d)
@@ -129,8 +140,8 @@ def _not_applicable(v, where):
 
 
 def expected_failure(settings, u_space, multiplier, quantity):
-    """The reason a series is declared not to converge, or None. A declaration names no p mass:
-    it applies to the series of both p masses."""
+    """The reason a series is declared not to converge, or None. A declaration names no p mass and
+    no p space: it applies to the series of every p mass and p space."""
     for f in settings["expected_failures"]:
         if all(f[k] in ("*", v) for k, v in (("u_space", u_space), ("multiplier", multiplier),
                                               ("quantity", quantity))):

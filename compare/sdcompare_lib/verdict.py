@@ -8,7 +8,8 @@ from collections import defaultdict
 import numpy as np
 
 from . import norms, rates, theory
-from .read import DEFAULT_P_MASS, case_key, finite_number, p_mass, total_time, variant_label
+from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, case_key, finite_number, p_mass, p_space,
+                   total_time, variant_label, variant_of, variant_order)
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.
@@ -22,8 +23,8 @@ ROUNDOFF_REL = 1e-12
 
 
 def _variants(cases):
-    """(u space, multiplier, p mass) of the cases."""
-    return sorted({(c["u_space"], c["multiplier"], p_mass(c)) for c in cases})
+    """(u space, multiplier, p mass, p space) of the cases."""
+    return sorted({variant_of(c) for c in cases}, key=variant_order)
 
 
 def ref_delta(cases):
@@ -33,14 +34,13 @@ def ref_delta(cases):
 
 
 def series_by_variant(cases, delta):
-    """{(u space, multiplier, p mass): the cases of δ = delta, coarse to fine}."""
+    """{(u space, multiplier, p mass, p space): the cases of δ = delta, coarse to fine}."""
     out = {}
-    for u, m, pm in _variants(cases):
-        cs = sorted((c for c in cases if c["u_space"] == u and c["multiplier"] == m
-                     and p_mass(c) == pm and float(c["delta"]) == delta),
+    for v in _variants(cases):
+        cs = sorted((c for c in cases if variant_of(c) == v and float(c["delta"]) == delta),
                     key=lambda c: int(c["level"]))
         if cs:
-            out[(u, m, pm)] = cs
+            out[v] = cs
     return out
 
 
@@ -63,50 +63,49 @@ def mesh_parameter(case, graded=False):
 
 
 def _measured_series(cases, agreement, has_exact, graded=False):
-    """{(u, m, p mass, q): (against, reference, [(level, h, error or None)])} at δ = ref_delta;
-    h is mesh_parameter's."""
+    """{(u, m, p mass, p space, q): (against, reference, [(level, h, error or None)])} at
+    δ = ref_delta; h is mesh_parameter's."""
     delta = ref_delta(cases)
     out = {}
     if has_exact:
-        for (u, m, pm), cs in series_by_variant(cases, delta).items():
+        for v, cs in series_by_variant(cases, delta).items():
             for q in QUANTITIES:
-                out[(u, m, pm, q)] = ("exact", None, [
+                out[v + (q,)] = ("exact", None, [
                     (int(c["level"]), mesh_parameter(c, graded),
                      (c.get("errors") or {}).get(q) if isinstance(c.get("errors"), dict) else None)
                     for c in cs])
         return delta, out
     rows = [r for r in agreement if r["kind"] == "solver_vs_reference" and "level" in r]
     tools = [t for t in PREFERRED_REFERENCE if any(r["reference"] == t for r in rows)]
-    for (u, m, pm), cs in series_by_variant(cases, delta).items():
+    for v, cs in series_by_variant(cases, delta).items():
         h_of = {int(c["level"]): mesh_parameter(c, graded) for c in cs}
         for q, key in REFERENCE_QUANTITIES.items():
             if not tools:
-                out[(u, m, pm, q)] = (None, None, [(int(c["level"]), h_of[int(c["level"])], None)
-                                                   for c in cs])
+                out[v + (q,)] = (None, None, [(int(c["level"]), h_of[int(c["level"])], None)
+                                              for c in cs])
                 continue
             tool = tools[0]
             by_level = {r["level"]: r.get(key) for r in rows if r["reference"] == tool
-                        and r["u_space"] == u and r["multiplier"] == m
-                        and r.get("p_mass", DEFAULT_P_MASS) == pm and r["delta"] == delta}
-            out[(u, m, pm, q)] = ("reference", tool, [(int(c["level"]), h_of[int(c["level"])],
-                                                   by_level.get(int(c["level"]))) for c in cs])
+                        and variant_of(r) == v and r["delta"] == delta}
+            out[v + (q,)] = ("reference", tool, [(int(c["level"]), h_of[int(c["level"])],
+                                                  by_level.get(int(c["level"]))) for c in cs])
     return delta, out
 
 
-def expected_order(settings, u, m, pm, q, s, closed=False):
+def expected_order(settings, u, m, pm, q, s, closed=False, ps=DEFAULT_P_SPACE):
     """(expected order, its reason) of one series: the scene's declaration, else theory.py's."""
-    declared = theory.declared_rate(settings.get("expected_rates", []), u, m, pm, q)
-    return declared if declared is not None else theory.expected_rate(q, m, pm, s, closed)
+    declared = theory.declared_rate(settings.get("expected_rates", []), u, m, pm, q, ps)
+    return declared if declared is not None else theory.expected_rate(q, m, pm, s, closed, ps)
 
 
 def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGULAR_S,
                    s_reason="", unstored=(), crack_closed=False, graded=False):
-    """One entry per (u space, multiplier, p mass, quantity): the errors against the exact solution
-    (scenes with [exact]) or against the reference of the same level, their rates, the expected
-    order (theory.py, for the regularity index s of the solution), the measured status
-    (rates.series_status against expected − theory.RATE_MARGIN) and the status after the scene's
-    expected failures (which apply to both p masses). Rates are per halving of h, or of N^{-1/2} on
-    `graded` meshes (mesh_parameter). A quantity in `unstored` (its field neither
+    """One entry per (u space, multiplier, p mass, p space, quantity): the errors against the exact
+    solution (scenes with [exact]) or against the reference of the same level, their rates, the
+    expected order (theory.py, for the regularity index s of the solution and the p space), the
+    measured status (rates.series_status against expected − theory.RATE_MARGIN) and the status
+    after the scene's expected failures (which apply to every p mass and p space). Rates are per
+    halving of h, or of N^{-1/2} on `graded` meshes (mesh_parameter). A quantity in `unstored` (its field neither
     asked for nor kept for verification: a folder written before verification.h5) whose errors
     are missing is "not judged", not incomplete."""
     out = []
@@ -114,9 +113,8 @@ def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGUL
         return out
     delta, measured = _measured_series(cases, agreement, has_exact, graded)
     order = {q: i for i, q in enumerate(QUANTITIES)}
-    for (u, m, pm, q), (against, tool, pts) in sorted(
-            measured.items(), key=lambda kv: (kv[0][:2], kv[0][2] != DEFAULT_P_MASS, kv[0][2],
-                                              order[kv[0][3]])):
+    for (u, m, pm, ps, q), (against, tool, pts) in sorted(
+            measured.items(), key=lambda kv: (variant_order(kv[0][:4]), order[kv[0][4]])):
         levels = [p[0] for p in pts]
         h = [p[1] for p in pts]
         e = [p[2] for p in pts]
@@ -130,7 +128,7 @@ def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGUL
         elif bad:
             status, reason = "incomplete", (f"error against the {against} missing, null or NaN at "
                                             f"level(s) {bad}")
-        expected, why = expected_order(settings, u, m, pm, q, s, crack_closed)
+        expected, why = expected_order(settings, u, m, pm, q, s, crack_closed, ps)
         floor = theory.threshold(expected, settings["min_rate"] if settings.get(
             "min_rate_declared") else None)
         if against is not None and not bad:
@@ -143,8 +141,9 @@ def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGUL
         elif xfail is not None and status == "does not converge":
             status, reason = "expected failure", f"declared in the scene; measured: {reason}"
         ok_e = [v if finite_number(v) else None for v in e]
-        out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "quantity": q,
-                    "against": against, "reference": tool, "delta": delta, "levels": levels,
+        out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "p_space": ps,
+                    "quantity": q, "against": against, "reference": tool, "delta": delta,
+                    "levels": levels,
                     "h": h, "errors": ok_e,
                     "rates": rates.successive_rates(h, ok_e) if not bad else [None] * (len(e) - 1),
                     "measured_status": measured_status, "status": status, "reason": reason,
@@ -169,8 +168,9 @@ def compute_delta_limit(scene, cases, fields):
     groups = defaultdict(list)
     for c in cases:
         if fields.has_case(c.get("fields_grid")):
-            groups[(int(c["level"]), c["u_space"], c["multiplier"], p_mass(c))].append(c)
-    for (lvl, u, m, pm), cs in sorted(groups.items()):
+            groups[(int(c["level"]),) + variant_of(c)].append(c)
+    for (lvl, u, m, pm, ps), cs in sorted(groups.items(),
+                                          key=lambda kv: (kv[0][0], variant_order(kv[0][1:]))):
         if len(cs) < 2:
             continue
         cs.sort(key=lambda c: float(c["delta"]))
@@ -197,8 +197,8 @@ def compute_delta_limit(scene, cases, fields):
             fit_e = [e for e in diffs if e > floor]
             line = rates.fit_line(fit_d, fit_e)
             resid = dict(zip(fit_d, line[2])) if line else {}
-            out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "level": lvl,
-                        "quantity": q, "delta_ref": d0, "deltas": ds, "diffs": diffs,
+            out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "p_space": ps,
+                        "level": lvl, "quantity": q, "delta_ref": d0, "deltas": ds, "diffs": diffs,
                         "norm_ref": scale, "slope": line[0] if line else None,
                         "points_fitted": len(fit_d),
                         "residuals": [resid.get(d) for d in ds],
@@ -276,7 +276,8 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
         uref = ref["u"][lvl]
         row = {"scene": scene, "kind": "solver_vs_reference", "reference": tool, "level": lvl,
                "u_space": c["u_space"], "multiplier": c["multiplier"], "p_mass": p_mass(c),
-               "delta": float(c["delta"]), "finest_level": finest, "note": ""}
+               "p_space": p_space(c), "delta": float(c["delta"]), "finest_level": finest,
+               "note": ""}
         try:
             if c["u_space"] == "broken" and f["points"].shape[0] == pts.shape[0]:
                 row["e_u"] = norms.p1_l2_diff(pts, tris, f["u"], uref)
@@ -342,7 +343,7 @@ def compute_gci(scene, cases, fields, has_exact):
     if fields is None or not cases:
         return out
     delta = ref_delta(cases)
-    for (u, m, pm), cs in series_by_variant(cases, delta).items():
+    for (u, m, pm, ps), cs in series_by_variant(cases, delta).items():
         cs = [c for c in cs if fields.has_case(c.get("fields_grid"))]
         hs = [float(c["h"]) for c in cs]
         if len(cs) < 3 or any(not b < a for a, b in zip(hs, hs[1:])):
@@ -361,7 +362,8 @@ def compute_gci(scene, cases, fields, has_exact):
             g = rates.gci(h, vals)
             if g is None:
                 continue
-            g.update(scene=scene, u_space=u, multiplier=m, p_mass=pm, delta=delta, output=name,
+            g.update(scene=scene, u_space=u, multiplier=m, p_mass=pm, p_space=ps, delta=delta,
+                     output=name,
                      levels=[int(c["level"]) for c in cs][-3:], scene_has_exact=has_exact)
             out.append(g)
     return out
@@ -373,8 +375,9 @@ def kkt_rows(scene, cases):
     for c in cases:
         k = c.get("kkt") or {}
         rows.append({"scene": scene, "level": int(c["level"]), "u_space": c["u_space"],
-                     "multiplier": c["multiplier"], "p_mass": p_mass(c), "delta": float(c["delta"]),
-                     "converged": c.get("converged") is True, "status": c.get("status"),
+                     "multiplier": c["multiplier"], "p_mass": p_mass(c), "p_space": p_space(c),
+                     "delta": float(c["delta"]), "converged": c.get("converged") is True,
+                     "status": c.get("status"),
                      "iterations": c.get("iterations"), "kkt": k,
                      "kkt_max": max([float(v) for v in k.values() if v is not None], default=None),
                      "active_multipliers": c.get("active_multipliers"),
@@ -383,8 +386,8 @@ def kkt_rows(scene, cases):
                      "condition_estimate": c.get("condition_estimate"),
                      # the δ' whose ‖K⁻¹‖₁ estimate κ₁ uses (δ itself in summaries before issue 26)
                      "condition_estimate_delta": c.get("condition_estimate_delta", c["delta"])})
-    rows.sort(key=lambda r: (r["converged"], r["level"], r["u_space"], r["multiplier"],
-                             r["p_mass"] != DEFAULT_P_MASS, r["p_mass"], -r["delta"]))
+    rows.sort(key=lambda r: (r["converged"], r["level"], variant_order(variant_of(r)),
+                             -r["delta"]))
     return rows
 
 
@@ -393,8 +396,9 @@ def timing_rows(scene, cases):
     for c in sorted(cases, key=case_key):
         e = c.get("errors") if isinstance(c.get("errors"), dict) else {}
         rows.append({"scene": scene, "level": int(c["level"]), "u_space": c["u_space"],
-                     "multiplier": c["multiplier"], "p_mass": p_mass(c), "delta": float(c["delta"]),
-                     "unknowns": c.get("unknowns"), "total_s": total_time(c),
+                     "multiplier": c["multiplier"], "p_mass": p_mass(c), "p_space": p_space(c),
+                     "delta": float(c["delta"]), "unknowns": c.get("unknowns"),
+                     "total_s": total_time(c),
                      "timings_s": c.get("timings_s"), "u_l2": e.get("u_l2")})
     return rows
 
@@ -403,12 +407,14 @@ def timing_rows(scene, cases):
 # An expectation of scenes/expectations.toml bounds one series at one level of one scene:
 # max_error (the error at `level`) and min_rate (the rate from level − 1 to `level`). Every name in
 # it must exist: the scene among the scene files beside the expectations file (or the judged
-# scene), the u space, multiplier, p mass and level among those the judged scene's file lists, the
-# quantity among QUANTITIES; otherwise exit 2. `p_mass` is optional: without it the expectation
-# bounds the consistent p mass ("*": both). Known failures are declared in the scene file
-# ([[verification.expected_failure]]), not here.
-EXPECTATION_KEYS = {"scene", "u_space", "multiplier", "p_mass", "quantity", "level", "min_rate",
-                    "max_error", "note"}
+# scene), the u space, multiplier, p mass, p space and level among those the judged scene's file
+# lists, the quantity among QUANTITIES; otherwise exit 2. `p_mass` and `p_space` are optional:
+# without them the expectation bounds the consistent p mass and the continuous p ("*": all). Known
+# failures are declared in the scene file ([[verification.expected_failure]]), not here.
+EXPECTATION_KEYS = {"scene", "u_space", "multiplier", "p_mass", "p_space", "quantity", "level",
+                    "min_rate", "max_error", "note"}
+# The value of an optional key of an expectation that does not give it.
+EXPECTATION_DEFAULTS = {"p_mass": DEFAULT_P_MASS, "p_space": DEFAULT_P_SPACE}
 MOVED_KEYS = {
     "converges": "declare a known failure in the scene file's [[verification.expected_failure]] "
                  "(every series is expected to converge)",
@@ -485,11 +491,10 @@ def load_expectations(path):
 
 def validate_expectations(exps, path, scene, scene_file):
     """The expectations that apply to `scene`; a name that matches nothing is a ValueError."""
-    from .settings import scene_lists, scene_p_masses
+    from .settings import scene_lists, scene_p_masses, scene_p_spaces
 
     known_scenes = _scene_names_beside(path) | {scene}
     levels, u_spaces, multipliers, _ = scene_lists(scene_file)
-    p_masses = scene_p_masses(scene_file)
     mine = []
     for i, e in enumerate(exps):
         if e["scene"] != "*" and e["scene"] not in known_scenes:
@@ -498,9 +503,10 @@ def validate_expectations(exps, path, scene, scene_file):
         if e["scene"] not in ("*", scene):
             continue
         for key, values in (("u_space", u_spaces), ("multiplier", multipliers),
-                            ("p_mass", p_masses)):
-            if key == "p_mass" and key not in e:
-                continue  # consistent, also in a scene that runs only the lumped p mass: no match
+                            ("p_mass", scene_p_masses(scene_file)),
+                            ("p_space", scene_p_spaces(scene_file))):
+            if key in EXPECTATION_DEFAULTS and key not in e:
+                continue  # the default, also in a scene that does not run it: no match
             if e[key] != "*" and e[key] not in values:
                 raise ValueError(f"expectation {i}: {key} {e[key]!r} is not run by scene "
                                  f"{scene!r} (its scene file lists {values})")
@@ -521,14 +527,15 @@ def check_expectations(series, exps):
     for e in exps:
         matched = [s for s in series if _match(e["u_space"], s["u_space"])
                    and _match(e["multiplier"], s["multiplier"]) and _match(e["quantity"], s["quantity"])
-                   and _match(e.get("p_mass", DEFAULT_P_MASS), s.get("p_mass", DEFAULT_P_MASS))]
+                   and _match(e.get("p_mass", DEFAULT_P_MASS), p_mass(s))
+                   and _match(e.get("p_space", DEFAULT_P_SPACE), p_space(s))]
         if not matched:
             results.append({**e, "variant": None, "status": "not evaluated",
                             "reason": "no series of this run matches it"})
         for s in matched:
-            pm = s.get("p_mass", DEFAULT_P_MASS)
-            res = {**e, "u_space": s["u_space"], "multiplier": s["multiplier"], "p_mass": pm,
-                   "quantity": s["quantity"], "variant": variant_label(s["u_space"], s["multiplier"], pm)}
+            res = {**e, "u_space": s["u_space"], "multiplier": s["multiplier"], "p_mass": p_mass(s),
+                   "p_space": p_space(s), "quantity": s["quantity"],
+                   "variant": variant_label(*variant_of(s))}
             at = dict(zip(s["levels"], s["errors"]))
             err, prev = at.get(e["level"]), at.get(e["level"] - 1)
             problems, missing = [], []
@@ -566,8 +573,11 @@ def _rel(a, b):
 
 
 def _case_list(k):
-    """A case key as written in a baseline flag: [level, u, m, δ], with the p mass only if lumped."""
-    return list(k[:4]) if k[4] == DEFAULT_P_MASS else list(k)
+    """A case key as written in a baseline flag: [level, u, m, δ], then the p mass when it or the p
+    space is not the default, then the p space when it is not continuous."""
+    if k[5] != DEFAULT_P_SPACE:
+        return list(k)
+    return list(k[:4]) if k[4] == DEFAULT_P_MASS else list(k[:5])
 
 
 def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
@@ -594,14 +604,14 @@ def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
             flags.append({"scene": scene, "kind": "timing", "case": _case_list(k), "old": to,
                           "new": tn, "rel_change": tn / to - 1})
     def skey(r):
-        return r["u_space"], r["multiplier"], r.get("p_mass", DEFAULT_P_MASS), r["quantity"]
+        return variant_of(r) + (r["quantity"],)
 
     oldr = {skey(r): r for r in base_rates}
     for r in rate_entries:
         o = oldr.get(skey(r))
         if o is None:
             continue
-        label = variant_label(r["u_space"], r["multiplier"], r.get("p_mass", DEFAULT_P_MASS))
+        label = variant_label(*variant_of(r))
         for lv, rn, ro in zip(r["levels"][1:], r["rates"], o["rates"]):
             if rn is None or ro is None:
                 continue
