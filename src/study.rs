@@ -1,10 +1,10 @@
 //! The driver: the study of one scene, read like the algorithm.
 //!
-//! for each level → mesh → for each u space → for each p space and p mass → assemble, analyse
-//! the pattern → for each δ (largest
-//! first) → factor K(δ), reduce to the crack (x₀ = K⁻¹b, H_N = N K⁻¹ Nᵀ) → for each multiplier →
-//! solve the LCP (warm-started from the previous δ), recover x, refine, measure the KKT residuals,
-//! the errors against `[exact]` and the fields → record the case.
+//! for each level → mesh → for each u space → for each p space it serves and p mass → assemble,
+//! analyse the pattern → for each δ (largest first) → factor K(δ), reduce to the crack
+//! (x₀ = K⁻¹b, H_N = N K⁻¹ Nᵀ) → for each multiplier → solve the LCP (warm-started from the
+//! previous δ), recover x, refine, measure the KKT residuals, the errors against `[exact]` and the
+//! fields → record the case.
 //!
 //! One numeric factorisation per (level, u space, δ) serves the three multipliers; the symbolic
 //! factorisation is shared by every δ. Phase timings are recorded per case; phases shared by
