@@ -376,6 +376,94 @@ fn lumped_p_mass_runs_alone_and_is_named_in_the_results() {
     );
 }
 
+/// `--p-space broken-tangential` alone: the plan, the cases and the field names say so, `check
+/// --json` lists the scene's p spaces, and the stored p is the broken-tangential field: at every
+/// interior node of the crack (y = 0, ν = (0, 1)) the + and − copies hold the same p·ν = p_y and,
+/// where the crack opens, different p·τ = p_x (the default scene's load opens it for x > 0).
+#[test]
+fn broken_tangential_p_runs_alone_and_its_field_jumps_only_tangentially() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "small.toml", SMALL);
+    let o = sdcrack(&["check", &scene, "--json"]);
+    let plan: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(plan["p_spaces"], serde_json::json!(["continuous"]));
+    let out = dir.path().join("res");
+    let o = sdcrack(&[
+        "run",
+        &scene,
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--p-space",
+        "broken-tangential",
+        "--multiplier",
+        "M1",
+        "--delta",
+        "0",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let folder = out.join("small");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(
+        summary["plan"]["p_spaces"],
+        serde_json::json!(["broken-tangential"])
+    );
+    let cases = summary["cases"].as_array().unwrap();
+    assert_eq!(
+        cases.len(),
+        2,
+        "levels 0, 1 of broken u; no continuous u case"
+    );
+    for c in cases {
+        assert_eq!(
+            (&c["p_space"], &c["u_space"]),
+            (&"broken-tangential".into(), &"broken".into())
+        );
+        assert!(c["fields_grid"]
+            .as_str()
+            .unwrap()
+            .ends_with("-M1-ptangential-delta0"));
+    }
+    let f = hdf5::File::open(folder.join("fields.h5")).unwrap();
+    let case = f
+        .group("cases/level1-broken-M1-ptangential-delta0")
+        .unwrap();
+    let attr = case
+        .attr("p_space")
+        .unwrap()
+        .read_scalar::<hdf5::types::VarLenUnicode>();
+    assert_eq!(attr.unwrap().as_str(), "broken-tangential");
+    // the case's own mesh (a soft link to /meshes/KEY)
+    let points = case
+        .dataset("mesh/points")
+        .unwrap()
+        .read_2d::<f64>()
+        .unwrap();
+    let p = case.dataset("p").unwrap().read_2d::<f64>().unwrap();
+    let n = points.nrows();
+    let (mut shared, mut jumps) = (0, 0);
+    for i in 0..n {
+        for j in i + 1..n {
+            let same = (0..2).all(|d| points[[i, d]] == points[[j, d]]);
+            if !same {
+                continue;
+            }
+            // a crack vertex and its − copy: p·ν (p_y) shared, p·τ (p_x) may jump
+            assert!((p[[i, 1]] - p[[j, 1]]).abs() <= 1e-13 * p[[i, 1]].abs().max(1.0));
+            shared += 1;
+            if (p[[i, 0]] - p[[j, 0]]).abs() > 1e-6 {
+                jumps += 1;
+            }
+        }
+    }
+    assert_eq!(shared, 3, "the interior nodes of the level-1 crack");
+    assert!(
+        jumps >= 1,
+        "the open part of the crack has a tangential jump"
+    );
+}
+
 #[test]
 fn bench_json_reports_the_lumped_case_beside_the_consistent_one() {
     let o = sdcrack(&["bench", "--json", "--vertices", "400"]);
