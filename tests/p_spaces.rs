@@ -16,7 +16,11 @@ use sdcrack::study::{CaseFilter, CaseResult};
 
 /// The repository scene `name` at `levels`, δ = 0, no fields, both p spaces and both p masses.
 fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
-    let mut s = common::load(name);
+    at_levels(common::load(name), levels)
+}
+
+/// `s` at `levels`, δ = 0, no fields, both p spaces and both p masses.
+fn at_levels(mut s: Scene, levels: &[u32]) -> Scene {
     s.levels = levels.to_vec();
     s.p_masses = vec![PMass::Consistent, PMass::Lumped];
     s.p_spaces = vec![PSpace::Continuous, PSpace::BrokenTangential];
@@ -160,12 +164,17 @@ fn broken_tangential_p_reaches_the_optimal_orders_on_a_smooth_open_crack() {
     }
 }
 
-/// open-smooth-inclined (open-smooth turned by 45°: the frames (ν, τ) are no axes, so the
+/// tests/data/scenes/open-smooth-inclined.toml (open-smooth turned by 45°: the frames (ν, τ) are no axes, so the
 /// rotation of the corner unknowns is exercised), uniform levels 1–4, M1: the same orders
 /// (measured u 2.01, p 1.01 consistent and 1.93 lumped, λ 2.01).
 #[test]
 fn broken_tangential_p_converges_on_an_oblique_open_crack() {
-    let mut scene = scene_at_levels("open-smooth-inclined", &[1, 2, 3, 4]);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/scenes/open-smooth-inclined.toml");
+    let mut scene = at_levels(
+        Scene::from_file(&path).expect("test scene is valid"),
+        &[1, 2, 3, 4],
+    );
     scene.multipliers = vec![MultiplierSpace::M1];
     let cases = solve_broken(&scene);
     for p_mass in [PMass::Consistent, PMass::Lumped] {
