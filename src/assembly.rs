@@ -193,15 +193,6 @@ fn element_corners(mesh: &Mesh, ptopo: &PTopology, t: usize) -> [PCorner; 3] {
     [0, 1, 2].map(|k| ptopo.corner(mesh, t, k))
 }
 
-/// The directions of a corner's two unknowns, row by row: (ν, τ) for a doubled crack vertex
-/// (the rotation R = [ν τ] transposed), the identity for the (x, y) frame.
-fn frame(c: &PCorner) -> [[f64; 2]; 2] {
-    match c.normal {
-        None => [[1.0, 0.0], [0.0, 1.0]],
-        Some([nx, ny]) => [[nx, ny], [ny, -nx]],
-    }
-}
-
 /// R_kᵀ R_l for two corners: exactly the identity when their frames are the same (always for
 /// k = l, and for two corners on one straight crack), so that the lumped diagonal stays diagonal
 /// bit for bit.
@@ -209,7 +200,7 @@ fn frame_product(a: &PCorner, b: &PCorner) -> [[f64; 2]; 2] {
     if a.normal == b.normal {
         return [[1.0, 0.0], [0.0, 1.0]];
     }
-    let (ra, rb) = (frame(a), frame(b));
+    let (ra, rb) = (a.directions(), b.directions());
     [0, 1].map(|i| [0, 1].map(|j| (0..2).map(|d| ra[i][d] * rb[j][d]).sum()))
 }
 
@@ -239,7 +230,7 @@ impl FramedElement {
         let mut b = [[0.0; 6]; 3];
         for (i, row) in b.iter_mut().enumerate() {
             for (k, corner) in corners.iter().enumerate() {
-                let r = frame(corner);
+                let r = corner.directions();
                 for j in 0..2 {
                     row[2 * k + j] = if corner.normal.is_none() {
                         ce.b[i][2 * k + j]

@@ -356,16 +356,29 @@ pub struct PCorner {
     pub normal: Option<[f64; 2]>,
 }
 
+/// The directions of the two p unknowns of a vertex in the frame of the crack normal ν, row by
+/// row: ν, then τ = ν turned by −90° (the direction of the crack), so that p = (p·ν) ν + (p·τ) τ.
+/// The one home of the frame's convention ([`PCorner`], the assembly's rotation, N's weights).
+pub fn frame_directions([nx, ny]: [f64; 2]) -> [[f64; 2]; 2] {
+    [[nx, ny], [ny, -nx]]
+}
+
 impl PCorner {
+    /// The directions of this corner's two unknowns, row by row: [`frame_directions`] of its
+    /// normal, the identity in the (x, y) frame.
+    pub fn directions(&self) -> [[f64; 2]; 2] {
+        self.normal
+            .map_or([[1.0, 0.0], [0.0, 1.0]], frame_directions)
+    }
+
     /// p in (x, y) at this corner from the unknowns `values` = (P[dofs[0]], P[dofs[1]]).
     pub fn to_xy(&self, values: [f64; 2]) -> [f64; 2] {
-        match self.normal {
-            None => values,
-            Some([nx, ny]) => {
-                let [a, b] = values;
-                [a * nx + b * ny, a * ny - b * nx]
-            }
+        if self.normal.is_none() {
+            return values;
         }
+        let [a, b] = values;
+        let [nu, tau] = self.directions();
+        [a * nu[0] + b * tau[0], a * nu[1] + b * tau[1]]
     }
 
     /// The corner's value read from the p unknowns `p`, in (x, y).

@@ -26,7 +26,7 @@
 //!   constant p. λ_h = M_c⁻¹ Λ̃ as on a straight crack (M_c the scalar P1 mass of the polyline).
 
 use crate::contact::KktResiduals;
-use crate::mesh::{Mesh, PTopology};
+use crate::mesh::{frame_directions, Mesh, PTopology};
 use crate::problem::MultiplierSpace;
 
 /// A discrete multiplier on the cracks (cracks concatenated in order).
@@ -132,7 +132,7 @@ impl CrackOperators {
                 *w = if r.normal == nu {
                     [1.0, 0.0]
                 } else {
-                    [a * nu[0] + b * nu[1], a * nu[1] - b * nu[0]]
+                    frame_directions(nu).map(|d| a * d[0] + b * d[1])
                 };
             }
         }
