@@ -280,6 +280,43 @@ def field_off_at_one_delta(factor, delta=1e-4, u_space="broken", multiplier="M1"
     return damage
 
 
+def field_scaled(multiplier, name, factor, u_space="broken"):
+    """One stored array (u, p, crack/lambda) of the finest δ = 0 case of `multiplier` multiplied
+    by `factor`: a bug in one multiplier variant only (issue 33: a wrong weight in M1star's rows)."""
+    def damage(folder, others):
+        import h5py
+
+        s = load(folder)
+        g = case_of(s, finest(s), u_space, multiplier)["fields_grid"]
+        with h5py.File(os.path.join(folder, "fields.h5"), "r+") as h5:
+            h5[f"cases/{g}/{name}"][...] = factor * h5[f"cases/{g}/{name}"][()]
+    return damage
+
+
+def delta_scaled_with_mesh(folder, others):
+    """Every field at δ > 0 replaced by x_0 + 2^-(level - coarsest) (x_δ − x_0): δ entering the
+    matrix as δ·h (issue 33: ‖u_δ − u_0‖ 22× too small at level 3 of the mixed crack, yet exactly
+    linear in δ on each level)."""
+    import h5py
+
+    s = load(folder)
+    coarsest = min(c["level"] for c in s["cases"])
+    n = 0
+    with h5py.File(os.path.join(folder, "fields.h5"), "r+") as h5:
+        for c in s["cases"]:
+            if float(c["delta"]) == 0.0:
+                continue
+            g0 = case_of(s, c["level"], c["u_space"], c["multiplier"], 0.0,
+                         c.get("p_mass", "consistent"))["fields_grid"]
+            scale = 2.0 ** -(c["level"] - coarsest)
+            for name in ("u", "p", "crack/lambda"):
+                x0 = h5[f"cases/{g0}/{name}"][()]
+                x = h5[f"cases/{c['fields_grid']}/{name}"]
+                x[...] = x0 + scale * (x[()] - x0)
+            n += 1
+    assert n
+
+
 def errors_scaled(factor, delta=None):
     """Every reported error (of δ = `delta` only, when given) multiplied by `factor`: a forged
     summary (a constant factor keeps every rate)."""
@@ -482,6 +519,13 @@ CASES = {
                                               ()),
     "open sweep: reported errors of one δ × 0.9": ("open sweep", errors_scaled(0.9, 1e-4), "empty",
                                                     ()),
+    # issue 33: δ scaled with the mesh (exactly linear in δ per level); one multiplier variant
+    # off where the method gives the same solution with M1 and M1star (open) or all three (closed)
+    "open sweep: δ scaled with the mesh": ("open sweep", delta_scaled_with_mesh, "empty", ()),
+    "open: M1star's p off by 1e-6 on the entirely open crack":
+        ("open", field_scaled("M1star", "p", 1 + 1e-6), "empty", ()),
+    "closed: M0's u off by 1e-9 on the entirely closed crack":
+        ("closed", field_scaled("M0", "u", 1 + 1e-9), "empty", ()),
     "open no fields undamaged": ("open no fields", nothing, "empty", ()),
     "open no fields: reported errors × 0.9": ("open no fields", errors_scaled(0.9), "empty", ()),
     "open no fields: verification.h5 removed": ("open no fields", remove("verification.h5"),
@@ -713,6 +757,16 @@ DAMAGES = {
     "closed: u error × 20 at every level": (1, [
         "interpolation yardstick: broken/M1 u_l2 at level 3: error",
         "reference yardstick: broken/M1 u_l2 at level"]),
+    "open sweep: δ scaled with the mesh": (1, [
+        "δ-constant: broken M1 u_l2 δ=1e-2: the δ-constant ‖x_δ − x_0‖/(δ‖x_0‖) goes",
+        "δ-constant: broken M1 p_l2 δ=1e-6: the δ-constant"]),
+    "open: M1star's p off by 1e-6 on the entirely open crack": (1, [
+        "variant identities: level 4 broken δ=0: M1 and M1star, crack entirely open, must give "
+        "the same solution: their p differ by 1.0e-06 relative"]),
+    "closed: M0's u off by 1e-9 on the entirely closed crack": (1, [
+        "variant identities: level 3 broken δ=0: M0 and M1, crack entirely closed, must give the "
+        "same solution: their u differ by 1.0e-09 relative",
+        "variant identities: level 3 broken δ=0: M0 and M1star, crack entirely closed"]),
     # two δ > 0: the line passes through both points, the slope shows it (0.016, not 1)
     "mixed: the field of one δ 93× off": (1, ["δ → 0: δ → 0 slope 0.0"]),
 }
@@ -842,6 +896,31 @@ def test_undamaged_exact_scenes_pass_every_new_check(judged, case):
                                                             "smooth")
         assert status["Theorem 2.1 (exact)"] == "ok" and rep["theorem21"]
         assert status["δ → 0"] == "ok"
+        # levels 2-4, three δ > 0, u and p of M1 with both u spaces: 12 constants judged on the
+        # last step
+        assert status["δ-constant"] == "ok"
+        assert len([r for r in rep["delta_constant"] if r["judged"]]) == 12
+
+
+@pytest.mark.parametrize("case", ["open undamaged", "closed undamaged", "mixed undamaged"],
+                         ids=_slug)
+def test_variant_identities_hold_where_the_crack_is_entirely_open_or_closed(judged, case):
+    """open-exact (every multiplier active): M1 = M1star per level and u space; closed-exact (none
+    active): M0 = M1 = M1star; mixed (contact sets differ): nothing to compare."""
+    rep = assert_passes(result(judged, case))
+    status = {c["check"]: c["status"] for c in rep["checks"]}
+    pairs = {(r["state"], r["a"], r["b"]) for r in rep["variant_identities"]}
+    if case == "mixed undamaged":
+        assert status["variant identities"].startswith("not applicable: no level has two "
+                                                        "multipliers with the crack entirely")
+        return
+    assert status["variant identities"] == "ok"
+    if case == "open undamaged":
+        assert pairs == {("open", "M1", "M1star")}
+    else:
+        assert pairs == {("closed", "M0", "M1"), ("closed", "M0", "M1star"),
+                         ("closed", "M1", "M1star")}
+    assert len(rep["variant_identities"]) == len(pairs) * 3 * 2  # 3 levels, 2 u spaces
 
 
 @pytest.mark.parametrize("case", ["open no fields undamaged"], ids=_slug)
