@@ -89,7 +89,41 @@ impl Default for NormQuadrature {
     }
 }
 
+/// Points per direction of the estimate's rule against those of the reported rule:
+/// [`NormQuadrature::higher`] takes ⌈n · 4/3⌉ for each rule's n. Why 4/3: where the integrand is
+/// not smooth on a triangle (a kink of the exact solution across it) a rule's error falls only
+/// algebraically, e_n ~ n^{−k} with k ≥ 1 for a bounded integrand, and the difference of the two
+/// rules, e_n (1 − (n/n')^k), is then at least a quarter of the reported rule's error e_n; where it
+/// is smooth the higher rule's error is negligible and the difference is e_n itself. The compare
+/// tool multiplies the estimate by its SAFETY 4 for this (compare/sdcompare_lib/checks.py).
+pub const HIGHER_RULE_RATIO: (usize, usize) = (4, 3);
+
+impl NormQuadrature {
+    /// The rule of the quadrature-error estimate ([`error_norms_estimated`]): every rule with
+    /// ⌈n · 4/3⌉ points per direction for its n ([`HIGHER_RULE_RATIO`]): degree 10 (6 points) →
+    /// 14 (8), tip degree 20 (11 points, and 11 Gauss points on the crack) → 28 (15), the collapsed
+    /// tip rule 16 → 22 points; the graded tip rule keeps its splits.
+    pub fn higher(self) -> NormQuadrature {
+        let (num, den) = HIGHER_RULE_RATIO;
+        let more = |n: usize| (n * num).div_ceil(den);
+        // a degree d rule has d / 2 + 1 points per direction, and that many points give degree
+        // 2(n − 1)
+        let degree = |d: usize| 2 * (more(d / 2 + 1) - 1);
+        NormQuadrature {
+            degree: degree(self.degree),
+            tip_degree: degree(self.tip_degree),
+            tip: match self.tip {
+                TipRule::Collapsed { points } => TipRule::Collapsed {
+                    points: more(points),
+                },
+                graded @ TipRule::Graded { .. } => graded,
+            },
+        }
+    }
+}
+
 /// The discrete solution needed for norms.
+#[derive(Clone, Copy)]
 pub struct DiscreteSolution<'a> {
     /// u dofs.
     pub u: &'a [f64],
@@ -206,7 +240,28 @@ pub fn error_norms(
     sol: &DiscreteSolution,
     quad: NormQuadrature,
 ) -> ErrorNorms {
+    error_norms_many(mesh, topo, exact, std::slice::from_ref(sol), quad)[0]
+}
+
+/// [`error_norms`] of several discrete solutions on the same mesh, against the same exact
+/// solution and source (the multipliers of one δ), in one pass over the quadrature points: the
+/// exact solution is evaluated once per point for all of them. Each solution's norms are those of
+/// [`error_norms`] alone, bit for bit: its sums run over the same points in the same order.
+pub fn error_norms_many(
+    mesh: &Mesh,
+    topo: &UTopology,
+    exact: &Exact,
+    sols: &[DiscreteSolution],
+    quad: NormQuadrature,
+) -> Vec<ErrorNorms> {
     use rayon::prelude::*;
+    let Some(first) = sols.first() else {
+        return Vec::new();
+    };
+    assert!(
+        sols.iter().all(|s| std::ptr::eq(s.source, first.source)),
+        "the solutions of one pass share their source f"
+    );
     let regular = triangle_rule(quad.degree);
     let near = triangle_rule(quad.tip_degree);
     let collapsed = match quad.tip {
@@ -233,91 +288,147 @@ pub fn error_norms(
         }
     }
     // u, ∂u/∂x, ∂u/∂y and f evaluated together, a triangle's points at once.
-    let program = ExprBatch::new(&[&exact.u, &exact.px, &exact.py, sol.source]);
-    // One triangle's contributions (∫ (u_h − u)², ∫ |p_h − ∇u|², h_T² ∫ (div p_h + f)²).
-    let element = |ti: usize, t: &[usize; 3], work: &mut ElementWork| -> (f64, f64, f64) {
-        let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
-        let near_tip = t.iter().any(|&v| tip_patch[v]);
-        work.pieces.clear();
-        pieces(
-            t.map(|v| tips.contains(&v)),
-            near_tip,
-            quad.tip,
-            &mut work.pieces,
-        );
-        work.points.clear();
-        for &(rule, piece) in &work.pieces {
-            work.points
-                .extend(physical_points(rule_of(rule), geo.vertices, piece));
-        }
-        let n = work.points.len();
-        work.xs.clear();
-        work.xs.extend(work.points.iter().map(|q| q.x[0]));
-        work.ys.clear();
-        work.ys.extend(work.points.iter().map(|q| q.x[1]));
-        work.values.resize(4 * n, 0.0);
-        program.eval(&work.xs, &work.ys, &mut work.scratch, &mut work.values);
-        let (u, rest) = work.values.split_at(n);
-        let (px, rest) = rest.split_at(n);
-        let (py, f) = rest.split_at(n);
-        let dofs = topo.triangle_dofs[ti];
-        let pv = dofs.map(|d| sol.p[d]);
-        let bc = sol.bubbles[ti];
-        // div of the P1 part (constant) and h_T (the longest edge)
-        let div_linear: f64 = (0..3)
-            .map(|k| pv[k][0] * geo.grad[k][0] + pv[k][1] * geo.grad[k][1])
-            .sum();
-        let [a, b, c] = geo.vertices;
-        let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
-        let h_t = d(a, b).max(d(b, c)).max(d(a, c));
-        let (mut su, mut sp, mut sd) = (0.0, 0.0, 0.0);
-        for (j, q) in work.points.iter().enumerate() {
-            let (l, w) = (TriangleGeometry::barycentric(q.xi), q.weight);
-            let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
-            let ph = mini_value(&pv, bc, l);
-            let du = uh - u[j];
-            let dpx = ph[0] - px[j];
-            let dpy = ph[1] - py[j];
-            // ∇b_T = 27 (∇λ0 λ1 λ2 + λ0 ∇λ1 λ2 + λ0 λ1 ∇λ2)
-            let grad_b = [0, 1].map(|k| {
-                27.0 * (geo.grad[0][k] * l[1] * l[2]
-                    + geo.grad[1][k] * l[0] * l[2]
-                    + geo.grad[2][k] * l[0] * l[1])
-            });
-            let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
-            let ddiv = div_h + f[j];
-            su += w * du * du;
-            sp += w * (dpx * dpx + dpy * dpy);
-            sd += w * h_t * h_t * ddiv * ddiv;
-        }
-        (su, sp, sd)
-    };
+    let program = ExprBatch::new(&[&exact.u, &exact.px, &exact.py, first.source]);
+    let add = |a: (f64, f64, f64), b: (f64, f64, f64)| (a.0 + b.0, a.1 + b.1, a.2 + b.2);
+    // One triangle's contributions (∫ (u_h − u)², ∫ |p_h − ∇u|², h_T² ∫ (div p_h + f)²), added
+    // to each solution's sums in `acc`.
+    let element =
+        |ti: usize, t: &[usize; 3], work: &mut ElementWork, acc: &mut [(f64, f64, f64)]| {
+            let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
+            let near_tip = t.iter().any(|&v| tip_patch[v]);
+            work.pieces.clear();
+            pieces(
+                t.map(|v| tips.contains(&v)),
+                near_tip,
+                quad.tip,
+                &mut work.pieces,
+            );
+            work.points.clear();
+            for &(rule, piece) in &work.pieces {
+                work.points
+                    .extend(physical_points(rule_of(rule), geo.vertices, piece));
+            }
+            let n = work.points.len();
+            work.xs.clear();
+            work.xs.extend(work.points.iter().map(|q| q.x[0]));
+            work.ys.clear();
+            work.ys.extend(work.points.iter().map(|q| q.x[1]));
+            work.values.resize(4 * n, 0.0);
+            program.eval(&work.xs, &work.ys, &mut work.scratch, &mut work.values);
+            let (u, rest) = work.values.split_at(n);
+            let (px, rest) = rest.split_at(n);
+            let (py, f) = rest.split_at(n);
+            let dofs = topo.triangle_dofs[ti];
+            let [a, b, c] = geo.vertices;
+            let d = |p: [f64; 2], q: [f64; 2]| (p[0] - q[0]).hypot(p[1] - q[1]);
+            // h_T, the longest edge
+            let h_t = d(a, b).max(d(b, c)).max(d(a, c));
+            for (sol, acc) in sols.iter().zip(acc.iter_mut()) {
+                let pv = dofs.map(|d| sol.p[d]);
+                let bc = sol.bubbles[ti];
+                // div of the P1 part (constant)
+                let div_linear: f64 = (0..3)
+                    .map(|k| pv[k][0] * geo.grad[k][0] + pv[k][1] * geo.grad[k][1])
+                    .sum();
+                let (mut su, mut sp, mut sd) = (0.0, 0.0, 0.0);
+                for (j, q) in work.points.iter().enumerate() {
+                    let (l, w) = (TriangleGeometry::barycentric(q.xi), q.weight);
+                    let uh: f64 = (0..3).map(|k| l[k] * sol.u[dofs[k]]).sum();
+                    let ph = mini_value(&pv, bc, l);
+                    let du = uh - u[j];
+                    let dpx = ph[0] - px[j];
+                    let dpy = ph[1] - py[j];
+                    // ∇b_T = 27 (∇λ0 λ1 λ2 + λ0 ∇λ1 λ2 + λ0 λ1 ∇λ2)
+                    let grad_b = [0, 1].map(|k| {
+                        27.0 * (geo.grad[0][k] * l[1] * l[2]
+                            + geo.grad[1][k] * l[0] * l[2]
+                            + geo.grad[2][k] * l[0] * l[1])
+                    });
+                    let div_h = div_linear + bc[0] * grad_b[0] + bc[1] * grad_b[1];
+                    let ddiv = div_h + f[j];
+                    su += w * du * du;
+                    sp += w * (dpx * dpx + dpy * dpy);
+                    sd += w * h_t * h_t * ddiv * ddiv;
+                }
+                *acc = add(*acc, (su, sp, sd));
+            }
+        };
     // Fixed chunks summed in order, then the chunk sums in order: the same additions in the same
     // order whatever the threads do, so a case gives the same norms bit for bit in any run
-    // (rayon's adaptive `reduce` splits differently from run to run).
+    // (rayon's adaptive `reduce` splits differently from run to run), and with any other
+    // solutions beside it.
     const CHUNK: usize = 4096;
-    let add = |a: (f64, f64, f64), b: (f64, f64, f64)| (a.0 + b.0, a.1 + b.1, a.2 + b.2);
-    let (eu, ep, ediv) = mesh
+    let zero = vec![(0.0, 0.0, 0.0); sols.len()];
+    let sums = mesh
         .triangles
         .par_chunks(CHUNK)
         .enumerate()
         .map(|(c, tris)| {
             let mut work = ElementWork::default();
-            tris.iter()
-                .enumerate()
-                .map(|(j, t)| element(c * CHUNK + j, t, &mut work))
-                .fold((0.0, 0.0, 0.0), add)
+            let mut acc = zero.clone();
+            for (j, t) in tris.iter().enumerate() {
+                element(c * CHUNK + j, t, &mut work, &mut acc);
+            }
+            acc
         })
         .collect::<Vec<_>>()
         .into_iter()
-        .fold((0.0, 0.0, 0.0), add);
-    let el = lambda_error(mesh, exact, sol.lambda, quad);
-    ErrorNorms {
-        u_l2: eu.sqrt(),
-        p_l2: ep.sqrt(),
-        p_x: (ep + ediv).sqrt(),
-        lambda_l2: el,
-    }
+        .fold(zero.clone(), |total, chunk| {
+            total
+                .into_iter()
+                .zip(chunk)
+                .map(|(a, b)| add(a, b))
+                .collect()
+        });
+    sols.iter()
+        .zip(sums)
+        .map(|(sol, (eu, ep, ediv))| ErrorNorms {
+            u_l2: eu.sqrt(),
+            p_l2: ep.sqrt(),
+            p_x: (ep + ediv).sqrt(),
+            lambda_l2: lambda_error(mesh, exact, sol.lambda, quad),
+        })
+        .collect()
+}
+
+/// The error norms of [`error_norms`] with `quad` (the numbers reported, unchanged) and an
+/// estimate of the quadrature error of each: |e(quad) − e(quad.higher())|, per quantity, in the
+/// units of the error ([`NormQuadrature::higher`]). summary.json reports it as
+/// `errors_quadrature`; the compare tool's "independent errors" check allows a reported error to
+/// differ from its own by a multiple of these estimates and its own (compare/README.md).
+pub fn error_norms_estimated(
+    mesh: &Mesh,
+    topo: &UTopology,
+    exact: &Exact,
+    sol: &DiscreteSolution,
+    quad: NormQuadrature,
+) -> (ErrorNorms, ErrorNorms) {
+    error_norms_estimated_many(mesh, topo, exact, std::slice::from_ref(sol), quad)[0]
+}
+
+/// [`error_norms_estimated`] of several solutions in one pass per rule ([`error_norms_many`]).
+pub fn error_norms_estimated_many(
+    mesh: &Mesh,
+    topo: &UTopology,
+    exact: &Exact,
+    sols: &[DiscreteSolution],
+    quad: NormQuadrature,
+) -> Vec<(ErrorNorms, ErrorNorms)> {
+    let reported = error_norms_many(mesh, topo, exact, sols, quad);
+    let higher = error_norms_many(mesh, topo, exact, sols, quad.higher());
+    reported
+        .into_iter()
+        .zip(higher)
+        .map(|(e, h)| {
+            let estimate = ErrorNorms {
+                u_l2: (e.u_l2 - h.u_l2).abs(),
+                p_l2: (e.p_l2 - h.p_l2).abs(),
+                p_x: (e.p_x - h.p_x).abs(),
+                lambda_l2: (e.lambda_l2 - h.lambda_l2).abs(),
+            };
+            (e, estimate)
+        })
+        .collect()
 }
 
 /// The exact jump \[u\] at a crack point.
@@ -552,5 +663,126 @@ mod tests {
         let divergence = 8.0 * s * s * beta * beta + 32.4 * q;
         close(n.p_x, (p2 + divergence).sqrt(), "‖p_h − ∇u‖_X");
         assert_eq!(n.lambda_l2, 0.0, "no crack");
+        // Every integrand is a polynomial of degree ≤ 6 (the bubble squared), which both the rule
+        // and the higher one integrate exactly: the estimate of the quadrature error is round-off.
+        let (e, estimate) =
+            error_norms_estimated(&mesh, &topo, &exact, &sol, NormQuadrature::default());
+        for (a, b, q, what) in [
+            (e.u_l2, n.u_l2, estimate.u_l2, "u_l2"),
+            (e.p_l2, n.p_l2, estimate.p_l2, "p_l2"),
+            (e.p_x, n.p_x, estimate.p_x, "p_x"),
+        ] {
+            assert_eq!(
+                a.to_bits(),
+                b.to_bits(),
+                "{what}: the reported error is error_norms'"
+            );
+            assert!(
+                q <= 1e-14 * b,
+                "{what}: estimate {q:e} of an exact integral {b}"
+            );
+        }
+        assert_eq!(estimate.lambda_l2, 0.0);
+    }
+
+    /// The higher rule of the quadrature-error estimate: ⌈4n/3⌉ points per direction.
+    #[test]
+    fn higher_rule_has_a_third_more_points_per_direction() {
+        let q = NormQuadrature::default().higher();
+        assert_eq!((q.degree, q.tip_degree), (14, 28));
+        assert_eq!(q.tip, TipRule::Collapsed { points: 22 });
+        assert_eq!(triangle_rule(q.degree).points.len(), 8 * 8);
+        assert_eq!(triangle_rule(q.tip_degree).points.len(), 15 * 15);
+        let graded = NormQuadrature {
+            tip: TipRule::Graded { depth: 30 },
+            ..NormQuadrature::default()
+        };
+        assert_eq!(graded.higher().tip, TipRule::Graded { depth: 30 });
+    }
+
+    /// The zero field's errors against u = sin(πx)cos(πy) on (−1, 1)² cut into 2 × 2 cells, whose
+    /// closed forms are ‖u‖ = 1, ‖∇u‖ = π√2 (∫ sin²(πx) = ∫ cos²(πx) = 1 over (−1, 1)): the
+    /// integrands are not polynomials, the degree-10 rule is off by a little on cells this wide,
+    /// and the estimate is not zero and bounds the rule's true error within the compare tool's
+    /// SAFETY factor 4 (compare/sdcompare_lib/checks.py).
+    #[test]
+    fn quadrature_estimate_of_a_non_polynomial_integrand_bounds_the_rules_error() {
+        let mesh = crate::mesh::structured::structured(
+            crate::problem::Rectangle {
+                min: [-1.0, -1.0],
+                max: [1.0, 1.0],
+            },
+            [2, 2],
+            &[],
+            0,
+        )
+        .unwrap();
+        assert_eq!(mesh.triangles.len(), 2 * 2 * 2);
+        let topo = mesh.u_topology(USpace::Continuous);
+        let parse = |s: &str| crate::expr::Expr::parse(s).unwrap();
+        let exact = Exact {
+            u: parse("sin(pi*x)*cos(pi*y)"),
+            px: parse("pi*cos(pi*x)*cos(pi*y)"),
+            py: parse("-pi*sin(pi*x)*sin(pi*y)"),
+            jump: None,
+        };
+        let u = vec![0.0; topo.n_dofs];
+        let p = vec![[0.0; 2]; topo.n_dofs];
+        let bubbles = vec![[0.0; 2]; mesh.triangles.len()];
+        let lambda = CrackField::PerNode(vec![]);
+        let source = parse("2*pi^2*sin(pi*x)*cos(pi*y)");
+        let sol = DiscreteSolution {
+            u: &u,
+            p: &p,
+            bubbles: &bubbles,
+            lambda: &lambda,
+            source: &source,
+        };
+        let (e, estimate) =
+            error_norms_estimated(&mesh, &topo, &exact, &sol, NormQuadrature::default());
+        for (got, closed, q, what) in [
+            (e.u_l2, 1.0, estimate.u_l2, "u_l2"),
+            (e.p_l2, PI * 2f64.sqrt(), estimate.p_l2, "p_l2"),
+        ] {
+            let error = (got - closed).abs();
+            assert!(
+                error > 1e-12 * closed,
+                "{what}: the rule is exact?: {error:e}"
+            );
+            assert!(q > 1e-12 * closed, "{what}: estimate {q:e}");
+            assert!(
+                error <= 4.0 * q && q <= 4.0 * error,
+                "{what}: the rule's error {error:e} against its estimate {q:e}"
+            );
+        }
+        assert!(estimate.p_x > 0.0);
+        // several solutions in one pass: each gets the norms it gets alone, bit for bit
+        let u2: Vec<f64> = (0..topo.n_dofs).map(|i| 0.1 * i as f64).collect();
+        let p2: Vec<[f64; 2]> = (0..topo.n_dofs).map(|i| [0.3, -0.02 * i as f64]).collect();
+        let b2 = vec![[0.2, 0.1]; mesh.triangles.len()];
+        let other = DiscreteSolution {
+            u: &u2,
+            p: &p2,
+            bubbles: &b2,
+            lambda: &lambda,
+            source: &source,
+        };
+        let both = error_norms_estimated_many(
+            &mesh,
+            &topo,
+            &exact,
+            &[sol, other],
+            NormQuadrature::default(),
+        );
+        let alone = [
+            error_norms_estimated(&mesh, &topo, &exact, &sol, NormQuadrature::default()),
+            error_norms_estimated(&mesh, &topo, &exact, &other, NormQuadrature::default()),
+        ];
+        let bits = |n: ErrorNorms| [n.u_l2, n.p_l2, n.p_x, n.lambda_l2].map(f64::to_bits);
+        for (together, (e, q)) in both.into_iter().zip(alone) {
+            assert_eq!(bits(together.0), bits(e));
+            assert_eq!(bits(together.1), bits(q));
+        }
+        assert_ne!(bits(alone[0].0), bits(alone[1].0));
     }
 }

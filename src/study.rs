@@ -20,7 +20,7 @@ use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{componentwise_backward_error, Ldlt, LinalgError, SymbolicLdlt};
 use crate::mesh::{Layout, Mesh, MeshError, PTopology, UTopology};
 use crate::multiplier::{CrackField, CrackOperators, Multiplier};
-use crate::norms::{error_norms, DiscreteSolution, ErrorNorms, NormQuadrature};
+use crate::norms::{error_norms_estimated_many, DiscreteSolution, ErrorNorms, NormQuadrature};
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use crate::scene::Scene;
 
@@ -172,7 +172,8 @@ pub struct Timings {
     pub condition: f64,
     /// LCP, recovery of x with refinement, KKT residuals.
     pub contact: f64,
-    /// Error norms against `[exact]`.
+    /// Error norms against `[exact]` with their quadrature-error estimate (the rule and the
+    /// higher rule): one pass for all the multipliers of a δ, its time shared equally.
     pub norms: f64,
     /// Preparing field arrays (the p bubbles, when only the fields need them, are in `norms`).
     pub fields: f64,
@@ -236,6 +237,9 @@ pub struct CaseResult {
     pub timings: Timings,
     /// Errors against `[exact]`.
     pub errors: Option<ErrorNorms>,
+    /// An estimate of the quadrature error of each of `errors`: |e(rule) − e(higher rule)|
+    /// ([`crate::norms::error_norms_estimated`]), in the units of the error.
+    pub errors_quadrature: Option<ErrorNorms>,
     /// Fields, every quantity whatever the scene's `fields` (`None` only when the plan's
     /// [`CasePlan::keep_fields`] is off).
     pub fields: Option<CaseFieldData>,
@@ -373,6 +377,21 @@ struct LevelContext<'a> {
     base_timings: Timings,
 }
 
+/// A case of one δ solved, before its error norms: what they and its fields are computed from.
+struct Solved<'m> {
+    multiplier: &'m Multiplier,
+    sol: crate::contact::LcpSolution,
+    kkt: KktResiduals,
+    /// λ_h.
+    lambda: CrackField,
+    /// p_h at the u dofs.
+    p_dof: Vec<[f64; 2]>,
+    /// p_h's bubble coefficients per triangle (zero for the lumped p with `[exact]`; empty when
+    /// neither the norms nor the fields need them).
+    bubbles: Vec<[f64; 2]>,
+    timings: Timings,
+}
+
 /// The LCP solution of one multiplier space at one δ, before x is recovered.
 struct Contact<'a> {
     /// The space with its S of D = S N.
@@ -464,10 +483,25 @@ impl LevelContext<'_> {
             timings.condition = t2.elapsed().as_secs_f64();
             // the block recovery is shared equally by the multipliers of this δ
             let share = recovery_time / contacts.len().max(1) as f64;
-            for (contact, x) in contacts.into_iter().zip(xs.chunks_exact(self.system.n())) {
-                let mut case_timings = timings;
-                case_timings.contact = contact.time + share;
-                let mut case = self.finish_case(&reduced, contact, x, delta, case_timings, plan);
+            let n = self.system.n();
+            let solved: Vec<Solved> = contacts
+                .into_iter()
+                .zip(xs.chunks_exact(n))
+                .map(|(contact, x)| {
+                    let mut case_timings = timings;
+                    case_timings.contact = contact.time + share;
+                    self.solved_case(&reduced, contact, x, case_timings, plan)
+                })
+                .collect();
+            // the error norms of every multiplier of this δ in one pass over the quadrature
+            // points (the exact solution evaluated once per point), the time shared equally
+            let t3 = Instant::now();
+            let errors = self.error_norms(&solved, &xs, plan);
+            let norms_share = t3.elapsed().as_secs_f64() / solved.len().max(1) as f64;
+            for ((mut solved, x), errors) in solved.into_iter().zip(xs.chunks_exact(n)).zip(errors)
+            {
+                solved.timings.norms += norms_share;
+                let mut case = self.finish_case(&reduced, solved, x, delta, errors, plan);
                 case.condition_estimate = condition_estimate;
                 case.condition_delta = inverse.delta;
                 observer.case_done(&case);
@@ -580,16 +614,16 @@ impl LevelContext<'_> {
         (x, t0.elapsed().as_secs_f64())
     }
 
-    /// KKT residuals, λ_h, error norms and fields of one solved case.
-    fn finish_case(
+    /// KKT residuals, λ_h, and p_h at the u dofs with its bubbles of one solved case: what its
+    /// error norms and fields are computed from.
+    fn solved_case<'m>(
         &self,
         reduced: &Reduced,
-        contact: Contact,
+        contact: Contact<'m>,
         x: &[f64],
-        delta: f64,
         mut timings: Timings,
         plan: &CasePlan,
-    ) -> CaseResult {
+    ) -> Solved<'m> {
         let t0 = Instant::now();
         let Contact {
             multiplier,
@@ -601,8 +635,7 @@ impl LevelContext<'_> {
         let kkt = self.kkt(reduced, multiplier, &sol.mu, &st_mu, &rhs, x);
         timings.contact += t0.elapsed().as_secs_f64();
         let lambda = multiplier.lambda_field(self.ops, &sol.mu);
-        let n_p = self.system.n_p;
-        let (p, u) = x.split_at(n_p);
+        let (p, u) = x.split_at(self.system.n_p);
         let t1 = Instant::now();
         // p at the u dofs: the vertex values seen from each dof's face
         let p_dof = self.ptopo.at_u_dofs(self.mesh, self.topo, p);
@@ -613,22 +646,68 @@ impl LevelContext<'_> {
             PMass::Lumped if exact => vec![[0.0; 2]; self.mesh.triangles.len()],
             _ => Vec::new(),
         };
-        let errors = self.scene.exact.as_ref().map(|exact| {
-            error_norms(
-                self.mesh,
-                self.topo,
-                exact,
-                &DiscreteSolution {
-                    u,
-                    p: &p_dof,
-                    bubbles: &bubbles,
-                    lambda: &lambda,
-                    source: &self.scene.f,
-                },
-                plan.norm_quadrature,
-            )
-        });
         timings.norms = t1.elapsed().as_secs_f64();
+        Solved {
+            multiplier,
+            sol,
+            kkt,
+            lambda,
+            p_dof,
+            bubbles,
+            timings,
+        }
+    }
+
+    /// The error norms against `[exact]` of the solved cases of one δ (`xs`: their solutions, one
+    /// after the other), with the estimate of their quadrature errors, in one pass per rule
+    /// ([`error_norms_estimated_many`]); `None` each without `[exact]`.
+    fn error_norms(
+        &self,
+        solved: &[Solved],
+        xs: &[f64],
+        plan: &CasePlan,
+    ) -> Vec<Option<(ErrorNorms, ErrorNorms)>> {
+        let Some(exact) = self.scene.exact.as_ref() else {
+            return vec![None; solved.len()];
+        };
+        let sols: Vec<DiscreteSolution> = solved
+            .iter()
+            .zip(xs.chunks_exact(self.system.n()))
+            .map(|(s, x)| DiscreteSolution {
+                u: &x[self.system.n_p..],
+                p: &s.p_dof,
+                bubbles: &s.bubbles,
+                lambda: &s.lambda,
+                source: &self.scene.f,
+            })
+            .collect();
+        error_norms_estimated_many(self.mesh, self.topo, exact, &sols, plan.norm_quadrature)
+            .into_iter()
+            .map(Some)
+            .collect()
+    }
+
+    /// The result of one solved case with its error norms and their estimate.
+    fn finish_case(
+        &self,
+        reduced: &Reduced,
+        solved: Solved,
+        x: &[f64],
+        delta: f64,
+        estimated: Option<(ErrorNorms, ErrorNorms)>,
+        plan: &CasePlan,
+    ) -> CaseResult {
+        let Solved {
+            multiplier,
+            sol,
+            kkt,
+            lambda,
+            p_dof,
+            bubbles,
+            mut timings,
+        } = solved;
+        let u = &x[self.system.n_p..];
+        let (errors, errors_quadrature) = (estimated.map(|e| e.0), estimated.map(|e| e.1));
         let t2 = Instant::now();
         let fields = plan.keep_fields.then(|| CaseFieldData {
             u: u.to_vec(),
@@ -661,6 +740,7 @@ impl LevelContext<'_> {
             condition_delta: delta,
             timings,
             errors,
+            errors_quadrature,
             fields,
         }
     }

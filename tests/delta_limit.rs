@@ -73,3 +73,91 @@ fn distance_to_delta_zero_is_linear_in_delta() {
         }
     }
 }
+
+/// The relative max-norm difference of two arrays (0 for two zero arrays).
+fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = a.iter().chain(b).fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = a
+        .iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    if scale == 0.0 {
+        0.0
+    } else {
+        diff / scale
+    }
+}
+
+fn flat(fields: &sdcrack::study::CaseFieldData) -> [Vec<f64>; 4] {
+    let lambda = match &fields.lambda {
+        sdcrack::multiplier::CrackField::PerSegment(v)
+        | sdcrack::multiplier::CrackField::PerNode(v) => v.clone(),
+    };
+    [
+        fields.u.clone(),
+        fields.p.iter().flatten().copied().collect(),
+        fields.p_bubble.iter().flatten().copied().collect(),
+        lambda,
+    ]
+}
+
+/// Issue 33, item 1: δ = 0 reached at the end of a sweep (each LCP warm-started from the previous
+/// δ's active set, K(δ) refactorised in place) and δ = 0 solved alone (cold start) are the same
+/// discrete solution: the LCP's solution is unique and both paths end in the same reduced linear
+/// system, so their fields agree to round-off of that solve, ≤ 10·κ·ε relative (κ the reported
+/// condition estimate). mixed has a partly open crack, so the warm start really starts from another
+/// active set than the cold one.
+#[test]
+fn delta_zero_at_the_end_of_a_sweep_is_delta_zero_solved_alone() {
+    let mut sweep = common::load("mixed");
+    sweep.levels = vec![2];
+    sweep.deltas = vec![1.0, 1e-2, 1e-4, 0.0];
+    sweep.fields = FieldSet {
+        u: true,
+        p: true,
+        lambda: true,
+    };
+    let mut alone = sweep.clone();
+    alone.deltas = vec![0.0];
+    let mut compared = 0;
+    for (u_space, p_mass, p_space) in [
+        (USpace::Continuous, PMass::Consistent, PSpace::Continuous),
+        (USpace::Broken, PMass::Consistent, PSpace::Continuous),
+        (USpace::Broken, PMass::Lumped, PSpace::Continuous),
+        (USpace::Broken, PMass::Consistent, PSpace::BrokenTangential),
+        (USpace::Broken, PMass::Lumped, PSpace::BrokenTangential),
+    ] {
+        let filter = CaseFilter {
+            u_space: Some(u_space),
+            p_mass: Some(p_mass),
+            p_space: Some(p_space),
+            ..CaseFilter::default()
+        };
+        let swept = common::solve(&sweep, filter);
+        let direct = common::solve(&alone, filter);
+        for d in &direct {
+            let s = swept
+                .iter()
+                .find(|s| s.multiplier == d.multiplier && s.delta == 0.0)
+                .expect("the sweep has δ = 0");
+            assert!(s.converged && d.converged);
+            let tol = 10.0 * s.condition_estimate.max(d.condition_estimate) * f64::EPSILON;
+            let (fs, fd) = (
+                flat(s.fields.as_ref().unwrap()),
+                flat(d.fields.as_ref().unwrap()),
+            );
+            for (name, (a, b)) in ["u", "p", "p bubble", "λ"].iter().zip(fs.iter().zip(&fd)) {
+                let diff = relative_difference(a, b);
+                assert!(
+                    diff <= tol,
+                    "{u_space} {} {p_mass:?} {p_space}: {name} of δ = 0 differs by {diff:e} \
+                     between the sweep and the direct solve (> 10·κ·ε = {tol:e})",
+                    d.multiplier
+                );
+            }
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 15);
+}

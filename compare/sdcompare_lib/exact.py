@@ -52,6 +52,18 @@ triangle, so data are never evaluated on the crack or on an edge.
 
 ``Quadrature().doubled()`` doubles n, m, n_line and η; compare/tests/test_exact.py checks that the errors
 of open-exact change by < 1e-10 relative under it.
+
+Quadrature-error estimate and self-check (issue 33)
+---------------------------------------------------
+``solver_case_errors_estimated`` computes every error with the rule above and with
+``Quadrature().higher()`` (⌈3n/2⌉ points per direction for each n: Stroud 8 → 12, tip 16 → 24,
+crack 12 → 18, the same η) and returns, beside the errors, the higher rule's values (``higher``)
+and |e(rule) − e(higher rule)| (``quadrature``), the estimate of each error's quadrature error the
+"independent errors" check builds its tolerance from (checks.py). ``quadrature_self_check``
+checks the rules themselves, without the solver: over a mesh, with the same pieces and rules as
+the errors (tip rules, near-tip splits), it integrates every monomial of the mesh's scaled
+coordinates up to the rule's degree and compares with the exact moments of the mesh's polygon,
+computed without any quadrature from its boundary edges (Green's theorem, ``polygon_moments``).
 """
 import math
 import sys
@@ -63,7 +75,8 @@ import sdexpr  # the references' shared modules: see sdcompare_lib/__init__.py
 from .norms import LastResults, digest
 
 __all__ = ["ExactSolution", "Quadrature", "load_scene", "solver_case_errors", "solver_case_errors_h5",
-           "read_h5_case", "p1_field_errors", "recover_bubble", "stroud_rule", "tip_rule",
+           "solver_case_errors_estimated", "quadrature_self_check", "polygon_moments",
+           "boundary_edges", "read_h5_case", "p1_field_errors", "recover_bubble", "stroud_rule", "tip_rule",
            "integrate_on_triangle", "SharedEvaluator", "ExactError", "scene_cracks", "crack_tips"]
 
 CHUNK_POINTS = 1 << 16  # expression evaluation in chunks that stay in cache
@@ -130,6 +143,13 @@ def tip_rule(m, corner=0):
     return L, (4.0 * sig ** 3 * ww).ravel()
 
 
+# Points per direction of the estimate's rule against the errors' rule (Quadrature.higher): for
+# an integrand that is not smooth on a triangle the rule's error falls as n^{-k}, k >= 1, and the
+# difference of the two rules, e_n (1 - (2/3)^k), is then at least a third of e_n (checks.py's
+# SAFETY 4 covers it, and the solver's 4/3, src/norms.rs).
+HIGHER_RULE_RATIO = (3, 2)
+
+
 class Quadrature:
     """Resolution of the error quadrature (see the module documentation)."""
 
@@ -138,6 +158,19 @@ class Quadrature:
 
     def doubled(self):
         return Quadrature(2 * self.n, 2 * self.tip_m, 2 * self.eta, 2 * self.line_n)
+
+    def higher(self):
+        """The rule of the quadrature-error estimate: ⌈3n/2⌉ points per direction for each n
+        (HIGHER_RULE_RATIO), the same η (at a fixed η the near-tip pieces converge geometrically in
+        n, so more points are what makes them more accurate)."""
+        num, den = HIGHER_RULE_RATIO
+        more = lambda k: -(-k * num // den)  # noqa: E731  ⌈k·num/den⌉
+        return Quadrature(more(self.n), more(self.tip_m), self.eta, more(self.line_n))
+
+    def degree(self):
+        """The total degree every piece's rule integrates exactly: Stroud 2n − 1, the tip rule
+        m − 2 (ξ^a η^b becomes σ^{2(a+b)+3} times a polynomial of degree a + b in t)."""
+        return min(2 * self.n - 1, self.tip_m - 2)
 
     def __repr__(self):
         return f"Quadrature(n={self.n}, tip_m={self.tip_m}, eta={self.eta}, line_n={self.line_n})"
@@ -714,6 +747,128 @@ def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exa
             raise ExactError("lambda without crack points")
         out["lambda_l2"] = math.sqrt(_crack_error(C, segments, _lambda_fn(lam, segments, C.shape[0]), exact,
                                                   quad))
+    return out
+
+
+ESTIMATED_QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
+
+
+def solver_case_errors_estimated(*args, quad=None, **kwargs):
+    """``solver_case_errors`` with the rule ``quad`` (default Quadrature()), plus "higher": the
+    errors with ``quad.higher()``, and "quadrature": |e(quad) − e(quad.higher())| per quantity
+    (None where the error is None), the estimate of each error's quadrature error."""
+    quad = quad or Quadrature()
+    base = solver_case_errors(*args, quad=quad, **kwargs)
+    high = solver_case_errors(*args, quad=quad.higher(), **kwargs)
+    base["higher"] = {q: high[q] for q in ESTIMATED_QUANTITIES}
+    base["quadrature"] = {q: None if base[q] is None or high[q] is None else abs(base[q] - high[q])
+                          for q in ESTIMATED_QUANTITIES}
+    return base
+
+
+# ---------------------------------------------------------------------------------------------
+# Self-check of the quadrature: monomials against Green's theorem
+# ---------------------------------------------------------------------------------------------
+
+def boundary_edges(triangles, points):
+    """(E, 2) vertex indices of the edges of one triangle only, each oriented counterclockwise
+    in its triangle: the boundary of the mesh's polygon (the two faces of a cut crack included,
+    with opposite orientations, so their contributions cancel)."""
+    P = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    X = P[t]
+    det = ((X[:, 1, 0] - X[:, 0, 0]) * (X[:, 2, 1] - X[:, 0, 1])
+           - (X[:, 1, 1] - X[:, 0, 1]) * (X[:, 2, 0] - X[:, 0, 0]))
+    ccw = np.where((det > 0)[:, None], t, t[:, [0, 2, 1]])
+    edges = np.concatenate([ccw[:, [0, 1]], ccw[:, [1, 2]], ccw[:, [2, 0]]])
+    key = np.sort(edges, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    return edges[counts[inverse.ravel()] == 1]
+
+
+def _powers(v, degree):
+    """(degree + 1, N): v**0, v**1, ... by repeated products."""
+    out = np.empty((degree + 1, v.shape[0]))
+    out[0] = 1.0
+    for k in range(1, degree + 1):
+        np.multiply(out[k - 1], v, out=out[k])
+    return out
+
+
+def polygon_moments(points, edges, degree, center, scale):
+    """M[a, b] = ∫_Ω ξ^a η^b dA for a + b ≤ degree, ξ = (x − cx)/scale, η = (y − cy)/scale, Ω
+    the polygon(s) bounded by the counterclockwise `edges` (E, 2) of `points`: Green's theorem,
+    a sum over the edges (v_i, v_j) of the moments of the signed triangles (0, v_i, v_j),
+    ∫ ξ^a η^b = a! b! / (a + b + 2)! (ξ_i η_j − ξ_j η_i) Σ_k Σ_l C(k + l, l) C(a + b − k − l, b − l)
+    ξ_i^k ξ_j^(a−k) η_i^l η_j^(b−l) (C. Steger, On the calculation of arbitrary moments of
+    polygons, 1996). In area units (dA = scale² dξ dη)."""
+    P = (np.asarray(points, dtype=float)[:, :2] - np.asarray(center, dtype=float)) / scale
+    xi, yi = P[edges[:, 0], 0], P[edges[:, 0], 1]
+    xj, yj = P[edges[:, 1], 0], P[edges[:, 1], 1]
+    cross = xi * yj - xj * yi
+    Xi, Xj, Yi, Yj = (_powers(v, degree) for v in (xi, xj, yi, yj))
+    M = np.zeros((degree + 1, degree + 1))
+    for a in range(degree + 1):
+        for b in range(degree + 1 - a):
+            acc = np.zeros_like(cross)
+            for k in range(a + 1):
+                for l in range(b + 1):
+                    acc += (math.comb(k + l, l) * math.comb(a + b - k - l, b - l)
+                            * Xi[k] * Xj[a - k] * Yi[l] * Yj[b - l])
+            M[a, b] = (math.factorial(a) * math.factorial(b) / math.factorial(a + b + 2)
+                       * float(np.dot(cross, acc)))
+    return M * scale * scale
+
+
+def quadrature_moments(points, triangles, tips, quad, degree, center, scale):
+    """M[a, b] ≈ ∫_Ω ξ^a η^b dA (as polygon_moments) by the error quadrature: the pieces and rules
+    of the errors (``_point_batches``: Stroud, tip rules, near-tip splits) with ``quad``."""
+    P = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    X, area, _, _ = _geometry(P, t)
+    M = np.zeros((degree + 1, degree + 1))
+    for ids, L, W in _point_batches(P, t, tips, quad):
+        xy = (L @ X[ids] - np.asarray(center, dtype=float)) / scale  # (K,q,2)
+        w = np.broadcast_to(W * area[ids][:, None], xy.shape[:2]).ravel()
+        xs, ys = xy[..., 0].ravel(), xy[..., 1].ravel()
+        M += (_powers(xs, degree) * w) @ _powers(ys, degree).T
+    mask = np.add.outer(np.arange(degree + 1), np.arange(degree + 1)) <= degree
+    return np.where(mask, M, 0.0)
+
+
+# Agreement asked of the quadrature's moments with the exact ones, relative to the mesh's area
+# (every scaled monomial is at most 1 in absolute value, so |moment| <= area): the rules' weights
+# are accurate to ~1e-15 (Golub-Welsch eigenvectors, Gauss-Legendre) and the sums over <= 1e7
+# points in float64 to ~1e-13 of the area (blocked matrix products; measured <= 3e-15 on the
+# repository's meshes, levels 0-4), while a weight or point off by 1e-9 of one point's share moves
+# a moment by more than this.
+SELF_CHECK_TOLERANCE = 1e-12
+
+
+def quadrature_self_check(points, triangles, tips, quad=None):
+    """The error quadrature ``quad`` (default Quadrature()) and its higher rule, checked on one
+    mesh: the largest |quadrature moment − exact moment| / area over the monomials ξ^a η^b of the
+    mesh's scaled coordinates (centred on its bounding box, |ξ|, |η| ≤ 1) with a + b up to each
+    rule's degree. Returns [{"rule", "degree", "worst", "monomial", "ok"}] for the rule and the
+    higher one."""
+    quad = quad or Quadrature()
+    P = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    lo, hi = P.min(axis=0), P.max(axis=0)
+    center, scale = 0.5 * (lo + hi), max(0.5 * float(np.max(hi - lo)), 1e-300)
+    edges = boundary_edges(t, P)
+    tips = [np.asarray(tp, dtype=float)[:2] for tp in tips]
+    area = float(_geometry(P, t)[1].sum())
+    out = []
+    for name, q in (("rule", quad), ("higher rule", quad.higher())):
+        d = q.degree()
+        exact_m = polygon_moments(P, edges, d, center, scale)
+        got = quadrature_moments(P, t, tips, q, d, center, scale)
+        dev = np.abs(got - exact_m) / area
+        a, b = np.unravel_index(int(np.argmax(dev)), dev.shape)
+        worst = float(dev[a, b])
+        out.append({"rule": name, "quadrature": repr(q), "degree": d, "worst": worst,
+                    "monomial": [int(a), int(b)], "ok": bool(worst <= SELF_CHECK_TOLERANCE)})
     return out
 
 

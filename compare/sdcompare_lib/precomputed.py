@@ -10,7 +10,8 @@ solution, stored under a sha256 of everything it depends on:
 * the arrays it is computed from (mesh, u, p, bubble, crack points and segments, λ; for a
   reference its cracked mesh, crack pairs and ranges), dtype, shape and bytes;
 * the scene's exact solution: its ``[exact]``, ``[data] f`` and ``[geometry]`` tables;
-* the quadrature (``exact.Quadrature``'s repr), the p mass and the p space;
+* the quadrature (``exact.Quadrature``'s repr, and that of its higher rule, whose values and
+  estimate |e(rule) − e(higher rule)| a solver entry carries), the p mass and the p space;
 * the source of the code that computes it (exact.py, norms.py and the expression parser).
 
 The report reads the same arrays from the merged folder (``sdcrack merge`` copies them bit for bit)
@@ -94,6 +95,7 @@ def _key(kind, arrays, scene_file, extra):
         _CODE = _code_digest()
     h = hashlib.sha256()
     h.update(json.dumps({"kind": kind, "code": _CODE, "quadrature": repr(exact.Quadrature()),
+                         "higher_quadrature": repr(exact.Quadrature().higher()),
                          "exact": _exact_tables(scene_file), "extra": extra},
                         sort_keys=True, default=str).encode())
     for name in sorted(arrays):
@@ -109,11 +111,12 @@ def _key(kind, arrays, scene_file, extra):
 
 
 def solver_case_errors_h5(h5, case, ex, scene_file, p_mass, p_space):
-    """``exact.solver_case_errors_h5`` through the store (the p space is part of the key: the same
-    arrays of another p space are another case)."""
+    """``exact.solver_case_errors_estimated`` of a case of fields.h5 through the store: the errors,
+    "higher" (the higher rule's) and "quadrature" (their difference, the estimate); the p space is
+    part of the key: the same arrays of another p space are another case."""
     d = exact.read_h5_case(h5, case)
     key = _key("solver", d, scene_file, {"p_mass": p_mass, "p_space": p_space})
-    return STORE.lookup(key, lambda: exact.solver_case_errors(
+    return STORE.lookup(key, lambda: exact.solver_case_errors_estimated(
         d["points"], d["triangles"], d["u"], d["p"], d["p_bubble"], d["crack_points"], d["lam"],
         ex, p_mass=p_mass, crack_segments=d["crack_segments"]))
 

@@ -469,8 +469,9 @@ def load_expectations(path):
     with open(path, "rb") as fh:
         data = tomllib.load(fh)
     exps = data.get("expectation", [])
-    if not isinstance(exps, list) or set(data) - {"expectation"}:
-        raise ValueError("only [[expectation]] tables are allowed")
+    if not isinstance(exps, list) or set(data) - {"expectation", "ratio"}:
+        raise ValueError("only [[expectation]] and [[ratio]] tables are allowed (ratios.py reads "
+                         "the [[ratio]] rows)")
     for i, e in enumerate(exps):
         for k in set(e) & set(MOVED_KEYS):
             raise ValueError(f"expectation {i}: key '{k}' is no longer used: {MOVED_KEYS[k]}")

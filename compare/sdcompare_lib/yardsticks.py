@@ -9,7 +9,9 @@ themselves are bounded by quantities computed independently of the solver.
   ‖∇(u − I_h u)‖, from which theory.regularity classifies u as smooth or singular.
 * **References** (scenes with references): the solver's error at each level against the exact
   solution (or, without one, against the finest reference level) must stay within REFERENCE_FACTOR
-  of the references' own error on the same mesh, recomputed here from their fields.
+  of the references' own error on the same mesh, recomputed here from their fields. Where the two
+  converge at the same order, ratios.py holds that ratio to its measured, recorded value (issue
+  33: a 1.7× slip passed inside the factor 3).
 
 Both bound only the series whose expected order reaches P1's on the cracked mesh
 (theory.reaches_p1_order: u 2s, p s): otherwise the ratio grows as h → 0 and no constant bounds it.
@@ -250,13 +252,17 @@ def check_rows(rows, label):
 
 def checks(res, a, st):
     """The check rows (label, requirement, problems, not-applicable reason) of the interpolation
-    and reference yardsticks and of Theorem 2.1 against the exact solution; the rows themselves go
-    to a["yardsticks"] and a["theorem21"]."""
+    and reference yardsticks, of the measured ratio to the references (ratios.py: it settles, it
+    matches the recorded one) and of Theorem 2.1 against the exact solution; the rows themselves
+    go to a["yardsticks"] and a["theorem21"]."""
     declared = st.get("not_applicable", {})
     has_exact = a["exact"] is not None
     a["yardsticks"] = {"interpolation": [], "reference": []}
+    from . import ratios  # (imports this module)
+
     return ([_interpolation_row(a, declared, has_exact),
              _reference_row(res, a, declared, has_exact)]
+            + ratios.checks(res, a, declared)
             + _theorem21_check(res, a, declared, has_exact))
 
 
@@ -332,13 +338,7 @@ def _reference_row(res, a, declared, has_exact):
     if not tools:
         return label, what, ["could not run: the references the scene asks for are missing"], None
     tool = tools[0]
-    if has_exact:
-        yard = reference_errors_exact(a["independent"], tool)
-        series = [s for s in a["series"] if s["against"] == "exact"]
-    else:
-        yard = reference_errors_finest(res["refs"][tool])
-        series = solver_vs_finest(a["series"], a["agreement"], tool, ref_delta(
-            res["summary"]["cases"]))
+    yard, series = reference_inputs(res, a, tool)
     if a["regularity"] >= 1.0:
         # On a smooth solution the references' jump [u_h] (P1 Galerkin) superconverges (order 2
         # measured), faster than λ_h of the continuous p (of the order of p, 1) and than M0's
@@ -358,6 +358,18 @@ def _reference_row(res, a, declared, has_exact):
         problems = [f"could not run: no level with both the solver's and {tool}'s error "
                     f"against the {against}"]
     return label, what + f" ({tool}; {len(rows)} level × series rows)", problems, None
+
+
+def reference_inputs(res, a, tool):
+    """(yardstick, series) of the reference yardstick for `tool`: with an exact solution the
+    reference's own errors against it (recomputed here) and the series against it; without one
+    the reference's distances to its finest level and the solver's (solver_vs_finest)."""
+    if a["exact"] is not None:
+        return (reference_errors_exact(a["independent"], tool),
+                [s for s in a["series"] if s["against"] == "exact"])
+    return (reference_errors_finest(res["refs"][tool]),
+            solver_vs_finest(a["series"], a["agreement"], tool, ref_delta(
+                res["summary"]["cases"])))
 
 
 def _theorem21_check(res, a, declared, has_exact):

@@ -1,5 +1,6 @@
 //! `summary.json`: one entry per case with the keys of README.md's results folder (level, h, u_space, multiplier,
-//! delta, unknowns, iterations, kkt, timings_s, errors when the scene has `[exact]`) plus the LCP
+//! delta, unknowns, iterations, kkt, timings_s, errors when the scene has `[exact]`, with
+//! errors_quadrature, the estimate of their quadrature errors) plus the LCP
 //! status, the active-set size and the factorisation's regularised pivots, the case's group in
 //! the field files (`fields_grid`), and at the top level the file the compare tool recomputes
 //! the errors from (`recomputation_file`).
@@ -176,6 +177,12 @@ pub struct CaseSummary {
     /// Errors against `[exact]`, when the scene has it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub errors: Option<ErrorNorms>,
+    /// With `errors`: an estimate of the quadrature error of each, |e(rule) − e(higher rule)| in
+    /// the units of the error (the rule of [`crate::norms::NormQuadrature::default`] against
+    /// [`crate::norms::NormQuadrature::higher`]); the compare tool's tolerance for its own
+    /// recomputation of `errors` is built from it (absent in a summary of an older sdcrack).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub errors_quadrature: Option<ErrorNorms>,
     /// Name of the case in the field files, always set: its group `/cases/<fields_grid>` in
     /// `fields.h5` and in `verification.h5` (whichever exist), and its step grid in the series
     /// file.
@@ -257,6 +264,7 @@ impl CaseSummary {
             condition_estimate_delta: c.condition_delta,
             timings_s: c.timings,
             errors: c.errors,
+            errors_quadrature: c.errors_quadrature,
             fields_grid: case_name(c),
             fields_series: with_series.then(|| {
                 let file = super::xdmf::series_file(&series_name(c), "");
@@ -309,13 +317,19 @@ mod tests {
                 p_x: (0.1 + 0.2) * 1e10,
                 lambda_l2: 2f64.powi(53) + 2.0,
             }),
+            errors_quadrature: Some(ErrorNorms {
+                u_l2: 1e-17 / 3.0,
+                p_l2: 0.0,
+                p_x: 5e-324,
+                lambda_l2: 2.5e-6,
+            }),
             fields: None,
         }
     }
 
-    /// summary.json carries a case's errors and KKT residuals unchanged: written by
-    /// [`crate::output::write_run`] and parsed back, every value is the same `f64` bit for bit,
-    /// under its own key (the compare tool recomputes the errors and compares with these).
+    /// summary.json carries a case's errors, their quadrature estimates and KKT residuals
+    /// unchanged: written by [`crate::output::write_run`] and parsed back, every value is the same
+    /// `f64` bit for bit, under its own key (the compare tool recomputes the errors and compares with these).
     #[test]
     fn errors_and_kkt_round_trip_through_summary_json_bit_for_bit() {
         let c = case();
@@ -345,6 +359,20 @@ mod tests {
             assert_eq!(bits(&got["errors"], key), want.to_bits(), "errors.{key}");
         }
         assert_eq!(got["errors"].as_object().unwrap().len(), 4);
+        let q = c.errors_quadrature.unwrap();
+        for (key, want) in [
+            ("u_l2", q.u_l2),
+            ("p_l2", q.p_l2),
+            ("p_x", q.p_x),
+            ("lambda_l2", q.lambda_l2),
+        ] {
+            assert_eq!(
+                bits(&got["errors_quadrature"], key),
+                want.to_bits(),
+                "errors_quadrature.{key}"
+            );
+        }
+        assert_eq!(got["errors_quadrature"].as_object().unwrap().len(), 4);
         for (key, want) in [
             ("equations", c.kkt.equations),
             ("primal", c.kkt.primal),
