@@ -33,7 +33,7 @@ import tomllib
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CATALOGUE = os.path.join(ROOT, "ci", "mutants.toml")
 DEFAULT_SCENES = ["scenes/closed-exact.toml", "scenes/open-exact.toml", "scenes/mixed.toml",
-                  "scenes/open-smooth.toml"]
+                  "scenes/open-smooth.toml", "scenes/open-graded.toml"]
 MUTANT_KEYS = {"name", "file", "find", "replace", "bug", "catches"}
 BEGIN, END = "<!-- ci/mutants: begin -->", "<!-- ci/mutants: end -->"
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
