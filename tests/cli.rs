@@ -79,6 +79,23 @@ fn run_writes_summary_and_fields_and_never_overwrites() {
     assert!(prov["cores"].as_u64().unwrap() >= 1);
     assert_eq!(prov["scene_origin"], scene.as_str());
     assert_eq!(prov["sdcrack_version"], env!("CARGO_PKG_VERSION"));
+    // the last line: the command's whole time, and the solve's (summary.json's wall_s) beside it
+    // (issue 34: "9 cases in 0.0 s" after 6 s of references)
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    let last = stdout.lines().last().unwrap_or_default();
+    let (counts, rest) = last.split_once(" s (solving ").expect(last);
+    let (solving, folder_text) = rest.split_once(" s); results in ").expect(last);
+    assert_eq!(folder_text, folder.display().to_string());
+    let total: f64 = counts
+        .trim_start_matches("24 cases in ")
+        .parse()
+        .expect(last);
+    let solving: f64 = solving.parse().expect(last);
+    assert!(total >= solving, "{last}");
+    assert_eq!(
+        format!("{solving:.1}"),
+        format!("{:.1}", summary["wall_s"].as_f64().unwrap())
+    );
     // no partial folders left
     let names: Vec<String> = std::fs::read_dir(&out)
         .unwrap()
