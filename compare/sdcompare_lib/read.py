@@ -261,9 +261,24 @@ def load_export_meshes(export, levels):
     return meshes
 
 
-def load_results(folder):
+def _not_a_results_folder(folder):
+    """The one-line reason `folder` is not one scene's results folder, with a hint where the
+    folder is a campaign's (one results folder per scene below it)."""
+    if not os.path.exists(folder):
+        return f"no such folder: {folder}"
     if not os.path.isdir(folder):
-        raise InputError(f"not a results folder: {folder}")
+        return f"not a results folder (a file): {folder}"
+    scenes = sorted(d for d in os.listdir(folder)
+                    if os.path.isfile(os.path.join(folder, d, "summary.json")))
+    if scenes:
+        return (f"{folder} holds the results folders of {len(scenes)} scene(s) (a campaign): give "
+                f"one of them, e.g. {os.path.join(folder, scenes[0])}")
+    return f"not a results folder (no summary.json): {folder}"
+
+
+def load_results(folder):
+    if not os.path.isfile(os.path.join(folder, "summary.json")):
+        raise InputError(_not_a_results_folder(folder))
     summary = _load_json(os.path.join(folder, "summary.json"))
     if "cases" not in summary or not isinstance(summary["cases"], list):
         raise InputError(f"{folder}/summary.json has no 'cases' list")

@@ -512,6 +512,22 @@ def test_bad_usage_exit_2(tmp_path):
     assert rc == 2 and "malformed" in err
 
 
+def test_a_path_that_is_not_a_results_folder_says_what_it_is(tmp_path):
+    """Issue 34: a missing path, a plain folder and a campaign root each get their own line; the
+    campaign root names one of its scenes' folders."""
+    rc, _, err = run_cli(str(tmp_path / "nope"))
+    assert rc == 2 and err == f"sdcompare: error: no such folder: {tmp_path / 'nope'}\n"
+    rc, _, err = run_cli(str(tmp_path))
+    assert rc == 2 and err == f"sdcompare: error: not a results folder (no summary.json): {tmp_path}\n"
+    for scene in ("mixed", "open-exact"):
+        os.makedirs(tmp_path / "campaign" / scene)
+        (tmp_path / "campaign" / scene / "summary.json").write_text("{}")
+    rc, _, err = run_cli(str(tmp_path / "campaign"))
+    assert rc == 2 and err == (f"sdcompare: error: {tmp_path / 'campaign'} holds the results folders "
+                               f"of 2 scene(s) (a campaign): give one of them, e.g. "
+                               f"{tmp_path / 'campaign' / 'mixed'}\n")
+
+
 # ------------------------------------------------------------------ report rules (issue 13)
 # Words a report must never show: Python's None and nan/inf, δ written as 0e0, 1.0e-02 or 0.0.
 FORBIDDEN = re.compile(r"\bNone\b|\bnan\b|\binf\b|δ ?=? ?(?:0e0|0\.0\b|\d\.\de-0\d|0\.0*1\b)")

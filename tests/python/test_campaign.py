@@ -325,3 +325,21 @@ def test_case_list_of_a_p_spaces_results_folder_is_the_reports_rerun_list(tmp_pa
                                               "consistent-ptangential", "0"]
     assert "--multiplier M1 --p-space broken-tangential --delta 0 --out" in rows[0][6]
     assert out_of(rows[0][6]).endswith("/closed-exact-l2-broken-M1-ptangential-d0")
+
+
+@pytest.mark.parametrize("arg, says", [
+    ("nope.toml", "ci/cases: nope.toml: no such file or directory: give a scene file or a results "
+                  "folder OUT/<scene>/"),
+    ("folder", "ci/cases: folder: a results folder without scene.toml: give a scene file or a "
+               "results folder OUT/<scene>/"),
+    ("bad.toml", "ci/cases: bad.toml: not a scene file: "),
+])
+def test_a_bad_argument_is_one_line_and_exit_2(tmp_path, arg, says):
+    """Issue 34: ci/cases exited 1 with Python's errno text; now one line and exit 2, as every
+    other tool of the repository on bad input."""
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "bad.toml").write_text("name = \n")
+    p = subprocess.run([str(ROOT / "ci" / "cases"), arg], cwd=tmp_path, capture_output=True,
+                       text=True)
+    assert p.returncode == 2 and p.stdout == "", p
+    assert p.stderr.startswith(says) and p.stderr.count("\n") == 1, p.stderr
