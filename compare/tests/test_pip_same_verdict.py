@@ -38,6 +38,26 @@ def installed_sdcompare():
     return None
 
 
+def stale_files(installed):
+    """The checkout's sdcompare_lib modules that the installed copy of .venv-pip/ (not the running
+    interpreter's own, which ci/test-pip has just installed) lacks or holds in another version:
+    an install older than the checkout judges with older code, which is not what this test is
+    about (ci/test-pip reinstalls it before running this file)."""
+    if os.path.dirname(installed) == os.path.dirname(sys.executable):
+        return []
+    import glob
+    lib = os.path.join(ROOT, "compare", "sdcompare_lib")
+    sites = glob.glob(os.path.join(os.path.dirname(os.path.dirname(installed)), "lib",
+                                   "python3*", "site-packages", "sdcompare_lib"))
+    out = []
+    for f in sorted(glob.glob(os.path.join(lib, "*.py"))):
+        there = [os.path.join(site, os.path.basename(f)) for site in sites]
+        if not any(os.path.isfile(t) and open(t, "rb").read() == open(f, "rb").read()
+                   for t in there):
+            out.append(os.path.basename(f))
+    return out
+
+
 def checkout_sdcompare():
     root = os.environ.get("SDCRACK_CHECKOUT", ROOT)
     script = os.path.join(root, "compare", "sdcompare")
@@ -62,6 +82,11 @@ def tools():
     installed, checkout = installed_sdcompare(), checkout_sdcompare()
     if installed is None:
         pytest.skip("no pip-installed sdcompare (ci/test-pip installs one into .venv-pip/)")
+    stale = stale_files(installed)
+    if stale:
+        pytest.skip(f"the pip-installed sdcompare of .venv-pip/ predates this checkout "
+                    f"({', '.join(stale[:3])}{' …' if len(stale) > 3 else ''} differ): ci/test-pip "
+                    "reinstalls it and runs this test")
     if checkout is None:
         pytest.skip("no checkout sdcompare (set SDCRACK_CHECKOUT)")
     if not os.access(sdcrack_bin(), os.X_OK):
