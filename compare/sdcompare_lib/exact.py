@@ -423,7 +423,8 @@ def _geometry(P, tris):
     e1, e2 = X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]
     det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
     if np.any(det == 0):
-        raise ExactError("degenerate triangle")
+        raise ExactError(f"triangle {int(np.flatnonzero(det == 0)[0])} of a stored mesh is "
+                         "degenerate (zero area)")
     g1 = np.column_stack([e2[:, 1], -e2[:, 0]]) / det[:, None]
     g2 = np.column_stack([-e1[:, 1], e1[:, 0]]) / det[:, None]
     G = np.stack([-g1 - g2, g1, g2], axis=1)

@@ -152,9 +152,28 @@ class Fields:
     def mesh_by_key(self, key):
         if key not in self._mesh_cache:
             g = self.h5[f"meshes/{key}"]
-            self._mesh_cache[key] = (np.asarray(g["points"][()], dtype=float),
-                                     np.asarray(g["triangles"][()], dtype=np.int64))
+            self._mesh_cache[key] = self._valid_mesh(
+                f"/meshes/{key}", np.asarray(g["points"][()], dtype=float),
+                np.asarray(g["triangles"][()], dtype=np.int64))
         return self._mesh_cache[key]
+
+    def _valid_mesh(self, where, pts, tris):
+        """(pts, tris), or InputError naming the first triangle that refers to no stored point or
+        has zero area: no norm can be taken on such a mesh."""
+        if pts.ndim != 2 or pts.shape[1] < 2 or tris.ndim != 2 or tris.shape[1] != 3:
+            raise InputError(f"{self.path}: {where}: points {pts.shape}, triangles {tris.shape}: "
+                             "expected (N, 2 or 3) and (T, 3)")
+        if tris.size and (tris.min() < 0 or tris.max() >= pts.shape[0]):
+            bad = int(np.flatnonzero((tris < 0).any(axis=1) | (tris >= pts.shape[0]).any(axis=1))[0])
+            raise InputError(f"{self.path}: {where}: triangle {bad} refers to a point that is not "
+                             f"stored ({pts.shape[0]} points)")
+        X = pts[tris][:, :, :2]
+        det = ((X[:, 1, 0] - X[:, 0, 0]) * (X[:, 2, 1] - X[:, 0, 1])
+               - (X[:, 1, 1] - X[:, 0, 1]) * (X[:, 2, 0] - X[:, 0, 0]))
+        if np.any(det == 0):
+            raise InputError(f"{self.path}: {where}: triangle {int(np.flatnonzero(det == 0)[0])} "
+                             "is degenerate (zero area)")
+        return pts, tris
 
     def has_mesh(self, key):
         return f"meshes/{key}" in self.h5
@@ -174,8 +193,9 @@ class Fields:
             pts, tris = self.mesh_by_key(link.path[len("/meshes/"):])
         else:
             mesh = g["mesh"]
-            pts = np.asarray(mesh["points"][()], dtype=float)
-            tris = np.asarray(mesh["triangles"][()], dtype=np.int64)
+            pts, tris = self._valid_mesh(f"/cases/{grid}/mesh",
+                                         np.asarray(mesh["points"][()], dtype=float),
+                                         np.asarray(mesh["triangles"][()], dtype=np.int64))
 
         def get(name):
             return np.asarray(g[name][()], dtype=float) if name in g else None

@@ -317,6 +317,18 @@ def delta_scaled_with_mesh(folder, others):
     assert n
 
 
+def collapse_a_triangle(folder, others):
+    """The first triangle of every stored mesh loses its third vertex (a, b, c → a, b, a): zero
+    area, no norm can be taken on it."""
+    import h5py
+
+    with h5py.File(os.path.join(folder, "fields.h5"), "r+") as h5:
+        for m in h5["meshes"].values():
+            t = m["triangles"][()]
+            t[0, 2] = t[0, 0]
+            m["triangles"][...] = t
+
+
 def errors_scaled(factor, delta=None):
     """Every reported error (of δ = `delta` only, when given) multiplied by `factor`: a forged
     summary (a constant factor keeps every rate)."""
@@ -526,6 +538,7 @@ CASES = {
         ("open", field_scaled("M1star", "p", 1 + 1e-6), "empty", ()),
     "closed: M0's u off by 1e-9 on the entirely closed crack":
         ("closed", field_scaled("M0", "u", 1 + 1e-9), "empty", ()),
+    "open: a stored triangle collapsed": ("open", collapse_a_triangle, "empty", ()),
     "open no fields undamaged": ("open no fields", nothing, "empty", ()),
     "open no fields: reported errors × 0.9": ("open no fields", errors_scaled(0.9), "empty", ()),
     "open no fields: verification.h5 removed": ("open no fields", remove("verification.h5"),
@@ -757,6 +770,7 @@ DAMAGES = {
     "closed: u error × 20 at every level": (1, [
         "interpolation yardstick: broken/M1 u_l2 at level 3: error",
         "reference yardstick: broken/M1 u_l2 at level"]),
+    "open: a stored triangle collapsed": (2, "triangle 0 is degenerate (zero area)"),
     "open sweep: δ scaled with the mesh": (1, [
         "δ-constant: broken M1 u_l2 δ=1e-2: the δ-constant ‖x_δ − x_0‖/(δ‖x_0‖) goes",
         "δ-constant: broken M1 p_l2 δ=1e-6: the δ-constant"]),
