@@ -14,12 +14,19 @@
 //! compare tool's independent computation from the stored fields (compare/sdcompare_lib/exact.py):
 //! agreement ≤ 2e-10 relative (1.8e-10 at worst, on graded meshes; docs/design.md). On Γc the exact jump is the scene's `jump` expression or u⁺ − u⁻
 //! evaluated with the signed-zero side convention of [`crate::problem::eval_on_face`].
+//!
+//! The exact data at the points (u, ∇u and f on the triangles, \[u\] on the cracks) cost ~80 % of a
+//! pass; a [`NormCache`] evaluates them once per mesh, for both rules, within a memory budget
+//! ([`NORM_CACHE_BUDGET`]), and every later pass on that mesh reads them. The cached and the
+//! evaluated values go through the same code (`norms_pass`): the norms are the same bit for bit.
 
-use crate::expr::{BatchScratch, ExprBatch};
+use std::sync::OnceLock;
+
+use crate::expr::{BatchScratch, Expr, ExprBatch};
 use crate::fe::mini::mini_value;
 use crate::fe::p1::TriangleGeometry;
 use crate::fe::quadrature::{
-    collapsed_tip_rule, gauss_legendre, physical_points, triangle_rule, PhysicalPoint,
+    collapsed_tip_rule, extend_physical_points, gauss_legendre, triangle_rule, PhysicalPoint,
     TriangleRule, REFERENCE_TRIANGLE,
 };
 use crate::mesh::{Mesh, UTopology};
@@ -227,32 +234,292 @@ struct ElementWork {
     points: Vec<PhysicalPoint>,
     xs: Vec<f64>,
     ys: Vec<f64>,
-    /// u, ∂u/∂x, ∂u/∂y, f at the points, one after the other.
+    /// u, ∂u/∂x, ∂u/∂y, f at the points, one after the other (when not read from a cache).
     values: Vec<f64>,
     scratch: BatchScratch,
 }
 
-/// Computes e_u, e_p, e_λ of `sol` against `exact`.
-pub fn error_norms(
-    mesh: &Mesh,
-    topo: &UTopology,
-    exact: &Exact,
-    sol: &DiscreteSolution,
-    quad: NormQuadrature,
-) -> ErrorNorms {
-    error_norms_many(mesh, topo, exact, std::slice::from_ref(sol), quad)[0]
+/// Values the norms need of the exact data at a point: u, ∂u/∂x, ∂u/∂y and f.
+const EXACT_VALUES: usize = 4;
+
+/// Triangles per chunk of a pass: fixed chunks summed in order, then the chunk sums in order.
+const CHUNK: usize = 4096;
+
+/// The norms' rule on the triangles of one mesh: which rule each piece of a triangle gets.
+struct MeshRule {
+    tip: TipRule,
+    regular: TriangleRule,
+    near: TriangleRule,
+    collapsed: TriangleRule,
+    tips: Vec<usize>,
+    /// The vertices of the triangles touching a tip: a triangle with one of them is near a tip.
+    tip_patch: Vec<bool>,
 }
 
-/// [`error_norms`] of several discrete solutions on the same mesh, against the same exact
-/// solution and source (the multipliers of one δ), in one pass over the quadrature points: the
-/// exact solution is evaluated once per point for all of them. Each solution's norms are those of
-/// [`error_norms`] alone, bit for bit: its sums run over the same points in the same order.
-pub fn error_norms_many(
+impl MeshRule {
+    fn new(mesh: &Mesh, quad: NormQuadrature) -> MeshRule {
+        let regular = triangle_rule(quad.degree);
+        let near = triangle_rule(quad.tip_degree);
+        let collapsed = match quad.tip {
+            TipRule::Collapsed { points } => collapsed_tip_rule(points),
+            TipRule::Graded { .. } => near.clone(),
+        };
+        let tips = mesh.tips();
+        let mut tip_patch = vec![false; mesh.vertices.len()];
+        for t in mesh
+            .triangles
+            .iter()
+            .filter(|t| t.iter().any(|v| tips.contains(v)))
+        {
+            for &v in t {
+                tip_patch[v] = true;
+            }
+        }
+        MeshRule {
+            tip: quad.tip,
+            regular,
+            near,
+            collapsed,
+            tips,
+            tip_patch,
+        }
+    }
+
+    fn rule_of(&self, r: PieceRule) -> &TriangleRule {
+        match r {
+            PieceRule::Regular => &self.regular,
+            PieceRule::NearTip => &self.near,
+            PieceRule::Collapsed => &self.collapsed,
+        }
+    }
+
+    /// The pieces of triangle `t` with their rules, into `out`.
+    fn pieces(&self, t: &[usize; 3], out: &mut Vec<Piece>) {
+        let near_tip = t.iter().any(|&v| self.tip_patch[v]);
+        out.clear();
+        pieces(t.map(|v| self.tips.contains(&v)), near_tip, self.tip, out);
+    }
+
+    /// The number of points of triangle `t` (`buffer`: scratch for its pieces).
+    fn count(&self, t: &[usize; 3], buffer: &mut Vec<Piece>) -> usize {
+        self.pieces(t, buffer);
+        buffer
+            .iter()
+            .map(|&(rule, _)| self.rule_of(rule).points.len())
+            .sum()
+    }
+
+    /// The points of triangle `t` (of geometry `geo`), piece after piece, into `work.points`.
+    fn points(&self, t: &[usize; 3], geo: &TriangleGeometry, work: &mut ElementWork) {
+        self.pieces(t, &mut work.pieces);
+        work.points.clear();
+        for &(rule, piece) in &work.pieces {
+            extend_physical_points(self.rule_of(rule), geo.vertices, piece, &mut work.points);
+        }
+    }
+}
+
+/// u, ∂u/∂x, ∂u/∂y and f compiled together into one program ([`ExprBatch`]).
+fn exact_program(exact: &Exact, source: &Expr) -> ExprBatch {
+    ExprBatch::new(&[&exact.u, &exact.px, &exact.py, source])
+}
+
+/// The program's values at `work.points` into `out` (u, ∂u/∂x, ∂u/∂y, f, one after the other:
+/// [`EXACT_VALUES`] × n values), a triangle's points at once. The one place where a norm pass, or
+/// a [`NormCache`] for all of them, evaluates the exact data on the triangles.
+fn evaluate(program: &ExprBatch, work: &mut ElementWork, out: &mut [f64]) {
+    work.xs.clear();
+    work.xs.extend(work.points.iter().map(|q| q.x[0]));
+    work.ys.clear();
+    work.ys.extend(work.points.iter().map(|q| q.x[1]));
+    program.eval(&work.xs, &work.ys, &mut work.scratch, out);
+}
+
+/// The points of the λ error's rule on the cracks, chains in order: a crack segment's pieces
+/// ([`segment_pieces`]) with `tip_degree / 2 + 1` Gauss points each.
+struct CrackRule {
+    points: Vec<CrackPoint>,
+    /// The points of each chain of the mesh, in its order.
+    chains: Vec<std::ops::Range<usize>>,
+}
+
+/// A point of the [`CrackRule`].
+struct CrackPoint {
+    /// The physical point.
+    x: [f64; 2],
+    /// The normal of its crack segment.
+    normal: [f64; 2],
+    /// Its crack segment k (x_k → x_{k+1}) within its chain.
+    segment: usize,
+    /// Its local coordinate s ∈ (0, 1) on the segment.
+    s: f64,
+    /// The weight (Gauss weight × ds × segment length).
+    weight: f64,
+}
+
+impl CrackRule {
+    fn new(mesh: &Mesh, quad: NormQuadrature) -> CrackRule {
+        let g = gauss_legendre(quad.tip_degree / 2 + 1);
+        let mut points = Vec::new();
+        let mut chains = Vec::with_capacity(mesh.cracks.len());
+        for chain in &mesh.cracks {
+            let start = points.len();
+            let nodes = &chain.nodes;
+            let last = nodes.len() - 2;
+            for k in 0..nodes.len() - 1 {
+                let (a, b) = (mesh.vertices[nodes[k]], mesh.vertices[nodes[k + 1]]);
+                let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+                let (from_tip, to_tip) = (k == 0, k == last);
+                for (s0, s1, collapsed) in segment_pieces(from_tip, to_tip, quad.tip) {
+                    for (&t, &w) in g.points.iter().zip(&g.weights) {
+                        // s from s0 (a tip where `collapsed`) toward s1;
+                        // s − s0 = (s1 − s0) σ² there
+                        let (s, ds) = if collapsed {
+                            (s0 + t * t * (s1 - s0), 2.0 * t * (s1 - s0).abs())
+                        } else {
+                            (s0 + t * (s1 - s0), (s1 - s0).abs())
+                        };
+                        points.push(CrackPoint {
+                            x: [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])],
+                            normal: chain.normals[k],
+                            segment: k,
+                            s,
+                            weight: w * ds * len,
+                        });
+                    }
+                }
+            }
+            chains.push(start..points.len());
+        }
+        CrackRule { points, chains }
+    }
+
+    /// The exact jump at every point ([`exact_jump`]).
+    fn jumps(&self, exact: &Exact) -> Vec<f64> {
+        self.points
+            .iter()
+            .map(|q| exact_jump(exact, q.x, q.normal))
+            .collect()
+    }
+
+    /// ‖λ_h − \[u\]‖_{L²(Γc)} with \[u\] = `jumps` at the points: ∫ (λ_h − \[u\])² per chain, the
+    /// chains' integrals added in order.
+    fn lambda_error(&self, mesh: &Mesh, lambda: &CrackField, jumps: &[f64]) -> f64 {
+        let mut total = 0.0;
+        // λ's node and segment numbers run on over the cracks in order
+        let (mut node0, mut seg0) = (0, 0);
+        for (chain, range) in mesh.cracks.iter().zip(&self.chains) {
+            let mut chain_total = 0.0;
+            for (q, &jump) in self.points[range.clone()].iter().zip(&jumps[range.clone()]) {
+                let (k, s) = (q.segment, q.s);
+                let lh = match lambda {
+                    CrackField::PerSegment(v) => v[seg0 + k],
+                    CrackField::PerNode(v) => (1.0 - s) * v[node0 + k] + s * v[node0 + k + 1],
+                };
+                let d = lh - jump;
+                chain_total += q.weight * d * d;
+            }
+            total += chain_total;
+            node0 += chain.nodes.len();
+            seg0 += chain.segments();
+        }
+        total.sqrt()
+    }
+}
+
+/// The exact data at every point of one rule on one mesh: what a norm pass reads instead of
+/// evaluating them ([`NormCache`]).
+struct RuleValues {
+    /// Triangle i's values are `values[offsets[i]..offsets[i + 1]]`.
+    offsets: Vec<usize>,
+    /// Per triangle, u, ∂u/∂x, ∂u/∂y, f at its points ([`evaluate`]'s layout).
+    values: Vec<f64>,
+    /// \[u\] at the points of the [`CrackRule`].
+    jumps: Vec<f64>,
+}
+
+impl RuleValues {
+    /// Bytes of the values of `rule` and `crack` (offsets, values and jumps), counted before any
+    /// is allocated: the points of every triangle, without computing them.
+    fn bytes(mesh: &Mesh, rule: &MeshRule, crack: &CrackRule) -> usize {
+        let mut buffer = Vec::new();
+        let points: usize = mesh
+            .triangles
+            .iter()
+            .map(|t| rule.count(t, &mut buffer))
+            .sum();
+        let words = mesh.triangles.len() + 1 + EXACT_VALUES * points + crack.points.len();
+        words * std::mem::size_of::<f64>()
+    }
+
+    /// Evaluates the exact data at every point of `rule` and `crack`, in parallel over the same
+    /// chunks as a pass.
+    fn build(
+        mesh: &Mesh,
+        rule: &MeshRule,
+        crack: &CrackRule,
+        exact: &Exact,
+        program: &ExprBatch,
+    ) -> RuleValues {
+        use rayon::prelude::*;
+        let triangles = &mesh.triangles;
+        let mut buffer = Vec::new();
+        let mut offsets = Vec::with_capacity(triangles.len() + 1);
+        offsets.push(0);
+        for t in triangles {
+            let next = offsets[offsets.len() - 1] + EXACT_VALUES * rule.count(t, &mut buffer);
+            offsets.push(next);
+        }
+        let mut values = vec![0.0; offsets[triangles.len()]];
+        // the chunks' parts of `values`, each filled by one thread
+        let mut parts = Vec::with_capacity(triangles.len().div_ceil(CHUNK));
+        let mut rest = values.as_mut_slice();
+        for start in (0..triangles.len()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(triangles.len());
+            let (part, tail) = rest.split_at_mut(offsets[end] - offsets[start]);
+            parts.push((start..end, part));
+            rest = tail;
+        }
+        parts.into_par_iter().for_each(|(range, part)| {
+            let mut work = ElementWork::default();
+            let base = offsets[range.start];
+            for ti in range {
+                let t = &triangles[ti];
+                let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
+                rule.points(t, &geo, &mut work);
+                evaluate(
+                    program,
+                    &mut work,
+                    &mut part[offsets[ti] - base..offsets[ti + 1] - base],
+                );
+            }
+        });
+        RuleValues {
+            offsets,
+            values,
+            jumps: crack.jumps(exact),
+        }
+    }
+
+    /// Triangle `ti`'s values.
+    fn triangle(&self, ti: usize) -> &[f64] {
+        &self.values[self.offsets[ti]..self.offsets[ti + 1]]
+    }
+}
+
+/// The error norms of `sols` with one rule (`rule`, `crack`) in one pass over its points: the
+/// exact data read from `cached`, or evaluated here a triangle at a time. The one home of the
+/// norms' sums: the cached and the uncached values are the same f64 values ([`evaluate`] on the
+/// same points), consumed by the same operations in the same order, so the norms are the same
+/// bit for bit.
+fn norms_pass(
     mesh: &Mesh,
+    rule: &MeshRule,
+    crack: &CrackRule,
     topo: &UTopology,
     exact: &Exact,
     sols: &[DiscreteSolution],
-    quad: NormQuadrature,
+    cached: Option<&RuleValues>,
 ) -> Vec<ErrorNorms> {
     use rayon::prelude::*;
     let Some(first) = sols.first() else {
@@ -262,60 +529,36 @@ pub fn error_norms_many(
         sols.iter().all(|s| std::ptr::eq(s.source, first.source)),
         "the solutions of one pass share their source f"
     );
-    let regular = triangle_rule(quad.degree);
-    let near = triangle_rule(quad.tip_degree);
-    let collapsed = match quad.tip {
-        TipRule::Collapsed { points } => collapsed_tip_rule(points),
-        TipRule::Graded { .. } => near.clone(),
+    assert_eq!(
+        topo.triangle_dofs.len(),
+        mesh.triangles.len(),
+        "a topology of the rule's mesh"
+    );
+    let program = match cached {
+        Some(_) => None,
+        None => Some(exact_program(exact, first.source)),
     };
-    let rule_of = |r: PieceRule| -> &TriangleRule {
-        match r {
-            PieceRule::Regular => &regular,
-            PieceRule::NearTip => &near,
-            PieceRule::Collapsed => &collapsed,
-        }
-    };
-    let tips = mesh.tips();
-    // vertices of the triangles touching a tip: a triangle with one of them is near a tip
-    let mut tip_patch = vec![false; mesh.vertices.len()];
-    for t in mesh
-        .triangles
-        .iter()
-        .filter(|t| t.iter().any(|v| tips.contains(v)))
-    {
-        for &v in t {
-            tip_patch[v] = true;
-        }
-    }
-    // u, ∂u/∂x, ∂u/∂y and f evaluated together, a triangle's points at once.
-    let program = ExprBatch::new(&[&exact.u, &exact.px, &exact.py, first.source]);
     let add = |a: (f64, f64, f64), b: (f64, f64, f64)| (a.0 + b.0, a.1 + b.1, a.2 + b.2);
     // One triangle's contributions (∫ (u_h − u)², ∫ |p_h − ∇u|², h_T² ∫ (div p_h + f)²), added
     // to each solution's sums in `acc`.
     let element =
         |ti: usize, t: &[usize; 3], work: &mut ElementWork, acc: &mut [(f64, f64, f64)]| {
             let geo = TriangleGeometry::new(t.map(|v| mesh.vertices[v]));
-            let near_tip = t.iter().any(|&v| tip_patch[v]);
-            work.pieces.clear();
-            pieces(
-                t.map(|v| tips.contains(&v)),
-                near_tip,
-                quad.tip,
-                &mut work.pieces,
-            );
-            work.points.clear();
-            for &(rule, piece) in &work.pieces {
-                work.points
-                    .extend(physical_points(rule_of(rule), geo.vertices, piece));
-            }
+            rule.points(t, &geo, work);
             let n = work.points.len();
-            work.xs.clear();
-            work.xs.extend(work.points.iter().map(|q| q.x[0]));
-            work.ys.clear();
-            work.ys.extend(work.points.iter().map(|q| q.x[1]));
-            work.values.resize(4 * n, 0.0);
-            program.eval(&work.xs, &work.ys, &mut work.scratch, &mut work.values);
-            let (u, rest) = work.values.split_at(n);
+            let values = match (cached, &program) {
+                (Some(cached), _) => cached.triangle(ti),
+                (None, Some(program)) => {
+                    let mut values = std::mem::take(&mut work.values);
+                    values.resize(EXACT_VALUES * n, 0.0);
+                    evaluate(program, work, &mut values);
+                    work.values = values;
+                    &work.values
+                }
+                (None, None) => unreachable!("a program without a cache"),
+            };
+            assert_eq!(values.len(), EXACT_VALUES * n, "the cache's points");
+            let (u, rest) = values.split_at(n);
             let (px, rest) = rest.split_at(n);
             let (py, f) = rest.split_at(n);
             let dofs = topo.triangle_dofs[ti];
@@ -357,7 +600,6 @@ pub fn error_norms_many(
     // order whatever the threads do, so a case gives the same norms bit for bit in any run
     // (rayon's adaptive `reduce` splits differently from run to run), and with any other
     // solutions beside it.
-    const CHUNK: usize = 4096;
     let zero = vec![(0.0, 0.0, 0.0); sols.len()];
     let sums = mesh
         .triangles
@@ -380,15 +622,50 @@ pub fn error_norms_many(
                 .map(|(a, b)| add(a, b))
                 .collect()
         });
+    // [u] at the crack points once for all the solutions
+    let evaluated;
+    let jumps = match cached {
+        Some(cached) => &cached.jumps,
+        None => {
+            evaluated = crack.jumps(exact);
+            &evaluated
+        }
+    };
     sols.iter()
         .zip(sums)
         .map(|(sol, (eu, ep, ediv))| ErrorNorms {
             u_l2: eu.sqrt(),
             p_l2: ep.sqrt(),
             p_x: (ep + ediv).sqrt(),
-            lambda_l2: lambda_error(mesh, exact, sol.lambda, quad),
+            lambda_l2: crack.lambda_error(mesh, sol.lambda, jumps),
         })
         .collect()
+}
+
+/// Computes e_u, e_p, e_λ of `sol` against `exact`.
+pub fn error_norms(
+    mesh: &Mesh,
+    topo: &UTopology,
+    exact: &Exact,
+    sol: &DiscreteSolution,
+    quad: NormQuadrature,
+) -> ErrorNorms {
+    error_norms_many(mesh, topo, exact, std::slice::from_ref(sol), quad)[0]
+}
+
+/// [`error_norms`] of several discrete solutions on the same mesh, against the same exact
+/// solution and source (the multipliers of one δ), in one pass over the quadrature points: the
+/// exact solution is evaluated once per point for all of them. Each solution's norms are those of
+/// [`error_norms`] alone, bit for bit: its sums run over the same points in the same order.
+pub fn error_norms_many(
+    mesh: &Mesh,
+    topo: &UTopology,
+    exact: &Exact,
+    sols: &[DiscreteSolution],
+    quad: NormQuadrature,
+) -> Vec<ErrorNorms> {
+    let (rule, crack) = (MeshRule::new(mesh, quad), CrackRule::new(mesh, quad));
+    norms_pass(mesh, &rule, &crack, topo, exact, sols, None)
 }
 
 /// The error norms of [`error_norms`] with `quad` (the numbers reported, unchanged) and an
@@ -406,7 +683,8 @@ pub fn error_norms_estimated(
     error_norms_estimated_many(mesh, topo, exact, std::slice::from_ref(sol), quad)[0]
 }
 
-/// [`error_norms_estimated`] of several solutions in one pass per rule ([`error_norms_many`]).
+/// [`error_norms_estimated`] of several solutions in one pass per rule ([`error_norms_many`]),
+/// the exact data evaluated in each pass: a [`NormCache`] with no budget.
 pub fn error_norms_estimated_many(
     mesh: &Mesh,
     topo: &UTopology,
@@ -414,21 +692,154 @@ pub fn error_norms_estimated_many(
     sols: &[DiscreteSolution],
     quad: NormQuadrature,
 ) -> Vec<(ErrorNorms, ErrorNorms)> {
-    let reported = error_norms_many(mesh, topo, exact, sols, quad);
-    let higher = error_norms_many(mesh, topo, exact, sols, quad.higher());
-    reported
-        .into_iter()
-        .zip(higher)
-        .map(|(e, h)| {
-            let estimate = ErrorNorms {
-                u_l2: (e.u_l2 - h.u_l2).abs(),
-                p_l2: (e.p_l2 - h.p_l2).abs(),
-                p_x: (e.p_x - h.p_x).abs(),
-                lambda_l2: (e.lambda_l2 - h.lambda_l2).abs(),
-            };
-            (e, estimate)
+    let Some(first) = sols.first() else {
+        return Vec::new();
+    };
+    NormCache::new(mesh, exact, first.source, quad, 0).error_norms_estimated_many(topo, sols)
+}
+
+/// The budget of the study's [`NormCache`]s: 256 MiB. The cache holds 32 bytes per quadrature
+/// point (u, ∂u/∂x, ∂u/∂y, f), ~100 points per triangle for the two rules (36 + 64 away from the
+/// tips): ~3.2 kB per triangle, as much as the whole case at its peak, factorisation included
+/// (~3.0 kB per triangle: one case of open-exact, broken u, M1, consistent p mass, δ = 0, peak
+/// resident memory 101 MB at level 4, 384 MB at level 5, 1.64 GB at level 6), so a cache without
+/// a bound would double the memory of every case. Measured (both rules): open-smooth level 4
+/// (16 384 triangles) 19 + 34 MB, open-exact level 4 (32 768 triangles) 38 + 68 MB, level 5
+/// (131 072 triangles) 152 + 270 MB. With 256 MiB both rules are kept up to level 4 of every
+/// repository scene (≤ 106 MB), only the reported rule at level 5 of open-exact, none from
+/// level 6 (~1.7 GB for both): a cache adds at most ~0.7 × a level-5 case's memory, ~0.16 × a
+/// level-6 case's, and never gigabytes (a 10⁶-triangle case would need ~3.2 GB).
+pub const NORM_CACHE_BUDGET: usize = 256 << 20;
+
+/// The error norms of every discrete solution on one mesh against one exact solution, with their
+/// quadrature-error estimates ([`error_norms_estimated_many`]), the exact data at the points of
+/// both rules (u, ∇u and f on the triangles, \[u\] on the cracks) evaluated once, on first use,
+/// and read by every later pass: the study keeps one per level, for all its u spaces, p spaces,
+/// p masses, δ and multipliers. Each rule's values are counted before they are allocated; a rule
+/// whose values do not fit in what the budget leaves is evaluated in each pass instead (the
+/// larger rule, the higher one, is kept first). The norms are the same bit for bit either way.
+pub struct NormCache<'a> {
+    mesh: &'a Mesh,
+    exact: &'a Exact,
+    source: &'a Expr,
+    quad: NormQuadrature,
+    budget: usize,
+    built: OnceLock<CachedRules>,
+}
+
+/// What a [`NormCache`] builds on first use: the rule and the higher rule, and the values of
+/// those that fit.
+struct CachedRules {
+    rules: [(MeshRule, CrackRule); 2],
+    values: [Option<RuleValues>; 2],
+}
+
+impl<'a> NormCache<'a> {
+    /// An empty cache of the norms with `quad` on `mesh` against `exact` and the source `source`
+    /// (−Δu = f), whose values may take up to `budget` bytes ([`NORM_CACHE_BUDGET`]).
+    pub fn new(
+        mesh: &'a Mesh,
+        exact: &'a Exact,
+        source: &'a Expr,
+        quad: NormQuadrature,
+        budget: usize,
+    ) -> NormCache<'a> {
+        NormCache {
+            mesh,
+            exact,
+            source,
+            quad,
+            budget,
+            built: OnceLock::new(),
+        }
+    }
+
+    /// [`error_norms_estimated_many`] of `sols` (on `topo`, a topology of the cache's mesh, with
+    /// the cache's source), reading the cached values.
+    pub fn error_norms_estimated_many(
+        &self,
+        topo: &UTopology,
+        sols: &[DiscreteSolution],
+    ) -> Vec<(ErrorNorms, ErrorNorms)> {
+        assert!(
+            sols.iter().all(|s| std::ptr::eq(s.source, self.source)),
+            "the solutions have the cache's source f"
+        );
+        if sols.is_empty() {
+            return Vec::new();
+        }
+        let built = self.built.get_or_init(|| self.build());
+        let [reported, higher] = [0, 1].map(|i| {
+            let (rule, crack) = &built.rules[i];
+            let cached = built.values[i].as_ref();
+            norms_pass(self.mesh, rule, crack, topo, self.exact, sols, cached)
+        });
+        reported
+            .into_iter()
+            .zip(higher)
+            .map(|(e, h)| {
+                let estimate = ErrorNorms {
+                    u_l2: (e.u_l2 - h.u_l2).abs(),
+                    p_l2: (e.p_l2 - h.p_l2).abs(),
+                    p_x: (e.p_x - h.p_x).abs(),
+                    lambda_l2: (e.lambda_l2 - h.lambda_l2).abs(),
+                };
+                (e, estimate)
+            })
+            .collect()
+    }
+
+    /// The bytes of the values kept for the rule and the higher rule (`None`: evaluated in each
+    /// pass); `None` before the first use.
+    pub fn cached_bytes(&self) -> Option<[Option<usize>; 2]> {
+        self.built.get().map(|built| {
+            built.values.each_ref().map(|v| {
+                v.as_ref().map(|v| {
+                    (v.offsets.len() + v.values.len() + v.jumps.len()) * std::mem::size_of::<f64>()
+                })
+            })
         })
-        .collect()
+    }
+
+    /// The rules, and the values of those that fit in the budget, the larger first.
+    fn build(&self) -> CachedRules {
+        let rules = [self.quad, self.quad.higher()].map(|quad| {
+            (
+                MeshRule::new(self.mesh, quad),
+                CrackRule::new(self.mesh, quad),
+            )
+        });
+        let bytes = if self.budget == 0 {
+            [usize::MAX; 2]
+        } else {
+            rules
+                .each_ref()
+                .map(|(rule, crack)| RuleValues::bytes(self.mesh, rule, crack))
+        };
+        let mut keep = [false; 2];
+        let mut left = self.budget;
+        let mut order = [0, 1];
+        order.sort_by_key(|&i| std::cmp::Reverse(bytes[i]));
+        for i in order {
+            if bytes[i] <= left {
+                keep[i] = true;
+                left -= bytes[i];
+            }
+        }
+        let program = keep
+            .contains(&true)
+            .then(|| exact_program(self.exact, self.source));
+        let mut values = [None, None];
+        for i in 0..2 {
+            if let (true, Some(program)) = (keep[i], &program) {
+                let (rule, crack) = &rules[i];
+                values[i] = Some(RuleValues::build(
+                    self.mesh, rule, crack, self.exact, program,
+                ));
+            }
+        }
+        CachedRules { rules, values }
+    }
 }
 
 /// The exact jump \[u\] at a crack point.
@@ -437,60 +848,6 @@ pub fn exact_jump(exact: &Exact, p: [f64; 2], normal: [f64; 2]) -> f64 {
         Some(j) => j.eval(p[0], p[1]),
         None => eval_on_face(&exact.u, p, normal, 1.0) - eval_on_face(&exact.u, p, normal, -1.0),
     }
-}
-
-/// ‖λ_h − [u]‖_{L²(Γc)} over every crack, with the tip rule on the segments at the chains' ends.
-fn lambda_error(mesh: &Mesh, exact: &Exact, lambda: &CrackField, quad: NormQuadrature) -> f64 {
-    let g = gauss_legendre(quad.tip_degree / 2 + 1);
-    let mut total = 0.0;
-    // λ's node and segment numbers run on over the cracks in order
-    let (mut node0, mut seg0) = (0, 0);
-    for chain in &mesh.cracks {
-        total += chain_lambda_error(mesh, chain, exact, lambda, (node0, seg0), &g, quad);
-        node0 += chain.nodes.len();
-        seg0 += chain.segments();
-    }
-    total.sqrt()
-}
-
-/// ∫ (λ_h − [u])² over one crack chain whose first node and segment are λ's `offsets`.
-fn chain_lambda_error(
-    mesh: &Mesh,
-    chain: &crate::mesh::CrackChain,
-    exact: &Exact,
-    lambda: &CrackField,
-    offsets: (usize, usize),
-    g: &crate::fe::quadrature::LineRule,
-    quad: NormQuadrature,
-) -> f64 {
-    let nodes = &chain.nodes;
-    let last = nodes.len() - 2;
-    let mut total = 0.0;
-    for k in 0..nodes.len() - 1 {
-        let (a, b) = (mesh.vertices[nodes[k]], mesh.vertices[nodes[k + 1]]);
-        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-        let (from_tip, to_tip) = (k == 0, k == last);
-        for (s0, s1, collapsed) in segment_pieces(from_tip, to_tip, quad.tip) {
-            for (&t, &w) in g.points.iter().zip(&g.weights) {
-                // s from s0 (a tip where `collapsed`) toward s1; s − s0 = (s1 − s0) σ² there
-                let (s, ds) = if collapsed {
-                    (s0 + t * t * (s1 - s0), 2.0 * t * (s1 - s0).abs())
-                } else {
-                    (s0 + t * (s1 - s0), (s1 - s0).abs())
-                };
-                let p = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
-                let lh = match lambda {
-                    CrackField::PerSegment(v) => v[offsets.1 + k],
-                    CrackField::PerNode(v) => {
-                        (1.0 - s) * v[offsets.0 + k] + s * v[offsets.0 + k + 1]
-                    }
-                };
-                let d = lh - exact_jump(exact, p, chain.normals[k]);
-                total += w * ds * len * d * d;
-            }
-        }
-    }
-    total
 }
 
 /// The pieces (s0, s1, collapsed at s0) of a crack segment [0, 1] in its local coordinate s, for
@@ -683,6 +1040,138 @@ mod tests {
             );
         }
         assert_eq!(estimate.lambda_l2, 0.0);
+    }
+
+    /// Bits of norms, to compare them exactly.
+    fn bits(n: ErrorNorms) -> [u64; 4] {
+        [n.u_l2, n.p_l2, n.p_x, n.lambda_l2].map(f64::to_bits)
+    }
+
+    /// Norms with their estimates, as bits.
+    fn all_bits(norms: &[(ErrorNorms, ErrorNorms)]) -> Vec<[u64; 4]> {
+        norms
+            .iter()
+            .flat_map(|&(e, q)| [bits(e), bits(q)])
+            .collect()
+    }
+
+    /// A non-trivial discrete solution of the open crack's level 0 (both u spaces) with both
+    /// multiplier layouts, and the norms of `check` on it.
+    fn with_open_crack_solutions(
+        check: impl Fn(&Mesh, &Exact, &[(UTopology, Vec<DiscreteSolution>)]),
+    ) {
+        let scene = Scene::from_toml(include_str!("../scenes/open-exact.toml")).unwrap();
+        let mesh = scene.mesh_source().unwrap().level(0).unwrap();
+        let exact = scene.exact.as_ref().unwrap();
+        let topos = [USpace::Broken, USpace::Continuous].map(|s| mesh.u_topology(s));
+        let n = topos[0].n_dofs;
+        let u: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
+        let p: Vec<[f64; 2]> = (0..n).map(|i| [(0.11 * i as f64).cos(), 0.2]).collect();
+        let bubbles: Vec<[f64; 2]> = (0..mesh.triangles.len())
+            .map(|t| [0.01 * t as f64, -0.3])
+            .collect();
+        let nodes = mesh.cracks[0].nodes.len();
+        let per_node = CrackField::PerNode((0..nodes).map(|k| 0.1 * k as f64).collect());
+        let per_segment = CrackField::PerSegment((1..nodes).map(|k| 0.2 * k as f64).collect());
+        let sols = |topo: &UTopology| {
+            [&per_node, &per_segment]
+                .map(|lambda| DiscreteSolution {
+                    u: &u[..topo.n_dofs],
+                    p: &p[..topo.n_dofs],
+                    bubbles: &bubbles,
+                    lambda,
+                    source: &scene.f,
+                })
+                .to_vec()
+        };
+        let cases: Vec<(UTopology, Vec<DiscreteSolution>)> = topos
+            .into_iter()
+            .map(|topo| {
+                let s = sols(&topo);
+                (topo, s)
+            })
+            .collect();
+        check(&mesh, exact, &cases);
+    }
+
+    /// The cached exact data give the norms of the uncached passes bit for bit, for every rule
+    /// (collapsed and graded tips, the crack's jumps), in the first pass (which builds the cache)
+    /// and the later ones, and for two u topologies reading one cache (as the u spaces of a level
+    /// do in a study).
+    #[test]
+    fn cached_and_uncached_norms_are_the_same_bit_for_bit() {
+        with_open_crack_solutions(|mesh, exact, cases| {
+            let graded = NormQuadrature {
+                tip: TipRule::Graded { depth: 6 },
+                ..NormQuadrature::default()
+            };
+            for quad in [NormQuadrature::default(), graded] {
+                let source = cases[0].1[0].source;
+                let cache = NormCache::new(mesh, exact, source, quad, NORM_CACHE_BUDGET);
+                assert!(cache.cached_bytes().is_none(), "built on first use");
+                for _ in 0..2 {
+                    for (topo, sols) in cases {
+                        let cached = cache.error_norms_estimated_many(topo, sols);
+                        let evaluated = error_norms_estimated_many(mesh, topo, exact, sols, quad);
+                        assert_eq!(all_bits(&cached), all_bits(&evaluated), "{quad:?}");
+                        assert!(cached
+                            .iter()
+                            .all(|(e, q)| e.lambda_l2 > 0.0 && q.p_l2 > 0.0));
+                    }
+                    let [Some(reported), Some(higher)] = cache.cached_bytes().unwrap() else {
+                        panic!("both rules fit in the budget");
+                    };
+                    assert!(reported < higher, "{reported} vs {higher}");
+                }
+                // the passes read the cache: with its values zeroed, every norm is another
+                let mut cache = cache;
+                for values in cache.built.get_mut().unwrap().values.iter_mut().flatten() {
+                    values.values.fill(0.0);
+                    values.jumps.fill(0.0);
+                }
+                for (topo, sols) in cases {
+                    let zeroed = cache.error_norms_estimated_many(topo, sols);
+                    let evaluated = error_norms_estimated_many(mesh, topo, exact, sols, quad);
+                    for ((z, _), (e, _)) in zeroed.into_iter().zip(evaluated) {
+                        let (z, e) = (bits(z), bits(e));
+                        assert!(z.iter().zip(&e).all(|(a, b)| a != b), "{quad:?}");
+                    }
+                }
+            }
+        });
+    }
+
+    /// A rule whose values exceed what the budget leaves is evaluated in each pass instead (the
+    /// larger, higher rule kept first), with the same norms; the sizes counted before building are
+    /// those allocated, so a budget of exactly one rule's bytes keeps it.
+    #[test]
+    fn a_rule_over_the_budget_is_evaluated_in_each_pass() {
+        with_open_crack_solutions(|mesh, exact, cases| {
+            let quad = NormQuadrature::default();
+            let (topo, sols) = &cases[0];
+            let want = all_bits(&error_norms_estimated_many(mesh, topo, exact, sols, quad));
+            let full = NormCache::new(mesh, exact, sols[0].source, quad, usize::MAX);
+            full.error_norms_estimated_many(topo, sols);
+            let [Some(r), Some(h)] = full.cached_bytes().unwrap() else {
+                panic!("an unbounded cache keeps both rules");
+            };
+            for (budget, kept) in [
+                (0, [None, None]),
+                (1, [None, None]),
+                (r - 1, [None, None]),
+                (r, [Some(r), None]),
+                (h, [None, Some(h)]),
+                (r + h - 1, [None, Some(h)]),
+                (r + h, [Some(r), Some(h)]),
+            ] {
+                let cache = NormCache::new(mesh, exact, sols[0].source, quad, budget);
+                for _ in 0..2 {
+                    let got = all_bits(&cache.error_norms_estimated_many(topo, sols));
+                    assert_eq!(got, want, "budget {budget}");
+                    assert_eq!(cache.cached_bytes(), Some(kept), "budget {budget}");
+                }
+            }
+        });
     }
 
     /// The higher rule of the quadrature-error estimate: ⌈4n/3⌉ points per direction.

@@ -7,9 +7,11 @@
 //! fields → record the case.
 //!
 //! One numeric factorisation per (level, u space, δ) serves the three multipliers; the symbolic
-//! factorisation is shared by every δ. Phase timings are recorded per case; phases shared by
-//! several cases (assembly, factorisation, crack reduction) are reported with each of them and
-//! flagged as shared in the summary.
+//! factorisation is shared by every δ. The exact solution's data at the error norms' quadrature
+//! points are evaluated once per level and read by all its norm passes ([`NormCache`], within
+//! [`NORM_CACHE_BUDGET`]). Phase timings are recorded per case; phases shared by several cases
+//! (assembly, factorisation, crack reduction) are reported with each of them and flagged as shared
+//! in the summary.
 
 use std::time::Instant;
 
@@ -20,7 +22,7 @@ use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{componentwise_backward_error, Ldlt, LinalgError, SymbolicLdlt};
 use crate::mesh::{Layout, Mesh, MeshError, PTopology, UTopology};
 use crate::multiplier::{CrackField, CrackOperators, Multiplier};
-use crate::norms::{error_norms_estimated_many, DiscreteSolution, ErrorNorms, NormQuadrature};
+use crate::norms::{DiscreteSolution, ErrorNorms, NormCache, NormQuadrature, NORM_CACHE_BUDGET};
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use crate::scene::Scene;
 
@@ -173,7 +175,10 @@ pub struct Timings {
     /// LCP, recovery of x with refinement, KKT residuals.
     pub contact: f64,
     /// Error norms against `[exact]` with their quadrature-error estimate (the rule and the
-    /// higher rule): one pass for all the multipliers of a δ, its time shared equally.
+    /// higher rule): one pass per rule for all the multipliers of a δ, its time shared equally.
+    /// The exact data at the rules' points are evaluated once per level, within the budget of
+    /// [`NORM_CACHE_BUDGET`] ([`NormCache`]): in the first pass of the level, whose cases carry
+    /// that time; the later passes (other δ, u spaces, p spaces, p masses) read them.
     pub norms: f64,
     /// Preparing field arrays (the p bubbles, when only the fields need them, are in `norms`).
     pub fields: f64,
@@ -305,6 +310,15 @@ pub fn run_study(
             .map(|&space| Multiplier::new(space, &ops))
             .collect();
         let mesh_time = t0.elapsed().as_secs_f64();
+        // the exact data at the norms' points, evaluated in the level's first norm pass and read
+        // by all the others; a level of one pass (one δ, u space, p space and p mass) keeps
+        // nothing: storing the values would only add to its one evaluation
+        let passes = plan.space_pairs().len() * plan.p_masses.len() * plan.deltas.len();
+        let budget = if passes > 1 { NORM_CACHE_BUDGET } else { 0 };
+        let norm_cache = scene
+            .exact
+            .as_ref()
+            .map(|exact| NormCache::new(&mesh, exact, &scene.f, plan.norm_quadrature, budget));
         for &u_space in &plan.u_spaces {
             observer.phase(&format!("level {level}, {u_space}: assembling"));
             let t1 = Instant::now();
@@ -347,6 +361,7 @@ pub fn run_study(
                         system: &system,
                         p_mass,
                         symbolic: &symbolic,
+                        norm_cache: norm_cache.as_ref(),
                         base_timings: Timings {
                             assembly,
                             symbolic: symbolic_time,
@@ -374,6 +389,8 @@ struct LevelContext<'a> {
     system: &'a System,
     p_mass: PMass,
     symbolic: &'a SymbolicLdlt,
+    /// The level's norms with their cached exact data (`None` without `[exact]`).
+    norm_cache: Option<&'a NormCache<'a>>,
     base_timings: Timings,
 }
 
@@ -493,10 +510,11 @@ impl LevelContext<'_> {
                     self.solved_case(&reduced, contact, x, case_timings, plan)
                 })
                 .collect();
-            // the error norms of every multiplier of this δ in one pass over the quadrature
-            // points (the exact solution evaluated once per point), the time shared equally
+            // the error norms of every multiplier of this δ in one pass per rule over the
+            // quadrature points (the exact data read from the level's cache, or evaluated once per
+            // point for all of them), the time shared equally
             let t3 = Instant::now();
-            let errors = self.error_norms(&solved, &xs, plan);
+            let errors = self.error_norms(&solved, &xs);
             let norms_share = t3.elapsed().as_secs_f64() / solved.len().max(1) as f64;
             for ((mut solved, x), errors) in solved.into_iter().zip(xs.chunks_exact(n)).zip(errors)
             {
@@ -660,14 +678,9 @@ impl LevelContext<'_> {
 
     /// The error norms against `[exact]` of the solved cases of one δ (`xs`: their solutions, one
     /// after the other), with the estimate of their quadrature errors, in one pass per rule
-    /// ([`error_norms_estimated_many`]); `None` each without `[exact]`.
-    fn error_norms(
-        &self,
-        solved: &[Solved],
-        xs: &[f64],
-        plan: &CasePlan,
-    ) -> Vec<Option<(ErrorNorms, ErrorNorms)>> {
-        let Some(exact) = self.scene.exact.as_ref() else {
+    /// ([`NormCache::error_norms_estimated_many`]); `None` each without `[exact]`.
+    fn error_norms(&self, solved: &[Solved], xs: &[f64]) -> Vec<Option<(ErrorNorms, ErrorNorms)>> {
+        let Some(cache) = self.norm_cache else {
             return vec![None; solved.len()];
         };
         let sols: Vec<DiscreteSolution> = solved
@@ -681,7 +694,8 @@ impl LevelContext<'_> {
                 source: &self.scene.f,
             })
             .collect();
-        error_norms_estimated_many(self.mesh, self.topo, exact, &sols, plan.norm_quadrature)
+        cache
+            .error_norms_estimated_many(self.topo, &sols)
             .into_iter()
             .map(Some)
             .collect()
@@ -930,6 +944,7 @@ mod tests {
                 system: &system,
                 p_mass,
                 symbolic: &symbolic,
+                norm_cache: None,
                 base_timings: Timings::default(),
             };
             let ldlt = Ldlt::factor(&symbolic, &system.matrix(1e-3), &system.signs).unwrap();
@@ -1120,6 +1135,7 @@ mod tests {
                 system: &system,
                 p_mass: PMass::Lumped,
                 symbolic: &symbolic,
+                norm_cache: None,
                 base_timings: Timings::default(),
             };
             let h_n = ctx.h_n_from_trailing_block(&ldlt).unwrap();

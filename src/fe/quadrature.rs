@@ -132,6 +132,19 @@ pub fn physical_points(
     vertices: [[f64; 2]; 3],
     piece: [[f64; 2]; 3],
 ) -> Vec<PhysicalPoint> {
+    let mut points = Vec::with_capacity(rule.points.len());
+    extend_physical_points(rule, vertices, piece, &mut points);
+    points
+}
+
+/// [`physical_points`] appended to `out` (the same points, without allocating where `out` has
+/// room: the error norms' passes reuse one buffer for every triangle).
+pub fn extend_physical_points(
+    rule: &TriangleRule,
+    vertices: [[f64; 2]; 3],
+    piece: [[f64; 2]; 3],
+    out: &mut Vec<PhysicalPoint>,
+) {
     let det = |[a, b, c]: [[f64; 2]; 3]| {
         ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
     };
@@ -142,18 +155,14 @@ pub fn physical_points(
         ]
     };
     let scale = det(piece) * det(vertices);
-    rule.points
-        .iter()
-        .zip(&rule.weights)
-        .map(|(s, w)| {
-            let xi = affine(piece, *s);
-            PhysicalPoint {
-                xi,
-                x: affine(vertices, xi),
-                weight: w * scale,
-            }
-        })
-        .collect()
+    out.extend(rule.points.iter().zip(&rule.weights).map(|(s, w)| {
+        let xi = affine(piece, *s);
+        PhysicalPoint {
+            xi,
+            x: affine(vertices, xi),
+            weight: w * scale,
+        }
+    }));
 }
 
 #[cfg(test)]
