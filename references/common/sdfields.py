@@ -3,7 +3,8 @@
 ParaView, meshio and the compare tool read solver and references alike.
 
     fields.h5   /meshes/level{L}/points (N,3)   /meshes/level{L}/triangles (T,3) int64
-                /cases/level{L}/<point field>   scalar (N,) or vector (N,3)
+                /cases/level{L}/<point field>   scalar (N,) or vector (N,3): u, and p = ∇u_h at the
+                vertices (vertex_gradient) in both references
                 /cases/level{L}/crack/points (I,3)  /crack/segments (S,2)  /crack/<crack field> (I,)
                 (the crack nodes of every crack in crack.txt's row order; segments: the row pairs
                 [k, k+1] within each crack, none joining two cracks, S = I − number of cracks)
@@ -23,6 +24,23 @@ as one grey square in ParaView and meshio.read could not read it.
 """
 
 import numpy as np
+
+
+def vertex_gradient(xy, tri, u):
+    """p = ∇u_h at the cracked vertices (N, 2), the point field `p` of both references: the
+    area-weighted mean of the constant triangle gradients of the P1 u_h (each copy of a crack vertex
+    averages its own face's triangles)."""
+    p0, p1, p2 = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
+    e1, e2 = p1 - p0, p2 - p0
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    d1, d2 = u[tri[:, 1]] - u[tri[:, 0]], u[tri[:, 2]] - u[tri[:, 0]]
+    g = np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det])
+    area = np.abs(det) / 2
+    acc, wsum = np.zeros((len(xy), 2)), np.zeros(len(xy))
+    for k in range(3):
+        np.add.at(acc, tri[:, k], g * area[:, None])
+        np.add.at(wsum, tri[:, k], area)
+    return acc / np.maximum(wsum, 1e-300)[:, None]
 
 
 def _item(h5name, dims, kind, path):

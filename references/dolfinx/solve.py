@@ -647,7 +647,7 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
             cases.append(case)
             np.savetxt(tmp / f"u_level{case['level']}.txt", u, fmt="%.17g")
             if fields:
-                point = {"u": fs["u"]}
+                point = {"u": fs["u"], "p": sdfields.vertex_gradient(fs["xy"], fs["tri"], fs["u"])}
                 if "u_exact" in fs:
                     point["u_exact"] = fs["u_exact"]
                 field_sets.append((case["level"], {

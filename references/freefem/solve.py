@@ -64,6 +64,7 @@ import sdexport  # noqa: E402  the crack layout of the export (crack.txt, cracks
 import sdexpr  # noqa: E402  the shared translator: parse, to_freefem, to_numpy, derivative
 import sdquad  # noqa: E402  the load quadrature shared with the dolfinx reference
 import sdresults  # noqa: E402  (standard library only)
+import sdfields  # noqa: E402  the field files (fields.h5, XDMF) and p = ∇u_h at the vertices
 
 MAX_ITERATIONS = 100      # linear solves of the active-set method (crack_qp.edp)
 KKT_TOLERANCE = sdresults.KKT_TOLERANCE
@@ -442,23 +443,6 @@ def jump_error_sq(xy, layout, u_h, u_ex, exact, degree, depth):
     return sl
 
 
-# ---- fields (--fields): fields.h5 + fields/level{L}[.crack].xdmf (references/common/sdfields.py) --
-
-def vertex_gradient(xy, tri, u):
-    """∇u_h at the cracked vertices: area-weighted mean of the constant triangle gradients."""
-    p0, p1, p2 = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
-    e1, e2 = p1 - p0, p2 - p0
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    d1, d2 = u[tri[:, 1]] - u[tri[:, 0]], u[tri[:, 2]] - u[tri[:, 0]]
-    g = np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det])
-    area = np.abs(det) / 2
-    acc, wsum = np.zeros((len(xy), 2)), np.zeros(len(xy))
-    for k in range(3):
-        np.add.at(acc, tri[:, k], g * area[:, None])
-        np.add.at(wsum, tri[:, k], area)
-    return acc / np.maximum(wsum, 1e-300)[:, None]
-
-
 # ---- driver --------------------------------------------------------------------------------------
 
 def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fields=False):
@@ -519,13 +503,13 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
                 fields_data.append((level, {
                     "xy": lv["xy"], "tri": lv["tri"], "crack": crack, "segments": lv["layout"].segments(),
                     "h": lv["meta"]["h"],
-                    "point": {"u": u, "p": vertex_gradient(lv["xy"], lv["tri"], u)},
+                    "point": {"u": u, "p": sdfields.vertex_gradient(lv["xy"], lv["tri"], u)},
                     "crack_fields": {"jump": u[crack[:, 0]] - u[crack[:, 1]], "multiplier": lam_nodes}}))
             if not keep_work:
                 shutil.rmtree(work)
         if fields:
             try:
-                import sdfields
+                import h5py  # noqa: F401  (sdfields.write_fields writes with it)
             except ImportError as e:
                 raise SolveError(f"--fields needs h5py: apt-get install -y python3-h5py ({e})")
             sdfields.write_fields(tmp, fields_data, "freefem")

@@ -76,7 +76,8 @@ def assert_fields_readable(out, export, summary, tool):
             tri = np.loadtxt(export / f"level{L}" / "triangles.txt", dtype=np.int64, ndmin=2)
             assert n == levels[L]["unknowns"]
             assert [(b.type, len(b.data)) for b in m.cells] == [("triangle", len(tri))]
-            assert "u" in m.point_data, rel
+            assert {"u", "p"} <= set(m.point_data), rel  # p = ∇u_h at the vertices (sdfields)
+            assert m.point_data["p"].shape == (n, 3), rel
             np.testing.assert_array_equal(m.point_data["u"], np.loadtxt(out / f"u_level{L}.txt"))
         for name, values in m.point_data.items():
             assert values.shape[0] == n and np.isfinite(values).all(), (rel, name)
