@@ -880,6 +880,20 @@ fn segment_pieces(from_tip: bool, to_tip: bool, tip: TipRule) -> Vec<(f64, f64, 
 mod tests {
     use super::*;
 
+    /// The structured mesh of (−1, 1)² without a crack: `cells` at level 0, refined `level` times.
+    fn uncracked_square(cells: [usize; 2], level: u32) -> Mesh {
+        crate::mesh::structured::structured(
+            crate::problem::Rectangle {
+                min: [-1.0, -1.0],
+                max: [1.0, 1.0],
+            },
+            cells,
+            &[],
+            level,
+        )
+        .unwrap()
+    }
+
     #[test]
     fn graded_pieces_tile_the_triangle() {
         for corner in [None, Some(0), Some(1), Some(2)] {
@@ -973,16 +987,7 @@ mod tests {
     /// part or the bubble's gradient) fails this.
     #[test]
     fn norms_of_a_known_discrete_field_against_a_polynomial_are_the_closed_forms() {
-        let mesh = crate::mesh::structured::structured(
-            crate::problem::Rectangle {
-                min: [-1.0, -1.0],
-                max: [1.0, 1.0],
-            },
-            [4, 4],
-            &[],
-            1,
-        )
-        .unwrap();
+        let mesh = uncracked_square([4, 4], 1);
         assert_eq!(mesh.triangles.len(), 2 * 8 * 8);
         let topo = mesh.u_topology(USpace::Continuous);
         let parse = |s: &str| crate::expr::Expr::parse(s).unwrap();
@@ -1196,16 +1201,7 @@ mod tests {
     /// SAFETY factor 4 (compare/sdcompare_lib/checks.py).
     #[test]
     fn quadrature_estimate_of_a_non_polynomial_integrand_bounds_the_rules_error() {
-        let mesh = crate::mesh::structured::structured(
-            crate::problem::Rectangle {
-                min: [-1.0, -1.0],
-                max: [1.0, 1.0],
-            },
-            [2, 2],
-            &[],
-            0,
-        )
-        .unwrap();
+        let mesh = uncracked_square([2, 2], 0);
         assert_eq!(mesh.triangles.len(), 2 * 2 * 2);
         let topo = mesh.u_topology(USpace::Continuous);
         let parse = |s: &str| crate::expr::Expr::parse(s).unwrap();

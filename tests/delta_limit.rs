@@ -6,6 +6,15 @@ mod common;
 use sdcrack::scene::{FieldSet, MultiplierSpace, PMass, PSpace, USpace};
 use sdcrack::study::CaseFilter;
 
+/// Every (u space, p mass, p space) sdcrack runs: the p spaces with the u spaces they serve.
+const VARIANTS: [(USpace, PMass, PSpace); 5] = [
+    (USpace::Continuous, PMass::Consistent, PSpace::Continuous),
+    (USpace::Broken, PMass::Consistent, PSpace::Continuous),
+    (USpace::Broken, PMass::Lumped, PSpace::Continuous),
+    (USpace::Broken, PMass::Consistent, PSpace::BrokenTangential),
+    (USpace::Broken, PMass::Lumped, PSpace::BrokenTangential),
+];
+
 #[test]
 fn distance_to_delta_zero_is_linear_in_delta() {
     let mut scene = common::load("mixed");
@@ -16,13 +25,7 @@ fn distance_to_delta_zero_is_linear_in_delta() {
         p: true,
         lambda: true,
     };
-    for (u_space, p_mass, p_space) in [
-        (USpace::Continuous, PMass::Consistent, PSpace::Continuous),
-        (USpace::Broken, PMass::Consistent, PSpace::Continuous),
-        (USpace::Broken, PMass::Lumped, PSpace::Continuous),
-        (USpace::Broken, PMass::Consistent, PSpace::BrokenTangential),
-        (USpace::Broken, PMass::Lumped, PSpace::BrokenTangential),
-    ] {
+    for (u_space, p_mass, p_space) in VARIANTS {
         for m in MultiplierSpace::ALL {
             let cases = common::solve(
                 &scene,
@@ -121,13 +124,7 @@ fn delta_zero_at_the_end_of_a_sweep_is_delta_zero_solved_alone() {
     let mut alone = sweep.clone();
     alone.deltas = vec![0.0];
     let mut compared = 0;
-    for (u_space, p_mass, p_space) in [
-        (USpace::Continuous, PMass::Consistent, PSpace::Continuous),
-        (USpace::Broken, PMass::Consistent, PSpace::Continuous),
-        (USpace::Broken, PMass::Lumped, PSpace::Continuous),
-        (USpace::Broken, PMass::Consistent, PSpace::BrokenTangential),
-        (USpace::Broken, PMass::Lumped, PSpace::BrokenTangential),
-    ] {
+    for (u_space, p_mass, p_space) in VARIANTS {
         let filter = CaseFilter {
             u_space: Some(u_space),
             p_mass: Some(p_mass),
