@@ -369,3 +369,68 @@ def test_summary_json_estimates_are_the_solvers_rule_against_a_higher_one(inclin
     for q in ("u_l2", "p_l2", "p_x"):
         rel = [c["errors_quadrature"][q] / c["errors"][q] for c in level0]
         assert min(rel) > 1e-8 and max(rel) < 1e-3, (q, rel)
+
+
+# A smooth, non-polynomial exact solution without kinks: closed-exact's with three times the
+# frequency, u = sin(3πx)cos(3πy) − y (closed crack: ∂u/∂y = −1 on y = 0), on 4 × 4 cells at
+# levels 1-3, where the integrands are resolved but not integrated exactly: at the coarsest level
+# the solver's and this tool's quadratures differ by ~1.7e-7 relative (measured), far above the
+# former bare 1e-8, and the estimates (~1.7e-7 of u's error) leave a tolerance below a forged
+# 1e-6.
+WAVY = """name = "wavy-closed"
+description = "closed crack, smooth non-polynomial u = sin(3 pi x) cos(3 pi y) - y"
+
+[geometry]
+domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
+crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
+
+[data]
+f = "18*pi^2*sin(3*pi*x)*cos(3*pi*y)"
+g = "sin(3*pi*x)*cos(3*pi*y) - y"
+
+[exact]
+u = "sin(3*pi*x)*cos(3*pi*y) - y"
+jump = "0"
+
+[discretization]
+cells = [4, 4]
+levels = [1, 2, 3]
+u_spaces = ["continuous", "broken"]
+multipliers = ["M1"]
+deltas = [0.0]
+
+[outputs]
+fields = ["u", "p", "lambda"]
+references = []
+"""
+
+
+@pytest.fixture(scope="module")
+def wavy(tmp_path_factory):
+    if not os.access(sdcrack_bin(), os.X_OK):
+        pytest.skip("no sdcrack binary (cargo build --release, or SDCRACK_BIN)")
+    tmp = tmp_path_factory.mktemp("wavy")
+    (tmp / "wavy.toml").write_text(WAVY)
+    r = subprocess.run([sdcrack_bin(), "run", str(tmp / "wavy.toml"), "--out", str(tmp / "out"),
+                        "--quiet"], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    return tmp / "out" / "wavy-closed"
+
+
+def test_sdcrack_on_a_smooth_non_polynomial_solution_passes_and_a_1e6_forgery_of_u_fails(
+        wavy, tmp_path, monkeypatch):
+    """Issue 33's acceptance: a correct solver whose two correct quadratures of a smooth
+    non-polynomial solution differ by more than 1e-8 relative at the coarsest level passes the
+    check, and the same folder with u's error forged by a relative 1e-6 fails it, blaming sdcrack."""
+    fresh_caches(monkeypatch)
+    folder = copy_of(wavy, tmp_path)
+    rows, problems, _ = independent(folder)
+    assert problems == []
+    solver = [r for r in rows if r["source"] == "sdcrack"]
+    assert len(solver) == 6
+    # the point: the two correct quadratures differ by more than the former bare 1e-8
+    assert max(r["worst"] for r in solver if r["level"] == 1) > 1e-8
+    forge(folder, 1, "u_l2", 1 + 1e-6)
+    _, problems, _ = independent(folder)
+    assert len(problems) == 1 and "sdcrack's value is suspect" in problems[0], problems
+    assert "level 1" in problems[0], problems
