@@ -64,6 +64,15 @@ def _residuals(kkt):
     return ", ".join(f"{k} {_num(v)}" for k, v in kkt.items()) or "none"
 
 
+def _estimate_text(e, scale):
+    """A quadrature estimate in a problem line: "round-off" below ROUNDOFF_RTOL of the error it
+    estimates (its digits there are those of one numpy build's summation order, not of the rule:
+    the pip-installed and the Debian tool printed 0.0e+00 and 2.8e-17 for the same case)."""
+    if finite_number(e) and finite_number(scale) and abs(e) <= ROUNDOFF_RTOL * abs(scale):
+        return "round-off"
+    return _num(e)
+
+
 def _rel(a, b):
     if not (finite_number(a) and finite_number(b)):
         return math.inf
@@ -435,8 +444,9 @@ def _tolerance(row, c, ours, self_check, what):
                   + (f" > tolerance {_num(tol)}" if tol is not None else ""))
         e_t, e_o = row["estimates"].get(q, (None, None))
         if tol is not None and e_t is not None and e_o is not None:
-            detail += (f" = {SAFETY:g}·(sdcrack's quadrature estimate {_num(e_t)} + this tool's "
-                       f"{_num(e_o)}) + round-off")
+            detail += (f" = {SAFETY:g}·(sdcrack's quadrature estimate "
+                       f"{_estimate_text(e_t, o)} + this tool's {_estimate_text(e_o, o)}) "
+                       "+ round-off")
         elif tol is not None and not has_estimates:
             detail += (f", the bare {SOLVER_ERRORS_RTOL:g} relative: summary.json has no "
                        "errors_quadrature (an sdcrack older than issue 33)")
