@@ -26,12 +26,11 @@ from collections import defaultdict
 
 from .read import p_mass, p_space, variant_suffix
 from .render import fmt_delta
+from .verdict import ROUNDOFF_REL  # below it (relative) a δ-difference is round-off: not judged
 
 MAX_LOG_CHANGE = math.log(2.0) / 4
 MIN_LEVEL = 3
 QUANTITIES = ("u_l2", "p_l2")
-# Below this relative size a δ-difference is round-off (verdict.ROUNDOFF_REL): not judged.
-ROUNDOFF_REL = 1e-12
 
 
 def constants(delta_limit):
