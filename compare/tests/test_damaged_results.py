@@ -959,3 +959,49 @@ def test_quantities_not_stored_are_still_judged(judged, case):
     judged_q = {s["quantity"] for s in rep["series"] if s["status"] in ("converges",
                                                                         "expected failure")}
     assert {"u_l2", "p_l2", "lambda_l2"} <= judged_q
+
+
+# ------------------------------------------------------------------ issue 34: the first screen
+def report_md(r):
+    with open(os.path.join(r["folder"], "report", "report.md"), encoding="utf-8") as fh:
+        return fh.read()
+
+
+@pytest.mark.parametrize("case", ["open sweep undamaged", "open sweep: the field of one δ 93× off",
+                                  "open sweep: reported errors of one δ × 0.9"], ids=_slug)
+def test_first_screen_delta_sentences_follow_the_checks(judged, case):
+    """The δ → 0 line under the verdict and the Theorem 2.1 sentence of the yardstick section say
+    what the checks found: PASS and "it holds" on the undamaged sweep, FAIL on a field off at one
+    δ (δ → 0 check) and "it fails" on errors off at one δ (Theorem 2.1 check). The sweep runs no
+    reference, and the first screen says so."""
+    r = result(judged, case)
+    md, g = report_md(r), r["report"]["glance"]
+    assert g["level"] is None and "**No reference run**" in md, r["what"]
+    if case == "open sweep undamaged":
+        assert g["delta"]["status"] == "PASS" and "**δ → 0 (Theorem 2.1): PASS**" in md
+        assert "it holds, so each error approaches the δ = 0 floor" in md
+        return
+    assert g["delta"]["status"] == "FAIL" and "**δ → 0 (Theorem 2.1): FAIL**" in md
+    if "× 0.9" in case:
+        assert "**it fails** (problems above)" in md
+
+
+@pytest.mark.parametrize("case", ["closed undamaged", "closed: u error × 20 at every level"],
+                         ids=_slug)
+def test_first_screen_reference_ratios_follow_the_errors(judged, case):
+    """The ratio of sdcrack's u error to the references' on the first screen and in report.json:
+    below 1 on the closed crack (0.49 measured: the mixed method's u is closer to the smooth u
+    than the P1 references' on the same mesh), above 5 once u_h − u_ex is multiplied by 20 at the
+    vertices (6.8 measured: the interpolation part of the error, u_ex − I_h u_ex, is not
+    scaled)."""
+    r = result(judged, case)
+    md, g = report_md(r), r["report"]["glance"]
+    assert g["level"] == 3 and g["against"] == "exact", r["what"]
+    assert "**sdcrack against dolfinx and FreeFEM** (u at level 3, errors against the exact" in md
+    ratios = [row["refs"]["dolfinx"]["ratio"] for row in g["rows"]
+              if row["u_space"] == "broken"]
+    assert ratios, r["what"]
+    if case == "closed undamaged":
+        assert all(0.25 < x < 1 for x in ratios), ratios
+    else:
+        assert all(5 < x < 20 for x in ratios), ratios

@@ -1,0 +1,251 @@
+"""The comparison at a glance (issue 34, item 2): sdcrack against dolfinx and FreeFEM, and the
+δ → 0 outcome, for the first screen of a report and the campaign index.
+
+What it measures, per variant (u space × multiplier × p mass × p space), is the u error at the
+finest level where sdcrack and a reference both have one, with the same yardstick as the
+reference checks (yardsticks.reference_inputs):
+
+* with an exact solution, both errors are against it (sdcrack's series; the reference's own
+  error recomputed by this tool), so ρ = e_sdcrack / e_ref is "how many times the reference's
+  error" on the same mesh;
+* without one, both are distances to the reference's finest level (sdcrack's solver_vs_finest,
+  the reference's own coarse level against its finest), so ρ compares the two codes' distance to
+  the same best available solution.
+
+The rates are observed over the last step to that level, each code in its own mesh parameter
+(verdict.mesh_parameter: h, or N^{-1/2} of its own unknowns on graded meshes).
+
+The δ → 0 outcome is read from the check rows "δ → 0", "δ-constant" and "Theorem 2.1 (exact)":
+FAIL when any has a problem, PASS when at least one applies and none has a problem, "not
+applicable" otherwise — so the sentence is the checks' result and comes out FAIL with them.
+
+Everything here is derived from the analysis dict `a` of compare/sdcompare; nothing is judged
+twice: the verdict does not read this module.
+"""
+import math
+
+from . import verdict, yardsticks
+from .read import finite_number, variant_label, variant_of, variant_order
+
+REFERENCES = ("dolfinx", "freefem")
+REFERENCE_NAMES = {"dolfinx": "dolfinx", "freefem": "FreeFEM"}
+# The check rows that judge the δ → 0 limit (Theorem 2.1).
+DELTA_CHECKS = ("δ → 0", "δ-constant", "Theorem 2.1 (exact)")
+# The quantities drawn as reference curves on the h → 0 plot (the references' own errors).
+PLOT_QUANTITIES = ("u_l2", "p_l2", "lambda_l2")
+
+
+def _rate(points):
+    """Observed rate over the last step of [(level, x, e)]: ln(e_{L−1}/e_L) / ln(x_{L−1}/x_L),
+    or None without two consecutive levels with positive values."""
+    pts = [(lv, x, e) for lv, x, e in points if finite_number(x) and finite_number(e)
+           and x > 0 and e > 0]
+    if len(pts) < 2 or pts[-1][0] != pts[-2][0] + 1 or pts[-1][1] == pts[-2][1]:
+        return None
+    (_, x0, e0), (_, x1, e1) = pts[-2], pts[-1]
+    return math.log(e0 / e1) / math.log(x0 / x1)
+
+
+def reference_parameters(res, a, tool):
+    """{level: mesh parameter} of a reference's cases (h, or N^{-1/2} of its unknowns on graded
+    meshes), as the solver's series are measured."""
+    out = {}
+    for c in res["refs"][tool]["summary"].get("cases", []):
+        try:
+            out[int(c["level"])] = verdict.mesh_parameter(c, a.get("graded", False))
+        except (KeyError, TypeError, ValueError):
+            continue
+    return out
+
+
+def _tools(res):
+    return [t for t in REFERENCES if t in res["refs"]]
+
+
+def _against(a):
+    return "exact" if a["exact"] is not None else "reference finest level"
+
+
+def reference_series(res, a):
+    """The references' curves for the h → 0 plot: per tool and quantity its own errors by level
+    (against the exact solution, or the distance to its finest level), with the mesh parameter
+    of the solver's series."""
+    out = []
+    for tool in _tools(res):
+        yard, _ = yardsticks.reference_inputs(res, a, tool)
+        xs = reference_parameters(res, a, tool)
+        name = REFERENCE_NAMES[tool]
+        label = (f"{name}: its error" if a["exact"] is not None
+                 else f"{name}: distance to its finest level")
+        for q in PLOT_QUANTITIES:
+            levels = sorted(lv for lv, qq in yard if qq == q and lv in xs)
+            if levels:
+                out.append({"tool": tool, "quantity": q, "levels": levels,
+                            "h": [xs[lv] for lv in levels],
+                            "errors": [yard[(lv, q)] for lv in levels], "label": label})
+    return out
+
+
+def _u_series(res, a, tool):
+    """(yardstick {(level, q): e_ref}, the solver's u series against the same solution)."""
+    yard, series = yardsticks.reference_inputs(res, a, tool)
+    own = {variant_of(s): s for s in a["series"] if s["quantity"] == "u_l2"}
+    out = []
+    for s in series:
+        if s["quantity"] != "u_l2":
+            continue
+        mine = own.get(variant_of(s))
+        xs = dict(zip(mine["levels"], mine["h"])) if mine and mine.get("h") else {}
+        out.append((s, xs))
+    return yard, out
+
+
+def comparison_level(res, a):
+    """The finest level where sdcrack's u and every reference's u error are all known."""
+    common = None
+    for tool in _tools(res):
+        yard, series = _u_series(res, a, tool)
+        levels = {lv for s, _ in series for lv, e in zip(s["levels"], s["errors"])
+                  if finite_number(e) and (lv, "u_l2") in yard}
+        common = levels if common is None else common & levels
+    return max(common) if common else None
+
+
+def rows(res, a, level):
+    """One row per variant: its u error and rate at `level`, and per reference the reference's
+    error, rate and the ratio ρ = e_sdcrack / e_ref."""
+    by_variant = {}
+    for tool in _tools(res):
+        yard, series = _u_series(res, a, tool)
+        rxs = reference_parameters(res, a, tool)
+        ref_pts = [(lv, rxs.get(lv), yard.get((lv, "u_l2"))) for lv in sorted(
+            {lv for lv, q in yard if q == "u_l2"})]
+        ref_err, ref_rate = yard.get((level, "u_l2")), _rate([p for p in ref_pts
+                                                              if p[0] <= level])
+        for s, xs in series:
+            e = dict(zip(s["levels"], s["errors"])).get(level)
+            if not finite_number(e):
+                continue
+            u, m, pm, ps = variant_of(s)
+            row = by_variant.setdefault(variant_of(s), {
+                "variant": variant_label(u, m, pm, ps), "u_space": u, "multiplier": m,
+                "p_mass": pm, "p_space": ps, "status": s["status"], "quantity": "u_l2",
+                "error": e, "rate": _rate([(lv, xs.get(lv), err) for lv, err in zip(
+                    s["levels"], s["errors"]) if lv <= level]), "refs": {}})
+            row["refs"][tool] = {"error": ref_err, "rate": ref_rate,
+                                 "ratio": e / ref_err if finite_number(ref_err) and ref_err > 0
+                                 else None}
+    return [by_variant[v] for v in sorted(by_variant, key=variant_order)]
+
+
+def delta_outcome(a):
+    """{"status": PASS | FAIL | not applicable, "text"} from the δ check rows."""
+    found = [(label, probs, na) for label, _, probs, na in a["checks"] if label in DELTA_CHECKS]
+    failed = [(label, probs) for label, probs, _ in found if probs]
+    applied = [label for label, probs, na in found if na is None]
+    if failed:
+        label, probs = failed[0]
+        n = sum(len(p) for _, p in failed)
+        return {"status": "FAIL", "text": f"δ → 0 (Theorem 2.1): FAIL — {n} problem(s); "
+                f"first, {label}: {probs[0]}"}
+    if applied:
+        slopes = [e["slope"] for e in a["delta_limit"] if e.get("points_fitted", 0) >= 2
+                  and e.get("slope") is not None]
+        fits = (f"‖x_δ − x_0‖ falls at slopes {min(slopes):.3f}–{max(slopes):.3f} over "
+                f"{len(slopes)} fits" if slopes else "")
+        return {"status": "PASS", "text": "δ → 0 (Theorem 2.1): PASS — " + "; ".join(
+            t for t in (fits, "checks " + ", ".join(applied) + " hold") if t)}
+    reasons = [na for _, _, na in found if na]
+    return {"status": "not applicable",
+            "text": "δ → 0 (Theorem 2.1): not applicable — " + (reasons[0] if reasons else
+                                                                "no δ check ran")}
+
+
+def summary(res, a):
+    """report.json's `glance` (see the module docstring)."""
+    level = comparison_level(res, a) if _tools(res) else None
+    return {"level": level, "against": _against(a) if level is not None else None,
+            "rows": rows(res, a, level) if level is not None else [],
+            "delta": delta_outcome(a)}
+
+
+def _g3(v):
+    return f"{v:.3g}"
+
+
+def _f2(v):
+    return f"{v:.2f}"
+
+
+def ratio_text(r):
+    """ρ as "2.4×" (three significant digits), "–" when unknown."""
+    return "–" if r is None else f"{r:.3g}×"
+
+
+def _span(values, fmt):
+    vs = sorted(v for v in values if v is not None)
+    if not vs:
+        return "–"
+    lo, hi = fmt(vs[0]), fmt(vs[-1])
+    return lo if lo == hi else f"{lo}–{hi}"
+
+
+def reference_sentence(g):
+    """The first-screen sentence on sdcrack against the references, or None without them."""
+    if g["level"] is None or not g["rows"]:
+        return None
+    tools = [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
+    against = ("errors against the exact solution" if g["against"] == "exact" else
+               "distances to each reference's finest level")
+    own = {t: (f"{_span([r['refs'][t]['error'] for r in g['rows'] if t in r['refs']], _g3)}"
+               f" (rate {_span([r['refs'][t]['rate'] for r in g['rows'] if t in r['refs']], _f2)})")
+           for t in tools}
+    ref_part = (f"{own[tools[0]]}, " + " and ".join(REFERENCE_NAMES[t] for t in tools) + " alike"
+                if len(set(own.values())) == 1 and len(tools) > 1 else
+                "; ".join(f"{REFERENCE_NAMES[t]} {own[t]}" for t in tools))
+    groups = []
+    for name, sel in (("converging variants", lambda r: r["status"] == "converges"),
+                      ("declared expected failures", lambda r: r["status"] == "expected failure"),
+                      ("other variants", lambda r: r["status"] not in ("converges",
+                                                                       "expected failure"))):
+        chosen = [r for r in g["rows"] if sel(r)]
+        if not chosen:
+            continue
+        spans = [_span([r["refs"].get(t, {}).get("ratio") for r in chosen], _g3) for t in tools]
+        per_tool = (f"{spans[0]}× either reference" if len(set(spans)) == 1 and len(spans) > 1
+                    else " / ".join(f"{sp}×" for sp in spans))
+        rates = _span([r["rate"] for r in chosen], _f2)
+        groups.append(f"{name} ({len(chosen)}): {per_tool}, rates {rates}")
+    return (f"**sdcrack against {' and '.join(REFERENCE_NAMES[t] for t in tools)}** (u at level "
+            f"{g['level']}, {against}; ratio = sdcrack's ÷ "
+            f"{' / '.join(REFERENCE_NAMES[t] for t in tools)}'s): " + "; ".join(groups)
+            + f". The references' own: {ref_part}.")
+
+
+def extremes_sentence(g):
+    """Which converging variant is closest to and farthest from the first reference."""
+    tools = [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
+    conv = [r for r in g["rows"] if r["status"] == "converges"
+            and (r["refs"].get(tools[0]) or {}).get("ratio") is not None] if tools else []
+    if len(conv) < 2:
+        return None
+    t = tools[0]
+    lo = min(conv, key=lambda r: r["refs"][t]["ratio"])
+    hi = max(conv, key=lambda r: r["refs"][t]["ratio"])
+    return (f"Smallest ratio to {REFERENCE_NAMES[t]}: {lo['variant']} {ratio_text(lo['refs'][t]['ratio'])}"
+            f" (rate {_span([lo['rate']], _f2)}); largest: {hi['variant']} "
+            f"{ratio_text(hi['refs'][t]['ratio'])} (rate {_span([hi['rate']], _f2)}).")
+
+
+def first_screen(g):
+    """The paragraphs under the verdict: the δ → 0 outcome, then the references."""
+    d = g["delta"]
+    out = [f"**{d['text'].split(' — ')[0]}**" + (" — " + d["text"].split(" — ", 1)[1]
+                                                 if " — " in d["text"] else "") + "."]
+    ref = reference_sentence(g)
+    out.append(ref if ref else "**No reference run**: the scene asks for none, or none is in the "
+               "results folder; sdcrack is judged against the exact solution alone.")
+    ext = extremes_sentence(g)
+    if ext:
+        out.append(ext)
+    return out
