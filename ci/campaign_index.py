@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """The index of a campaign folder: DIR/index.html and DIR/index.json, one row per scene.
 
-    ci/campaign_index.py DIR [--scene NAME ...]
+    ci/campaign_index.py DIR [--scene NAME ...] [--baseline BASEDIR [--baseline-label TEXT]
+                                                 | --no-baseline REASON]
 
 DIR is a campaign folder of ci/campaign or ci/nightly (DIR/<name>/report/report.json per scene,
 the jobs' logs under DIR/logs/<name>/), or a folder of such scene folders put together, e.g. the
@@ -12,20 +13,48 @@ summary.json or scene.toml and every DIR/logs/<name>/.
 A scene's verdict is its report's (PASS or FAIL). A scene without a report, or one of whose jobs
 failed since (its output missing and its log without a `campaign: ... done` line: a failed or
 killed job), or whose report is older than its shards or inputs, is FAIL; the index shows the
-failing jobs' logs (their last 40 lines, and a link). Prints one verdict line per scene and the
-index's path; exit 0 when every scene PASSes, 1 otherwise, 2 on bad usage. Standard library only.
+failing jobs' logs (their last 40 lines, and a link). Each row also says what converged, and, from
+the report's `glance`, the ratios of sdcrack's errors to the references' at the finest level both
+have and the δ → 0 outcome.
+
+--baseline BASEDIR: a campaign folder of the same layout (e.g. the previous night's merged
+artifacts; its scenes found as above, without --scene). Each scene's row then lists what changed
+since: its verdict, the scene new (or gone: a line of its own), and per series (matched by
+variant and quantity) its status, its finest level, its last rate by more than
+verdict.BASELINE_RATE_ATOL and its error at the finest common level by more than
+verdict.BASELINE_ERROR_RTOL relative (compare/sdcompare_lib/verdict.py, read, not imported), or
+"no change beyond tolerance". --baseline-label names the baseline in the header (default: the
+folder). --no-baseline REASON: the header says "no baseline: REASON" instead (the nightly's
+first night). Neither changes the verdict or the exit status.
+
+Prints one verdict line per scene, the baseline's line and the index's path; exit 0 when every
+scene PASSes, 1 otherwise, 2 on bad usage (one line). Standard library only.
 """
 
 import argparse
+import ast
 import datetime
 import html
 import json
+import math
 import os
 import re
 import sys
 
 TAIL = 40
 RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks"}
+# The baseline's tolerances have one home, sdcompare's verdict module; it imports numpy and the
+# references' modules (absent where the GitHub index job runs), so their values are read from its
+# source.
+VERDICT_PY = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                          "compare", "sdcompare_lib", "verdict.py")
+TOLERANCES = ("BASELINE_RATE_ATOL", "BASELINE_ERROR_RTOL")
+MAX_LISTED = 10  # changes per scene listed in index.html (index.json has them all)
+NO_CHANGE = "no change beyond tolerance"
+
+
+class UsageError(Exception):
+    """Bad usage or unreadable inputs: one line, exit 2."""
 
 
 def load_json(path):
@@ -54,7 +83,8 @@ def scenes_of(root, names):
         d = os.path.join(root, entry)
         if entry.startswith(".") or entry in RESERVED or not os.path.isdir(d):
             continue
-        if any(os.path.exists(os.path.join(d, f)) for f in ("report", "summary.json", "scene.toml")):
+        if any(os.path.exists(os.path.join(d, f))
+               for f in ("report", "summary.json", "scene.toml")):
             found.add(entry)
     logs = os.path.join(root, "logs")
     if os.path.isdir(logs):
@@ -132,14 +162,21 @@ def stale(root, name):
     return any(t is not None and t > report for t in newest)
 
 
-def scene_row(root, name):
+def load_report(root, name):
+    """The scene's report/report.json as a dict, or None."""
     report = load_json(os.path.join(root, name, "report", "report.json"))
-    verdict = report.get("verdict") if isinstance(report, dict) else None
+    return report if isinstance(report, dict) else None
+
+
+def scene_row(root, name, report):
+    """The index's row of one scene (report: its load_report)."""
+    verdict = report.get("verdict") if report else None
     failed = failed_jobs(root, name)
     row = {"name": name, "verdict": "FAIL", "reason": None, "report": None,
            "report_verdict": verdict, "failed_jobs": failed,
-           "converged": converged_line(report) if isinstance(report, dict) else None,
-           "first_problem": first_problem(report) if isinstance(report, dict) else None}
+           "converged": converged_line(report) if report else None,
+           "first_problem": first_problem(report) if report else None,
+           "glance": glance(report) if report else None}
     if os.path.isfile(os.path.join(root, name, "report", "index.html")):
         row["report"] = f"{name}/report/index.html"
     if verdict is None:
@@ -194,7 +231,8 @@ def converged_line(report):
              + (f" ({', '.join(sorted(ok))})" if ok and len(ok) <= 4 else "")]
     if rates:
         parts.append("last rates " + ", ".join(
-            f"{SYMBOL.get(q, q)} {min(v):.2f}" + (f"–{max(v):.2f}" if max(v) > min(v) + 5e-3 else "")
+            f"{SYMBOL.get(q, q)} {min(v):.2f}"
+            + (f"–{max(v):.2f}" if max(v) > min(v) + 5e-3 else "")
             for q, v in sorted(rates.items(), key=lambda kv: list(SYMBOL).index(kv[0])
                                if kv[0] in SYMBOL else 9)))
     if xfail:
@@ -208,6 +246,214 @@ def first_problem(report):
     return str(reasons[0]) if reasons else None
 
 
+# --------------------------------------------------------------------------- the references
+
+def number(x):
+    """x as a finite float, else None (JSON's null, a string, a bool, NaN)."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return None
+    return float(x) if math.isfinite(x) else None
+
+
+def glance(report):
+    """The index's line on the report's `glance` (sdcompare_lib/glance.py writes the line, its
+    one home, with tests that make it false): sdcrack's u error over the references' at the
+    finest level both have, per status group, and the δ → 0 outcome;
+    {"line", "level", "against", "delta"}."""
+    g = report.get("glance")
+    if not isinstance(g, dict) or not isinstance(g.get("line"), str):
+        line = ("no references" if not report.get("references")
+                else "no error ratios (a report from before the glance)")
+        return {"line": line, "level": None, "against": None, "delta": None}
+    delta = g.get("delta") if isinstance(g.get("delta"), dict) else None
+    return {"line": g["line"], "level": g.get("level"), "against": g.get("against"),
+            "delta": delta}
+
+
+# --------------------------------------------------------------------------- the baseline
+
+def baseline_tolerances(path=None):
+    """{"BASELINE_RATE_ATOL": .., "BASELINE_ERROR_RTOL": ..}, read from the source of
+    compare/sdcompare_lib/verdict.py (their one home; see VERDICT_PY) or of path."""
+    path = path or VERDICT_PY
+    try:
+        with open(path, encoding="utf-8") as fh:
+            tree = ast.parse(fh.read(), path)
+    except (OSError, SyntaxError, ValueError) as e:
+        raise UsageError(f"cannot read the baseline tolerances from {path}: {e}")
+    found = {}
+    for node in tree.body:
+        if (isinstance(node, ast.Assign) and len(node.targets) == 1
+                and isinstance(node.targets[0], ast.Name) and node.targets[0].id in TOLERANCES):
+            try:
+                found[node.targets[0].id] = float(ast.literal_eval(node.value))
+            except (ValueError, TypeError):
+                pass
+    missing = [n for n in TOLERANCES if n not in found]
+    if missing:
+        raise UsageError(f"{path}: no literal {', '.join(missing)}")
+    return found
+
+
+def series_map(report):
+    """{"variant quantity": series} of a report (variant_key, the same on both sides)."""
+    return {f"{variant_key(s)} {s.get('quantity')}": s
+            for s in (report or {}).get("series") or [] if isinstance(s, dict)}
+
+
+def by_level(s, key):
+    """{level: value or None} of a series' "errors" (one per level) or "rates" (one per step,
+    keyed by the level it ends at)."""
+    values = s.get(key) or []
+    levels = s.get("levels") or list(range(len(s.get("errors") or values)))
+    if key == "rates":
+        levels = levels[1:]
+    return {lv: number(v) for lv, v in zip(levels, values)}
+
+
+def rel_change(old, new):
+    """|new − old| relative to the larger, as verdict.compare_baseline measures it."""
+    return 0.0 if old == new else abs(new - old) / max(abs(old), abs(new), 1e-300)
+
+
+def change(kind, text, old=None, new=None, **more):
+    """One change since the baseline, as index.json lists it."""
+    return dict({"kind": kind, "text": text, "old": old, "new": new}, **more)
+
+
+def value_change(key, what, level, old, new, tol):
+    """The change of one error ("error", relative tolerance) or rate ("rate", absolute), or
+    None within tolerance."""
+    if old is None or new is None:
+        if old is new:
+            return None
+        return change(what, f"{key}: {what} at level {level} {old} → {new}", old, new,
+                      level=level)
+    if what == "rate":
+        if abs(new - old) <= tol["BASELINE_RATE_ATOL"]:
+            return None
+        return change("rate", f"{key}: last rate (to level {level}) {old:.4f} → {new:.4f} "
+                      f"({new - old:+.2g})", old, new, level=level, abs_change=abs(new - old))
+    rc = rel_change(old, new)
+    if rc <= tol["BASELINE_ERROR_RTOL"]:
+        return None
+    return change("error", f"{key}: error at level {level} {old:.6g} → {new:.6g} "
+                  f"({rc:.2g} relative)", old, new, level=level, rel_change=rc)
+
+
+def series_changes(key, old, new, tol):
+    """What changed in one series (same variant and quantity) beyond tolerance: its status, its
+    finest level, its error at the finest level both have, its rate of the last step both
+    have."""
+    out = []
+    if old.get("status") != new.get("status"):
+        out.append(change("status", f"{key}: {old.get('status')} → {new.get('status')}",
+                          old.get("status"), new.get("status")))
+    for what, field in (("error", "errors"), ("rate", "rates")):
+        o, n = by_level(old, field), by_level(new, field)
+        if what == "error" and o and n and max(o) != max(n):
+            out.append(change("levels", f"{key}: finest level {max(o)} → {max(n)}",
+                              max(o), max(n)))
+        common = sorted(set(o) & set(n))
+        if common:
+            c = value_change(key, what, common[-1], o[common[-1]], n[common[-1]], tol)
+            out += [c] if c else []
+    for c in out:
+        c["series"] = key
+    return out
+
+
+def listed(names):
+    """"a, b, c, d (+2 more)"."""
+    return ", ".join(names[:4]) + (f" (+{len(names) - 4} more)" if len(names) > 4 else "")
+
+
+def report_changes(old, new, tol):
+    """The changes between two reports of one scene: series new, gone, and changed."""
+    o, n = series_map(old), series_map(new)
+    out = []
+    for kind, names in (("series new", [k for k in n if k not in o]),
+                        ("series gone", [k for k in o if k not in n])):
+        if names:
+            out.append(change(kind, f"{len(names)} {kind} ({listed(names)})", names=names))
+    changed = [c for key in n if key in o for c in series_changes(key, o[key], n[key], tol)]
+    return out + merge_levels(changed, sum(1 for key in n if key in o))
+
+
+def merge_levels(changes, compared):
+    """The changes with the series' "finest level" changes merged into one per (old, new): a
+    scene run at other levels says so once, not once per series."""
+    levels = {}
+    for c in changes:
+        if c["kind"] == "levels":
+            levels.setdefault((c["old"], c["new"]), []).append(c["series"])
+    merged = [change("levels", f"finest level {old} → {new} ("
+                     + (f"all {compared} series" if len(keys) == compared else
+                        f"{len(keys)} series: {listed(keys)}") + ")", old, new, series=keys)
+              for (old, new), keys in levels.items()]
+    return merged + [c for c in changes if c["kind"] != "levels"]
+
+
+def scene_changes(row, report, base_row, base_report, tol):
+    """What changed in one scene since the baseline (its row and report there; None: the
+    baseline has no such scene)."""
+    if base_row is None:
+        return [change("new scene", "new scene (not in the baseline)")]
+    out = []
+    if row["verdict"] != base_row["verdict"]:
+        out.append(change("verdict", f"verdict {base_row['verdict']} → {row['verdict']}",
+                          base_row["verdict"], row["verdict"]))
+    if report and base_report:
+        out += report_changes(base_report, report, tol)
+    elif report or base_report:
+        where = "the baseline" if report else "tonight's folder"
+        out.append(change("report", f"no report in {where}: series not compared"))
+    return out
+
+
+def load_baseline(base, label, names, tol):
+    """The baseline's scenes ({name: (row, report)}) and its header facts."""
+    scenes = {}
+    for name in scenes_of(base, None):
+        report = load_report(base, name)
+        scenes[name] = (scene_row(base, name, report), report)
+    index = load_json(os.path.join(base, "index.json"))
+    index = index if isinstance(index, dict) else {}
+    head = {"folder": base, "label": label or base, "created": index.get("created"),
+            "verdict": index.get("verdict"), "rate_atol": tol["BASELINE_RATE_ATOL"],
+            "error_rtol": tol["BASELINE_ERROR_RTOL"],
+            "gone": [n for n in scenes if n not in names]}
+    return scenes, head
+
+
+def apply_baseline(rows, reports, base, label):
+    """Adds each row's "changes" (a list) and "changes_line" against the baseline folder;
+    returns the index's "baseline" entry."""
+    tol = baseline_tolerances()
+    scenes, head = load_baseline(base, label, [r["name"] for r in rows], tol)
+    for r in rows:
+        base_row, base_report = scenes.get(r["name"], (None, None))
+        r["changes"] = scene_changes(r, reports[r["name"]], base_row, base_report, tol)
+        r["changes_line"] = "; ".join(c["text"] for c in r["changes"]) or NO_CHANGE
+    head["changed"] = [r["name"] for r in rows if r["changes"]]
+    return head
+
+
+def baseline_line(head):
+    """The one line naming the baseline and what it shows (or why there is none)."""
+    if head is None:
+        return None
+    if "none" in head:
+        return f"no baseline: {head['none']}"
+    when = (f"its index of {head['created']}, verdict {head['verdict']}" if head["created"]
+            else "no index.json there")
+    changed = (f"{len(head['changed'])} scene(s) changed beyond tolerance"
+               + (f" ({listed(head['changed'])})" if head["changed"] else ""))
+    gone = f"; {len(head['gone'])} gone ({listed(head['gone'])})" if head["gone"] else ""
+    return (f"baseline: {head['label']} ({when}): {changed}{gone}; tolerances: last rates "
+            f"{head['rate_atol']:g} absolute, errors {head['error_rtol']:g} relative")
+
+
 def write_atomic(path, text):
     tmp = f"{path}.tmp-{os.getpid()}"
     with open(tmp, "w", encoding="utf-8") as fh:
@@ -215,29 +461,49 @@ def write_atomic(path, text):
     os.replace(tmp, path)
 
 
-def render_html(rows, verdict, created):
+STYLE = ("<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
+         "div.scroll{overflow-x:auto;max-width:100%}td.t{min-width:14em}"
+         "td,th{border:1px solid #ccc;padding:.3em .6em;text-align:left;vertical-align:top}"
+         "td ul{margin:0;padding-left:1.2em}"
+         ".PASS{color:#060;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
+         "pre{background:#f6f6f6;padding:.5em;overflow-x:auto;max-width:100em}</style>")
+AGAINST = {"exact": "errors against the exact solution",
+           "reference finest level": "distances to each reference's finest level"}
+
+
+def changes_cell(r):
+    """The "changed since baseline" cell: NO_CHANGE or the list (MAX_LISTED of them)."""
     e = html.escape
-    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-           "<title>sdcrack campaign: " + e(verdict) + "</title>",
-           '<meta name="viewport" content="width=device-width, initial-scale=1">',
-           "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
-           "div.scroll{overflow-x:auto;max-width:100%}td.t{min-width:14em}"
-           "td,th{border:1px solid #ccc;padding:.3em .6em;text-align:left;vertical-align:top}"
-           ".PASS{color:#060;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
-           "pre{background:#f6f6f6;padding:.5em;overflow-x:auto;max-width:100em}</style>",
-           "</head><body>",
-           f'<h1>sdcrack campaign: <span class="{e(verdict)}">{e(verdict)}</span></h1>',
-           f"<p>{len(rows)} scene(s), index written {e(created)}.</p>",
-           "<div class='scroll'><table><tr><th>scene</th><th>verdict</th>"
-           "<th>what converged, at which rates</th><th>first problem</th><th>report</th></tr>"]
-    for r in rows:
-        link = (f'<a href="{e(r["report"])}">report</a>' if r["report"] else "none")
-        problem = " — ".join(x for x in (r["reason"] if r["verdict"] != "PASS" else None,
-                                          r.get("first_problem")) if x) or "none"
-        out.append(f'<tr><td>{e(r["name"])}</td><td class="{e(r["verdict"])}">{e(r["verdict"])}'
-                   f'</td><td class="t">{e(r.get("converged") or "–")}</td>'
-                   f'<td class="t">{e(problem)}</td><td>{link}</td></tr>')
-    out.append("</table></div>")
+    if not r["changes"]:
+        return f'<td class="t">{e(NO_CHANGE)}</td>'
+    items = "".join(f"<li>{e(c['text'])}</li>" for c in r["changes"][:MAX_LISTED])
+    more = len(r["changes"]) - MAX_LISTED
+    if more > 0:
+        items += f"<li>{more} more: index.json</li>"
+    return f'<td class="t"><ul>{items}</ul></td>'
+
+
+def table_row(r, with_baseline):
+    """One scene's <tr>."""
+    e = html.escape
+    link = (f'<a href="{e(r["report"])}">report</a>' if r["report"] else "none")
+    reason = r["reason"] if r["verdict"] != "PASS" else None
+    problem = " — ".join(x for x in (reason, r.get("first_problem")) if x) or "none"
+    g = r.get("glance") or {}
+    note = "; ".join(x for x in (AGAINST.get(g.get("against")),
+                                 (g.get("delta") or {}).get("text")) if x)
+    title = f' title="{e(note)}"' if note else ""
+    return (f'<tr><td>{e(r["name"])}</td><td class="{e(r["verdict"])}">{e(r["verdict"])}'
+            f'</td><td class="t">{e(r.get("converged") or "–")}</td>'
+            f'<td class="t"{title}>{e(g.get("line") or "–")}</td>'
+            f'<td class="t">{e(problem)}</td>'
+            + (changes_cell(r) if with_baseline else "") + f"<td>{link}</td></tr>")
+
+
+def failed_jobs_html(rows):
+    """The failed jobs' sections: each job's log, its last TAIL lines."""
+    e = html.escape
+    out = []
     for r in rows:
         if not r["failed_jobs"]:
             continue
@@ -246,32 +512,79 @@ def render_html(rows, verdict, created):
             out.append(f'<h3>{e(j["job"])} ({e(j["status"])}): <a href="{e(j["log"])}">'
                        f'{e(j["log"])}</a></h3>')
             out.append(f"<p>last {TAIL} lines of the log:</p><pre>{e(j['tail'])}</pre>")
+    return out
+
+
+def render_html(rows, verdict, created, baseline=None):
+    """index.html: the verdict, the baseline's line, one row per scene, the failed jobs."""
+    e = html.escape
+    with_baseline = baseline is not None and "none" not in baseline
+    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+           "<title>sdcrack campaign: " + e(verdict) + "</title>",
+           '<meta name="viewport" content="width=device-width, initial-scale=1">', STYLE,
+           "</head><body>",
+           f'<h1>sdcrack campaign: <span class="{e(verdict)}">{e(verdict)}</span></h1>',
+           f"<p>{len(rows)} scene(s), index written {e(created)}.</p>"]
+    if baseline is not None:
+        out.append(f'<p id="baseline">{e(baseline_line(baseline))}</p>')
+    out.append("<div class='scroll'><table><tr><th>scene</th><th>verdict</th>"
+               "<th>what converged, at which rates</th>"
+               "<th>sdcrack's errors / the references'</th><th>first problem</th>"
+               + ("<th>changed since baseline</th>" if with_baseline else "")
+               + "<th>report</th></tr>")
+    out += [table_row(r, with_baseline) for r in rows]
+    out.append("</table></div>")
+    out += failed_jobs_html(rows)
     out.append("</body></html>")
     return "\n".join(out) + "\n"
 
 
-def build(root, names=None):
-    rows = [scene_row(root, n) for n in scenes_of(root, names)]
+def build(root, names=None, baseline=None, label=None, no_baseline=None):
+    """Writes ROOT/index.json and ROOT/index.html; returns (rows, verdict, baseline entry)."""
+    names = scenes_of(root, names)
+    reports = {n: load_report(root, n) for n in names}
+    rows = [scene_row(root, n, reports[n]) for n in names]
+    head = None
+    if baseline is not None:
+        head = apply_baseline(rows, reports, baseline, label)
+    elif no_baseline is not None:
+        head = {"none": no_baseline}
     verdict = "PASS" if rows and all(r["verdict"] == "PASS" for r in rows) else "FAIL"
     created = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
-    write_atomic(os.path.join(root, "index.json"),
-                 json.dumps({"verdict": verdict, "created": created, "scenes": rows}, indent=1)
-                 + "\n")
-    write_atomic(os.path.join(root, "index.html"), render_html(rows, verdict, created))
-    return rows, verdict
+    index = {"verdict": verdict, "created": created, "baseline": head, "scenes": rows}
+    write_atomic(os.path.join(root, "index.json"), json.dumps(index, indent=1) + "\n")
+    write_atomic(os.path.join(root, "index.html"), render_html(rows, verdict, created, head))
+    return rows, verdict, head
 
 
-def main():
+def parse_args(argv):
+    """The command line (argparse: exit 2 on an unknown option)."""
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("dir", help="campaign folder")
     p.add_argument("--scene", action="append", default=[],
                    help="a scene the folder should hold (repeat; default: see above)")
-    args = p.parse_args()
-    root = args.dir
-    if not os.path.isdir(root):
-        print(f"campaign_index: {root}: no such folder", file=sys.stderr)
-        return 2
-    rows, verdict = build(root, args.scene)
+    b = p.add_mutually_exclusive_group()
+    b.add_argument("--baseline", metavar="BASEDIR",
+                   help="an earlier campaign folder: list per scene what changed since")
+    b.add_argument("--no-baseline", metavar="REASON",
+                   help="no baseline, and why (the header says 'no baseline: REASON')")
+    p.add_argument("--baseline-label", metavar="TEXT",
+                   help="what the baseline is, for the header (default: BASEDIR)")
+    return p.parse_args(argv)
+
+
+def check_args(args):
+    """Raises UsageError on a missing folder or a label without a baseline."""
+    if not os.path.isdir(args.dir):
+        raise UsageError(f"{args.dir}: no such folder")
+    if args.baseline is not None and not os.path.isdir(args.baseline):
+        raise UsageError(f"--baseline {args.baseline}: no such folder")
+    if args.baseline_label is not None and args.baseline is None:
+        raise UsageError("--baseline-label needs --baseline")
+
+
+def print_rows(root, rows):
+    """One verdict line per scene."""
     for r in rows:
         if r["report"] and r["verdict"] == r["report_verdict"]:
             print(f"  {r['verdict']}  {os.path.join(root, r['report'])}")
@@ -282,6 +595,21 @@ def main():
                   + (f"; see {jobs}" if jobs else "") + (f" (+{more} more)" if more > 0 else ""))
     if not rows:
         print(f"  FAIL  no scene in {root}")
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    root = args.dir
+    try:
+        check_args(args)
+        rows, verdict, head = build(root, args.scene, args.baseline, args.baseline_label,
+                                    args.no_baseline)
+    except UsageError as e:
+        print(f"campaign_index: {e}", file=sys.stderr)
+        return 2
+    print_rows(root, rows)
+    if head is not None:
+        print(baseline_line(head))
     print(f"index: {os.path.join(root, 'index.html')}")
     return 0 if verdict == "PASS" else 1
 

@@ -164,13 +164,15 @@ def delta_outcome(a):
 def summary(res, a):
     """report.json's `glance` (see the module docstring)."""
     level = comparison_level(res, a) if _tools(res) else None
-    return {"level": level, "against": _against(a) if level is not None else None,
-            "rows": rows(res, a, level) if level is not None else [],
-            "delta": delta_outcome(a)}
+    g = {"level": level, "against": _against(a) if level is not None else None,
+         "rows": rows(res, a, level) if level is not None else [], "delta": delta_outcome(a)}
+    g["line"] = index_line(g)
+    return g
 
 
 def _g3(v):
-    return f"{v:.3g}"
+    """Three significant digits, without an exponent from 1e-3 to 1e5 (1280, not 1.28e+03)."""
+    return f"{v:.3g}" if not 1e3 <= abs(v) < 1e5 else f"{v:.0f}"
 
 
 def _f2(v):
@@ -179,7 +181,7 @@ def _f2(v):
 
 def ratio_text(r):
     """ρ as "2.4×" (three significant digits), "–" when unknown."""
-    return "–" if r is None else f"{r:.3g}×"
+    return "–" if r is None else f"{_g3(r)}×"
 
 
 def _span(values, fmt):
@@ -190,41 +192,81 @@ def _span(values, fmt):
     return lo if lo == hi else f"{lo}–{hi}"
 
 
-def reference_sentence(g):
-    """The first-screen sentence on sdcrack against the references, or None without them."""
-    if g["level"] is None or not g["rows"]:
-        return None
-    tools = [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
-    against = ("errors against the exact solution" if g["against"] == "exact" else
-               "distances to each reference's finest level")
-    own = {t: (f"{_span([r['refs'][t]['error'] for r in g['rows'] if t in r['refs']], _g3)}"
-               f" (rate {_span([r['refs'][t]['rate'] for r in g['rows'] if t in r['refs']], _f2)})")
-           for t in tools}
-    ref_part = (f"{own[tools[0]]}, " + " and ".join(REFERENCE_NAMES[t] for t in tools) + " alike"
-                if len(set(own.values())) == 1 and len(tools) > 1 else
-                "; ".join(f"{REFERENCE_NAMES[t]} {own[t]}" for t in tools))
-    groups = []
-    for name, sel in (("converging variants", lambda r: r["status"] == "converges"),
-                      ("declared expected failures", lambda r: r["status"] == "expected failure"),
-                      ("other variants", lambda r: r["status"] not in ("converges",
-                                                                       "expected failure"))):
-        chosen = [r for r in g["rows"] if sel(r)]
+# The status groups of the sentences, in their order: (name, statuses or None for the rest).
+GROUPS = (("converging variants", ("converges",)),
+          ("declared expected failures", ("expected failure",)),
+          ("other variants", None))
+
+
+def _tools_of(g):
+    return [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
+
+
+def groups(g):
+    """[(group name, rows, ratio text per tool (merged into one "… either reference" when the
+    tools read the same), rates span)] of the glance's rows, non-empty groups only."""
+    tools, taken, out = _tools_of(g), set(), []
+    for name, statuses in GROUPS:
+        chosen = [r for r in g["rows"] if (r["status"] in statuses if statuses
+                                           else r["status"] not in taken)]
+        taken.update(statuses or ())
         if not chosen:
             continue
         spans = [_span([r["refs"].get(t, {}).get("ratio") for r in chosen], _g3) for t in tools]
         per_tool = (f"{spans[0]}× either reference" if len(set(spans)) == 1 and len(spans) > 1
                     else " / ".join(f"{sp}×" for sp in spans))
-        rates = _span([r["rate"] for r in chosen], _f2)
-        groups.append(f"{name} ({len(chosen)}): {per_tool}, rates {rates}")
-    return (f"**sdcrack against {' and '.join(REFERENCE_NAMES[t] for t in tools)}** (u at level "
-            f"{g['level']}, {against}; ratio = sdcrack's ÷ "
-            f"{' / '.join(REFERENCE_NAMES[t] for t in tools)}'s): " + "; ".join(groups)
+        out.append((name, chosen, per_tool, _span([r["rate"] for r in chosen], _f2)))
+    return out
+
+
+def _own(g, t):
+    """A reference's own error and rate at the comparison level, as text."""
+    mine = [r["refs"][t] for r in g["rows"] if t in r["refs"]]
+    return (f"{_span([m['error'] for m in mine], _g3)} (rate "
+            f"{_span([m['rate'] for m in mine], _f2)})")
+
+
+def _names(tools, sep):
+    return sep.join(REFERENCE_NAMES[t] for t in tools)
+
+
+def reference_sentence(g):
+    """The first-screen sentence on sdcrack against the references, or None without them."""
+    if g["level"] is None or not g["rows"]:
+        return None
+    tools = _tools_of(g)
+    against = ("errors against the exact solution" if g["against"] == "exact" else
+               "distances to each reference's finest level")
+    own = {t: _own(g, t) for t in tools}
+    ref_part = (f"{own[tools[0]]}, {_names(tools, ' and ')} alike"
+                if len(set(own.values())) == 1 and len(tools) > 1 else
+                "; ".join(f"{REFERENCE_NAMES[t]} {own[t]}" for t in tools))
+    parts = [f"{name} ({len(rows)}): {per_tool}, rates {rates}"
+             for name, rows, per_tool, rates in groups(g)]
+    return (f"**sdcrack against {_names(tools, ' and ')}** (u at level {g['level']}, {against}; "
+            f"ratio = sdcrack's ÷ {_names(tools, ' / ')}'s): " + "; ".join(parts)
             + f". The references' own: {ref_part}.")
+
+
+def index_line(g):
+    """The campaign index's line (ci/campaign_index.py shows it as written): the ratios per
+    group at the comparison level, the rates on both sides, and the δ → 0 outcome."""
+    if g["level"] is None or not g["rows"]:
+        head = "no references"
+    else:
+        tools = _tools_of(g)
+        own = {t: _own(g, t) for t in tools}
+        ref_rates = " / ".join(sorted({own[t].split("(rate ")[1].rstrip(")") for t in tools}))
+        parts = [f"{name} {per_tool}" + (f" (rates {rates} vs {ref_rates})"
+                                         if name == "converging variants" else "")
+                 for name, _, per_tool, rates in groups(g)]
+        head = f"u at level {g['level']} ÷ {_names(tools, ', ')}: " + "; ".join(parts)
+    return f"{head}; δ → 0: {g['delta']['status']}"
 
 
 def extremes_sentence(g):
     """Which converging variant is closest to and farthest from the first reference."""
-    tools = [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
+    tools = _tools_of(g)
     conv = [r for r in g["rows"] if r["status"] == "converges"
             and (r["refs"].get(tools[0]) or {}).get("ratio") is not None] if tools else []
     if len(conv) < 2:

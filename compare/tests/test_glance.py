@@ -125,3 +125,18 @@ def test_reference_curves_carry_the_references_errors():
     assert [c["tool"] for c in u] == ["dolfinx", "freefem"]
     assert u[0]["h"] == H and u[0]["errors"] == [REF[(lv, "u_l2")] for lv in LEVELS]
     assert u[0]["label"] == "dolfinx: its error"
+
+
+def test_index_line_follows_the_data():
+    g = glance.summary(results(), analysis(good()))
+    assert g["line"] == ("u at level 4 ÷ dolfinx, FreeFEM: converging variants 1–2× either "
+                         "reference (rates 2.00 vs 2.00); declared expected failures 800× "
+                         "either reference; δ → 0: PASS")
+    s = good()
+    s[0]["errors"][-1] *= 3
+    checks = [("δ → 0", "slopes", ["a slope 0.5"], None)]
+    g = glance.summary(results(), analysis(s, checks=checks))
+    assert "converging variants 1–6× either reference (rates 0.42–2.00 vs 2.00)" in g["line"]
+    assert g["line"].endswith("; δ → 0: FAIL")
+    assert glance.summary(results(tools=()), analysis(good()))["line"] == \
+        "no references; δ → 0: PASS"

@@ -1,12 +1,15 @@
 """ci/render-field: ParaView's default reader walks δ, and the picture is drawn (pvpython).
 
-The rendering tests need ParaView (`pvpython`, Debian: paraview python3-paraview xvfb) and a results
+The rendering tests need ParaView (`pvpython`, Debian: paraview python3-paraview xvfb), an X
+server (a DISPLAY, or Xvfb, which `ci/setup --tests` installs where pvpython is) and a results
 folder in SDCRACK_RUN_DIR (ci/test runs the `mixed` scene at level 1 into one); they skip
-otherwise. They run ci/render-field on that folder and check: the PNG exists, has the requested
+otherwise, saying which is missing. They run ci/render-field on that folder and check: the PNG
+exists, has the requested
 size and is not one flat colour; the script's self-check passed, and what it saw agrees with
 summary.json and fields.h5 read here with h5py: one time step per δ of the series, at every step
 the u (and crack λ) range ParaView read is /cases/<fields_grid>/u's, the picture is the last step
-(smallest δ). The bad-input and no-ParaView paths run everywhere.
+(smallest δ). The bad-input, no-ParaView and no-X-server paths run everywhere (a fake pvpython,
+PATH without Xvfb), and so does ci/setup's choice of packages (on fake apt-get and dpkg-query).
 """
 
 import json
@@ -26,6 +29,25 @@ def pvpython():
     """The pvpython ci/render-field would use (PVPYTHON, else PATH), or None."""
     p = os.environ.get("PVPYTHON") or shutil.which("pvpython")
     return p if p and os.access(p, os.X_OK) else None
+
+
+def no_x_server(env=None):
+    """Why ci/render-field has no X server to render on (no DISPLAY, and no Xvfb on PATH to
+    start one), or None. Debian's ParaView renders through GLX only."""
+    env = os.environ if env is None else env
+    if env.get("DISPLAY") or shutil.which("Xvfb", path=env.get("PATH", "")):
+        return None
+    return ("pvpython present but no Xvfb and no DISPLAY: install xvfb (ci/setup --tests does "
+            "where pvpython is installed)")
+
+
+def need_paraview_and_x():
+    """Skips (with the reason) where ParaView or an X server for it is missing."""
+    if not pvpython():
+        pytest.skip("ParaView (pvpython) not installed")
+    reason = no_x_server()
+    if reason:
+        pytest.skip(reason)
 
 
 @pytest.fixture(scope="module")
@@ -76,8 +98,7 @@ def h5_range(run_dir, dataset):
 
 @pytest.mark.parametrize("which", ["default", "M0"])
 def test_render_field_walks_delta_and_draws_u(run_dir, summary, tmp_path, which):
-    if not pvpython():
-        pytest.skip("ParaView (pvpython) not installed")
+    need_paraview_and_x()
     series = default_series(summary)
     args = [run_dir]
     if which == "M0":  # λ per crack segment (Center="Cell")
@@ -99,7 +120,8 @@ def test_render_field_walks_delta_and_draws_u(run_dir, summary, tmp_path, which)
     # The self-check, against summary.json and fields.h5 read here.
     rep = json.loads(check.read_text())
     assert rep["self_check"] == "ok" and rep["series"] == series
-    cases = [c for c in summary["cases"] if c.get("fields_series") == f"fields/{series}.series.xdmf"]
+    cases = [c for c in summary["cases"]
+             if c.get("fields_series") == f"fields/{series}.series.xdmf"]
     assert len(cases) >= 2
     field, crack = rep["files"]
     assert field["reader"] == crack["reader"]  # ParaView's default for .xdmf (Xdmf3ReaderS)
@@ -141,6 +163,103 @@ def test_render_field_without_paraview_skips(run_dir, tmp_path):
     rc, out, err = render(run_dir, "--out", tmp_path / "u.png", env=env)
     assert (rc, out) == (0, "render-field: ParaView (pvpython) not installed; skipped\n"), err
     assert not (tmp_path / "u.png").exists()
+
+
+def tool_path(tmp_path, *tools):
+    """A PATH of one folder holding links to the named tools only (no Xvfb, no xvfb-run)."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir(exist_ok=True)
+    for t in tools:
+        (bin_dir / t).symlink_to(shutil.which(t))
+    return str(bin_dir)
+
+
+def fake_results(tmp_path):
+    """A results folder that passes ci/render-field's input check: fields.h5 (empty) and one
+    series of one step with u."""
+    d = tmp_path / "scene"
+    (d / "fields").mkdir(parents=True)
+    (d / "fields.h5").write_bytes(b"")
+    (d / "fields" / "level1-broken-M1.series.xdmf").write_text(
+        '<?xml version="1.0"?><Xdmf Version="3.0"><Domain>'
+        '<Grid Name="s" GridType="Collection" CollectionType="Temporal">'
+        '<Grid Name="c0"><Time Value="0"/><Information Name="delta" Value="0"/>'
+        '<Attribute Name="u" Center="Node"><DataItem>../fields.h5:/cases/c0/u</DataItem>'
+        "</Attribute></Grid></Grid></Domain></Xdmf>")
+    return d
+
+
+def test_without_x_server_the_paraview_tests_skip(tmp_path):
+    """PATH without Xvfb and no DISPLAY: the reason to skip; a DISPLAY or an Xvfb: none."""
+    path = tool_path(tmp_path, "bash")
+    assert no_x_server({"PATH": path}).startswith("pvpython present but no Xvfb and no DISPLAY: ")
+    assert no_x_server({"PATH": path, "DISPLAY": ":0"}) is None
+    xvfb = tmp_path / "xbin" / "Xvfb"
+    xvfb.parent.mkdir()
+    xvfb.write_text("#!/bin/sh\n")
+    xvfb.chmod(0o755)
+    assert no_x_server({"PATH": f"{path}:{xvfb.parent}"}) is None
+
+
+def test_render_field_without_x_server_is_one_line_exit_1(tmp_path):
+    """No DISPLAY, no Xvfb on PATH, and a pvpython that segfaults as Debian's does there: one line
+    saying to install xvfb, exit 1 (not 139)."""
+    fake = tmp_path / "pvpython"
+    fake.write_text("#!/bin/sh\nulimit -c 0\nkill -SEGV $$\n")  # no core file
+    fake.chmod(0o755)
+    path = tool_path(tmp_path, "bash", "python3", "dirname", "mktemp", "grep", "tail", "rm")
+    env = {"PATH": path, "PVPYTHON": str(fake), "TMPDIR": str(tmp_path), "HOME": str(tmp_path)}
+    rc, out, err = render(fake_results(tmp_path), "--out", tmp_path / "u.png", env=env)
+    assert rc == 1, out + err
+    assert out.startswith("render-field: no DISPLAY and no Xvfb, and pvpython was killed by "
+                          "signal 11 (SEGV): this ParaView needs an X server (install xvfb"), out
+    assert out.count("\n") == 1 and err == ""
+
+
+SETUP_FAKES = {
+    "dpkg-query": "exit 1",  # nothing installed: every package is listed for apt-get
+    "apt-get": 'echo "$*" >>"$HOME/apt.log"',
+    "sudo": 'exec "$@"',
+    "cargo": "exit 0",
+}
+
+
+def setup_installs(tmp_path, *args, pvpython=False):
+    """The packages a copy of ci/setup asks apt-get for, on fake dpkg-query, apt-get and cargo
+    (and a workflow venv that is already there); with pvpython=True a pvpython is on PATH."""
+    root = tmp_path / ("with-pv" if pvpython else "without-pv")
+    (root / "ci").mkdir(parents=True)
+    text = (ROOT / "ci" / "setup").read_text()
+    (root / "ci" / "setup").write_text(text)
+    (root / "ci" / "setup").chmod(0o755)
+    version = next(line.split("=", 1)[1] for line in text.splitlines()
+                   if line.startswith("SNAKEMAKE_VERSION="))
+    fakes = dict(SETUP_FAKES, snakemake=f"echo {version}")
+    if pvpython:
+        fakes["pvpython"] = "exit 0"
+    path = tool_path(root, "bash", "grep", "id", "dirname")
+    for name, body in fakes.items():
+        f = pathlib.Path(path) / name
+        f.write_text(f"#!/bin/sh\n{body}\n")
+        f.chmod(0o755)
+    (root / ".venv-workflow" / "bin").mkdir(parents=True)
+    (root / ".venv-workflow" / "bin" / "snakemake").symlink_to(pathlib.Path(path) / "snakemake")
+    p = subprocess.run([str(root / "ci" / "setup"), *args], capture_output=True, text=True,
+                       timeout=60, env={"PATH": path, "HOME": str(root)})
+    assert p.returncode == 0, p.stdout + p.stderr
+    (install,) = [line.split()[3:] for line in (root / "apt.log").read_text().splitlines()
+                  if line.startswith("install")]
+    return install
+
+
+def test_setup_tests_installs_xvfb_where_paraview_is(tmp_path):
+    """ci/setup --tests adds xvfb where pvpython is installed, not elsewhere, and plain ci/setup
+    neither Chromium nor xvfb."""
+    assert "xvfb" in setup_installs(tmp_path, "--tests", pvpython=True)
+    without = setup_installs(tmp_path, "--tests")
+    assert "chromium" in without and "xvfb" not in without
+    plain = setup_installs(tmp_path / "plain", pvpython=True)
+    assert "xvfb" not in plain and "chromium" not in plain and "gmsh" in plain
 
 
 PV_OPEN = r"""

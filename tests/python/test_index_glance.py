@@ -1,0 +1,56 @@
+"""ci/campaign_index.py's line per scene on sdcrack's errors against the references' (the
+report's `glance`, written by sdcompare_lib/glance.py, whose tests make the line's numbers
+false: compare/tests/test_glance.py): the index shows the report's line as written, and says
+why when a report has none; from hand-made report.json files."""
+
+import json
+import pathlib
+import subprocess
+import sys
+
+import ci_script
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+ci = ci_script.load("ci/campaign_index.py")
+LINE = ("u at level 4 ÷ dolfinx, FreeFEM: converging variants 0.98–2.4× either reference "
+        "(rates 0.77–2.20 vs 2.12); declared expected failures 95× either reference; δ → 0: PASS")
+
+
+def glance_report(line=LINE):
+    return {"verdict": "PASS", "series": [], "references": [{"tool": "dolfinx"}],
+            "glance": {"level": 4, "against": "exact", "rows": [], "line": line,
+                       "delta": {"status": "PASS", "text": "every δ-sweep tends to δ = 0"}}}
+
+
+def test_the_line_is_the_reports():
+    g = ci.glance(glance_report())
+    assert g["line"] == LINE
+    assert (g["level"], g["against"], g["delta"]["status"]) == (4, "exact", "PASS")
+    assert ci.glance(glance_report("another line"))["line"] == "another line"
+
+
+def test_without_glance_or_references():
+    """Old reports (no glance, or a glance without its line) and scenes without references say
+    so in a few words."""
+    assert ci.glance({"series": []})["line"] == "no references"
+    assert ci.glance({"series": [], "references": [{"tool": "dolfinx"}]})["line"] == \
+        "no error ratios (a report from before the glance)"
+    old = glance_report()
+    del old["glance"]["line"]
+    assert ci.glance(old)["line"] == "no error ratios (a report from before the glance)"
+
+
+def test_index_shows_the_line(tmp_path):
+    """index.json and index.html carry the line; a scene without a glance reads "no
+    references"."""
+    for name, rep in (("a", glance_report()), ("b", {"verdict": "PASS", "series": []})):
+        (tmp_path / name / "report").mkdir(parents=True)
+        (tmp_path / name / "report" / "report.json").write_text(json.dumps(rep))
+    r = subprocess.run([sys.executable, str(ROOT / "ci" / "campaign_index.py"), str(tmp_path)],
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    rows = {s["name"]: s for s in json.loads((tmp_path / "index.json").read_text())["scenes"]}
+    assert rows["a"]["glance"]["line"] == LINE and rows["b"]["glance"]["line"] == "no references"
+    page = (tmp_path / "index.html").read_text()
+    assert ('title="errors against the exact solution; every δ-sweep tends to δ = 0">'
+            + LINE.replace("×", "×") + "</td>") in page
