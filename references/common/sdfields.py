@@ -7,7 +7,12 @@ ParaView, meshio and the compare tool read solver and references alike.
                 vertices (vertex_gradient) in both references
                 /cases/level{L}/crack/points (I,3)  /crack/segments (S,2)  /crack/<crack field> (I,)
                 (the crack nodes of every crack in crack.txt's row order; segments: the row pairs
-                [k, k+1] within each crack, none joining two cracks, S = I − number of cracks)
+                [k, k+1] within each crack, none joining two cracks, S = I − number of cracks); the
+                references' crack fields: `jump` = u⁺ − u⁻ (crack.txt's plus minus minus row) and
+                `contact_force` = the nodal multiplier λ_j ≥ 0 of the QP (0 off the active set and
+                at the tips), a name per quantity shared with the solver's files (README's field
+                table); files written before issue 34 call the contact force `multiplier`, which
+                crack_field() still reads
                 every dataset has the attributes "level" (int), "tool" (str) and, when the caller
                 gives it, "h" (float, the level's mesh size); the file has the attribute "tool"
     fields/level{L}.xdmf         XDMF 3, the Triangle grid "level{L}" with the point fields
@@ -24,6 +29,23 @@ as one grey square in ParaView and meshio.read could not read it.
 """
 
 import numpy as np
+
+# Old names of crack fields, by current name: what files written before issue 34 call them (the
+# references' contact force was `multiplier`, a name that sdcrack's files use for the multiplier
+# space M0 / M1 / M1star of a case).
+OLD_NAMES = {"contact_force": ("multiplier",)}
+
+
+def crack_field(fields, name):
+    """The crack field `name` (an np.ndarray) of `fields`: an h5py crack group
+    (/cases/level{L}/crack), meshio's point_data of a .crack.xdmf, or any mapping of names to arrays;
+    under its current name, else under an old one of OLD_NAMES (a file written before the rename).
+    KeyError naming every name tried when it has none of them."""
+    tried = (name,) + OLD_NAMES.get(name, ())
+    for key in tried:
+        if key in fields:
+            return np.asarray(fields[key][()])
+    raise KeyError(f"no crack field {' or '.join(map(repr, tried))} (have {', '.join(sorted(fields))})")
 
 
 def vertex_gradient(xy, tri, u):

@@ -57,8 +57,9 @@ processes: a start-up cost, not part of assembly), "total"}, "errors" (exact sce
 OUT/u_level{L}.txt (u at the cracked vertices in the export's numbering, %.17g, for cross-checks with
 the FreeFEM reference) and with --fields OUT/fields.h5 + OUT/fields/level{L}.xdmf (the grid "level{L}"
 with u, and u_exact when the scene has one: at a crack copy exact.u on its face, see side_points) +
-OUT/fields/level{L}.crack.xdmf (jump, multiplier; the cracks as polylines, segments within each crack)
-(references/common/sdfields.py).  OUT is written atomically (temporary folder, then rename); an
+OUT/fields/level{L}.crack.xdmf (the cracks as polylines, segments within each crack; the crack fields
+`jump` = u⁺ − u⁻ and `contact_force` = the nodal multipliers λ_j, 0 off the active set and at the tips,
+named as in every solver's files: references/common/sdfields.py, README's field table).  OUT is written atomically (temporary folder, then rename); an
 existing OUT is an error unless --overwrite.  Errors: one line on stderr; exit status 2 for an
 unsupported dolfinx and for an invalid scene (scene.json malformed, an expression outside the grammar
 of references/common/sdexpr.py: no scene text is ever evaluated as code), 1 for any other failure.
@@ -353,7 +354,7 @@ def solve_level(scene, lv, trees, want_fields, quadrature=None):
     mult = np.zeros(len(crack))
     mult[interior] = lam
     fields = {"xy": xy, "tri": tri, "crack": crack, "segments": layout.segments(), "u": u, "jump": jump,
-              "multiplier": mult}
+              "contact_force": mult}
     if trees.get("exact_u") is not None:
         case["errors"] = exact_errors(mesh, uh, dof_of, inp, xy, layout, jump, trees, quadrature)
         if want_fields:
@@ -654,7 +655,7 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
                     "xy": fs["xy"], "tri": fs["tri"], "crack": fs["crack"], "segments": fs["segments"],
                     "point": point,
                     "h": case["h"] if math.isfinite(case["h"]) else None,
-                    "crack_fields": {"jump": fs["jump"], "multiplier": fs["multiplier"]}}))
+                    "crack_fields": {"jump": fs["jump"], "contact_force": fs["contact_force"]}}))
         if fields:
             sdfields.write_fields(tmp, field_sets, "dolfinx")
         summary = sdresults.write_summary(tmp, scene["name"], "dolfinx", cases, tool_version=dolfinx.__version__)

@@ -35,8 +35,9 @@ summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h"
     (over the segments within each crack), ∇u from exact.px/py, else sdexpr's symbolic derivative of
     exact.u; [u] from exact.jump, else u on each face of a segment by the signed-zero rule of
     eval_on_face (src/scene/mod.rs) with the segment's normal.
-With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf + level{L}.crack.xdmf
-(references/common/sdfields.py).
+With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf (u, p) + level{L}.crack.xdmf
+(`jump` = u⁺ − u⁻ and `contact_force` = the nodal multipliers λ_j, 0 off the active set and at the
+tips; references/common/sdfields.py, README's field table).
 OUT is written atomically (a temporary folder, then one rename); an existing OUT is an error unless
 --overwrite is given. Every failure is one line on stderr: exit status 2 for an invalid scene
 (scene.json malformed, an expression outside the grammar of references/common/sdexpr.py: no scene
@@ -496,7 +497,7 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
                 case["errors"] = exact_errors(lv, u, exact)
             case["timings_s"] = {"freefem": t_ff, "total": time.perf_counter() - t0}
             cases.append(case)
-            if fields:  # multipliers at the crack nodes (crack.txt's rows; 0 at the tips)
+            if fields:  # contact forces (the multipliers) at the crack nodes (crack.txt's rows; 0 at the tips)
                 crack = lv["crack"]
                 lam_nodes = np.zeros(len(crack))
                 lam_nodes[lv["layout"].interior()] = lam
@@ -504,7 +505,7 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
                     "xy": lv["xy"], "tri": lv["tri"], "crack": crack, "segments": lv["layout"].segments(),
                     "h": lv["meta"]["h"],
                     "point": {"u": u, "p": sdfields.vertex_gradient(lv["xy"], lv["tri"], u)},
-                    "crack_fields": {"jump": u[crack[:, 0]] - u[crack[:, 1]], "multiplier": lam_nodes}}))
+                    "crack_fields": {"jump": u[crack[:, 0]] - u[crack[:, 1]], "contact_force": lam_nodes}}))
             if not keep_work:
                 shutil.rmtree(work)
         if fields:

@@ -12,7 +12,11 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
+import sdfields  # noqa: E402
 import sdresults  # noqa: E402
+
+# The references' crack fields, named as in every solver's files (README's field table).
+CRACK_FIELDS = {"jump", "contact_force"}
 
 
 def load_module(name, path):
@@ -47,8 +51,8 @@ def assert_provenance(summary, tool, script=None):
 
 def assert_fields_readable(out, export, summary, tool):
     """Every *.xdmf under `out` is read by meshio.read: the per-level grid has finite point data of
-    the mesh's length (u among them), the crack grid finite jump and multiplier (the nodal λ) of the
-    cracks' length and one line per segment within a crack (cracks.txt; absent: one crack); there is
+    the mesh's length (u among them), the crack grid finite CRACK_FIELDS (jump = u⁺ − u⁻ and
+    contact_force = the nodal λ ≥ 0, 0 at the tips; not under its old name multiplier) of the cracks' length and one line per segment within a crack (cracks.txt; absent: one crack); there is
     no top-level fields.xdmf; fields.h5's datasets carry level, h, tool."""
     import h5py
     import meshio
@@ -71,7 +75,13 @@ def assert_fields_readable(out, export, summary, tool):
             assert [(b.type, len(b.data)) for b in m.cells] == [("line", n - len(ranges))]
             within = {(k, k + 1) for first, c in ranges for k in range(first, first + c - 1)}
             assert {tuple(map(int, s)) for s in m.cells[0].data} == within, rel
-            assert {"jump", "multiplier"} <= set(m.point_data), rel
+            assert CRACK_FIELDS <= set(m.point_data) and "multiplier" not in m.point_data, rel
+            pairs = np.asarray(crack)
+            u = np.loadtxt(out / f"u_level{L}.txt")
+            np.testing.assert_array_equal(m.point_data["jump"], u[pairs[:, 0]] - u[pairs[:, 1]])
+            force = sdfields.crack_field(m.point_data, "contact_force")
+            assert force.min() >= -1e-10 * max(1.0, force.max()), rel  # λ ≥ 0 (KKT_TOLERANCE)
+            assert (force[pairs[:, 0] == pairs[:, 1]] == 0).all(), rel  # 0 at the tips
         else:
             tri = np.loadtxt(export / f"level{L}" / "triangles.txt", dtype=np.int64, ndmin=2)
             assert n == levels[L]["unknowns"]

@@ -20,6 +20,7 @@ SOLVE = HERE.parent / "freefem" / "solve.py"
 sys.path.insert(0, str(HERE))
 from fake_export import write_fake_export  # noqa: E402
 from output_checks import assert_fields_readable, assert_provenance  # noqa: E402
+from sdfields import crack_field  # noqa: E402  (output_checks put references/common on the path)
 
 _spec = importlib.util.spec_from_file_location("freefem_solve", SOLVE)
 ffsolve = importlib.util.module_from_spec(_spec)
@@ -240,7 +241,8 @@ def test_fields_written(tmp_path):
     with h5py.File(tmp_path / "o" / "fields.h5") as f:
         u = f["cases/level1/u"][:]
         assert np.array_equal(u, np.loadtxt(tmp_path / "o" / "u_level1.txt"))
-        lam = f["cases/level1/crack/multiplier"][:]
+        lam = crack_field(f["cases/level1/crack"], "contact_force")
+        assert "multiplier" not in f["cases/level1/crack"]  # the old name of files before issue 34
         assert lam[0] == 0 and lam[-1] == 0 and lam.min() >= 0 and lam.max() > 0
         jump = f["cases/level1/crack/jump"][:]
         assert jump.min() >= -1e-12 and np.all(np.abs(jump * lam) < 1e-10)
@@ -248,4 +250,4 @@ def test_fields_written(tmp_path):
     m = meshio.read(tmp_path / "o" / "fields" / "level1.xdmf")
     assert np.array_equal(m.point_data["u"], u) and m.point_data["p"].shape == (len(u), 3)
     c = meshio.read(tmp_path / "o" / "fields" / "level1.crack.xdmf")
-    assert np.array_equal(c.point_data["multiplier"], lam)
+    assert np.array_equal(c.point_data["contact_force"], lam)

@@ -42,12 +42,14 @@
 //! /cases/CASE/crack/points         f64 (N_c, 3) crack nodes, z = 0 (all cracks, concatenated)
 //! /cases/CASE/crack/segments       i64 (I, 2)  the crack segments [k, k+1], within each crack
 //! /cases/CASE/crack/lambda         f64 (N_c,) per node or (I,) per segment, optional
+//! /cases/CASE/crack/jump           f64 (N_c,)  per node, optional: [u_h] = u⁺ − u⁻ (see
+//!                                              [`CaseFields::jump`])
 //! /cases/CASE/NAME                 f64 (N,)    a constant field of [`CaseFields::constants`]
 //! /cases/CASE/crack/NAME           f64 (I+1,)  the same on the crack nodes
 //! ```
 //!
 //! The group `/cases/CASE` and every field dataset in it (`u`, `p`, `p_bubble`, `crack/lambda`,
-//! the constants) carry the case's [`CaseFields::metadata`] as HDF5 attributes (the solver's:
+//! `crack/jump`, the constants) carry the case's [`CaseFields::metadata`] as HDF5 attributes (the solver's:
 //! `level`, `h`, `u_space`, `multiplier`, `p_mass`, `delta`), plus `series` (text) and `step` (integer).
 //! The solver's only constant field is `delta`: ParaView ignores XDMF `Information` and shows no
 //! step names, so δ is also a point attribute whose value (its range in the information panel, or
@@ -55,8 +57,8 @@
 //! point data. (A `Center="Grid"` attribute would cost one number, but meshio rejects it.)
 //!
 //! Each mesh is stored once, however many cases use it; only meshes used by at least one case are
-//! written. A case whose `crack_points` is empty (and has no `lambda`) has no `crack` group and no
-//! crack grid. Data are stored contiguously, uncompressed.
+//! written. A case whose `crack_points` is empty (and has no `lambda` or `jump`) has no `crack`
+//! group and no crack grid. Data are stored contiguously, uncompressed.
 //!
 //! # XDMF series (`STEM/SERIES.series.xdmf`, `STEM/SERIES.crack.series.xdmf`)
 //!
@@ -73,7 +75,8 @@
 //! ```
 //!
 //! The crack file has the same shape with Polyline topology (`NodesPerElement="2"`) and the
-//! attributes `lambda` (Scalar, `Center="Node"` or `"Cell"`) and `delta` (Scalar, Node). All `DataItem`s are `Format="HDF"`
+//! attributes `lambda` (Scalar, `Center="Node"` or `"Cell"`), `jump` (Scalar, Node) and `delta`
+//! (Scalar, Node). All `DataItem`s are `Format="HDF"`
 //! and name the heavy file relative to the XDMF file (`../STEM.h5:/cases/CASE/u`); the steps of
 //! a series point at the same `/meshes/KEY/...` datasets.
 //!
@@ -168,8 +171,13 @@ pub struct CaseFields {
     pub crack_points: Vec<[f64; 2]>,
     /// Crack segments as pairs of indices into `crack_points` (within one crack; `I` of them).
     pub crack_segments: Vec<[usize; 2]>,
-    /// Contact multiplier on the crack, per node or per segment.
+    /// The multiplier λ_h of the smooth-domain method on the crack, per node or per segment
+    /// (it approximates the jump [u]).
     pub lambda: Option<(Centering, Vec<f64>)>,
+    /// [u_h] = u⁺ − u⁻ of the case's own u at each crack node (`crack_points`' order), + the face
+    /// the crack normal ν (the segment direction turned by +90°) points into: the references'
+    /// `jump`. Zero at the tips and, for the continuous u space, everywhere.
+    pub jump: Option<Vec<f64>>,
     /// Name of the series the case is a step of (see the module documentation): the cases of
     /// one series share one mesh and one crack, and are its steps in the order given.
     pub series: String,
@@ -182,7 +190,9 @@ pub struct CaseFields {
 }
 
 /// Dataset names of a case group that a constant field must not take.
-const RESERVED: [&str; 7] = ["u", "p", "p_bubble", "mesh", "crack", "points", "segments"];
+const RESERVED: [&str; 9] = [
+    "u", "p", "p_bubble", "mesh", "crack", "points", "segments", "lambda", "jump",
+];
 
 /// A metadata value of a case.
 #[derive(Clone, Debug, PartialEq)]
@@ -555,7 +565,7 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
             check_finite(b, || format!("case {name:?}: field p_bubble"))?;
         }
         let nc = case.crack_points.len();
-        if nc == 1 || (nc == 0 && case.lambda.is_some()) {
+        if nc == 1 || (nc == 0 && (case.lambda.is_some() || case.jump.is_some())) {
             return Err(OutputError::Invalid(format!(
                 "case {name:?}: the crack polyline has {nc} points, at least 2 are needed"
             )));
@@ -582,6 +592,15 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
                 )));
             }
             check_finite_scalar(lambda, || format!("case {name:?}: field lambda"))?;
+        }
+        if let Some(jump) = &case.jump {
+            if jump.len() != nc {
+                return Err(OutputError::Invalid(format!(
+                    "case {name:?}: field jump has {} values, the crack has {nc} crack nodes",
+                    jump.len()
+                )));
+            }
+            check_finite_scalar(jump, || format!("case {name:?}: field jump"))?;
         }
     }
     let series = group_series(cases, &case_mesh)?;
@@ -764,6 +783,10 @@ fn write_h5(
                     write_i64(&gk, "segments", &segs, vec![ns, 2])?;
                     if let Some((_, lambda)) = &case.lambda {
                         let ds = write_f64(&gk, "lambda", lambda, vec![lambda.len()])?;
+                        write_attrs(&ds, &meta)?;
+                    }
+                    if let Some(jump) = &case.jump {
+                        let ds = write_f64(&gk, "jump", jump, vec![n])?;
                         write_attrs(&ds, &meta)?;
                     }
                     for (name, value) in &case.constants {
@@ -977,6 +1000,10 @@ fn crack_grid_xml(h5: &str, case: &CaseFields, k: Option<usize>, indent: &str) -
         let item = data_item(&i3, h5, &format!("{kp}/lambda"), &[lambda.len()], false);
         s.push_str(&attribute(&i2, "lambda", "Scalar", center, item));
     }
+    if case.jump.is_some() {
+        let item = data_item(&i3, h5, &format!("{kp}/jump"), &[n], false);
+        s.push_str(&attribute(&i2, "jump", "Scalar", "Node", item));
+    }
     s.push_str(&constant_attributes(&i2, h5, &kp, n, case));
     s.push_str(&format!("{indent}</Grid>\n"));
     s
@@ -1010,7 +1037,8 @@ mod tests {
     }
 
     /// u = s(x + 2y), p = s(xy, x − y), crack on y = 1/2 from x = 1/4 to 3/4 with `ni` segments,
-    /// lambda = s·k per node or s·(k + 1/2) per segment; metadata δ = `delta`, level = `ni − 1`.
+    /// lambda = s·k per node or s·(k + 1/2) per segment, and with it jump = s·(ni − k) per node;
+    /// metadata δ = `delta`, level = `ni − 1`.
     #[allow(clippy::too_many_arguments)]
     fn case(
         name: &str,
@@ -1051,6 +1079,7 @@ mod tests {
                 Centering::Node => (c, (0..=ni).map(|k| s * k as f64).collect()),
                 Centering::Cell => (c, (0..ni).map(|k| s * (k as f64 + 0.5)).collect()),
             }),
+            jump: lambda.map(|_| (0..=ni).map(|k| s * (ni - k) as f64).collect()),
             series: series.to_string(),
             metadata: vec![
                 ("level".into(), Meta::Int(ni as i64 - 1)),
@@ -1183,6 +1212,14 @@ mod tests {
                 }
                 None => assert!(!g.link_exists("crack/lambda")),
             }
+            match &c.jump {
+                Some(j) => {
+                    let ds = g.dataset("crack/jump").unwrap();
+                    assert_eq!(ds.shape(), [ni + 1]);
+                    assert_eq!(&ds.read_raw::<f64>().unwrap(), j);
+                }
+                None => assert!(!g.link_exists("crack/jump")),
+            }
         }
 
         // Attributes on the case group and its field datasets.
@@ -1191,6 +1228,7 @@ mod tests {
             g.dataset("u").unwrap().as_location().unwrap(),
             g.dataset("p").unwrap().as_location().unwrap(),
             g.dataset("crack/lambda").unwrap().as_location().unwrap(),
+            g.dataset("crack/jump").unwrap().as_location().unwrap(),
             g.as_location().unwrap(),
         ] {
             assert_eq!(
@@ -1218,7 +1256,13 @@ mod tests {
         assert!(xdmf.find("<Time Value=\"0\"/>") < xdmf.find("<Time Value=\"1\"/>"));
         assert!(xdmf.contains("<Information Name=\"delta\" Value=\"1e-2\"/>"));
         assert!(xdmf.contains("<Information Name=\"delta\" Value=\"0\"/>"));
+        let crack = fs::read_to_string(dir.join("fields/level1-P1-P0-delta0.crack.xdmf")).unwrap();
+        assert!(
+            crack.contains("<Attribute Name=\"jump\" AttributeType=\"Scalar\" Center=\"Node\">")
+        );
+        assert!(crack.contains(">../fields.h5:/cases/level1-P1-P0-delta0/crack/jump<"));
         let odd = fs::read_to_string(dir.join(format!("fields/{ODD}.crack.series.xdmf"))).unwrap();
+        assert!(!odd.contains("jump"));
         assert!(odd.contains("Name=\"odd &lt;&amp;&gt;&quot;&apos; name/crack\""));
         // one state per case: a single grid, no Time, no Information, the same data items
         let state = fs::read_to_string(dir.join("fields/level1-P1-P0-delta0.xdmf")).unwrap();
@@ -1467,6 +1511,18 @@ mod tests {
         expect_invalid(&m, &cc, &[case0, "field lambda", "value 1"]);
 
         let mut cc = c.clone();
+        cc[0].jump = Some(vec![0.0; 2]);
+        expect_invalid(&m, &cc, &[case0, "field jump", "3 crack nodes"]);
+
+        let mut cc = c.clone();
+        cc[1].jump.as_mut().unwrap()[4] = f64::NEG_INFINITY;
+        expect_invalid(&m, &cc, &["field jump", "value 4"]);
+
+        let mut cc = c.clone();
+        cc[0].constants = vec![("jump".into(), 1.0)];
+        expect_invalid(&m, &cc, &[case0, "constant field \"jump\""]);
+
+        let mut cc = c.clone();
         cc[3].crack_points.truncate(1);
         expect_invalid(&m, &cc, &["odd <&>", "crack polyline"]);
 
@@ -1533,10 +1589,17 @@ mod tests {
             crack_points: vec![],
             crack_segments: vec![],
             lambda: None,
+            jump: None,
             series: "bare".into(),
             metadata: vec![],
             constants: vec![],
         };
+        let no_crack = CaseFields {
+            jump: Some(vec![]),
+            ..c.clone()
+        };
+        let e = write_fields(tmp.path(), "out", std::slice::from_ref(&m), &[no_crack]).unwrap_err();
+        assert!(e.to_string().contains("crack polyline has 0 points"), "{e}");
         write_fields(tmp.path(), "out", &[m], &[c]).unwrap();
         assert_eq!(
             listing(&tmp.path().join("out")),

@@ -14,7 +14,7 @@ from the fixture's definition (keep in sync with the Rust test):
   triangles per square [a, a+1, a+n+2], [a, a+n+2, a+n+1], a = j(n+1)+i;
 * u = s(x + 2y), p = s(xy, x - y) (written with z = 0);
 * crack: I = n segments on y = 1/2 from x = 1/4 to 3/4; lambda = s*k per node or s*(k + 1/2) per
-  segment;
+  segment, and with lambda jump = s*(n - k) per node (the crack field [u_h] = u+ - u-);
 * series (one XDMF temporal collection each, steps in this order): "level1-P1-P0" = the cases
   delta 1e-2 (s = 1) then delta 0 (s = 4); "level2-P1-P1" = delta 1.5e-2 (s = 2); ODD (s = 3, no
   p, no lambda).
@@ -83,10 +83,19 @@ def expected(name):
         lam = s * k.astype(float)
     elif centering == "Cell":
         lam = s * (np.arange(n) + 0.5)
+    jump = None if centering is None else s * (n - k).astype(float)
     return dict(
         series=series, delta=delta, level=n - 1, key=key, pts=pts, tris=tris,
-        point_data=point_data, crack=crack, segs=segs, centering=centering, lam=lam,
+        point_data=point_data, crack=crack, segs=segs, centering=centering, lam=lam, jump=jump,
     )
+
+
+def check_jump(point_data, e):
+    """The crack's point field `jump` (per node, always Center="Node"), removed from point_data."""
+    if e["jump"] is None:
+        assert "jump" not in point_data
+    else:
+        np.testing.assert_allclose(point_data.pop("jump"), e["jump"], rtol=1e-15)
 
 
 def test_only_series_and_state_files_no_spatial_collection(folder):
@@ -133,6 +142,7 @@ def test_meshio_time_series_reads_crack_series(folder, series):
             assert t == k
             # δ as a constant point field on the crack too (ParaView shows no Information)
             np.testing.assert_array_equal(point_data.pop("delta"), np.full(len(points), e["delta"]))
+            check_jump(point_data, e)
             if e["centering"] == "Node":
                 np.testing.assert_allclose(point_data["lambda"], e["lam"], rtol=1e-15)
                 assert not cell_data
@@ -197,6 +207,7 @@ def test_meshio_read_reads_each_state(folder, case):
         np.testing.assert_allclose(m.point_data[key], v, rtol=1e-15, atol=1e-15)
     np.testing.assert_allclose(c.points, e["crack"], rtol=0, atol=1e-15)
     np.testing.assert_array_equal(c.cells_dict["line"], e["segs"])
+    check_jump(dict(c.point_data), e)
     if e["centering"] == "Node":
         np.testing.assert_allclose(c.point_data["lambda"], e["lam"], rtol=1e-15)
     elif e["centering"] == "Cell":
@@ -220,9 +231,14 @@ def test_h5_data_and_attributes(folder):
                 assert "lambda" not in g["crack"]
             else:
                 np.testing.assert_allclose(g["crack/lambda"][()], e["lam"], rtol=1e-15)
+            if e["jump"] is None:
+                assert "jump" not in g["crack"]
+            else:
+                np.testing.assert_allclose(g["crack/jump"][()], e["jump"], rtol=1e-15)
             np.testing.assert_array_equal(g["delta"][()], np.full(len(e["pts"]), e["delta"]))
             np.testing.assert_array_equal(g["crack/delta"][()], np.full(len(e["crack"]), e["delta"]))
-            fields = [g] + [g[k] for k in ("u", "p", "p_bubble", "crack/lambda", "delta", "crack/delta")
+            fields = [g] + [g[k] for k in ("u", "p", "p_bubble", "crack/lambda", "crack/jump", "delta",
+                                                    "crack/delta")
                             if k in g]
             for obj in fields:
                 a = obj.attrs
