@@ -1,18 +1,51 @@
-"""PNG plots (matplotlib, Agg backend). Each function returns the file name written or None."""
+"""PNG plots (matplotlib, Agg backend). Each function returns the file name written or None.
+
+Sizes: a figure is at most MAX_COLS × PANEL_W = 11.2 inches (1120 px) wide; the page shows it at
+that width in a 1280 px window and about 772 px wide in an 800 px one (the page's body less its
+padding). Its smallest text, a mathtext sub- or superscript of a MATH_PT text (SCRIPT × 14 =
+9.8 pt, 13.6 px), is then 13.6 and 9.4 CSS px; plain text is MIN_PT; tick labels are plain text
+(1e-3, as the report writes numbers), never 10 with a small exponent. Each PNG carries its
+smallest text in its own pixels (render.MIN_FONT_KEY, a PNG text chunk) for the page that shows
+it (render._img)."""
+import math
 import os
+import textwrap
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
+from matplotlib.text import Text  # noqa: E402
+from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter  # noqa: E402
 
-from .read import p_mass, p_space, variant_label, variant_of, variant_order  # noqa: E402
-from .render import fmt_delta  # noqa: E402
+from .read import (DEFAULT_P_MASS, p_mass, p_space, p_space_tag, variant_label,  # noqa: E402
+                   variant_of, variant_order)
+from .render import MIN_FONT_KEY, REFERENCE_NAMES, fmt_delta  # noqa: E402
 
-QLABEL = {"u_l2": "‖u_h−u‖_L²", "p_l2": "‖p_h−∇u‖_L²", "p_x": "‖p_h−∇u‖_X", "lambda_l2": "‖λ_h−[u]‖_L²(Γc)"}
+DPI = 100
+PANEL_W, PANEL_H = 2.8, 2.35  # one panel with its title and tick labels [inches]
+TITLE_H = 0.45  # the figure's title [inches]
+MAX_COLS = 4  # panels per row
+MIN_PT = 10.5  # plain text: ticks, legend, notes, axis labels without scripts
+SCRIPT = 0.7  # mathtext's size of a sub- or superscript, relative to its text
+MATH_PT = 14  # a text with sub- or superscripts: its scripts 9.8 pt
+RC = {"figure.dpi": DPI, "savefig.dpi": DPI, "font.size": MIN_PT, "xtick.labelsize": MIN_PT,
+      "ytick.labelsize": MIN_PT, "legend.fontsize": MIN_PT, "axes.labelsize": MATH_PT,
+      "axes.titlesize": MATH_PT, "figure.titlesize": MATH_PT, "legend.handlelength": 2.4,
+      "legend.columnspacing": 1.2, "legend.labelspacing": 0.35, "legend.borderpad": 0.2,
+      # a minor tick's label as far from the axis as a major one's (3.5 + 3.5 = 2 + 5)
+      "xtick.minor.pad": 5.0, "ytick.minor.pad": 5.0}
+
+QLABEL = {"u_l2": "$‖u_h - u‖_{L²}$", "p_l2": "$‖p_h - ∇u‖_{L²}$", "p_x": "$‖p_h - ∇u‖_X$",
+          "lambda_l2": "$‖λ_h - [u]‖_{L²(Γc)}$"}
 # one spelling per symbol in every plot: λ, never "lambda"
 SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p", "lambda_l2": "λ"}
+# the parts of a variant, as a note under a figure names them
+PARTS = ("u space", "multiplier", "p mass", "p space")
+# a panel as a note under the figure names it (a no-break space: never wrapped inside)
+PANEL_NAME = {"u_l2": "u", "p_l2": "p\u00a0(L²)", "p_x": "p\u00a0(X)", "lambda_l2": "λ"}
+# the mesh parameter of the series (read.py's "h" or "N^-1/2") as the axes write it
+MESH_NAME = {"h": "h", "N^-1/2": "$N^{-1/2}$"}
 STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
 # colour per (u space, p mass, p space): each combination its own hue, so consistent and lumped,
@@ -31,6 +64,8 @@ REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "ma
                          "label": "reference dolfinx"},
              "freefem": {"marker": "D", "linestyle": ":", "color": "tab:gray", "markersize": 6,
                          "markerfacecolor": "none", "label": "reference FreeFEM"}}
+# A reference curve of the h → 0 plot is drawn thicker and over the solver's (up to 18) lines.
+REF_LINE = {"linewidth": 2.0, "zorder": 4}
 # Two lines whose points all agree to this relative distance (on a log axis) look like one line.
 OVERLAP_REL = 0.02
 # line style per (p mass, p space): solid consistent, dashed lumped; the broken-tangential p
@@ -40,6 +75,17 @@ PM_STYLE = {("consistent", "continuous"): "-", ("lumped", "continuous"): "--",
             ("lumped", "broken-tangential"): (0, (6, 2, 1, 2, 1, 2))}
 # a series that does not converge is drawn pale (its status is in the tables)
 PALE = 0.35
+# δ values up to this many are each a tick of the δ axis (more: a tick per decade or two)
+MAX_DELTA_TICKS = 8
+# the legend's columns at most; the figure's margin around the legend and notes [inches]
+MAX_LEGEND_COLS = 6
+PAD_IN = 0.08
+# tight_layout's margin around the panels [font sizes] (matplotlib's 1.08: a line of white space)
+TIGHT_PAD = 0.8
+# the work–precision plot's one panel [inches]
+WORK_SIZE = (7.0, 4.6)
+# the part of a panel's height kept below the slope guides for their label
+LABEL_ROOM = 0.15
 
 
 def _variant_style(e):
@@ -55,10 +101,38 @@ def _variant_style(e):
     return kw, variant_label(u, m, pm, ps)
 
 
-def _delta_axis(ax):
-    """δ ticks written as the report writes δ (1e-2, not 10⁻² or 0.01)."""
-    ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: fmt_delta(float(f"{x:.6g}"))))
+def _number(x):
+    """A tick value as the report writes numbers: 1e-3, 2e-3, 1 (fmt_delta's shortest form)."""
+    return fmt_delta(float(f"{x:.6g}"))
+
+
+def _minor_label(axis):
+    """A formatter of an axis' minor ticks: on an axis spanning under two decades (h of a few
+    levels) the 2s and 5s are labelled, under half a decade every one, so the axis never shows a
+    single label; on a longer one none."""
+    def label(x, _):
+        lo, hi = axis.get_view_interval()
+        decades = math.log10(hi / lo)
+        coeff = round(x / 10 ** math.floor(math.log10(x) + 1e-9))
+        return _number(x) if decades < 0.5 or (decades < 2 and coeff in (2, 5)) else ""
+    return FuncFormatter(label)
+
+
+def _log_axes(ax):
+    """Both log axes labelled in plain text, 1e-3 (_number), at the decades and the labelled minor
+    ticks (_minor_label)."""
+    for axis in (ax.xaxis, ax.yaxis):
+        axis.set_major_formatter(FuncFormatter(lambda x, _: _number(x)))
+        axis.set_minor_formatter(_minor_label(axis))
+
+
+def _delta_axis(ax, deltas):
+    """δ ticks written as the report writes δ (1e-2, not 10⁻² or 0.01); at most MAX_DELTA_TICKS
+    δ values: a tick at each of them, the δ of the data (they fell between them before)."""
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda x, _: _number(x)))
     ax.xaxis.set_minor_formatter(NullFormatter())
+    if len(deltas) <= MAX_DELTA_TICKS:
+        ax.xaxis.set_major_locator(FixedLocator(sorted(deltas)))
 
 
 def _single_x(ax, xs, note):
@@ -69,7 +143,7 @@ def _single_x(ax, xs, note):
     ys = [y for line in ax.get_lines() for y in line.get_ydata() if y > 0]
     if ys:
         ax.set_ylim(min(ys) / 3, max(ys) * 3)
-    ax.text(0.03, 0.03, note, transform=ax.transAxes, fontsize=7, va="bottom", ha="left",
+    ax.text(0.03, 0.03, note, transform=ax.transAxes, va="bottom", ha="left",
             bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "0.7"})
 
 
@@ -80,31 +154,236 @@ def _overlap(a, b):
                                     for (xa, ya), (xb, yb) in zip(a, b))
 
 
-def _figure_legend(fig, axes, note=None):
-    """One legend for the whole figure, below the panels and off the data: each label once (the
-    panels share their variants), in columns; `note` (e.g. what pale lines mean) under it."""
+def _data_lines(ax):
+    """(label, [(x, y)]) of each labelled line of a panel: the series and references, not the
+    guides."""
+    return [(ln.get_label(), list(zip(ln.get_xdata(), ln.get_ydata()))) for ln in ax.get_lines()
+            if not ln.get_label().startswith("_")]
+
+
+def _coinciding(ax):
+    """The groups (≥ 2 labels, in drawing order) of a panel's lines that coincide to plotting
+    accuracy (_overlap with the group's first line): only the last drawn shows."""
+    groups = []
+    for label, pts in _data_lines(ax):
+        for g in groups:
+            if _overlap(g[0][1], pts):
+                g.append((label, pts))
+                break
+        else:
+            groups.append([(label, pts)])
+    return [[label for label, _ in g] for g in groups if len(g) > 1]
+
+
+def _component(i, x, varying):
+    """Part i of a variant's label (u space, multiplier, p mass, p space); the consistent p mass
+    and the continuous p space ("pcontinuous", as "ptangential") are named only where they vary
+    within a group."""
+    if i == 2:
+        return x if varying or x != DEFAULT_P_MASS else ""
+    if i == 3:
+        return (p_space_tag(x) or f"p{x}") if varying else p_space_tag(x)
+    return x
+
+
+def _product(labels, variants):
+    """The values of each part (u space, multiplier, p mass, p space) of the variants of `labels`
+    where they are every combination of them (broken u with M1 and M1star, each p mass); None
+    otherwise, or where a line is not a variant (a reference). `variants`: {label: variant}."""
+    vs = list(dict.fromkeys(variants.get(label) for label in labels))
+    if None in vs:
+        return None
+    values = [list(dict.fromkeys(v[i] for v in vs)) for i in range(4)]
+    return values if math.prod(len(x) for x in values) == len(vs) else None
+
+
+def _product_text(values, each=()):
+    """The label of a product of variants (_product), the parts that vary in braces:
+    "broken/{M1 = M1star}/{consistent = lumped}"; the parts `each` are left out and said after
+    it: "broken/{M1 = M1star} with each p mass and p space"."""
+    parts = []
+    for i, vals in enumerate(values):
+        words = [_component(i, x, len(vals) > 1) for x in vals]
+        if i in each:
+            continue
+        if len(words) > 1:
+            parts.append("{" + " = ".join(words) + "}")
+        elif words[0]:
+            parts.append(words[0])
+    return "/".join(parts) + (f" with each {' and '.join(PARTS[i] for i in each)}" if each else "")
+
+
+def _group_text(labels, variants, names=None):
+    """The label of lines that coincide: _product_text of a product of variants, otherwise its
+    lines joined by " = ", a reference by its tool (`names`: {label: short name}):
+    "broken/M1 = dolfinx"."""
+    values = _product(labels, variants)
+    if values:
+        return _product_text(values)
+    return " = ".join((names or {}).get(label, label) for label in labels)
+
+
+def _panel_texts(groups, variants, names):
+    """The texts of a panel's groups of coinciding lines. Groups alike but for parts that are one
+    value in each (broken/{M1 = M1star} of each p mass and p space, four groups) are one text
+    when together they are every combination of those parts; the references' groups last."""
+    alike, others = {}, []
+    for g in groups:
+        values = _product(g, variants)
+        if values is None:
+            others.append(_group_text(g, variants, names))
+            continue
+        varying = tuple((i, tuple(v)) for i, v in enumerate(values) if len(v) > 1)
+        alike.setdefault(varying, []).append(values)
+    texts = []
+    for varying, members in alike.items():
+        union = [list(dict.fromkeys(x for m in members for x in m[i])) for i in range(4)]
+        each = [i for i, v in enumerate(union) if len(v) > 1 and i not in dict(varying)]
+        if len(members) > 1 and math.prod(len(union[i]) for i in each) == len(members):
+            texts.append(_product_text(union, each))
+        else:
+            texts += [_product_text(m) for m in members]
+    return texts + others
+
+
+def _merged(panels, groups, variants):
+    """The solver lines that coincide in every panel where one of them is drawn, as groups of
+    labels in drawing order: one legend entry each."""
+    drawn = {name: [label for label, _ in _data_lines(ax)] for name, ax in panels.items()}
+
+    def together(a, b):
+        return all((a in ls) == (b in ls)
+                   and (a not in ls or any(a in g and b in g for g in groups[name]))
+                   for name, ls in drawn.items())
+    merged = []
+    for label in dict.fromkeys(x for ls in drawn.values() for x in ls if x in variants):
+        for g in merged:
+            if all(together(label, x) for x in g):
+                g.append(label)
+                break
+        else:
+            merged.append([label])
+    return [g for g in merged if len(g) > 1]
+
+
+def _coincidences(panels, variants, names=None):
+    """(legend groups [(label, [line labels])], note) of the lines that lie on top of each other
+    (only the last drawn shows): those that coincide in every panel are one legend entry
+    (_merged, _group_text); those that coincide in some panels are named in a note, per panel
+    (panels alike together). `panels`: {name: axes}; `variants`, `names`: as _group_text's."""
+    groups = {name: _coinciding(ax) for name, ax in panels.items()}
+    merged = _merged(panels, groups, variants)
+    known = [set(g) for g in merged]
+    panels_of = {}
+    for panel, gs in groups.items():
+        texts = tuple(_panel_texts([g for g in gs if set(g) not in known], variants, names))
+        if texts:
+            panels_of.setdefault(texts, []).append(panel)
+    within = f"every point within {100 * OVERLAP_REL:g} %"
+    out = [f"“=” in the legend: lines on top of each other ({within})"] if merged else []
+    if panels_of:
+        out.append(("Also" if merged else f"Lines on top of each other ({within})") + " in "
+                   + "; in ".join(f"{', '.join(panels)}: {', '.join(texts)}"
+                                  for texts, panels in panels_of.items()))
+    return [(_group_text(g, variants), g) for g in merged], (". ".join(out) + ".") if out else None
+
+
+def _panels(n):
+    """A figure of n panels, at most MAX_COLS per row (as few rows as that allows, filled
+    evenly), and its axes in reading order. Three panels a row or more take the whole width of
+    MAX_COLS panels: a legend of up to 20 entries needs its three columns."""
+    rows = -(-n // MAX_COLS)
+    cols = -(-n // rows)
+    width = PANEL_W * (MAX_COLS if cols >= 3 else cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(width, PANEL_H * rows + TITLE_H), squeeze=False)
+    axes = list(axes.flat)
+    for ax in axes[n:]:
+        fig.delaxes(ax)
+    return fig, axes[:n]
+
+
+def _legend_entries(axes, merged=()):
+    """{label: handle}: each label once (the panels share their variants and references); the
+    lines of a merged group (label, labels) one entry under the group's label, their handles
+    drawn over each other as in the panels."""
     seen = {}
     for ax in axes:
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if not lab.startswith("_"):
-                seen.setdefault(lab, h)
-    if not seen:
-        return
-    ncol = min(len(seen), 6)
-    rows = -(-len(seen) // ncol)
-    height = fig.get_size_inches()[1]
-    note_band = 0.2 / height if note else 0.0  # a line of small text, in figure fractions
-    fig.legend(list(seen.values()), list(seen), loc="lower center", ncol=ncol, fontsize=8,
-               frameon=False, bbox_to_anchor=(0.5, note_band))
+        for h, label in zip(*ax.get_legend_handles_labels()):
+            if not label.startswith("_"):
+                seen.setdefault(label, h)
+    group_of = {x: (text, g) for text, g in merged for x in g}
+    entries = {}
+    for label, h in seen.items():
+        text, g = group_of.get(label, (label, None))
+        if text not in entries:
+            entries[text] = tuple(seen[x] for x in g) if g else h
+    return entries
+
+
+def _fitting_legend(fig, entries, y, renderer):
+    """The figure's legend with its lower edge y inches above the figure's bottom, in as many
+    columns (at most MAX_LEGEND_COLS) as fit the figure's width: it was clipped on both sides."""
+    width = fig.bbox.width - 2 * PAD_IN * fig.dpi
+    for ncol in range(min(len(entries), MAX_LEGEND_COLS), 0, -1):
+        legend = fig.legend(list(entries.values()), list(entries), loc="lower center", ncol=ncol,
+                            frameon=False, borderaxespad=0, bbox_transform=fig.dpi_scale_trans,
+                            bbox_to_anchor=(fig.get_size_inches()[0] / 2, y))
+        if ncol == 1 or legend.get_window_extent(renderer).width <= width:
+            return legend
+        legend.remove()
+
+
+def _wrapped(fig, text, renderer):
+    """`text` broken into lines that fit the figure's width (at the width of its average
+    character, with a margin)."""
+    probe = fig.text(0, 0, text)
+    width = probe.get_window_extent(renderer).width
+    probe.remove()
+    chars = int(len(text) * 0.95 * (fig.bbox.width - 2 * PAD_IN * fig.dpi) / max(width, 1.0))
+    return textwrap.fill(text, max(chars, 20))
+
+
+def _finish(fig, axes, notes=(), merged=()):
+    """The figure's layout: under the panels one legend for the whole figure, off the data, then
+    the notes (what pale lines mean, which lines coincide, …) as one paragraph wrapped to the
+    width; `merged`: the groups of lines that are one legend entry (_coincidences). The figure
+    grows by their height, so the panels keep their size and nothing is clipped."""
+    renderer = fig.canvas.get_renderer()
+    w, h = fig.get_size_inches()
+    y = PAD_IN
+    note = " ".join(n for n in notes if n)
     if note:
-        fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=7, color="0.3")
-    fig._legend_band = min(0.45, note_band + (0.22 * rows + 0.1) / height)  # read by _save
+        t = fig.text(w / 2, y, _wrapped(fig, note, renderer), ha="center", va="bottom",
+                     color="0.3", transform=fig.dpi_scale_trans)
+        y += t.get_window_extent(renderer).height / fig.dpi + PAD_IN
+    entries = _legend_entries(axes, merged)
+    if entries:
+        legend = _fitting_legend(fig, entries, y + PAD_IN, renderer)
+        y += legend.get_window_extent(renderer).height / fig.dpi + 2 * PAD_IN
+    band = y if y > PAD_IN else 0.0
+    fig.set_size_inches(w, h + band)
+    fig.tight_layout(pad=TIGHT_PAD, rect=(0, band / (h + band), 1, 1))
+
+
+def _shown_pt(t):
+    """The size a text is drawn at: its font size, SCRIPT of it where mathtext writes a sub- or
+    superscript (the smallest part of the text)."""
+    s = t.get_text()
+    math_part = s.count("$") >= 2 and any(c in s for c in "^_")
+    return t.get_fontsize() * (SCRIPT if math_part else 1.0)
+
+
+def min_font_px(fig):
+    """The smallest text of a figure (each drawn text's _shown_pt), in the PNG's pixels."""
+    return min(_shown_pt(t) for t in fig.findobj(Text)
+               if t.get_visible() and t.get_text().strip()) * fig.dpi / 72
 
 
 def _save(fig, folder, name):
+    """Writes the laid-out figure (_finish) with its smallest text in the MIN_FONT_KEY chunk."""
     path = os.path.join(folder, name)
-    fig.tight_layout(rect=(0, getattr(fig, "_legend_band", 0.0), 1, 1))
-    fig.savefig(path, dpi=90)
+    fig.canvas.draw()
+    fig.savefig(path, dpi=fig.dpi, metadata={MIN_FONT_KEY: f"{min_font_px(fig):.2f}"})
     plt.close(fig)
     return name
 
@@ -113,90 +392,125 @@ def _positive(e):
     return e is not None and e > 0
 
 
-def rate_plot(folder, scene, rate_entries):
+def _points(xs, ys):
+    """The (x, y) of a series that a log plot can show (y > 0)."""
+    return [(x, y) for x, y in zip(xs, ys) if _positive(x) and _positive(y)]
+
+
+def _reference_line(ax, r):
+    """A reference's curve in its panel: REF_STYLE (black stars dash-dotted, grey hollow diamonds
+    dotted), thicker and over the solver's lines, labelled by the caller (its error, or its
+    distance to its finest level). Returns whether there was a point to draw."""
+    pts = _points(r["h"], r["errors"])
+    if pts:
+        style = dict(REF_STYLE.get(r["tool"], {"marker": "x", "linestyle": "-.",
+                                               "color": "black"}), **REF_LINE)
+        style["label"] = r["label"]
+        ax.loglog(*zip(*pts), **style)
+    return bool(pts)
+
+
+@matplotlib.rc_context(RC)
+def rate_plot(folder, scene, rate_entries, ref_series=None):
     """Errors against h per quantity (u = the exact or the reference solution, per the series'
-    `against`); a series that does not converge is marked in its label by its status."""
+    `against`); a series that does not converge is pale. `ref_series` (dicts of tool, quantity,
+    h, errors, label): the references' own curves, drawn over the series of their quantity. A
+    note names the lines that lie on top of each other."""
     ents = [r for r in rate_entries if any(_positive(e) for e in r["errors"])]
     if not ents:
         return None
     qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
-    fig, axes = plt.subplots(1, len(qs), figsize=(4.2 * len(qs), 4.6), squeeze=False)
+    fig, axes = _panels(len(qs))
     graded = any(r.get("mesh_parameter") == "N^-1/2" for r in ents)
-    hname = "N^-1/2" if graded else "h"
-    pale = False
-    for ax, q in zip(axes[0], qs):
+    hname = MESH_NAME["N^-1/2" if graded else "h"]
+    pale, variants, names = False, {}, {}
+    for ax, q in zip(axes, qs):
         for r in (r for r in ents if r["quantity"] == q):
-            pts = [(h, e) for h, e in zip(r["h"], r["errors"]) if _positive(e)]
+            pts = _points(r["h"], r["errors"])
             if not pts:
                 continue
             kw, label = _variant_style(r)
+            variants[label] = variant_of(r)
             if r["status"] != "converges":
                 kw["alpha"], pale = PALE, True
             ax.loglog(*zip(*pts), **kw, label=label)
-        _slope_guides(ax, [x for r in ents for x in r["h"] if _positive(x)],
-                      [e for r in ents if r["quantity"] == q for e in r["errors"] if _positive(e)],
-                      hname)
+        for r in (r for r in ref_series or [] if r["quantity"] == q):
+            if _reference_line(ax, r):
+                names[r["label"]] = REFERENCE_NAMES.get(r["tool"], r["tool"])
+        _slope_guides(ax)
+        _log_axes(ax)
         ax.set_xlabel(hname)
-        ax.set_title(QLABEL[q], fontsize=10)
+        ax.set_title(QLABEL[q])
         ax.grid(True, which="both", alpha=0.3)
+    merged, note = _coincidences({PANEL_NAME[q]: ax for ax, q in zip(axes, qs)}, variants, names)
     against = sorted({r["against"] for r in ents if r["against"]})
     fig.suptitle(f"{scene}: errors against {hname}"
-                 + (f" (u = {' / '.join(against)})" if against else ""), fontsize=11)
-    _figure_legend(fig, axes[0], "pale: a series that does not converge (see the tables)"
-                   if pale else None)
+                 + (f" (u = {' / '.join(against)})" if against else ""))
+    _finish(fig, axes, ["Pale: a series that does not converge (see the tables)." if pale
+                        else None, note], merged)
     return _save(fig, folder, f"rates-{scene}.png")
 
 
-def _slope_guides(ax, h, errors, hname):
-    """Dotted slopes 1/2, 1 and 2 over the last two halvings of h, ending below the smallest
-    error, labelled at their low end (below every data point, never on one)."""
-    if len(set(h)) < 2 or not errors:
+def _slope_guides(ax):
+    """Dotted slopes 1/2, 1 and 2 over the last two halvings of the mesh parameter of the panel's
+    finest series (the smallest plotted one and the one two levels coarser), ending below the
+    panel's smallest value, labelled at their low end (below every data point, never on one)."""
+    lines = [pts for _, pts in _data_lines(ax)]
+    if not lines:
         return
-    hs = sorted(set(h))
-    h1, h0 = hs[0], hs[min(2, len(hs) - 1)]
-    e1 = min(errors) / 3
+    finest = min(lines, key=lambda pts: min(x for x, _ in pts))
+    xs = sorted({x for x, _ in finest})
+    if len(xs) < 2:
+        return
+    h1, h0 = xs[0], xs[min(2, len(xs) - 1)]
+    e1 = min(y for pts in lines for _, y in pts) / 3
     for p in (0.5, 1.0, 2.0):
-        ax.loglog([h1, h0], [e1, e1 * (h0 / h1) ** p], color="0.4", ls=":", lw=0.8)
-    ax.annotate(f"{hname}^½, ^1, ^2", (h1, e1), xytext=(0, -10), textcoords="offset points",
-                fontsize=7, color="0.3", ha="left", va="top")
+        ax.loglog([h1, h0], [e1, e1 * (h0 / h1) ** p], color="0.4", ls=":", lw=1.0)
+    ax.annotate("slopes ½, 1, 2", (h1, e1), xytext=(0, -3), textcoords="offset points",
+                color="0.3", ha="left", va="top")
     lo, hi = ax.get_ylim()
-    ax.set_ylim(min(lo, e1 / 4), hi)
+    ax.set_ylim(min(lo, e1 / (hi / e1) ** LABEL_ROOM), hi)
 
 
+@matplotlib.rc_context(RC)
 def delta_plot(folder, scene, delta_entries):
+    """Distance to the δ = 0 solution against δ at the finest level, per quantity; a tick at each
+    δ of the data, and a note naming the lines that lie on top of each other."""
     if not delta_entries:
         return None
-    levels = sorted({d["level"] for d in delta_entries})
-    lvl = levels[-1]
-    qs = [q for q in ("u_l2", "p_l2", "lambda_l2") if any(d["quantity"] == q for d in delta_entries)]
-    fig, axes = plt.subplots(1, len(qs), figsize=(4.2 * len(qs), 4.6), squeeze=False)
-    for ax, q in zip(axes[0], qs):
+    lvl = max(d["level"] for d in delta_entries)
+    qs = [q for q in ("u_l2", "p_l2", "lambda_l2")
+          if any(d["quantity"] == q for d in delta_entries)]
+    fig, axes = _panels(len(qs))
+    variants = {}
+    for ax, q in zip(axes, qs):
         xs = set()
         for d in delta_entries:
             if d["quantity"] != q or d["level"] != lvl:
                 continue
-            pts = [(x, y) for x, y in zip(d["deltas"], d["diffs"]) if x > 0 and y > 0]
+            pts = _points(d["deltas"], d["diffs"])
             if pts:
-                s = d["slope"]
                 xs.update(x for x, _ in pts)
                 kw, label = _variant_style(d)
+                variants[label] = variant_of(d)
                 ax.loglog(*zip(*pts), **kw, markersize=6, label=label)
         if len(xs) == 1:
             _single_x(ax, sorted(xs), f"one δ > 0 (δ = {fmt_delta(min(xs))}): no slope")
         elif not xs:
-            ax.text(0.5, 0.5, "no difference above zero", transform=ax.transAxes, ha="center",
-                    fontsize=8)
+            ax.text(0.5, 0.5, "no difference above zero", transform=ax.transAxes, ha="center")
+        _log_axes(ax)
         if xs:
-            _delta_axis(ax)
+            _delta_axis(ax, xs)
         ax.set_xlabel("δ")
-        ax.set_title(f"‖{SYMBOL[q]}_δ − {SYMBOL[q]}_0‖", fontsize=10)
+        ax.set_title(f"$‖{SYMBOL[q]}_δ - {SYMBOL[q]}_0‖$")
         ax.grid(True, which="both", alpha=0.3)
-    fig.suptitle(f"{scene}, level {lvl}: distance to the δ = 0 solution (slopes in the table)",
-                 fontsize=11)
-    _figure_legend(fig, axes[0])
+    merged, note = _coincidences({SYMBOL[q]: ax for ax, q in zip(axes, qs)}, variants)
+    fig.suptitle(f"{scene}, level {lvl}: distance to the δ = 0 solution (slopes in the table)")
+    _finish(fig, axes, [note], merged)
     return _save(fig, folder, f"delta-{scene}.png")
 
 
+@matplotlib.rc_context(RC)
 def work_precision_plot(folder, scene, timing_rows, ref_rows):
     """Error against the time spent on each level: the solver's sum of timings_s, a reference's
     total without its start-up (dolfinx's form compilation, cached between runs, which would
@@ -205,7 +519,7 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
     rpts = [r for r in ref_rows if (r.get("errors") or {}).get("u_l2") and r.get("total_s")]
     if not pts and not rpts:
         return None
-    fig, ax = plt.subplots(figsize=(6.4, 5.2))
+    fig, ax = plt.subplots(figsize=WORK_SIZE)
     for v in sorted({variant_of(t) for t in pts}):
         sel = sorted((t for t in pts if variant_of(t) == v
                       and t["delta"] == min(x["delta"] for x in pts)), key=lambda t: t["level"])
@@ -229,14 +543,17 @@ def work_precision_plot(folder, scene, timing_rows, ref_rows):
                for tool in ref_pts}
     note = "; ".join(f"{tool} start-up {min(s):.2g}–{max(s):.2g} s per level, not plotted"
                      for tool, s in startup.items() if s and max(s) > 0)
-    ax.set_xlabel("time per level [s] (solver: sum of timings_s; references: without start-up)")
-    ax.set_ylabel("‖u_h − u‖_L²")
-    ax.set_title(f"{scene}: work–precision", fontsize=11)
+    _log_axes(ax)
+    ax.set_xlabel("time per level [s] (solver: sum of timings_s;\nreferences: without start-up)",
+                  fontsize=MIN_PT)
+    ax.set_ylabel(QLABEL["u_l2"])
+    ax.set_title(f"{scene}: work–precision")
     ax.grid(True, which="both", alpha=0.3)
-    _figure_legend(fig, [ax], note or None)
+    _finish(fig, [ax], [note or None])
     return _save(fig, folder, f"work-precision-{scene}.png")
 
 
+@matplotlib.rc_context(RC)
 def delta_reference_plot(folder, scene, agreement):
     """Distance to the reference of the same level as δ decreases: it falls with δ until it reaches
     the discretisation floor of the level (the δ = 0 value, dotted), and the floor falls with h."""
@@ -249,24 +566,26 @@ def delta_reference_plot(folder, scene, agreement):
                     key=variant_order)
     if not spaces:  # δ = 0 only: the reference tables say it all
         return None
-    fig, axes = plt.subplots(1, len(spaces), figsize=(4.6 * len(spaces), 4.6), squeeze=False)
-    for ax, v in zip(axes[0], spaces):
+    fig, axes = _panels(len(spaces))
+    for ax, v in zip(axes, spaces):
         sel = [a for a in rows if a["reference"] == tool and variant_of(a) == v]
         deltas = sorted({a["delta"] for a in sel if a["delta"] > 0})
         if not deltas:
             continue
         for lvl in sorted({a["level"] for a in sel}):
-            pts = sorted((a["delta"], a["e_u"]) for a in sel if a["level"] == lvl and a["delta"] > 0)
+            pts = sorted((a["delta"], a["e_u"]) for a in sel
+                         if a["level"] == lvl and a["delta"] > 0)
             floor = [a["e_u"] for a in sel if a["level"] == lvl and a["delta"] == 0]
             line = ax.loglog(*zip(*pts), marker="o", label=f"level {lvl}")[0] if pts else None
             if floor and line is not None:
                 ax.axhline(floor[0], color=line.get_color(), ls=":", lw=0.8)
         if len(deltas) == 1:
             _single_x(ax, deltas, f"one δ > 0 (δ = {fmt_delta(deltas[0])}): one point per level")
-        _delta_axis(ax)
-        ax.set_xlabel("δ (dotted: δ = 0, the floor of the level)")
-        ax.set_title(variant_label(*v), fontsize=10)
+        _log_axes(ax)
+        _delta_axis(ax, deltas)
+        ax.set_xlabel("δ (dotted: δ = 0, the floor)", fontsize=MIN_PT)
+        ax.set_title(variant_label(*v), fontsize=MIN_PT)
         ax.grid(True, which="both", alpha=0.3)
-    fig.suptitle(f"{scene}: ‖u_δh − u_{tool}‖_L² at each level", fontsize=11)
-    _figure_legend(fig, axes[0])
+    fig.suptitle(f"{scene}: $‖u_{{δh}} - u_\\mathrm{{{tool}}}‖_{{L²}}$ at each level")
+    _finish(fig, axes)
     return _save(fig, folder, f"delta-reference-{scene}.png")

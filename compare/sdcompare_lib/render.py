@@ -12,6 +12,7 @@ import json
 import math
 import os
 import shutil
+import struct
 import tempfile
 
 from .read import DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag
@@ -131,22 +132,50 @@ def _td(text):
     return f"<td class='{'s' if len(text) <= SHORT_CELL else 't'}'>{_inline_md(text)}</td>"
 
 
+# The PNG text chunk in which plots.py writes a plot's smallest text, in the PNG's pixels.
+MIN_FONT_KEY = "min-font-px"
+
+
+def _png_texts(data):
+    """{keyword: text} of the tEXt chunks of a PNG's bytes."""
+    out, pos = {}, 8
+    while pos + 8 <= len(data):
+        length, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        if kind == b"tEXt":
+            key, _, value = data[pos + 8:pos + 8 + length].partition(b"\0")
+            out[key.decode("latin-1")] = value.decode("latin-1")
+        elif kind == b"IEND":
+            break
+        pos += 12 + length
+    return out
+
+
 def _img(folder, img):
-    """An image inlined as base64, its id the file name's stem (rates-SCENE, delta-SCENE, …)."""
+    """An image inlined as base64, its id the file name's stem (rates-SCENE, delta-SCENE, …),
+    inside a link to its file in the report folder (the full-size view). data-min-font-px: the
+    smallest text of the PNG in its own pixels (its MIN_FONT_KEY chunk), which a reader of the page
+    scales by the shown width to know the size the text is shown at."""
     with open(os.path.join(folder, img), "rb") as fh:
-        b64 = base64.b64encode(fh.read()).decode("ascii")
-    ident = html.escape(os.path.splitext(img)[0])
-    return f"<p><img id='{ident}' alt='{html.escape(img)}' src='data:image/png;base64,{b64}'></p>"
+        data = fh.read()
+    b64 = base64.b64encode(data).decode("ascii")
+    ident, name = html.escape(os.path.splitext(img)[0]), html.escape(img)
+    font = _png_texts(data).get(MIN_FONT_KEY)
+    font_attr = f" data-min-font-px='{html.escape(font)}'" if font else ""
+    return (f"<p class='plot'><a href='{name}' title='{name}: full size'><img id='{ident}' "
+            f"alt='{name}'{font_attr} src='data:image/png;base64,{b64}'></a></p>")
 
 
 # The page's style: at most 1200 px wide, never wider than the window (tables scroll in their
-# own box, long text cells wrap but keep a readable width, images shrink).
+# own box, long text cells wrap but keep a readable width, images shrink; plots.py sizes its
+# text so that it stays readable at the width of an 800 px window).
 CSS = ("body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}"
        "table{border-collapse:collapse;margin:0.5em 0;font-size:13px}"
        "div.scroll{overflow-x:auto;max-width:100%}"
        "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
-       "th{background:#eee;text-align:center}.PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
-       "img{max-width:100%;height:auto}code{font-size:11px;text-align:left;overflow-wrap:anywhere}"
+       "th{background:#eee;text-align:center}"
+       ".PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
+       "img{max-width:100%;height:auto}p.plot{margin:0.5em 0}p.plot img{display:block}"
+       "code{font-size:11px;text-align:left;overflow-wrap:anywhere}"
        "td.s{white-space:nowrap}td.t{text-align:left;min-width:14em}"
        "details{margin:0.4em 0}summary{cursor:pointer;color:#035;font-size:14px}"
        "p{overflow-wrap:anywhere}p.caption{margin:0.6em 0 0;font-style:italic}"
@@ -307,39 +336,57 @@ def provenance(summary, refs):
     return {"sdcrack": prov, "references": ref_prov}, headers, rows
 
 
-RERUN_FOLDER = "rerun"
+# A rerun writes where it is run from, never into the results tree: its --out is this folder,
+# relative, unless ci/cases --rerun-dir names another one.
+RERUN_FOLDER = "sdcrack-rerun"
+CHECKOUT_BINARY = ("target", "release", "sdcrack")
 
 
-def rerun_command(results_dir, summary, scene_file, k):
-    """The shell command that reruns one case of this results folder from any working directory:
-    the binary that wrote it (provenance `executable`, absolute; `sdcrack` from PATH when not
-    recorded), the folder's own copy of the scene (RESULTS_DIR/scene.toml, absolute), the case's
-    level, u space and multiplier (and `--p-mass lumped` for a lumped case, `--p-space
+def rerun_executable(summary, checkout=None):
+    """The binary a rerun command names. For a results folder (summary.json's dict): the binary
+    that wrote it (provenance `executable`, when recorded and absolute), else `sdcrack` from PATH.
+    For a scene file (`summary` None): the checkout's target/release/sdcrack under `checkout`.
+    One home for the reports (rerun_command) and ci/cases."""
+    if summary is None:
+        return os.path.join(checkout, *CHECKOUT_BINARY)
+    prov = summary.get("provenance") if isinstance(summary, dict) else None
+    exe = prov.get("executable") if isinstance(prov, dict) else None
+    return exe if isinstance(exe, str) and os.path.isabs(exe) else "sdcrack"
+
+
+def rerun_command(results_dir, summary, scene_file, k, rerun_dir=None):
+    """The shell command that reruns one case of this results folder: the binary that wrote it
+    (rerun_executable), the folder's own copy of the scene (RESULTS_DIR/scene.toml, absolute), the
+    case's level, u space and multiplier (and `--p-mass lumped` for a lumped case, `--p-space
     broken-tangential` for a broken-tangential one) with the δ sweep of the run (each δ
     warm-started from the previous one, as in the run, so the numbers come back exactly; `--delta`
-    only when the run was restricted to one δ), into the absolute folder
-    RERUN/<scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>], RERUN the folder `rerun` beside the
-    results
-    folder (OUT/rerun/ for OUT/<scene>/): the command ci/cases prints for the same folder."""
+    only when the run was restricted to one δ), into rerun_out(rerun_dir, ...): by default the
+    relative folder sdcrack-rerun/<scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>] of the
+    directory it is run from. The command ci/cases prints for the same folder."""
     from .settings import scene_lists
 
-    prov = summary.get("provenance")
-    exe = prov.get("executable") if isinstance(prov, dict) else None
-    if not (isinstance(exe, str) and os.path.isabs(exe)):
-        exe = "sdcrack"
     plan_deltas = sorted({float(d) for d in ((summary.get("plan") or {}).get("deltas") or [])})
     restricted = plan_deltas != sorted(set(scene_lists(scene_file)[3]))
-    return rerun_args(exe, os.path.join(os.path.abspath(results_dir), "scene.toml"),
+    return rerun_args(rerun_executable(summary),
+                      os.path.join(os.path.abspath(results_dir), "scene.toml"),
                       summary.get("scene", "scene"), k, k["delta"] if restricted else None,
-                      os.path.join(os.path.dirname(os.path.abspath(results_dir)), RERUN_FOLDER))
+                      rerun_dir)
 
 
-def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir):
+def rerun_out(rerun_dir, name):
+    """The --out of a rerun named `name`: RERUN_FOLDER/name, relative, so that it lands under the
+    directory the command is run from; RERUN_DIR/name (absolute) when a folder is given."""
+    if rerun_dir is None:
+        return os.path.join(RERUN_FOLDER, name)
+    return os.path.join(os.path.abspath(rerun_dir), name)
+
+
+def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir=None):
     """The shell command `exe run SCENE_PATH` of one rerunnable unit `k` (level, u space,
     multiplier, p mass, p space; absent p_mass / p_space: consistent / continuous): the whole δ
     sweep, or `--delta` alone when `only_delta` is given, into
-    RERUN_DIR/<scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>] (the suffixes of the solver's
-    field names). One home for the commands of the reports (rerun_command) and of ci/cases."""
+    rerun_out(RERUN_DIR, <scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>]) (the suffixes of the
+    solver's field names). One home for the commands of the reports and of ci/cases."""
     import shlex
 
     args = [exe, "run", scene_path, "--level", str(k["level"]), "--u-space", str(k["u_space"]),
@@ -356,5 +403,15 @@ def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir):
         d = fmt_delta(only_delta)
         args += ["--delta", d]
         name += f"-d{d}"
-    args += ["--out", os.path.join(rerun_dir, name)]
+    args += ["--out", rerun_out(rerun_dir, name)]
     return shlex.join(args)
+
+
+def rerun_compare_command(results_dir, rerun="<name>"):
+    """The command comparing a rerun of this results folder with it (compare/sdcompare-rerun of
+    the sdcrack checkout, compare/sdcompare_lib/rerun_diff.py): the folder by absolute path, the
+    rerun by the relative --out of its command, RERUN_FOLDER/<name>."""
+    import shlex
+
+    return (f"compare/sdcompare-rerun {shlex.quote(os.path.abspath(results_dir))} "
+            f"{os.path.join(RERUN_FOLDER, rerun)}")

@@ -126,7 +126,7 @@ def test_rerun_command_of_a_broken_tangential_case():
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="lumped",
                                                              p_space=TANGENTIAL)) == \
         ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 --p-mass "
-         "lumped --p-space broken-tangential --out /r/rerun/s-l2-broken-M1-lumped-ptangential")
+         "lumped --p-space broken-tangential --out sdcrack-rerun/s-l2-broken-M1-lumped-ptangential")
 
 
 def test_case_keys_labels_and_defaults():

@@ -1,8 +1,10 @@
 """What a reader sees first, measured in headless Chromium (issue 25, items 3 and 5): the report
 opens with the verdict, then the h → 0 plot, then the δ → 0 plot, then the short variant table;
 at 1280 and 800 px the page never scrolls sideways (wide tables scroll in their own box) and no
-text cell is squeezed to a word per line; provenance is folded. The campaign index says, one line
-per scene, what converged at which rates and the first problem.
+text cell is squeezed to a word per line; provenance is folded. Every plot's text is legible at
+both widths and the plot links to its PNG; at 1280 px the whole h → 0 plot, its legend included,
+is on the first screen (issue 34, item 3). The campaign index says, one line per scene, what
+converged at which rates and the first problem.
 
 Chromium (Debian: chromium) runs the page with a script appended that measures the layout and
 writes it into the DOM, which `--dump-dom` prints; the tests skip without Chromium."""
@@ -36,7 +38,14 @@ window.addEventListener('load', function () {
       return h.textContent === 'Provenance'; }).map(function (h) {
       var d = h.nextElementSibling; return d && d.tagName === 'DETAILS' ? d.open : true; }),
     text_cells: Array.from(document.querySelectorAll('td.t')).filter(function (td) {
-      return td.offsetParent !== null; }).map(function (td) { return td.getBoundingClientRect().width; })
+      return td.offsetParent !== null; }).map(function (td) {
+      return td.getBoundingClientRect().width; }),
+    images: Array.from(document.querySelectorAll('img')).filter(function (i) {
+      return i.offsetParent !== null; }).map(function (i) {
+      var r = i.getBoundingClientRect(), a = i.closest('a');
+      return {id: i.id, width: r.width, natural: i.naturalWidth, bottom: r.bottom + window.scrollY,
+              min_font_px: parseFloat(i.getAttribute('data-min-font-px')),
+              href: a ? a.getAttribute('href') : null}; })
   };
   var pre = document.createElement('pre'); pre.id = 'layout';
   pre.textContent = JSON.stringify(out); document.body.appendChild(pre);
@@ -82,9 +91,16 @@ def report(tmp_path_factory):
     return tmp / "mixed" / "report" / "index.html"
 
 
+@pytest.fixture(scope="module")
+def layouts(report, tmp_path_factory):
+    """The report's measurements at 1280 and 800 px, each measured once for all the tests."""
+    tmp = tmp_path_factory.mktemp("probe")
+    return {width: layout(report, width, tmp) for width in (1280, 800)}
+
+
 @pytest.mark.parametrize("width", [1280, 800])
-def test_report_opens_with_verdict_plots_then_table(report, width, tmp_path):
-    got = layout(report, width, tmp_path)
+def test_report_opens_with_verdict_plots_then_table(layouts, width):
+    got = layouts[width]
     assert got["width"] == width
     assert got["verdict"] < got["rates"] < got["delta"] < got["first_table"], got
     # the h → 0 plot starts within the first screen (it was at y ≈ 2860 px below a 36-row
@@ -94,11 +110,34 @@ def test_report_opens_with_verdict_plots_then_table(report, width, tmp_path):
 
 
 @pytest.mark.parametrize("width", [1280, 800])
-def test_report_never_scrolls_sideways(report, width, tmp_path):
-    got = layout(report, width, tmp_path)
+def test_report_never_scrolls_sideways(layouts, width):
+    got = layouts[width]
     assert got["scroll_width"] <= width, got
     # a reason or note cell keeps a readable width (it was one word per line at 800 px)
     assert got["text_cells"] and min(got["text_cells"]) >= 120, sorted(got["text_cells"])[:5]
+
+
+# The smallest text of a plot as shown, in CSS px (issue 34, item 3: 6 px at 800 px before).
+MIN_TEXT_CSS_PX = 9
+# The first screen at 1280 px: the verdict and the whole h → 0 plot, its legend included.
+FIRST_SCREEN_PX = 900
+
+
+@pytest.mark.parametrize("width", [1280, 800])
+def test_plots_are_legible_and_link_to_their_full_size_file(report, layouts, width):
+    """Every plot's smallest text (data-min-font-px of its PNG, scaled by the width it is shown
+    at) is at least MIN_TEXT_CSS_PX; every plot links to its PNG in the report folder; at 1280 px
+    the h → 0 plot with its legend ends within the first screen."""
+    images = layouts[width]["images"]
+    assert any(i["id"].startswith("rates-") for i in images), images
+    shown = {i["id"]: round((i["min_font_px"] or 0) * i["width"] / i["natural"], 2)
+             for i in images}
+    assert min(shown.values()) >= MIN_TEXT_CSS_PX, (shown, images)
+    for i in images:
+        assert i["href"] == i["id"] + ".png" and (report.parent / i["href"]).is_file(), i
+    if width == 1280:
+        rates = next(i for i in images if i["id"].startswith("rates-"))
+        assert rates["bottom"] <= FIRST_SCREEN_PX, rates
 
 
 INDEX_MEASURE = MEASURE.replace(

@@ -618,6 +618,8 @@ def test_provenance_rows():
 
 
 def test_rerun_command_is_absolute():
+    """Absolute binary and scene; the --out is relative (sdcrack-rerun/<name> under the directory
+    the command runs from, never inside the results tree), absolute with a rerun folder."""
     from sdcompare_lib import render
 
     scene = {"discretization": {"deltas": [1e-2, 0.0]}}
@@ -626,11 +628,13 @@ def test_rerun_command_is_absolute():
                "provenance": {"executable": "/opt/my sdcrack/bin/sdcrack"}}
     cmd = render.rerun_command("/data/run 1/s", summary, scene, k)
     assert cmd == ("'/opt/my sdcrack/bin/sdcrack' run '/data/run 1/s/scene.toml' --level 1 "
-                   "--u-space broken --multiplier M1 --out '/data/run 1/rerun/s-l1-broken-M1'")
+                   "--u-space broken --multiplier M1 --out sdcrack-rerun/s-l1-broken-M1")
+    cmd = render.rerun_command("/data/run 1/s", summary, scene, k, rerun_dir="/tmp/my reruns")
+    assert cmd.endswith(" --out '/tmp/my reruns/s-l1-broken-M1'")
     # a run restricted to one δ (--delta) is rerun so; no provenance: sdcrack from PATH
     cmd = render.rerun_command("/r/s", {"scene": "s", "plan": {"deltas": [0.01]}}, scene, k)
     assert cmd == ("sdcrack run /r/s/scene.toml --level 1 --u-space broken --multiplier M1 "
-                   "--delta 1e-2 --out /r/rerun/s-l1-broken-M1-d1e-2")
+                   "--delta 1e-2 --out sdcrack-rerun/s-l1-broken-M1-d1e-2")
 
 
 def _captured_figures(monkeypatch):
@@ -797,10 +801,10 @@ def test_rerun_command_of_a_lumped_case():
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="consistent")) == \
         render.rerun_command("/r/s", summary, scene, k) == \
         ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
-         "--out /r/rerun/s-l2-broken-M1")
+         "--out sdcrack-rerun/s-l2-broken-M1")
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="lumped")) == \
         ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
-         "--p-mass lumped --out /r/rerun/s-l2-broken-M1-lumped")
+         "--p-mass lumped --out sdcrack-rerun/s-l2-broken-M1-lumped")
 
 
 def test_expectations_with_and_without_p_mass(tmp_path):
@@ -935,7 +939,7 @@ def test_consistent_and_lumped_are_separate_series(lumped_run, empty_exps, tmp_p
     assert {(g["p_mass"], g["kind"]) for g in r["gci"] if g["u_space"] == "broken"} == \
         {("consistent", "error estimate"), ("lumped", "error estimate")}
     reruns = {k["rerun"] for k in r["kkt"] if k["p_mass"] == "lumped"}
-    assert len(reruns) == 3 * 2 and all(f"--multiplier M1 --p-mass lumped --out {lumped_run.parent / 'rerun'}/" in c
+    assert len(reruns) == 3 * 2 and all("--multiplier M1 --p-mass lumped --out sdcrack-rerun/" in c
                                         and c.endswith("-M1-lumped") for c in reruns)
     assert not any("--p-mass" in k["rerun"] for k in r["kkt"] if k["p_mass"] == "consistent")
     md = open(lumped_run / "report" / "report.md").read()

@@ -55,11 +55,14 @@ def test_case_list_has_one_line_per_rerunnable_unit(tmp_path):
     assert all("--delta" not in r[6] for r in rows)
     outs = [out_of(r[6]) for r in rows]
     assert len(set(outs)) == len(outs), "one folder per unit"
-    # absolute binary, scene and output folder: the same command from any working directory
+    # absolute binary and scene: the same command from any working directory, writing into
+    # sdcrack-rerun/ under it (relative), or into --rerun-dir (absolute)
     cmd = rows[0][6].split()
     assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack")
     assert cmd[2] == str(ROOT / "scenes" / "closed-exact.toml")
-    assert outs[0] == str(tmp_path / "results" / "rerun" / "closed-exact-l0-continuous-M0")
+    assert outs[0] == "sdcrack-rerun/closed-exact-l0-continuous-M0"
+    rows = cases("--rerun-dir", "mine", ROOT / "scenes" / "closed-exact.toml", cwd=tmp_path)
+    assert out_of(rows[0][6]) == str(tmp_path / "mine" / "closed-exact-l0-continuous-M0")
 
 
 def test_case_list_names_the_campaign_jobs(tmp_path):
@@ -79,11 +82,12 @@ def test_case_list_names_the_campaign_jobs(tmp_path):
     out = subprocess.run(["bash", "-c", "ci/cases scenes/closed-exact.toml | head -1 | cut -d' ' -f7- "
                           "| sed 's/^[^ ]*/echo/' | sh"], cwd=ROOT, check=True,
                          capture_output=True, text=True).stdout
-    assert out.strip().endswith(f"--out {ROOT}/results/rerun/closed-exact-l0-continuous-M0")
+    assert out.strip().endswith("--out sdcrack-rerun/closed-exact-l0-continuous-M0")
 
 
 def test_case_list_of_a_results_folder(tmp_path):
-    """A results folder reruns its own scene copy and plan into OUT/rerun/; a folder that no
+    """A results folder reruns its own scene copy and plan (with the binary that wrote it, as its
+    report: `sdcrack` from PATH when summary.json does not record it); a folder that no
     campaign wrote has no target comment (no job computes it), one inside a campaign folder
     (OUT/shards/ exists) names that campaign's job, not the checkout's."""
     folder = tmp_path / "out" / "closed-exact"
@@ -98,9 +102,9 @@ def test_case_list_of_a_results_folder(tmp_path):
                                         for m in ("M0", "M1")]
     assert [t for _, t in rows] == [None, None]
     cmd = rows[0][0][6].split()
-    assert cmd[:3] == [str(ROOT / "target" / "release" / "sdcrack"), "run", str(folder / "scene.toml")]
+    assert cmd[:3] == ["sdcrack", "run", str(folder / "scene.toml")]  # no provenance recorded
     assert "--delta" not in cmd  # the scene's only δ: the run's δ sweep
-    assert out_of(rows[0][0][6]) == str(tmp_path / "out" / "rerun" / "closed-exact-l2-broken-M0")
+    assert out_of(rows[0][0][6]) == "sdcrack-rerun/closed-exact-l2-broken-M0"
     (tmp_path / "out" / "shards").mkdir()
     rows = cases_with_targets(folder, cwd=ROOT)
     assert rows[1][1] == str(tmp_path / "out" / "shards" / "closed-exact" / "solver"
@@ -109,7 +113,10 @@ def test_case_list_of_a_results_folder(tmp_path):
 
 def test_case_list_of_a_results_folder_is_the_reports_rerun_list(tmp_path):
     """For a results folder, ci/cases prints exactly the commands the folder's report lists
-    (compare's render.rerun_command), a run restricted to one δ and a lumped p mass included."""
+    (compare's render.rerun_command), a run restricted to one δ and a lumped p mass included, with
+    the folder's recorded binary (a campaign's pinned copy, not this checkout's), `sdcrack` from
+    PATH when none is recorded, and --rerun-dir (tests/python/test_reruns.py compares with a real
+    report's table)."""
     import sys
 
     sys.path.insert(0, str(ROOT / "compare"))
@@ -122,19 +129,24 @@ def test_case_list_of_a_results_folder_is_the_reports_rerun_list(tmp_path):
     text = set_key((ROOT / "scenes" / "closed-exact.toml").read_text(), "p_mass",
                    '["consistent", "lumped"]')
     (folder / "scene.toml").write_text(text)
-    exe = str(ROOT / "target" / "release" / "sdcrack")
-    for deltas in ([1.0, 0.01, 0.0001, 1e-06, 0.0], [0.01]):
+    pinned = str(tmp_path / "campaign" / "inputs" / "sdcrack")
+    for deltas, prov in (([1.0, 0.01, 0.0001, 1e-06, 0.0], {"executable": pinned}),
+                         ([0.01], {"executable": pinned}), ([0.01], None)):
         plan = {"levels": [1, 2], "u_spaces": ["broken"], "multipliers": ["M1"],
                 "p_masses": ["consistent", "lumped"], "deltas": deltas}
-        summary = {"scene": "closed-exact", "plan": plan, "provenance": {"executable": exe}}
+        summary = {"scene": "closed-exact", "plan": plan, "provenance": prov}
         (folder / "summary.json").write_text(json.dumps(summary))
         scene = tomllib.loads(text)
-        want = [render.rerun_command(str(folder), summary, scene,
-                                     {"level": lv, "u_space": "broken", "multiplier": "M1",
-                                      "p_mass": pm, "delta": deltas[0]})
-                for lv in (1, 2) for pm in ("consistent", "lumped")]
+        units = [{"level": lv, "u_space": "broken", "multiplier": "M1", "p_mass": pm,
+                  "delta": deltas[0]} for lv in (1, 2) for pm in ("consistent", "lumped")]
+        want = [render.rerun_command(str(folder), summary, scene, k) for k in units]
         got = [r[6] for r in cases(folder, cwd=tmp_path)]
         assert got == want
+        assert {c.split()[0] for c in got} == {pinned if prov else "sdcrack"}
+        mine = tmp_path / "mine"
+        want = [render.rerun_command(str(folder), summary, scene, k, rerun_dir=str(mine))
+                for k in units]
+        assert [r[6] for r in cases("--rerun-dir", mine, folder, cwd=ROOT)] == want
 
 
 def test_rerun_reproduces_the_row(tmp_path):
@@ -157,9 +169,10 @@ def test_rerun_reproduces_the_row(tmp_path):
         cmd = r[6].split() + ["--quiet"]
         assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack") and cmd[2] == str(scene)
         cmd[0] = str(EXE)  # SDCRACK_BIN may name another build
-        subprocess.run(cmd, cwd=ROOT, check=True, capture_output=True)  # any directory
-        folder = pathlib.Path(out_of(r[6])) / "mixed"
-        assert folder.is_relative_to(tmp_path)
+        elsewhere = tmp_path / "elsewhere"  # any directory: the rerun lands under it
+        elsewhere.mkdir(exist_ok=True)
+        subprocess.run(cmd, cwd=elsewhere, check=True, capture_output=True)
+        folder = elsewhere / out_of(r[6]) / "mixed"
         one = json.loads((folder / "summary.json").read_text())["cases"]
         assert len(one) == 6 == len(r[5].split(",")), "the delta sweep of the unit"
         for c in one:
@@ -195,8 +208,7 @@ def test_case_list_of_both_p_masses(tmp_path):
     for r in lumped:
         cmd = r[6].split()
         assert cmd[cmd.index("--p-mass") + 1] == "lumped" and cmd.index("--p-mass") < cmd.index("--out")
-        assert cmd[-1] == str(tmp_path / "results" / "rerun"
-                              / f"closed-exact-l{r[1]}-{r[2]}-{r[3]}-lumped")
+        assert cmd[-1] == f"sdcrack-rerun/closed-exact-l{r[1]}-{r[2]}-{r[3]}-lumped"
     assert all("--p-mass" not in r[6] for r in consistent)
     outs = [out_of(r[6]) for r in rows]
     assert len(set(outs)) == len(outs), "one folder per unit"
@@ -259,8 +271,7 @@ def test_case_list_of_both_p_spaces(tmp_path):
         assert cmd.index("--p-space") < cmd.index("--out")
         assert ("--p-mass lumped" in r[6]) == (r[4] == "lumped-ptangential")
         lumped = "-lumped" if r[4] == "lumped-ptangential" else ""
-        assert cmd[-1] == str(tmp_path / "results" / "rerun"
-                              / f"closed-exact-l{r[1]}-{r[2]}-{r[3]}{lumped}-ptangential")
+        assert cmd[-1] == f"sdcrack-rerun/closed-exact-l{r[1]}-{r[2]}-{r[3]}{lumped}-ptangential"
     assert all("--p-space" not in r[6] for r in continuous)
     outs = [out_of(r[6]) for r in rows]
     assert len(set(outs)) == len(outs), "one folder per unit"

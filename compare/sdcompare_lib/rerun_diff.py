@@ -1,0 +1,345 @@
+"""Comparing a rerun with its original results folder (compare/sdcompare-rerun).
+
+Owns the answer to "did this rerun give back the same numbers?": every HDF5 dataset of the
+rerun's field files (fields.h5, verification.h5: whichever it has; with --references also the
+references' dolfinx/ and freefem/fields.h5 it has) against the same-named dataset of the
+original's, bit for bit by default or within --rtol, and the numbers of each rerun case in
+summary.json (matched to the original's case by level, u space, multiplier, p mass, p space and
+δ; timings and file names are not compared). A rerun of one level / u space / multiplier holds a
+subset of the original's datasets and cases: that is the normal case. Exit codes: 0 the same,
+1 something differs (the first differing dataset and case are named), 2 bad input (one line on
+stderr). See compare/README.md, "Rerun commands".
+"""
+import argparse
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+from .read import REFERENCE_TOOLS, p_mass, p_space
+from .render import fmt_delta
+
+PROG = "sdcompare-rerun"
+SAME, DIFFERENT, BAD_INPUT = 0, 1, 2
+FIELD_FILES = ("fields.h5", "verification.h5")  # sdcrack's: a rerun has one at least
+REFERENCE_FIELDS = tuple(f"{tool}/fields.h5" for tool in REFERENCE_TOOLS)
+# wall-clock times and the names of the case's XDMF files: not results
+NOT_COMPARED = ("timings_s", "fields_series", "fields_state")
+DEFAULT_KKT_TOLERANCE = 1e-10
+
+
+class BadInput(Exception):
+    """Missing, unreadable or mismatched input (exit 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):
+        raise BadInput(message)
+
+
+def parse_args(argv):
+    p = _Parser(prog=PROG, description="Compares a rerun (the output of a report's or ci/cases' "
+                "rerun command) with the results folder it reruns: every dataset of the rerun's "
+                "fields.h5 / verification.h5 and the numbers of each rerun case in summary.json. "
+                "Exit 0 the same, 1 different, 2 bad input.")
+    p.add_argument("original", help="the results folder the command came from, OUT/<scene>/")
+    p.add_argument("rerun", help="the rerun: the command's --out folder (sdcrack-rerun/<name>) "
+                   "or the results folder inside it")
+    p.add_argument("--rtol", type=_rtol, default=None, metavar="X",
+                   help="accept a float dataset whose largest difference is at most X times the "
+                   "original dataset's largest magnitude, and summary.json floats within X "
+                   "relative (KKT residuals: both at most summary.json's kkt_tolerance); "
+                   "default: bit for bit")
+    p.add_argument("--references", action="store_true",
+                   help="also compare the references' dolfinx/ and freefem/fields.h5 that the "
+                   "rerun has (written by this checkout's reference scripts, not by the recorded "
+                   "binary: they differ where those scripts changed since the original)")
+    return p.parse_args(argv)
+
+
+def _rtol(text):
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}")
+    if not (math.isfinite(x) and x >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0: {text!r}")
+    return x
+
+
+# ---------------------------------------------------------------- the two folders
+def results_folder(path):
+    """The results folder `path` names: itself when it holds summary.json, else the one folder
+    inside it that does (a rerun command's --out holds OUT/<scene>/)."""
+    if not os.path.isdir(path):
+        raise BadInput(f"{path}: " + ("not a folder" if os.path.exists(path) else "no such folder"))
+    if os.path.isfile(os.path.join(path, "summary.json")):
+        return path
+    try:
+        entries = os.listdir(path)
+    except OSError as exc:
+        raise BadInput(f"{path}: unreadable folder ({exc.strerror})")
+    inner = sorted(e for e in entries if os.path.isfile(os.path.join(path, e, "summary.json")))
+    if len(inner) == 1:
+        return os.path.join(path, inner[0])
+    if inner:
+        raise BadInput(f"{path}: holds several results folders ({', '.join(inner)}): name one")
+    raise BadInput(f"{path}: not a results folder (no summary.json in it or in a folder inside)")
+
+
+def load_summary(folder):
+    path = os.path.join(folder, "summary.json")
+    try:
+        with open(path, encoding="utf-8") as fh:
+            summary = json.load(fh)
+    except OSError as exc:
+        raise BadInput(f"{path}: unreadable ({exc.strerror})")
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise BadInput(f"{path}: malformed JSON ({exc})")
+    if not isinstance(summary, dict) or not isinstance(summary.get("cases"), list):
+        raise BadInput(f"{path}: no `cases` list: not an sdcrack summary.json")
+    return summary
+
+
+# ---------------------------------------------------------------- summary.json cases
+def case_key(c):
+    """A case's identity: (level, u space, multiplier, p mass, p space, δ)."""
+    try:
+        return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), p_mass(c), p_space(c),
+                float(c["delta"]))
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def case_label(key):
+    level, u, m, pm, ps, delta = key
+    return f"level {level} {u} {m} {pm} {ps} δ {fmt_delta(delta)}"
+
+
+def cases_by_key(summary, folder):
+    out = {}
+    for c in summary["cases"]:
+        key = case_key(c) if isinstance(c, dict) else None
+        if key is None:
+            raise BadInput(f"{folder}/summary.json: a case without level, u_space, multiplier "
+                           "or delta")
+        out[key] = c
+    return out
+
+
+def flatten(value, prefix=""):
+    """{dotted name: leaf value} of a case entry, NOT_COMPARED left out."""
+    if not isinstance(value, dict):
+        return {prefix: value}
+    out = {}
+    for k, v in value.items():
+        if not prefix and k in NOT_COMPARED:
+            continue
+        out.update(flatten(v, f"{prefix}.{k}" if prefix else str(k)))
+    return out
+
+
+def _number(v):
+    return isinstance(v, float) or (isinstance(v, int) and not isinstance(v, bool))
+
+
+def value_agrees(name, a, b, rtol, leaves, kkt_tolerance):
+    """Whether the rerun's value `a` of a case's `name` agrees with the original's `b`: equal
+    (JSON values) by default; with rtol, floats within rtol relative, KKT residuals both at most
+    kkt_tolerance (their digits are round-off), a quadrature estimate within rtol of its error."""
+    if a == b and type(a) is type(b):
+        return True
+    if rtol is None or not (isinstance(a, float) or isinstance(b, float)):
+        return False
+    if not (_number(a) and _number(b)):
+        return False
+    diff = abs(a - b)
+    if diff <= rtol * max(abs(a), abs(b)):
+        return True
+    if name.startswith("kkt."):
+        return max(abs(a), abs(b)) <= kkt_tolerance
+    if name.startswith("errors_quadrature."):
+        error = leaves.get("errors." + name.split(".", 1)[1])
+        return _number(error) and diff <= rtol * abs(error)
+    return False
+
+
+def case_difference(rerun_case, original_case, rtol, kkt_tolerance):
+    """None, or "NAME: RERUN vs original ORIGINAL" for the first differing number of a case."""
+    a, b = flatten(rerun_case), flatten(original_case)
+    for name in sorted(set(a) | set(b)):
+        if name not in b:
+            return f"{name}: {a[name]!r}, absent in the original"
+        if name not in a:
+            return f"{name}: absent, {b[name]!r} in the original"
+        if not value_agrees(name, a[name], b[name], rtol, a, kkt_tolerance):
+            return f"{name}: {a[name]!r} vs original {b[name]!r}"
+    return None
+
+
+def compare_cases(rerun_sum, original_sum, rerun_dir, original_dir, rtol):
+    """([(case label, difference)] in the rerun's order, number of cases compared)."""
+    if rerun_sum.get("scene") != original_sum.get("scene"):
+        raise BadInput(f"{rerun_dir} reruns scene {rerun_sum.get('scene')!r}, {original_dir} is "
+                       f"scene {original_sum.get('scene')!r}")
+    original = cases_by_key(original_sum, original_dir)
+    rerun = cases_by_key(rerun_sum, rerun_dir)
+    if not rerun:
+        raise BadInput(f"{rerun_dir}/summary.json: no cases")
+    tol = original_sum.get("kkt_tolerance")
+    tol = tol if _number(tol) else DEFAULT_KKT_TOLERANCE
+    diffs = []
+    for key, c in rerun.items():
+        if key not in original:
+            raise BadInput(f"{rerun_dir}: case {case_label(key)} is not in "
+                           f"{original_dir}/summary.json: not a rerun of that folder")
+        why = case_difference(c, original[key], rtol, tol)
+        if why:
+            diffs.append((case_label(key), why))
+    return diffs, len(rerun)
+
+
+# ---------------------------------------------------------------- the field files
+def field_files(rerun_dir, original_dir, references=False):
+    """The field files to compare: those of FIELD_FILES (and REFERENCE_FIELDS with `references`)
+    that the rerun has."""
+    names = [n for n in FIELD_FILES if os.path.isfile(os.path.join(rerun_dir, n))]
+    if not names:
+        raise BadInput(f"{rerun_dir}: no {' or '.join(FIELD_FILES)} to compare")
+    if references:
+        names += [n for n in REFERENCE_FIELDS if os.path.isfile(os.path.join(rerun_dir, n))]
+    for n in names:
+        if not os.path.isfile(os.path.join(original_dir, n)):
+            raise BadInput(f"{original_dir}: no {n}, which the rerun has")
+    return names
+
+
+def _open(h5py, path):
+    try:
+        return h5py.File(path, "r")
+    except OSError as exc:
+        raise BadInput(f"{path}: unreadable HDF5 file ({exc})")
+
+
+def dataset_names(h5py, f):
+    names = []
+    f.visititems(lambda name, obj: names.append(name) if isinstance(obj, h5py.Dataset) else None)
+    return sorted(names)
+
+
+def _read(f, name, path):
+    try:
+        return np.asarray(f[name][()])
+    except (OSError, KeyError, TypeError, ValueError) as exc:
+        raise BadInput(f"{path}: dataset /{name} unreadable ({exc})")
+
+
+def max_differences(a, b):
+    """(largest |a − b|, that over the largest |b|) of two same-shape numeric arrays; NaN against
+    NaN is no difference, NaN against a number an infinite one."""
+    a, b = a.astype(np.float64), b.astype(np.float64)
+    with np.errstate(invalid="ignore", over="ignore"):
+        d = np.abs(a - b)
+    d[(a == b) | (np.isnan(a) & np.isnan(b))] = 0.0
+    d[np.isnan(d)] = np.inf
+    dmax = float(d.max()) if d.size else 0.0
+    finite = np.abs(b[np.isfinite(b)])
+    scale = float(finite.max()) if finite.size else 0.0
+    rel = dmax / scale if scale > 0 else (0.0 if dmax == 0 else math.inf)
+    return dmax, rel
+
+
+def dataset_difference(a, b, rtol):
+    """None when the rerun's dataset `a` matches the original's `b` (bit for bit, or a float
+    dataset within rtol), else what differs."""
+    if a.shape != b.shape:
+        return f"shape {a.shape} vs original {b.shape}"
+    if a.dtype != b.dtype:
+        return f"dtype {a.dtype} vs original {b.dtype}"
+    if a.tobytes() == b.tobytes():
+        return None
+    if a.dtype.kind not in "fiub":
+        return f"values differ ({a.dtype} data)"
+    dmax, rel = max_differences(a, b)
+    if rtol is not None and a.dtype.kind == "f" and rel <= rtol:
+        return None
+    if dmax == 0:
+        return "equal values, different bits (a signed zero or a NaN payload)"
+    return f"max abs difference {dmax:.2e}, max rel difference {rel:.2e}"
+
+
+def compare_fields(h5py, rerun_dir, original_dir, rtol, references=False):
+    """([(dataset label, difference)] in file and name order, number of datasets compared)."""
+    diffs, count = [], 0
+    for name in field_files(rerun_dir, original_dir, references):
+        rpath, opath = os.path.join(rerun_dir, name), os.path.join(original_dir, name)
+        with _open(h5py, rpath) as rf, _open(h5py, opath) as of:
+            try:
+                file_diffs = compare_file(h5py, rf, of, rpath, opath, rtol)
+            except (OSError, RuntimeError, KeyError) as exc:  # a damaged file's internals
+                raise BadInput(f"{rpath} or {opath}: unreadable HDF5 content ({exc})")
+        count += len(file_diffs)
+        diffs += [(f"/{ds} ({name})", why) for ds, why in file_diffs if why]
+    return diffs, count
+
+
+def compare_file(h5py, rf, of, rpath, opath, rtol):
+    """[(dataset name, difference or None)] of every dataset of the rerun's open file `rf`."""
+    out = []
+    for ds in dataset_names(h5py, rf):
+        if not isinstance(of.get(ds), h5py.Dataset):
+            raise BadInput(f"{rpath}: dataset /{ds} is not in {opath} (not a rerun of that "
+                           "folder, or by a binary that writes other datasets)")
+        out.append((ds, dataset_difference(_read(rf, ds, rpath), _read(of, ds, opath), rtol)))
+    return out
+
+
+# ---------------------------------------------------------------- the verdict
+def report(field_diffs, n_fields, case_diffs, n_cases, rtol):
+    """The lines printed and the exit code."""
+    if not field_diffs and not case_diffs:
+        what = "identical" if rtol is None else f"the same within rtol {rtol:g}"
+        return [f"{what}: {n_fields} datasets, {n_cases} cases"], SAME
+    lines = []
+    if field_diffs:
+        label, why = field_diffs[0]
+        lines.append(f"differs: dataset {label}: {why}")
+    if case_diffs:
+        label, why = case_diffs[0]
+        lines.append(f"differs: summary.json case {label}: {why}")
+    lines.append(f"{len(field_diffs)} of {n_fields} datasets and {len(case_diffs)} of {n_cases} "
+                 "cases differ" + (" bit for bit" if rtol is None else f" beyond rtol {rtol:g}")
+                 + " (the first of each is named above)")
+    return lines, DIFFERENT
+
+
+def compare(original, rerun, rtol=None, references=False):
+    """(lines, exit code) of comparing the rerun folder with the original; BadInput on bad input."""
+    try:
+        import h5py
+    except ImportError as exc:
+        raise BadInput(f"needs h5py ({exc})")
+    original_dir, rerun_dir = results_folder(original), results_folder(rerun)
+    if os.path.realpath(original_dir) == os.path.realpath(rerun_dir):
+        raise BadInput(f"{original_dir}: the same folder twice")
+    case_diffs, n_cases = compare_cases(load_summary(rerun_dir), load_summary(original_dir),
+                                        rerun_dir, original_dir, rtol)
+    field_diffs, n_fields = compare_fields(h5py, rerun_dir, original_dir, rtol, references)
+    return report(field_diffs, n_fields, case_diffs, n_cases, rtol)
+
+
+def main(argv):
+    try:
+        args = parse_args(argv)
+        lines, code = compare(args.original, args.rerun, args.rtol, args.references)
+    except BadInput as exc:
+        print(f"{PROG}: {exc}", file=sys.stderr)
+        return BAD_INPUT
+    print("\n".join(lines))
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
