@@ -25,6 +25,7 @@ from scene_text import set_key  # noqa: E402
 
 MEASURE = """<script>
 function posY(e) { return e ? e.getBoundingClientRect().top + window.scrollY : null; }
+function bottomY(e) { return e ? e.getBoundingClientRect().bottom + window.scrollY : null; }
 window.addEventListener('load', function () {
   var out = {
     width: window.innerWidth,
@@ -32,6 +33,11 @@ window.addEventListener('load', function () {
     verdict: posY(Array.from(document.querySelectorAll('p')).find(function (p) {
       return p.textContent.indexOf('Verdict:') === 0; })),
     rates: posY(document.querySelector('img[id^="rates-"]')),
+    // the first screen's δ → 0 line and reference sentence (issue 34 item 2): their bottoms
+    delta_line: bottomY(Array.from(document.querySelectorAll('p')).find(function (p) {
+      return p.textContent.indexOf('δ → 0 (Theorem 2.1)') === 0; })),
+    reference_line: bottomY(Array.from(document.querySelectorAll('p')).find(function (p) {
+      return p.textContent.indexOf('sdcrack against ') === 0; })),
     delta: posY(document.querySelector('img[id^="delta-"]:not([id^="delta-reference"])')),
     first_table: posY(document.querySelector('table')),
     provenance_open: Array.from(document.querySelectorAll('h2')).filter(function (h) {
@@ -164,3 +170,13 @@ def test_campaign_index_says_per_scene_what_converged(report, width, tmp_path):
     assert row.startswith("mixedPASS6 of 12 variants converge; last rates u "), row
     assert "6 declared expected failure(s)" in row and row.endswith("nonereport")
     assert got["scroll_width"] <= width, got
+
+
+def test_first_screen_holds_the_verdict_the_delta_result_and_the_references(layouts):
+    """At 1280 px the first screen shows the verdict, the δ → 0 line, the sentence on sdcrack
+    against dolfinx and FreeFEM, then the h → 0 plot (which draws the references' curves,
+    test_plots.py) whole."""
+    got = layouts[1280]
+    assert got["verdict"] < got["delta_line"] < got["reference_line"] < got["rates"], got
+    rates = next(i for i in got["images"] if i["id"].startswith("rates-"))
+    assert rates["bottom"] <= FIRST_SCREEN_PX, got
