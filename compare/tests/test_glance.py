@@ -140,3 +140,16 @@ def test_index_line_follows_the_data():
     assert g["line"].endswith("; δ → 0: FAIL")
     assert glance.summary(results(tools=()), analysis(good()))["line"] == \
         "no references; δ → 0: PASS"
+
+
+def test_without_an_exact_solution_the_sentences_name_the_finest_level_and_its_bias():
+    a = analysis(good())
+    a["exact"] = None
+    g = glance.summary(results(), a)
+    assert g["against"] == "reference finest level"
+    assert "distances to each reference's finest level" in glance.reference_sentence(g)
+    assert glance.FINEST_CAVEAT in glance.reference_sentence(g)
+    assert g["line"].startswith("u at level 4 ÷ dolfinx, FreeFEM (distances to their finest "
+                                "level): ")
+    exact = glance.summary(results(), analysis(good()))
+    assert glance.FINEST_CAVEAT not in glance.reference_sentence(exact)
