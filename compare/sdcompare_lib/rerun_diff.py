@@ -18,7 +18,8 @@ import sys
 
 import numpy as np
 
-from .read import REFERENCE_TOOLS, p_mass, p_space
+from . import read
+from .read import REFERENCE_TOOLS
 from .render import fmt_delta
 
 PROG = "sdcompare-rerun"
@@ -105,16 +106,16 @@ def load_summary(folder):
 
 # ---------------------------------------------------------------- summary.json cases
 def case_key(c):
-    """A case's identity: (level, u space, multiplier, p mass, p space, δ)."""
+    """A case's identity, read.case_key's (level, u space, multiplier, δ, p mass, p space), or
+    None for an entry that lacks one."""
     try:
-        return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), p_mass(c), p_space(c),
-                float(c["delta"]))
+        return read.case_key(c)
     except (KeyError, TypeError, ValueError):
         return None
 
 
 def case_label(key):
-    level, u, m, pm, ps, delta = key
+    level, u, m, delta, pm, ps = key
     return f"level {level} {u} {m} {pm} {ps} δ {fmt_delta(delta)}"
 
 
