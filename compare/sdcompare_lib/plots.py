@@ -46,7 +46,6 @@ PARTS = ("u space", "multiplier", "p mass", "p space")
 PANEL_NAME = {"u_l2": "u", "p_l2": "p\u00a0(L²)", "p_x": "p\u00a0(X)", "lambda_l2": "λ"}
 # the mesh parameter of the series (read.py's "h" or "N^-1/2") as the axes write it
 MESH_NAME = {"h": "h", "N^-1/2": "$N^{-1/2}$"}
-STYLE = {"broken": "-", "continuous": "--"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
 # colour per (u space, p mass, p space): each combination its own hue, so consistent and lumped,
 # continuous and broken-tangential p differ by more than dashing; the line style repeats the p mass
