@@ -35,6 +35,7 @@ import argparse
 import ast
 import datetime
 import html
+import importlib.util
 import json
 import math
 import os
@@ -272,10 +273,24 @@ def glance(report):
 
 # --------------------------------------------------------------------------- the baseline
 
+def verdict_source():
+    """The verdict module's source file: the checkout's (VERDICT_PY), else the installed
+    sdcompare_lib's (a pip install, whose checkout copy has no compare/sdcompare_lib; found
+    without importing the package)."""
+    if os.path.isfile(VERDICT_PY):
+        return VERDICT_PY
+    spec = importlib.util.find_spec("sdcompare_lib")
+    if spec is not None and spec.origin:
+        installed = os.path.join(os.path.dirname(spec.origin), "verdict.py")
+        if os.path.isfile(installed):
+            return installed
+    return VERDICT_PY
+
+
 def baseline_tolerances(path=None):
-    """{"BASELINE_RATE_ATOL": .., "BASELINE_ERROR_RTOL": ..}, read from the source of
-    compare/sdcompare_lib/verdict.py (their one home; see VERDICT_PY) or of path."""
-    path = path or VERDICT_PY
+    """{"BASELINE_RATE_ATOL": .., "BASELINE_ERROR_RTOL": ..}, read from the source of sdcompare's
+    verdict module (their one home; verdict_source()) or of path."""
+    path = path or verdict_source()
     try:
         with open(path, encoding="utf-8") as fh:
             tree = ast.parse(fh.read(), path)
