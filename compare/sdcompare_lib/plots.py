@@ -58,8 +58,10 @@ VARIANT_COLOR = {("broken", "consistent", "continuous"): "tab:blue",
                  ("broken", "consistent", "broken-tangential"): "tab:red",
                  ("broken", "lumped", "broken-tangential"): "tab:brown"}
 # The references: told apart by marker, line style and label as well as colour (a grey-scale print
-# or a colour-blind reader still sees two), and unlike any solver variant's marker and line.
-REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": "-.", "color": "black", "markersize": 9,
+# or a colour-blind reader still sees two), and unlike any solver variant's marker and line
+# (PM_STYLE: dolfinx's long dashes, not the broken-tangential p's dash-dot).
+REF_STYLE = {"dolfinx": {"marker": "*", "linestyle": (0, (10, 3)), "color": "black",
+                         "markersize": 9,
                          "label": "reference dolfinx"},
              "freefem": {"marker": "D", "linestyle": ":", "color": "tab:gray", "markersize": 6,
                          "markerfacecolor": "none", "label": "reference FreeFEM"}}

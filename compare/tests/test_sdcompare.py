@@ -656,7 +656,7 @@ def test_references_are_told_apart_in_plots(monkeypatch):
     d, f = plots.REF_STYLE["dolfinx"], plots.REF_STYLE["freefem"]
     for key in ("marker", "linestyle", "label", "color"):
         assert d[key] != f[key], key
-    solver = set(plots.MARK.values()) | set(plots.STYLE.values())
+    solver = set(plots.MARK.values()) | set(plots.PM_STYLE.values())
     assert not {d["marker"], f["marker"], d["linestyle"], f["linestyle"]} & solver
 
     def refs(scale):
