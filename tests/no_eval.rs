@@ -8,7 +8,7 @@
 
 mod common;
 
-use sdcrack::scene::{Expr, Scene};
+use sdcrack::scene::{Expr, Scene, TomlScene};
 
 fn hostile(placeholder_path: &str) -> Vec<String> {
     let doc: serde_json::Value =
