@@ -8,7 +8,7 @@
 //!   drives the stages over levels, u spaces, δ and multipliers; no TOML, CLI or HDF5 crate;
 //! - `sdcrack-io` (crates/sdcrack-io): the formats — [`scene`] (the TOML scene, validated) and
 //!   [`output`] (`summary.json`, HDF5/XDMF fields, the mesh export, merge);
-//! - `sdcrack` (this package): the binary — [`cli`], [`bench`] and [`references`] (runs the
+//! - `sdcrack` (this package): the binary — [`cli`], [`bench`](mod@bench) and [`references`] (runs the
 //!   dolfinx and FreeFEM reference solvers the scene asks for) — and this library, which
 //!   re-exports the two crates' modules under their old paths (`sdcrack::study`, …).
 
