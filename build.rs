@@ -1,13 +1,14 @@
 //! Records the git commit the binary is built from, and whether its sources differ from it, as
 //! the compile-time variables `SDCRACK_GIT_COMMIT` (40 hex digits, empty outside a git checkout)
 //! and `SDCRACK_GIT_DIRTY` (`true`, `false`, or empty outside a git checkout). "Dirty" means a
-//! tracked or untracked file under `src/`, `Cargo.toml`, `Cargo.lock` or `build.rs` differs from
-//! the commit: the files the binary is compiled from, not the docs or scripts beside them.
+//! tracked or untracked file under `src/`, `crates/` (the workspace's sdcrack-core and sdcrack-io),
+//! `Cargo.toml`, `Cargo.lock` or `build.rs` differs from the commit: the files the binary is
+//! compiled from, not the docs or scripts beside them.
 
 use std::process::Command;
 
-/// Paths the binary is compiled from (relative to the crate root).
-const SOURCES: [&str; 4] = ["src", "Cargo.toml", "Cargo.lock", "build.rs"];
+/// Paths the binary is compiled from (relative to the workspace root, this package's folder).
+const SOURCES: [&str; 5] = ["src", "crates", "Cargo.toml", "Cargo.lock", "build.rs"];
 
 /// Runs git without its optional locks: a plain `git status` refreshes the index and rewrites
 /// `.git/index` (a watched path below) when the files' stat data is racy, as right after a clone,

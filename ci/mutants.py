@@ -1,15 +1,15 @@
 """Mutation tests of the verification (issue 23): ci/mutants' engine.
 
 Each mutant of ci/mutants.toml is one realistic bug (a wrong factor, a swapped pair, a sign) in the
-solver (src/), a reference (references/) or the compare tool (compare/). It is applied alone to a
-scratch copy of this checkout; the copy is rebuilt when the bug is in Rust; the scenes are run as a
+solver (Rust: src/, crates/), a reference (references/) or the compare tool (compare/). It is
+applied alone to a scratch copy of this checkout; the copy is rebuilt when the bug is in Rust; the scenes are run as a
 user runs them (`sdcrack run`, with the references the scene names) and judged by the copy's
 compare/sdcompare. A mutant is KILLED when some scene's verdict is FAIL (exit 1), sdcompare refuses
 the folder (exit 2) or `sdcrack run` fails; it SURVIVES when every scene PASSes. The unmutated copy
 must PASS every scene first, or nothing is judged (exit 2).
 
 Mutants in compare/ judge the unmutated run's results (the solver and references are unchanged);
-mutants in references/ rerun the scenes that run references; mutants in src/ rebuild and rerun
+mutants in references/ rerun the scenes that run references; mutants in Rust rebuild and rerun
 every scene. The first scene that FAILs kills a mutant: the later ones are not run.
 
 Output: one line per mutant on stdout (KILLED/SURVIVED/BROKEN, name, the scene and the first
@@ -69,7 +69,8 @@ def kind(mutant):
     """Where the bug lives: "solver" (Rust, rebuild and rerun), "reference" (rerun the scenes with
     references) or "compare" (judge the unmutated results again)."""
     top = mutant["file"].split("/", 1)[0]
-    return {"src": "solver", "references": "reference", "compare": "compare"}.get(top, "solver")
+    return {"src": "solver", "crates": "solver", "references": "reference",
+            "compare": "compare"}.get(top, "solver")
 
 
 def mutated_text(text, mutant):

@@ -5,7 +5,7 @@
 RESULTS_DIR is one scene's results folder (`sdcrack run ... --out OUT` writes OUT/SCENE/), holding
 `fields.h5` and `fields/SERIES.series.xdmf` (+ `fields/SERIES.crack.series.xdmf`), one XDMF
 temporal collection per (level, u space, multiplier, p mass) whose time steps 0, 1, 2, ... are the
-δ sweep in decreasing δ (see src/output/xdmf.rs; the one-state files `fields/CASE.xdmf` beside
+δ sweep in decreasing δ (see crates/sdcrack-io/src/output/xdmf.rs; the one-state files `fields/CASE.xdmf` beside
 them are for meshio.read). The default series is broken-M1 at the finest level that has one, else
 the first series (by level, then name); --series takes `level4-broken-M1`, its file name or the
 `fields_series` of summary.json.
@@ -56,7 +56,7 @@ class _Parser(argparse.ArgumentParser):
         raise BadInput(message)
 
 
-# the time-series files (src/output/xdmf.rs): NAME.series.xdmf; NAME.xdmf holds one state
+# the time-series files (crates/sdcrack-io/src/output/xdmf.rs): NAME.series.xdmf; NAME.xdmf holds one state
 SERIES = ".series.xdmf"
 
 def parse_args(argv):

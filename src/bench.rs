@@ -669,6 +669,7 @@ pub fn peak_rss_mb() -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::TomlScene;
     use crate::study::Silent;
 
     /// A missed goal says by how much and lists its phases, largest first; a met one says "met".

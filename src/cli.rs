@@ -18,7 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::output::summary::{delta_text, Provenance};
 use crate::output::{write_run, ResultsDir};
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
-use crate::scene::Scene;
+use crate::scene::{Scene, TomlScene};
 use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
 
 /// `println!` that survives a closed standard output: `sdcrack bench --json | head` must not
@@ -430,7 +430,7 @@ fn reference(scene: &Scene, tool: &str, level: u32, out: &Path) -> Result<i32, F
 fn merge(shards: &[PathBuf], out: &Path) -> Result<i32, Failure> {
     let start = std::time::SystemTime::now();
     let outcome = crate::output::merge::merge_shards(shards, out, |origin| {
-        Provenance::of_this_process(origin, start)
+        Provenance::of_this_process(origin, start, crate::BUILD)
     })
     .map_err(|e| {
         if e.is_input_error() {
@@ -565,7 +565,8 @@ fn run(
     }
     let plan = CasePlan::new(scene, filter);
     let results = ResultsDir::create(out, &scene.name).map_err(usage)?;
-    let provenance = Provenance::of_this_process(origin, std::time::SystemTime::now());
+    let provenance =
+        Provenance::of_this_process(origin, std::time::SystemTime::now(), crate::BUILD);
     let start = Instant::now();
     let bar = if quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()

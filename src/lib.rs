@@ -1,37 +1,30 @@
 //! sdcrack — the smooth-domain mixed method for a crack with unilateral contact
 //! (Belhachmi, Sac-Epée, Sokolowski, C. R. Math. 338 (2004) 499–504).
 //!
-//! The pipeline, one module per stage, data flowing one way:
-//! 1. [`scene`]: the TOML scene and its expressions, validated;
-//! 2. [`mesh`]: structured nested triangulations, the crack chain, the u-space topologies;
-//! 3. [`fe`] + [`assembly`]: P1/MINI elements, bubbles condensed, the system of paper (15);
-//! 4. [`linalg`] + [`contact`]: sparse LDLᵀ of K(δ), the crack LCP of M0 | M1 | M1star;
-//!    [`krylov`]: PCG on the lumped Schur complement, the iterative alternative that
-//!    `sdcrack bench` measures (the solver keeps the direct route);
-//! 5. [`norms`] + [`output`]: errors against exact solutions, `summary.json`, HDF5/XDMF fields.
-//!
-//! [`study`] drives the stages over levels, u spaces, δ and multipliers; [`references`] runs the
-//! dolfinx and FreeFEM reference solvers the scene asks for; [`cli`] is the binary's command line.
+//! A workspace of three crates, layered (issue 35; tests/python/test_layout.py states the graph):
+//! - `sdcrack-core` (crates/sdcrack-core): the maths and the study — [`problem`], [`expr`],
+//!   [`mesh`], [`geometry`], [`fe`], [`assembly`], [`linalg`], [`ordering`], [`contact`],
+//!   [`multiplier`], [`krylov`], [`norms`], the validated [`scene`] struct and [`study`], which
+//!   drives the stages over levels, u spaces, δ and multipliers; no TOML, CLI or HDF5 crate;
+//! - `sdcrack-io` (crates/sdcrack-io): the formats — [`scene`] (the TOML scene, validated) and
+//!   [`output`] (`summary.json`, HDF5/XDMF fields, the mesh export, merge);
+//! - `sdcrack` (this package): the binary — [`cli`], [`bench`](mod@bench) and [`references`] (runs the
+//!   dolfinx and FreeFEM reference solvers the scene asks for) — and this library, which
+//!   re-exports the two crates' modules under their old paths (`sdcrack::study`, …).
 
-// Element loops index local matrices by (i, j, k) exactly as the formulas do.
-#![allow(clippy::needless_range_loop)]
+pub use sdcrack_core::{
+    assembly, contact, expr, fe, geometry, krylov, linalg, mesh, multiplier, norms, ordering,
+    problem, study,
+};
+pub use sdcrack_io::{output, plain, scene};
 
-pub mod assembly;
 pub mod bench;
 pub mod cli;
-pub mod contact;
-pub mod expr;
-pub mod fe;
-pub mod geometry;
-pub mod krylov;
-pub mod linalg;
-pub mod mesh;
-pub mod multiplier;
-pub mod norms;
-pub mod ordering;
-pub mod output;
-pub mod plain;
-pub mod problem;
 pub mod references;
-pub mod scene;
-pub mod study;
+
+/// How this binary was built: the package version and the git provenance that build.rs records.
+pub const BUILD: output::summary::Build = output::summary::Build {
+    version: env!("CARGO_PKG_VERSION"),
+    git_commit: env!("SDCRACK_GIT_COMMIT"),
+    git_dirty: env!("SDCRACK_GIT_DIRTY"),
+};

@@ -1,7 +1,7 @@
 //! The scene examples of docs/scenes.md are valid scenes, so the documentation stays true; and
 //! the repository refers to nothing outside it.
 
-use sdcrack::scene::Scene;
+use sdcrack::scene::{Scene, TomlScene};
 
 #[test]
 fn every_toml_example_of_the_scene_documentation_is_a_valid_scene() {

@@ -11,7 +11,7 @@
 use std::collections::BTreeSet;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use sdcrack::scene::{Scene, MAX_SCENE_BYTES};
+use sdcrack::scene::{Scene, TomlScene, MAX_SCENE_BYTES};
 
 struct Rng(u64);
 

@@ -357,7 +357,8 @@ fn reference_needs_a_listed_tool_and_check_json_gives_the_plan() {
     );
     assert_eq!(plan["references"], serde_json::json!([]));
     assert_eq!(plan["fields"], true);
-    // the estimate of src/scene: 128 MiB + 600 B per cell per log2(cells), in whole MiB
+    // the estimate of crates/sdcrack-core/src/scene.rs: 128 MiB + 600 B per cell per log2(cells),
+    // in whole MiB
     let mib =
         |cells: f64| ((128u64 << 20) as f64 + 600.0 * cells * cells.log2()) / (1u64 << 20) as f64;
     assert_eq!(plan["memory_mb"]["0"], mib(16.0).ceil() as u64);

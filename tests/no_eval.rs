@@ -1,4 +1,4 @@
-//! Scene text is parsed by the expression grammar (src/expr.rs), never evaluated as code.
+//! Scene text is parsed by the expression grammar (crates/sdcrack-core/src/expr.rs), never evaluated as code.
 //! The hostile expressions shared with the Python test (references/tests/hostile_expressions.json:
 //! attribute access, dunder names, calls outside the grammar, string literals, shell and FreeFEM
 //! statements) are fed to every Rust entry point that takes an expression: `Expr::parse`, each
@@ -8,7 +8,7 @@
 
 mod common;
 
-use sdcrack::scene::{Expr, Scene};
+use sdcrack::scene::{Expr, Scene, TomlScene};
 
 fn hostile(placeholder_path: &str) -> Vec<String> {
     let doc: serde_json::Value =

@@ -11,7 +11,7 @@
 
 mod common;
 
-use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, USpace};
+use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, TomlScene, USpace};
 use sdcrack::study::{CaseFilter, CaseResult};
 
 /// The repository scene `name` at `levels`, δ = 0, no fields, both p spaces and both p masses.

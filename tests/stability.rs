@@ -488,7 +488,7 @@ fn dilating_the_domain_follows_the_scaling_law() {
 /// dilation by L. Measured before the fix on mixed, level 2: for L = 1e-5 (1e-6) 2163 (2178) p
 /// pivots were regularised: KKT 5e-5 (0.8), fields wrong by O(1); for L = 1e8 two pivots: KKT
 /// 3e-7, fields wrong by 0.7 (reported as non-converged, never silent). Fixed by the symmetric
-/// diagonal equilibration K̃ = S K S before the LDLᵀ (src/linalg.rs).
+/// diagonal equilibration K̃ = S K S before the LDLᵀ (crates/sdcrack-core/src/linalg.rs).
 #[test]
 fn dilating_to_extreme_sizes_follows_the_scaling_law() {
     check_dilations(&["mixed"], &[1e-6, 1e8]);

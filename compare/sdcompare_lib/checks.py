@@ -18,7 +18,7 @@ from .settings import QUANTITIES, scene_lists, scene_p_masses, scene_p_spaces
 # at the tips), issue 33: two correct fixed-degree quadratures of a non-polynomial integrand differ
 # by their quadrature errors, which no fixed tolerance bounds (up to 1e-4 relative where the exact
 # solution's kinks cross the triangles). Each side estimates its own: the solver's
-# summary.json gives, per error, |e(rule) - e(higher rule)| (`errors_quadrature`, src/norms.rs,
+# summary.json gives, per error, |e(rule) - e(higher rule)| (`errors_quadrature`, crates/sdcrack-core/src/norms.rs,
 # 4/3 the points per direction), this tool the same with its own rules (exact.py, 3/2 the points).
 # A reported error r and this tool's o must then satisfy
 #     |r - o| <= SAFETY (est_sdcrack + est_ours) + ROUNDOFF_RTOL max(|r|, |o|) + ERRORS_ATOL.
@@ -28,7 +28,7 @@ from .settings import QUANTITIES, scene_lists, scene_p_masses, scene_p_spaces
 # tool's 3/2: 4 times the estimate bounds each rule's error.
 SAFETY = 4.0
 # Round-off: each error² is a sum of nonnegative terms, which float64 gives to (n - 1) eps relative
-# summed in sequence; the solver sums chunks of 4096 triangles in sequence (src/norms.rs), 4096 x
+# summed in sequence; the solver sums chunks of 4096 triangles in sequence (crates/sdcrack-core/src/norms.rs), 4096 x
 # 2.2e-16 = 9e-13, this tool pairwise (numpy). Measured where both estimates are round-off (smooth
 # scenes, levels 2-4): <= 5e-13 relative.
 ROUNDOFF_RTOL = 1e-12

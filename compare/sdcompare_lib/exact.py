@@ -1,4 +1,4 @@
-"""Errors against a scene's exact solution, computed independently of the solver (src/norms.rs).
+"""Errors against a scene's exact solution, computed independently of the solver (crates/sdcrack-core/src/norms.rs).
 
 What is computed (the quantities of summary.json's ``errors``)
 -----------------------------------------------------------
@@ -20,9 +20,9 @@ p_h = ∇u_h, constant per triangle, and λ_h = [u_h], piecewise linear along ea
 Exact data come from the scene's ``[exact]`` (u, optional px, py, jump) and ``[data] f``, parsed
 with references/common/sdexpr.py; missing px / py are the symbolic derivatives of u
 (``sdexpr.derivative``), a missing jump is u on the + face minus u on the − face with the
-signed-zero convention of ``eval_on_face`` (src/scene/mod.rs).
+signed-zero convention of ``eval_on_face`` (crates/sdcrack-core/src/problem.rs).
 
-Quadrature (deliberately not the solver's: src/norms.rs uses collapsed Gauss–Legendre rules of
+Quadrature (deliberately not the solver's: crates/sdcrack-core/src/norms.rs uses collapsed Gauss–Legendre rules of
 degree 10 and 20, no splitting of the tips' neighbours, and its own Duffy rule at the tips)
 ----------------------------------------------------------------------------------------------
 All rules are tensor rules on [0, 1]² mapped to the triangle; every point is strictly inside the
@@ -146,7 +146,7 @@ def tip_rule(m, corner=0):
 # Points per direction of the estimate's rule against the errors' rule (Quadrature.higher): for
 # an integrand that is not smooth on a triangle the rule's error falls as n^{-k}, k >= 1, and the
 # difference of the two rules, e_n (1 - (2/3)^k), is then at least a third of e_n (checks.py's
-# SAFETY 4 covers it, and the solver's 4/3, src/norms.rs).
+# SAFETY 4 covers it, and the solver's 4/3, crates/sdcrack-core/src/norms.rs).
 HIGHER_RULE_RATIO = (3, 2)
 
 
@@ -346,7 +346,7 @@ class ExactSolution:
         """u on the face ``side`` (+1 / −1) at crack points xy (K, 2), ν = normal (2,) or one per
         point (K, 2): a coordinate that is exactly zero while ν has a component in that direction
         gets the sign of side·ν there (signed zero selects the branch of sign / atan2), as
-        eval_on_face in src/scene/mod.rs."""
+        eval_on_face in crates/sdcrack-core/src/problem.rs."""
         q = np.array(xy, dtype=float)[:, :2]
         nu = np.broadcast_to(np.asarray(normal, dtype=float), q.shape)
         for d in range(2):

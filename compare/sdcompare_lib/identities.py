@@ -9,7 +9,7 @@ The three multiplier spaces differ only in the contact rows of the LCP (paper (1
   crack without kinks p·ν is linear on each crack edge (the bubble vanishes there), so M1's rows
   ∫ φ_j p·ν = (M_c N P)_j and M1star's rows (N P)_j = p(x_j)·ν span the same equations
   (M_c is invertible), and the multipliers are the same function (Λ̃ = M_c Λ). At a kink M1star
-  uses one averaged normal where M1's row integrates each edge's own (src/multiplier.rs), so the
+  uses one averaged normal where M1's row integrates each edge's own (crates/sdcrack-core/src/multiplier.rs), so the
   identity holds only for cracks without kinks; M0 (one mean per segment) is weaker and differs.
 
 Threshold: the two solves are backward stable on systems that differ only by an invertible row

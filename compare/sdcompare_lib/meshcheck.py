@@ -2,15 +2,15 @@
 which every other check takes on trust.
 
 * **mesh size h** — each case's `h` in summary.json is the largest triangle diameter (the longest
-  edge of a triangle: src/mesh.rs `Mesh::h`, `diameter`) of the case's stored mesh, the arrays of
+  edge of a triangle: crates/sdcrack-core/src/mesh.rs `Mesh::h`, `diameter`) of the case's stored mesh, the arrays of
   fields.h5 / verification.h5 the errors are recomputed from; each reference's `h` is that of the
   mesh export it solved on (mesh/levelL). Same float64 coordinates, the same hypot and max: they
   can differ by the order of the max only, ~1e-16 relative; H_RTOL = 1e-12 leaves four orders
   and is eleven below a factor-2 slip (h written as 2h: the uniform rates are taken per halving
   of h, and a rate computed from the wrong h is wrong by the slip).
 * **graded mesh law** — on a scene with `[discretization] grading = { beta = β, radius = R }`
-  the triangles of every level follow the law of the mesher (src/mesh/bisect.rs,
-  src/problem.rs `Grading::target`): with h_ℓ = h₀/2^ℓ (h₀ the largest diameter of the ungraded
+  the triangles of every level follow the law of the mesher (crates/sdcrack-core/src/mesh/bisect.rs,
+  crates/sdcrack-core/src/problem.rs `Grading::target`): with h_ℓ = h₀/2^ℓ (h₀ the largest diameter of the ungraded
   level 0), r_T the smallest distance of T's corners to a crack tip (the ends of every polyline of
   the scene copy) and the target
       t(h, r) = h · (min(max(r, r₀)/R, 1))^{1−β} for r < R, h beyond; r₀ = R (h/R)^{1/β},
@@ -53,7 +53,7 @@ which every other check takes on trust.
   case's stored mesh, array for array (exactly: the same float64 and int64 data); every stored
   mesh is cut along the crack as its u space says: for the broken u every triangle corner at an
   interior crack node uses the copy of its own face — the vertex number on the + face (left of the
-  path a → v → b along the crack, src/mesh.rs `corner_sides`), the − copy on the − face, two
+  path a → v → b along the crack, crates/sdcrack-core/src/mesh.rs `corner_sides`), the − copy on the − face, two
   different vertices — and, where the mesh export is there, exactly the (plus, minus) pair of the
   export's crack.txt, with the mesh equal to the export's vertices.txt / triangles.txt (the cracked
   mesh the references solved on, written by another writer); for the continuous u one vertex per
@@ -98,7 +98,7 @@ def checks(res, a):
 
 # ---------------------------------------------------------------- geometry
 def diameters(points, tris):
-    """(T,) the largest edge length of each triangle, as src/mesh.rs `diameter`: hypot of each
+    """(T,) the largest edge length of each triangle, as crates/sdcrack-core/src/mesh.rs `diameter`: hypot of each
     edge, the max of |p0 p1|, |p1 p2| and |p0 p2|."""
     X = np.asarray(points, dtype=float)[:, :2][np.asarray(tris, dtype=np.int64)]
     e01 = np.hypot(X[:, 0, 0] - X[:, 1, 0], X[:, 0, 1] - X[:, 1, 1])
@@ -112,7 +112,7 @@ def largest_diameter(points, tris):
 
 
 def grading_target(h, r, beta, radius):
-    """src/problem.rs `Grading::target`, vectorised over r."""
+    """crates/sdcrack-core/src/problem.rs `Grading::target`, vectorised over r."""
     r = np.asarray(r, dtype=float)
     if beta >= 1.0:
         return np.full_like(r, h)
@@ -202,7 +202,7 @@ def _rel(a, b):
 def h_check(res, a, meshes):
     label = "mesh size h"
     what = (f"each case's h in summary.json is the largest triangle diameter (longest edge, "
-            f"src/mesh.rs) of its stored mesh, each reference's h that of the mesh it solved on, "
+            f"crates/sdcrack-core/src/mesh.rs) of its stored mesh, each reference's h that of the mesh it solved on, "
             f"to ≤ {H_RTOL:g} relative")
     largest = {}
     problems, worst, n, unmeasured = [], 0.0, 0, []
@@ -294,7 +294,7 @@ def graded_check(res, a, meshes):
     sf = res["scene_file"]
     grading = _grading(sf)
     what = ("every triangle of every level within the grading law of the mesher: d_T ≤ "
-            "h_ℓ (r_T/R)^(1−β) (floored at r₀ = R (h_ℓ/R)^(1/β), h_ℓ beyond R; src/mesh/bisect.rs) "
+            "h_ℓ (r_T/R)^(1−β) (floored at r₀ = R (h_ℓ/R)^(1/β), h_ℓ beyond R; crates/sdcrack-core/src/mesh/bisect.rs) "
             f"× (1 + {GRADED_UPPER_RTOL:g})")
     if grading is None:
         return label, what, [], "the scene has no [discretization] grading (uniform levels)"
@@ -434,7 +434,7 @@ def reference_rates_check(res, a):
 
 # ---------------------------------------------------------------- 4. field files
 def _side_plus(out, back, d):
-    """src/mesh.rs `left_of_path`, vectorised: direction d from a crack node lies left of the
+    """crates/sdcrack-core/src/mesh.rs `left_of_path`, vectorised: direction d from a crack node lies left of the
     path arriving from `back` and leaving along `out` (the + face)."""
     def cross(a, b):
         return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]

@@ -2,7 +2,7 @@
 results folder (scene.toml, written by sdcrack), with the compare tool's defaults.
 
 The defaults are not set from the outputs they judge:
-* kkt_tolerance 1e-10: the solver's own acceptance tolerance of a contact solve (src/study.rs
+* kkt_tolerance 1e-10: the solver's own acceptance tolerance of a contact solve (crates/sdcrack-core/src/study.rs
   KKT_TOLERANCE, documented in docs/design.md), applied to the references as well;
 * reference_agreement 1e-8: the two references solve the same discrete problem (a convex QP on the
   same mesh), so their vertex values differ only by their solvers' tolerances;

@@ -460,7 +460,7 @@ def solver_run(request, tmp_path_factory):
 
 @needs_binary
 def test_agreement_with_solver_summary(solver_run):
-    """The solver's summary.json errors (src/norms.rs) equal this module's to 1e-8 relative."""
+    """The solver's summary.json errors (crates/sdcrack-core/src/norms.rs) equal this module's to 1e-8 relative."""
     scene, folder, _, ex, cases = solver_run
     # 2 u spaces x 3 multipliers, each over the scene's δ sweep
     assert len({(c["u_space"], c["multiplier"]) for c in cases}) == 6

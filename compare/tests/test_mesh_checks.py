@@ -376,7 +376,7 @@ def test_diameter_is_the_longest_edge():
 
 
 def test_grading_target_is_the_mesher_s():
-    """src/mesh/bisect.rs's test of Grading::target, here: uniform beyond R and at β = 1,
+    """crates/sdcrack-core/src/mesh/bisect.rs's test of Grading::target, here: uniform beyond R and at β = 1,
     (r/R)^(1−β) inside, the floor h (h/R)^((1−β)/β) at the tip."""
     def t(h, r, beta=0.5):
         return float(meshcheck.grading_target(h, np.array([r]), beta, 0.25)[0])

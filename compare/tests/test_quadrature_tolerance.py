@@ -48,7 +48,7 @@ KINKED = {"u": "sign(y)*max(0.3-x^2,0)^3*cos(y)", "jump": "2*max(0.3-x^2,0)^3",
 # smooth and closed everywhere (closed-exact's solution)
 CLOSED = sr.CLOSED
 # The "solver" of the synthetic folders: another correct rule (Stroud 6 × 6, tip 12, crack 8
-# points) with its own higher rule for its estimate, as src/norms.rs does with its own rules.
+# points) with its own higher rule for its estimate, as crates/sdcrack-core/src/norms.rs does with its own rules.
 SOLVER_RULE = exact.Quadrature(n=6, tip_m=12, eta=1.0, line_n=8)
 
 

@@ -1,6 +1,6 @@
 """sdexpr — the sdcrack scene expression grammar in Python: ONE parser, three back-ends.
 
-This is a port of ``src/expr.rs`` (grammar, precedence and error messages/columns), used by
+This is a port of ``crates/sdcrack-core/src/expr.rs`` (grammar, precedence and error messages/columns), used by
 the reference solvers so that a scene string means the same function everywhere (translate, never
 re-type).
 
@@ -476,7 +476,7 @@ def evaluate(tree, x, y):
 
 def on_face(x, y, normal, side):
     """Coordinates of crack points as seen from face `side` (+1: the side ν points into), the rule
-    of eval_on_face (src/scene/mod.rs): exactly-zero coordinates get the sign of side·ν (IEEE
+    of eval_on_face (crates/sdcrack-core/src/problem.rs): exactly-zero coordinates get the sign of side·ν (IEEE
     signed zero), so that ``to_numpy`` of ``sign``/``atan2`` selects that face."""
     import numpy as np
 
@@ -764,7 +764,7 @@ def _deriv_f2(name, a, b, var):
 def derivative(tree, var):
     """The symbolic derivative of ``tree`` (a tree or a source string) by ``var`` ("x" or "y"),
     as a tree of the same forms, lightly simplified (0*a -> 0, 1*a -> a, a+0 -> a, folding of
-    finite constants). Conventions of ``Expr::derivative`` in src/expr.rs:
+    finite constants). Conventions of ``Expr::derivative`` in crates/sdcrack-core/src/expr.rs:
     sign' = 0 everywhere, abs(a)' = sign(a)*a', min/max take the derivative of the active
     argument (``a < b`` decides; ties: the second argument's for min, the first's for max),
     (a^b)' = b*a^(b-1)*a' when b is constant, a^b*log(a)*b' when a is constant, else

@@ -1,5 +1,5 @@
 """Field files of the reference solvers: fields.h5 in the layout of the solver's writer
-(src/output/xdmf.rs), one grid per level on the cracked mesh, and one XDMF file per grid, so
+(crates/sdcrack-io/src/output/xdmf.rs), one grid per level on the cracked mesh, and one XDMF file per grid, so
 ParaView, meshio and the compare tool read solver and references alike.
 
     fields.h5   /meshes/level{L}/points (N,3)   /meshes/level{L}/triangles (T,3) int64
@@ -20,7 +20,7 @@ ParaView, meshio and the compare tool read solver and references alike.
                                  line cell per segment (one grid a file: meshio reads them, ParaView
                                  opens them as they are)
 
-The solver's convention (src/output/xdmf.rs): `NAME.xdmf` holds one state, a single grid that
+The solver's convention (crates/sdcrack-io/src/output/xdmf.rs): `NAME.xdmf` holds one state, a single grid that
 meshio.read reads; `NAME.series.xdmf` a temporal collection for meshio's TimeSeriesReader. A
 reference solves one state per level, so it writes only the first kind.
 

@@ -55,7 +55,7 @@ def write_summary(folder, scene, tool, cases, tool_version):
 # ---- KKT residuals and case status ---------------------------------------------------------------
 
 KKT_KEYS = ("equations", "primal", "dual", "complementarity")
-KKT_TOLERANCE = 1e-10  # as the Rust solver's KKT_TOLERANCE (src/study.rs): every residual is relative
+KKT_TOLERANCE = 1e-10  # as the Rust solver's KKT_TOLERANCE (crates/sdcrack-core/src/study.rs): every residual is relative
 
 
 def case_status(kkt, tolerance=KKT_TOLERANCE, failure=None):
@@ -74,7 +74,7 @@ def case_status(kkt, tolerance=KKT_TOLERANCE, failure=None):
 
 
 def componentwise_backward_error(residual, scale):
-    """max_i |r_i| / scale_i (Oettli–Prager, as src/linalg.rs): 0/0 counts as 0, a non-zero residual
+    """max_i |r_i| / scale_i (Oettli–Prager, as crates/sdcrack-core/src/linalg.rs): 0/0 counts as 0, a non-zero residual
     over a zero scale as ∞, a NaN residual gives NaN."""
     import numpy as np
 

@@ -419,7 +419,7 @@ def kkt_residuals(K, F, u, plus, minus, free, active):
 # the cell onto the tip (r ∝ ρ, Jacobian ∝ ρ), then ρ = σ², so that the integrands, which are
 # expansions in powers of r^(1/2) times smooth functions of the angle, become smooth in (σ, t) and
 # tensor Gauss rules converge exponentially. This is a different quadrature from the FreeFEM
-# script's (geometric grading as in src/norms.rs) and converges to the same integrals: raising
+# script's (geometric grading as in crates/sdcrack-core/src/norms.rs) and converges to the same integrals: raising
 # NORM_DEGREE and TIP_POINTS changes the norms by < 1e-9 relative (test_dolfinx_reference.py).
 
 REFERENCE_TRIANGLE = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])

@@ -34,7 +34,7 @@ summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h"
     relative) u_l2 = ‖u_h − u‖_{L²(Ω_c)},  p_l2 = ‖∇u_h − ∇u‖_{L²(Ω_c)},  lambda_l2 = ‖[u_h] − [u]‖_{L²(Γc)}
     (over the segments within each crack), ∇u from exact.px/py, else sdexpr's symbolic derivative of
     exact.u; [u] from exact.jump, else u on each face of a segment by the signed-zero rule of
-    eval_on_face (src/scene/mod.rs) with the segment's normal.
+    eval_on_face (crates/sdcrack-core/src/problem.rs) with the segment's normal.
 With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf (u, p) + level{L}.crack.xdmf
 (`jump` = u⁺ − u⁻ and `contact_force` = the nodal multipliers λ_j, 0 off the active set and at the
 tips; references/common/sdfields.py, README's field table).
@@ -69,7 +69,7 @@ import sdfields  # noqa: E402  the field files (fields.h5, XDMF) and p = ∇u_h 
 
 MAX_ITERATIONS = 100      # linear solves of the active-set method (crack_qp.edp)
 KKT_TOLERANCE = sdresults.KKT_TOLERANCE
-NORM_DEGREE = 10          # collapsed Gauss rule on triangles away from the crack tips (as src/norms.rs)
+NORM_DEGREE = 10          # collapsed Gauss rule on triangles away from the crack tips (as crates/sdcrack-core/src/norms.rs)
 NORM_NEAR_DEGREE = 20     # ... within NORM_NEAR_RADIUS diameters of a tip, on graded pieces and segments
 NORM_NEAR_RADIUS = 4.0
 NORM_TIP_DEPTH = 32       # splits toward each crack tip (triangles with a tip vertex, tip segments)
@@ -303,7 +303,7 @@ def run_level(exe, lv, f_ff, g_ff, work):
 
 # ---- errors against an exact solution ------------------------------------------------------------
 #
-# As src/norms.rs, with more points: every triangle gets a collapsed (Duffy) Gauss rule, of degree
+# As crates/sdcrack-core/src/norms.rs, with more points: every triangle gets a collapsed (Duffy) Gauss rule, of degree
 # NORM_NEAR_DEGREE where its centroid lies within NORM_NEAR_RADIUS of its diameters of a crack tip (there
 # ∇u ~ r^(-1/2) is far from polynomial), of degree NORM_DEGREE elsewhere; a triangle having a tip as a
 # vertex is split toward the tip NORM_TIP_DEPTH times (each split cuts it into its four midpoint
@@ -319,7 +319,7 @@ REFERENCE_TRIANGLE = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 def collapsed_rule(degree):
     """Collapsed Gauss rule on the reference triangle, exact for polynomials of `degree` (n² points,
-    n = degree/2 + 1; all interior; weights sum 1/2): the rule of src/fe/quadrature.rs."""
+    n = degree/2 + 1; all interior; weights sum 1/2): the rule of crates/sdcrack-core/src/fe/quadrature.rs."""
     g, w = sdquad.gauss01(degree // 2 + 1)
     a, b = np.meshgrid(g, g, indexing="ij")
     wa, wb = np.meshgrid(w, w, indexing="ij")
@@ -329,7 +329,7 @@ def collapsed_rule(degree):
 def graded_pieces(corners, depth, tri=REFERENCE_TRIANGLE):
     """Sub-triangles of `tri` graded toward its vertices k with corners[k] true: split into the four
     midpoint children; a corner child at a graded vertex is split again, `depth` times in all
-    (3·depth + 1 pieces for one graded corner, as graded_pieces in src/norms.rs)."""
+    (3·depth + 1 pieces for one graded corner, as graded_pieces in crates/sdcrack-core/src/norms.rs)."""
     if depth == 0 or not any(corners):
         return [tri]
     a, b, c = tri

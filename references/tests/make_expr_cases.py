@@ -1,7 +1,7 @@
 """Writes expr_cases.json: values of the Python translator (references/common/sdexpr.py) at
 random points, crack faces (y = +0.0 / -0.0) included (non-finite values as the strings
 'inf', '-inf', 'nan'), and its parse errors. The Rust test
-tests/expr_crosscheck.rs evaluates the same strings with src/expr.rs and must agree, and
+tests/expr_crosscheck.rs evaluates the same strings with crates/sdcrack-core/src/expr.rs and must agree, and
 test_expr_cases.py checks that the Python back-ends still give these values. Regenerate with
 `/usr/bin/python3 references/tests/make_expr_cases.py` after changing the grammar."""
 

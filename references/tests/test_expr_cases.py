@@ -1,5 +1,5 @@
 """The Python back-ends still give the values recorded in expr_cases.json (which the Rust test
-tests/expr_crosscheck.rs checks against src/expr.rs)."""
+tests/expr_crosscheck.rs checks against crates/sdcrack-core/src/expr.rs)."""
 
 import json
 import pathlib

@@ -122,7 +122,7 @@ def test_error_quadrature_is_converged(tmp_path, scene):
 
 
 def test_graded_rules_tile_and_integrate():
-    """The graded pieces tile the triangle (3·depth + 1 pieces for one tip corner, as src/norms.rs;
+    """The graded pieces tile the triangle (3·depth + 1 pieces for one tip corner, as crates/sdcrack-core/src/norms.rs;
     k corners share the first split) and the rules integrate the r^(-1) tip singularity up to what
     the innermost piece carries (2^-depth of the integral; measured 3e-11 relative at depth 32) and
     the s^(1/2) jump to round-off."""

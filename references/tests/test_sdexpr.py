@@ -123,7 +123,7 @@ def test_hard_coded_values(src, x, y, value):
     assert to_numpy(src)(x, y) == pytest.approx(value, rel=1e-14, abs=1e-14)
 
 
-# Error messages and 1-based columns: same cases as the Rust unit tests in src/expr.rs.
+# Error messages and 1-based columns: same cases as the Rust unit tests in crates/sdcrack-core/src/expr.rs.
 ERRORS = [
     ("", 1, "empty expression"),
     ("   ", 1, "empty expression"),
@@ -197,7 +197,7 @@ def test_ufl_backend():
 
 
 # ---------------------------------------------------------------------------------------------
-# Symbolic derivative (sdexpr.derivative), conventions of Expr::derivative in src/expr.rs
+# Symbolic derivative (sdexpr.derivative), conventions of Expr::derivative in crates/sdcrack-core/src/expr.rs
 # ---------------------------------------------------------------------------------------------
 
 # The expressions of the Rust test derivatives_match_finite_differences, plus the scenes' u.
@@ -250,7 +250,7 @@ def test_derivative_matches_finite_differences(src):
 
 
 def test_derivative_simplification_as_in_rust():
-    # the cases of the Rust unit test derivative_simplification (src/expr.rs)
+    # the cases of the Rust unit test derivative_simplification (crates/sdcrack-core/src/expr.rs)
     D = sdexpr.derivative
     assert D("x", "x") == ("num", 1.0)
     assert D("x", "y") == ("num", 0.0)

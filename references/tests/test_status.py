@@ -18,7 +18,7 @@ GOOD = {"equations": 2e-16, "primal": 0.0, "dual": 0.0, "complementarity": 1e-17
 
 
 def test_converged_when_every_residual_is_within_tolerance():
-    assert sdresults.KKT_TOLERANCE == 1e-10  # the Rust solver's KKT_TOLERANCE (src/study.rs)
+    assert sdresults.KKT_TOLERANCE == 1e-10  # the Rust solver's KKT_TOLERANCE (crates/sdcrack-core/src/study.rs)
     assert sdresults.case_status(GOOD) == "converged"
     assert sdresults.case_status(dict(GOOD, dual=1e-10)) == "converged"  # ≤, as the solver
 
@@ -42,7 +42,7 @@ def test_solver_failure_comes_first():
 
 
 def test_componentwise_backward_error_conventions():
-    """As componentwise_backward_error in src/linalg.rs."""
+    """As componentwise_backward_error in crates/sdcrack-core/src/linalg.rs."""
     cbe = sdresults.componentwise_backward_error
     assert cbe([0.0, 1e-16], [0.0, 1.0]) == 1e-16  # 0/0 counts as 0
     assert cbe([-2.0, 1.0], [4.0, 8.0]) == 0.5

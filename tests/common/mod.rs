@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use sdcrack::scene::{MultiplierSpace, Scene, USpace};
+use sdcrack::scene::{MultiplierSpace, Scene, TomlScene, USpace};
 use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
 
 /// A small valid scene (levels 0–1 of a 4 × 4 mesh, every variant, fields, no reference) that the

@@ -25,11 +25,14 @@ def test_a_second_build_finds_the_crate_fresh():
     assert first.returncode == 0, first.stderr[-2000:]
     second = subprocess.run(build, cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert second.returncode == 0, second.stderr[-2000:]
-    assert "Fresh sdcrack" in second.stderr, second.stderr[-2000:]
+    # the workspace's three crates (issue 35), each found fresh
+    for crate in ("sdcrack-core", "sdcrack-io", "sdcrack"):
+        assert f"Fresh {crate} v" in second.stderr, second.stderr[-2000:]
 
 
 def _build_script():
-    """The newest compiled build script of the crate (target/release/build/sdcrack-*/)."""
+    """The newest compiled build script of the crate (target/release/build/sdcrack-*/; of the
+    workspace's crates only the root package sdcrack has one)."""
     found = [os.path.join(d, "build-script-build")
              for d in glob.glob(os.path.join(ROOT, "target", "release", "build", "sdcrack-*"))
              if os.path.isfile(os.path.join(d, "build-script-build"))]

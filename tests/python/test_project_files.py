@@ -12,7 +12,11 @@ SPDX_FIRST_LINE = {"MIT": "MIT License"}  # the licence texts this check knows
 
 
 def cargo_package():
-    return tomllib.loads((ROOT / "Cargo.toml").read_text())["package"]
+    """The root package's table, keys inherited from the workspace (`license.workspace = true`,
+    issue 35) resolved from [workspace.package]."""
+    cargo = tomllib.loads((ROOT / "Cargo.toml").read_text())
+    inherited = cargo.get("workspace", {}).get("package", {})
+    return {k: inherited[k] if v == {"workspace": True} else v for k, v in cargo["package"].items()}
 
 
 def test_license_file_matches_cargo_toml():

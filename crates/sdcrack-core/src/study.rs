@@ -871,6 +871,8 @@ fn vertex_order(mesh: &Mesh, vertex_of: &[usize], last: &[bool], reach: usize) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::problem::Polyline;
+    use crate::scene::testing;
 
     /// The reuse test is the Neumann bound, and the bound is tight: K(δ) = A − (δ − δ') M with
     /// A = diag(1, 2), M = diag(1, 0) has ‖K(δ)⁻¹‖₁ = 1 / (1 − Δ) for Δ = δ − δ' ≥ 0 while
@@ -903,17 +905,17 @@ mod tests {
     fn h_n_from_the_trailing_block_matches_block_solves() {
         // the structured default scene, and a gmsh mesh of a kinked crack beside a straight one
         // (two trace rows at the kink; nested dissection of the vertex graph)
-        let unstructured = Scene::from_toml(
-            &crate::scene::DEFAULT_SCENE
-                .replace(
-                    "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
-                    "cracks = [{ polyline = [[-0.6, -0.2], [0.0, -0.2], [0.5, 0.3]] }, { segment = [[-0.5, 0.5], [0.3, 0.6]] }]",
-                )
-                .replace("cells = [8, 8]", "mesh_size = 0.3"),
-        )
-        .unwrap();
-        assert_eq!(unstructured.cracks.len(), 2, "the replacements took");
-        for scene in [Scene::default_scene(), unstructured] {
+        let mut unstructured = testing::mixed();
+        unstructured.cracks = vec![
+            Polyline {
+                points: vec![[-0.6, -0.2], [0.0, -0.2], [0.5, 0.3]],
+            },
+            Polyline {
+                points: vec![[-0.5, 0.5], [0.3, 0.6]],
+            },
+        ];
+        unstructured.meshing = crate::problem::Meshing::MeshSize(0.3);
+        for scene in [testing::mixed(), unstructured] {
             h_n_agrees_on(&scene);
         }
     }
@@ -1014,17 +1016,11 @@ mod tests {
     /// centroid lies on the + (−) side of the crack line for p⁺·τ (p⁻·τ).
     #[test]
     fn lumped_p_mass_is_an_exact_elimination() {
-        lumped_elimination_is_exact(Scene::default_scene(), PSpace::Continuous);
-        let oblique = crate::scene::DEFAULT_SCENE.replace(
-            "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
-            "crack = { segment = [[-0.5, -0.5], [0.5, 0.5]] }",
-        );
-        let scene = Scene::from_toml(&oblique).unwrap();
-        assert_ne!(
-            scene.cracks,
-            Scene::default_scene().cracks,
-            "the replacement took"
-        );
+        lumped_elimination_is_exact(testing::mixed(), PSpace::Continuous);
+        let mut scene = testing::mixed();
+        scene.cracks = vec![Polyline {
+            points: vec![[-0.5, -0.5], [0.5, 0.5]],
+        }];
         for p_space in [PSpace::Continuous, PSpace::BrokenTangential] {
             lumped_elimination_is_exact(scene.clone(), p_space);
         }

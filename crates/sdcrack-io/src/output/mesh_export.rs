@@ -245,6 +245,7 @@ pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBu
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::TomlScene;
 
     #[test]
     fn export_round_trips_coordinates_and_pairs() {

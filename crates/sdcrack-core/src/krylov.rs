@@ -292,13 +292,14 @@ mod tests {
     use super::*;
     use crate::assembly::assemble;
     use crate::problem::{PMass, PSpace, USpace};
-    use crate::scene::Scene;
+    use crate::scene::{testing, Scene};
 
     fn load(name: &str) -> Scene {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("scenes")
-            .join(format!("{name}.toml"));
-        Scene::from_file(&path).unwrap()
+        match name {
+            "mixed" => testing::mixed(),
+            "open-exact" => testing::open_exact(),
+            _ => unreachable!("{name}"),
+        }
     }
 
     /// The route's u equals the direct LDLᵀ's to 1e-10 relative (max norm) on repository scenes,

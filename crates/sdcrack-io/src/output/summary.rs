@@ -74,23 +74,41 @@ pub struct Provenance {
     pub scene_origin: String,
 }
 
+/// How the running binary was built, as its build script recorded it (build.rs at the repository
+/// root; the `sdcrack` package passes `sdcrack::BUILD`).
+#[derive(Clone, Copy, Debug)]
+pub struct Build {
+    /// Version of sdcrack (Cargo.toml).
+    pub version: &'static str,
+    /// Git commit the binary was built from, 40 hex digits; empty outside a git checkout.
+    pub git_commit: &'static str,
+    /// `true` or `false`: whether the binary's sources differed from that commit; empty outside
+    /// a git checkout.
+    pub git_dirty: &'static str,
+}
+
 impl Provenance {
-    /// The provenance of this process, started at `start`, running the scene from `scene_origin`.
-    pub fn of_this_process(scene_origin: &str, start: std::time::SystemTime) -> Provenance {
+    /// The provenance of this process, built as `build` says, started at `start`, running the
+    /// scene from `scene_origin`.
+    pub fn of_this_process(
+        scene_origin: &str,
+        start: std::time::SystemTime,
+        build: Build,
+    ) -> Provenance {
         let absolute = |p: std::io::Result<std::path::PathBuf>| {
             p.map(|p| p.display().to_string())
                 .unwrap_or_else(|e| format!("(unknown: {e})"))
         };
-        let commit = env!("SDCRACK_GIT_COMMIT");
+        let commit = build.git_commit;
         Provenance {
             command_line: std::env::args_os()
                 .map(|a| a.to_string_lossy().into_owned())
                 .collect(),
             working_directory: absolute(std::env::current_dir()),
             executable: absolute(std::env::current_exe()),
-            sdcrack_version: env!("CARGO_PKG_VERSION"),
+            sdcrack_version: build.version,
             git_commit: (!commit.is_empty()).then_some(commit),
-            git_dirty: match env!("SDCRACK_GIT_DIRTY") {
+            git_dirty: match build.git_dirty {
                 "true" => Some(true),
                 "false" => Some(false),
                 _ => None,
@@ -283,6 +301,7 @@ mod tests {
     use super::*;
     use crate::contact::LcpStatus;
     use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
+    use crate::scene::TomlScene;
 
     /// A solved case with awkward numbers: the shortest round trip needs 17 digits, a
     /// subnormal, the smallest normal, an exact zero, huge and tiny exponents.
@@ -339,7 +358,12 @@ mod tests {
             cases: vec![c.clone()],
             ..Default::default()
         };
-        let provenance = Provenance::of_this_process("test", std::time::SystemTime::now());
+        let build = Build {
+            version: "0.1.0",
+            git_commit: "",
+            git_dirty: "",
+        };
+        let provenance = Provenance::of_this_process("test", std::time::SystemTime::now(), build);
         let dir = tempfile::tempdir().unwrap();
         crate::output::write_run(dir.path(), &scene, &plan, &study, 1.0, &provenance).unwrap();
         let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();

@@ -914,12 +914,11 @@ mod tests {
     }
 
     use crate::problem::USpace;
-    use crate::scene::Scene;
+    use crate::scene::{testing, Scene};
     use std::f64::consts::PI;
 
     /// The error norms of the zero discrete solution of a repository scene at `level`.
-    fn zero_field_norms(scene_toml: &str, level: u32) -> (ErrorNorms, Mesh) {
-        let scene = Scene::from_toml(scene_toml).expect("repository scene is valid");
+    fn zero_field_norms(scene: Scene, level: u32) -> (ErrorNorms, Mesh) {
         let mesh = scene.mesh_source().unwrap().level(level).unwrap();
         let topo = mesh.u_topology(USpace::Broken);
         let exact = scene.exact.as_ref().expect("exact scene");
@@ -944,7 +943,7 @@ mod tests {
     /// diagonal of a cell). A quadrature weight off by a constant factor fails this test.
     #[test]
     fn zero_field_error_is_the_closed_form_norm_of_the_exact_solution() {
-        let (n, mesh) = zero_field_norms(include_str!("../scenes/closed-exact.toml"), 1);
+        let (n, mesh) = zero_field_norms(testing::closed_exact(), 1);
         let h_t = std::f64::consts::SQRT_2 * 2.0 / 16.0;
         let close = |a: f64, b: f64, what: &str| {
             assert!((a - b).abs() <= 1e-12 * b, "{what}: {a} vs closed form {b}");
@@ -964,7 +963,7 @@ mod tests {
     /// integrated through the r^{1/2} tips by the graded segments.
     #[test]
     fn zero_multiplier_error_is_the_closed_form_norm_of_the_jump() {
-        let (n, _) = zero_field_norms(include_str!("../scenes/open-exact.toml"), 0);
+        let (n, _) = zero_field_norms(testing::open_exact(), 0);
         let exact = (2.0f64 / 3.0).sqrt();
         assert!(
             (n.lambda_l2 - exact).abs() <= 1e-9 * exact,
@@ -1065,7 +1064,7 @@ mod tests {
     fn with_open_crack_solutions(
         check: impl Fn(&Mesh, &Exact, &[(UTopology, Vec<DiscreteSolution>)]),
     ) {
-        let scene = Scene::from_toml(include_str!("../scenes/open-exact.toml")).unwrap();
+        let scene = testing::open_exact();
         let mesh = scene.mesh_source().unwrap().level(0).unwrap();
         let exact = scene.exact.as_ref().unwrap();
         let topos = [USpace::Broken, USpace::Continuous].map(|s| mesh.u_topology(s));

@@ -3,8 +3,9 @@
 //! with its normal ν and faces), how the level-0 mesh is made ([`Meshing`]), the exact solution
 //! ([`Exact`]) and the discrete choices of a case: the u space ([`USpace`]), the multiplier cone
 //! ([`MultiplierSpace`], paper (12)–(14)) and the p–p block ([`PMass`]). The maths modules
-//! (mesh, assembly, norms, …) import these from here, never from [`crate::scene`], which owns
-//! the TOML format and its validation and re-exports them for its users.
+//! (mesh, assembly, norms, …) import these from here; the scene parser (sdcrack-io's `scene`,
+//! which this crate cannot see) owns the TOML format and its validation and re-exports them for
+//! its users.
 
 use std::fmt;
 

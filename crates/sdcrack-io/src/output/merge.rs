@@ -26,7 +26,7 @@ use serde_json::{Map, Value};
 
 use super::summary::{PlanSummary, Provenance};
 use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
-use crate::scene::Scene;
+use crate::scene::{Scene, TomlScene};
 use crate::study::{CaseFilter, CasePlan};
 
 /// Errors of a merge.

@@ -19,13 +19,18 @@ pub use crate::problem::{
     eval_on_face, Domain, Exact, Meshing, MultiplierSpace, PMass, PSpace, Polyline, Rectangle,
     Segment, USpace,
 };
-pub use verification::{ExpectedFailure, Verification};
+// The validated scene and its limits are sdcrack-core's (the study runs them without this
+// parser); re-exported so that a scene's users find them here too.
+pub use sdcrack_core::scene::{
+    check_level, estimated_memory_bytes, ExpectedFailure, FieldSet, Level0Size, Scene,
+    Verification, MAX_LEVEL, MAX_MEMORY_BYTES, MEMORY_BYTES_PER_CELL,
+};
 
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
-pub const SCENE_TEMPLATE: &str = include_str!("../../docs/scene-template.toml");
+pub const SCENE_TEMPLATE: &str = include_str!("../../../../docs/scene-template.toml");
 
 /// The embedded default scene (`sdcrack run` without argument): a partly open, partly closed crack.
-pub const DEFAULT_SCENE: &str = include_str!("../../scenes/mixed.toml");
+pub const DEFAULT_SCENE: &str = include_str!("../../../../scenes/mixed.toml");
 
 /// Errors found while reading or validating a scene.
 #[derive(Debug, thiserror::Error)]
@@ -100,88 +105,10 @@ fn in_file_message(path: &str, error: &SceneError) -> String {
     }
 }
 
-/// Which fields are written to `fields.h5` and the series `fields/*.xdmf` (the results folder
-/// keeps all of them in `verification.h5` when this set is not complete).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct FieldSet {
-    /// Write u at vertices.
-    pub u: bool,
-    /// Write p at vertices.
-    pub p: bool,
-    /// Write λ on the crack.
-    pub lambda: bool,
-}
-
-impl FieldSet {
-    /// True when no field file is to be written at all.
-    pub fn is_empty(&self) -> bool {
-        !(self.u || self.p || self.lambda)
-    }
-
-    /// True when u, p and λ are all listed: `fields.h5` then holds everything the compare tool
-    /// recomputes the errors from, and no `verification.h5` is written.
-    pub fn is_complete(&self) -> bool {
-        self.u && self.p && self.lambda
-    }
-}
-
-/// A validated scene.
-#[derive(Clone, Debug)]
-pub struct Scene {
-    /// Name, used for the results folder (letters, digits, `-`, `_`).
-    pub name: String,
-    /// Free text.
-    pub description: String,
-    /// The domain Ω.
-    pub domain: Domain,
-    /// The cracks Γc, in the scene's order.
-    pub cracks: Vec<Polyline>,
-    /// How messages name each crack (`geometry.crack.segment`, `geometry.cracks[1]`, …).
-    pub crack_names: Vec<String>,
-    /// How the level-0 mesh is made.
-    pub meshing: Meshing,
-    /// Grading of every level towards the crack tips (`[discretization] grading`), if any.
-    pub grading: Option<crate::problem::Grading>,
-    /// The level-0 mesh's size, for memory estimates before meshing.
-    pub level0: Level0Size,
-    /// Source term f of −Δu = f.
-    pub f: Expr,
-    /// Dirichlet data g on Γ.
-    pub g: Expr,
-    /// Exact solution, if the scene has one.
-    pub exact: Option<Exact>,
-    /// Refinement levels to run (level ℓ has 2^ℓ·cells cells per direction).
-    pub levels: Vec<u32>,
-    /// u spaces to run.
-    pub u_spaces: Vec<USpace>,
-    /// Multiplier spaces to run.
-    pub multipliers: Vec<MultiplierSpace>,
-    /// p masses to run (default: the consistent one only).
-    pub p_masses: Vec<PMass>,
-    /// p spaces to run (default: the paper's continuous p only); each runs with the u spaces it
-    /// serves ([`PSpace::serves`]).
-    pub p_spaces: Vec<PSpace>,
-    /// Regularisation parameters δ ≥ 0 to run.
-    pub deltas: Vec<f64>,
-    /// Fields to write.
-    pub fields: FieldSet,
-    /// Reference tools to run (`dolfinx`, `freefem`).
-    pub references: Vec<String>,
-    /// What the verdict may expect of the scene (`[verification]`).
-    pub verification: Verification,
-    /// The scene's TOML text as read (copied byte for byte into the results folder).
-    pub source: String,
-}
-
-/// Largest refinement level accepted (4^13 · cells would not fit in memory anyway).
-pub const MAX_LEVEL: u32 = 12;
 /// Largest number of level-0 cells per direction.
 pub const MAX_CELLS: usize = 4096;
 /// Largest scene file accepted, in bytes (1 MiB; the repository's scenes are under 2 KiB).
 pub const MAX_SCENE_BYTES: usize = 1 << 20;
-/// Largest estimated peak memory of one level's solve accepted before anything is allocated
-/// ([`estimated_memory_bytes`]): 16 GiB.
-pub const MAX_MEMORY_BYTES: u64 = 16 << 30;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -331,12 +258,31 @@ const TABLE_KEYS: &[(&str, &[&str])] = &[
 /// Reference tools the project knows how to run.
 pub const KNOWN_REFERENCES: [&str; 2] = ["dolfinx", "freefem"];
 
-impl Scene {
+/// A [`Scene`]'s TOML format: reading and validating a scene file or text, and locating a
+/// message's key in it. The scene struct is sdcrack-core's (format-free); bring this trait into
+/// scope with it (`use sdcrack::scene::{Scene, TomlScene}`) to call `Scene::from_file` and the rest.
+pub trait TomlScene: Sized {
+    /// Reads and validates a scene file; errors name the file.
+    fn from_file(path: &Path) -> Result<Self, SceneError>;
+    /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
+    const SCENE_TEMPLATE: &'static str;
+    /// The embedded default scene.
+    fn default_scene() -> Self;
+    /// Parses and validates scene TOML text.
+    fn from_toml(text: &str) -> Result<Self, SceneError>;
+    /// As [`TomlScene::from_toml`], reading a `discretization.mesh` file relative to `base_dir`.
+    fn from_toml_in(text: &str, base_dir: &Path) -> Result<Self, SceneError>;
+    /// `message` about this scene, naming a key first, with that key's line and column in the
+    /// scene file appended.
+    fn locate(&self, message: String) -> String;
+}
+
+impl TomlScene for Scene {
     /// Reads and validates a scene file; errors name the file.
     ///
     /// Refuses directories, files over [`MAX_SCENE_BYTES`] (without reading more than that) and
     /// text that is not UTF-8.
-    pub fn from_file(path: &Path) -> Result<Scene, SceneError> {
+    fn from_file(path: &Path) -> Result<Scene, SceneError> {
         let shown = path.display().to_string();
         let read_error = |reason: String| SceneError::Read {
             path: shown.clone(),
@@ -380,21 +326,21 @@ impl Scene {
     }
 
     /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
-    pub const SCENE_TEMPLATE: &str = include_str!("../../docs/scene-template.toml");
+    const SCENE_TEMPLATE: &'static str = include_str!("../../../../docs/scene-template.toml");
 
     /// The embedded default scene.
-    pub fn default_scene() -> Scene {
+    fn default_scene() -> Scene {
         // The embedded text is validated by a unit test; failing here is a build defect.
         Scene::from_toml(DEFAULT_SCENE).expect("embedded default scene is valid")
     }
 
     /// Parses and validates scene TOML text.
-    pub fn from_toml(text: &str) -> Result<Scene, SceneError> {
+    fn from_toml(text: &str) -> Result<Scene, SceneError> {
         Scene::from_toml_in(text, Path::new("."))
     }
 
     /// As [`Scene::from_toml`], reading a `discretization.mesh` file relative to `base_dir`.
-    pub fn from_toml_in(text: &str, base_dir: &Path) -> Result<Scene, SceneError> {
+    fn from_toml_in(text: &str, base_dir: &Path) -> Result<Scene, SceneError> {
         if text.len() > MAX_SCENE_BYTES {
             return Err(SceneError::Value(format!(
                 "the scene has {} bytes, more than the 1 MiB ({MAX_SCENE_BYTES} bytes) a scene may have",
@@ -416,26 +362,8 @@ impl Scene {
     /// `message` about this scene, naming a key first (`data.f = "…" evaluates to NaN …`,
     /// `geometry.cracks[1]: crack segment … is not along a mesh line`), with that key's line and
     /// column in the scene file appended, as the scene's own validation errors have them.
-    pub fn locate(&self, message: String) -> String {
+    fn locate(&self, message: String) -> String {
         locate_message(message, &self.source)
-    }
-
-    /// The scene's meshes (runs gmsh for a `mesh_size` scene).
-    pub fn mesh_source(&self) -> Result<crate::mesh::MeshSource, crate::mesh::MeshError> {
-        Ok(
-            crate::mesh::MeshSource::new(&self.domain, &self.cracks, &self.meshing)?
-                .graded(self.grading),
-        )
-    }
-
-    /// Total number of cases (level × served (u space, p space) pair × multiplier × p mass × δ).
-    pub fn case_count(&self) -> usize {
-        let pairs = self
-            .u_spaces
-            .iter()
-            .map(|&u| self.p_spaces.iter().filter(|p| p.serves(u)).count())
-            .sum::<usize>();
-        self.levels.len() * pairs * self.multipliers.len() * self.p_masses.len() * self.deltas.len()
     }
 }
 
@@ -1280,47 +1208,6 @@ fn validate_meshing(d: &DiscretizationToml, base_dir: &Path) -> Result<Meshing, 
     }
 }
 
-/// The size of a scene's level-0 mesh, known before it is made (memory estimates).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Level0Size {
-    /// The structured grid's cells per direction.
-    Grid([usize; 2]),
-    /// Triangles of an unstructured level 0: counted for a mesh file, estimated for gmsh as
-    /// |Ω| over the area √3/4 h² of an equilateral triangle of edge h, times 1.5.
-    Triangles(f64),
-}
-
-impl Level0Size {
-    /// Cells of a structured grid of the same work at `level` (a cell is two triangles).
-    fn cells_at(self, level: u32) -> f64 {
-        let n0 = match self {
-            Level0Size::Grid(c) => (c[0] as f64) * (c[1] as f64),
-            Level0Size::Triangles(t) => t / 2.0,
-        };
-        n0 * 4f64.powi(level.min(64) as i32)
-    }
-
-    /// What level `level` is, in words ("a 256×256 grid", "about 131072 triangles").
-    fn describe(self, level: u32) -> String {
-        match self {
-            Level0Size::Grid(c) => {
-                let scale = 1u64 << level.min(62);
-                format!(
-                    "level {level} of cells [{}, {}] is a {}×{} grid",
-                    c[0],
-                    c[1],
-                    (c[0] as u64).saturating_mul(scale),
-                    (c[1] as u64).saturating_mul(scale)
-                )
-            }
-            Level0Size::Triangles(_) => format!(
-                "level {level} has about {:.2e} triangles",
-                2.0 * self.cells_at(level)
-            ),
-        }
-    }
-}
-
 fn validate_cells(cells: &[i64]) -> Result<[usize; 2], SceneError> {
     let &[nx, ny] = cells else {
         return Err(SceneError::Value(format!(
@@ -1367,46 +1254,6 @@ fn validate_levels(levels: &[i64], size: Level0Size) -> Result<Vec<u32>, SceneEr
     }
     out.sort_unstable();
     Ok(out)
-}
-
-/// Estimated peak memory, in bytes, of solving level `level` of a grid of `cells` level-0 cells:
-/// 128 MiB plus [`MEMORY_BYTES_PER_CELL`] per cell times log2 of the cell count (the fill of the
-/// sparse LDLᵀ of a 2D grid under nested dissection grows like n log n). Measured peaks are in
-/// docs/design.md; the estimate is above each of them.
-pub fn estimated_memory_bytes(size: Level0Size, level: u32) -> u64 {
-    let n = size.cells_at(level);
-    let bytes = (128u64 << 20) as f64 + MEMORY_BYTES_PER_CELL * n * n.max(2.0).log2();
-    if bytes >= u64::MAX as f64 {
-        u64::MAX
-    } else {
-        bytes as u64
-    }
-}
-
-/// Bytes per cell per log2(cells) in [`estimated_memory_bytes`].
-pub const MEMORY_BYTES_PER_CELL: f64 = 600.0;
-
-/// Checks one refinement level of a grid of `cells` level-0 cells: at most [`MAX_LEVEL`] and an
-/// [`estimated_memory_bytes`] within [`MAX_MEMORY_BYTES`]. The message names the level, not the
-/// key (the scene's `discretization.levels` or the command line's `--level`).
-pub fn check_level(size: Level0Size, level: u32) -> Result<(), String> {
-    if level > MAX_LEVEL {
-        return Err(format!("level {level} is outside 0..={MAX_LEVEL}"));
-    }
-    let memory = estimated_memory_bytes(size, level);
-    if memory > MAX_MEMORY_BYTES {
-        let fewer = match size {
-            Level0Size::Grid(_) => "fewer cells",
-            Level0Size::Triangles(_) => "a larger mesh_size",
-        };
-        return Err(format!(
-            "{}, which needs an estimated {:.1} GiB, more than the {} GiB limit; use a lower level or {fewer}",
-            size.describe(level),
-            memory as f64 / (1u64 << 30) as f64,
-            MAX_MEMORY_BYTES >> 30
-        ));
-    }
-    Ok(())
 }
 
 fn validate_names<T: PartialEq + Copy>(

@@ -144,6 +144,7 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::TomlScene;
 
     #[test]
     fn results_dir_refuses_existing_and_cleans_up() {
@@ -272,7 +273,7 @@ pub fn write_run(
     let summary = summary::Summary {
         scene: scene.name.clone(),
         description: scene.description.clone(),
-        sdcrack_version: env!("CARGO_PKG_VERSION"),
+        sdcrack_version: provenance.sdcrack_version,
         provenance: provenance.clone(),
         kkt_tolerance: crate::study::KKT_TOLERANCE,
         plan: summary::PlanSummary::from_plan(plan),

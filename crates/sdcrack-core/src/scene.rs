@@ -1,0 +1,271 @@
+//! The validated scene: one crack problem and its study, free of any file format. The TOML
+//! format and its validation live in sdcrack-io's `scene`, which builds this struct and
+//! re-exports it; the study ([`crate::study`]) runs it.
+
+pub mod verification;
+
+use crate::expr::Expr;
+use crate::problem::{Domain, Exact, Meshing, MultiplierSpace, PMass, PSpace, Polyline, USpace};
+pub use verification::{ExpectedFailure, Verification};
+
+/// Which fields are written to `fields.h5` and the series `fields/*.xdmf` (the results folder
+/// keeps all of them in `verification.h5` when this set is not complete).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FieldSet {
+    /// Write u at vertices.
+    pub u: bool,
+    /// Write p at vertices.
+    pub p: bool,
+    /// Write λ on the crack.
+    pub lambda: bool,
+}
+
+impl FieldSet {
+    /// True when no field file is to be written at all.
+    pub fn is_empty(&self) -> bool {
+        !(self.u || self.p || self.lambda)
+    }
+
+    /// True when u, p and λ are all listed: `fields.h5` then holds everything the compare tool
+    /// recomputes the errors from, and no `verification.h5` is written.
+    pub fn is_complete(&self) -> bool {
+        self.u && self.p && self.lambda
+    }
+}
+
+/// A validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Name, used for the results folder (letters, digits, `-`, `_`).
+    pub name: String,
+    /// Free text.
+    pub description: String,
+    /// The domain Ω.
+    pub domain: Domain,
+    /// The cracks Γc, in the scene's order.
+    pub cracks: Vec<Polyline>,
+    /// How messages name each crack (`geometry.crack.segment`, `geometry.cracks[1]`, …).
+    pub crack_names: Vec<String>,
+    /// How the level-0 mesh is made.
+    pub meshing: Meshing,
+    /// Grading of every level towards the crack tips (`[discretization] grading`), if any.
+    pub grading: Option<crate::problem::Grading>,
+    /// The level-0 mesh's size, for memory estimates before meshing.
+    pub level0: Level0Size,
+    /// Source term f of −Δu = f.
+    pub f: Expr,
+    /// Dirichlet data g on Γ.
+    pub g: Expr,
+    /// Exact solution, if the scene has one.
+    pub exact: Option<Exact>,
+    /// Refinement levels to run (level ℓ has 2^ℓ·cells cells per direction).
+    pub levels: Vec<u32>,
+    /// u spaces to run.
+    pub u_spaces: Vec<USpace>,
+    /// Multiplier spaces to run.
+    pub multipliers: Vec<MultiplierSpace>,
+    /// p masses to run (default: the consistent one only).
+    pub p_masses: Vec<PMass>,
+    /// p spaces to run (default: the paper's continuous p only); each runs with the u spaces it
+    /// serves ([`PSpace::serves`]).
+    pub p_spaces: Vec<PSpace>,
+    /// Regularisation parameters δ ≥ 0 to run.
+    pub deltas: Vec<f64>,
+    /// Fields to write.
+    pub fields: FieldSet,
+    /// Reference tools to run (`dolfinx`, `freefem`).
+    pub references: Vec<String>,
+    /// What the verdict may expect of the scene (`[verification]`).
+    pub verification: Verification,
+    /// The scene's TOML text as read (copied byte for byte into the results folder).
+    pub source: String,
+}
+
+/// Largest refinement level accepted (4^13 · cells would not fit in memory anyway).
+pub const MAX_LEVEL: u32 = 12;
+
+/// Largest estimated peak memory of one level's solve accepted before anything is allocated
+/// ([`estimated_memory_bytes`]): 16 GiB.
+pub const MAX_MEMORY_BYTES: u64 = 16 << 30;
+
+impl Scene {
+    /// The scene's meshes (runs gmsh for a `mesh_size` scene).
+    pub fn mesh_source(&self) -> Result<crate::mesh::MeshSource, crate::mesh::MeshError> {
+        Ok(
+            crate::mesh::MeshSource::new(&self.domain, &self.cracks, &self.meshing)?
+                .graded(self.grading),
+        )
+    }
+
+    /// Total number of cases (level × served (u space, p space) pair × multiplier × p mass × δ).
+    pub fn case_count(&self) -> usize {
+        let pairs = self
+            .u_spaces
+            .iter()
+            .map(|&u| self.p_spaces.iter().filter(|p| p.serves(u)).count())
+            .sum::<usize>();
+        self.levels.len() * pairs * self.multipliers.len() * self.p_masses.len() * self.deltas.len()
+    }
+}
+
+/// The size of a scene's level-0 mesh, known before it is made (memory estimates).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Level0Size {
+    /// The structured grid's cells per direction.
+    Grid([usize; 2]),
+    /// Triangles of an unstructured level 0: counted for a mesh file, estimated for gmsh as
+    /// |Ω| over the area √3/4 h² of an equilateral triangle of edge h, times 1.5.
+    Triangles(f64),
+}
+
+impl Level0Size {
+    /// Cells of a structured grid of the same work at `level` (a cell is two triangles).
+    fn cells_at(self, level: u32) -> f64 {
+        let n0 = match self {
+            Level0Size::Grid(c) => (c[0] as f64) * (c[1] as f64),
+            Level0Size::Triangles(t) => t / 2.0,
+        };
+        n0 * 4f64.powi(level.min(64) as i32)
+    }
+
+    /// What level `level` is, in words ("a 256×256 grid", "about 131072 triangles").
+    fn describe(self, level: u32) -> String {
+        match self {
+            Level0Size::Grid(c) => {
+                let scale = 1u64 << level.min(62);
+                format!(
+                    "level {level} of cells [{}, {}] is a {}×{} grid",
+                    c[0],
+                    c[1],
+                    (c[0] as u64).saturating_mul(scale),
+                    (c[1] as u64).saturating_mul(scale)
+                )
+            }
+            Level0Size::Triangles(_) => format!(
+                "level {level} has about {:.2e} triangles",
+                2.0 * self.cells_at(level)
+            ),
+        }
+    }
+}
+
+/// Estimated peak memory, in bytes, of solving level `level` of a grid of `cells` level-0 cells:
+/// 128 MiB plus [`MEMORY_BYTES_PER_CELL`] per cell times log2 of the cell count (the fill of the
+/// sparse LDLᵀ of a 2D grid under nested dissection grows like n log n). Measured peaks are in
+/// docs/design.md; the estimate is above each of them.
+pub fn estimated_memory_bytes(size: Level0Size, level: u32) -> u64 {
+    let n = size.cells_at(level);
+    let bytes = (128u64 << 20) as f64 + MEMORY_BYTES_PER_CELL * n * n.max(2.0).log2();
+    if bytes >= u64::MAX as f64 {
+        u64::MAX
+    } else {
+        bytes as u64
+    }
+}
+
+/// Bytes per cell per log2(cells) in [`estimated_memory_bytes`].
+pub const MEMORY_BYTES_PER_CELL: f64 = 600.0;
+
+/// Checks one refinement level of a grid of `cells` level-0 cells: at most [`MAX_LEVEL`] and an
+/// [`estimated_memory_bytes`] within [`MAX_MEMORY_BYTES`]. The message names the level, not the
+/// key (the scene's `discretization.levels` or the command line's `--level`).
+pub fn check_level(size: Level0Size, level: u32) -> Result<(), String> {
+    if level > MAX_LEVEL {
+        return Err(format!("level {level} is outside 0..={MAX_LEVEL}"));
+    }
+    let memory = estimated_memory_bytes(size, level);
+    if memory > MAX_MEMORY_BYTES {
+        let fewer = match size {
+            Level0Size::Grid(_) => "fewer cells",
+            Level0Size::Triangles(_) => "a larger mesh_size",
+        };
+        return Err(format!(
+            "{}, which needs an estimated {:.1} GiB, more than the {} GiB limit; use a lower level or {fewer}",
+            size.describe(level),
+            memory as f64 / (1u64 << 30) as f64,
+            MAX_MEMORY_BYTES >> 30
+        ));
+    }
+    Ok(())
+}
+
+/// The repository's scenes that unit tests solve, built without their TOML (this crate has no
+/// parser): keep domain, crack, meshing, f, g and the exact solution as scenes/*.toml have them.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::*;
+    use crate::problem::Rectangle;
+
+    /// A scene on (−1, 1)² with the crack [−0.5, 0.5] × {0}, level-0 cells [8, 8], source `f`,
+    /// Dirichlet data `g` and, if given, the exact solution (u, \[u\]) — the shape of
+    /// scenes/mixed.toml, open-exact.toml and closed-exact.toml.
+    pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -> Scene {
+        let exact = exact.map(|(u, jump)| {
+            let u = Expr::parse(u).unwrap();
+            Exact {
+                px: u.derivative(crate::expr::Var::X),
+                py: u.derivative(crate::expr::Var::Y),
+                u,
+                jump: Some(Expr::parse(jump).unwrap()),
+            }
+        });
+        Scene {
+            name: name.into(),
+            description: String::new(),
+            domain: Domain::Rectangle(Rectangle {
+                min: [-1.0, -1.0],
+                max: [1.0, 1.0],
+            }),
+            cracks: vec![Polyline {
+                points: vec![[-0.5, 0.0], [0.5, 0.0]],
+            }],
+            crack_names: vec!["geometry.crack.segment".into()],
+            meshing: Meshing::Cells([8, 8]),
+            grading: None,
+            level0: Level0Size::Grid([8, 8]),
+            f: Expr::parse(f).unwrap(),
+            g: Expr::parse(g).unwrap(),
+            exact,
+            levels: vec![0, 1, 2, 3, 4],
+            u_spaces: vec![USpace::Continuous, USpace::Broken],
+            multipliers: vec![
+                MultiplierSpace::M0,
+                MultiplierSpace::M1,
+                MultiplierSpace::M1Star,
+            ],
+            p_masses: vec![PMass::Consistent, PMass::Lumped],
+            p_spaces: vec![PSpace::Continuous],
+            deltas: vec![1.0, 1e-2, 1e-4, 1e-6, 1e-8, 0.0],
+            fields: FieldSet {
+                u: true,
+                p: true,
+                lambda: true,
+            },
+            references: Vec::new(),
+            verification: Verification::default(),
+            source: String::new(),
+        }
+    }
+
+    /// scenes/mixed.toml, the default scene: partly open, partly closed.
+    pub(crate) fn mixed() -> Scene {
+        scene("mixed", "20*sin(2*pi*x)*sign(y)", "0", None)
+    }
+
+    /// scenes/open-exact.toml: the fully open crack, u = Im √(z² − 1/4).
+    pub(crate) fn open_exact() -> Scene {
+        let u =
+            "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)";
+        scene("open-exact", "0", u, Some((u, "2*sqrt(0.25 - x^2)")))
+    }
+
+    /// scenes/closed-exact.toml: the closed crack, u = sin(πx) cos(πy) − y.
+    pub(crate) fn closed_exact() -> Scene {
+        scene(
+            "closed-exact",
+            "2*pi^2*sin(pi*x)*cos(pi*y)",
+            "sin(pi*x)*cos(pi*y) - y",
+            Some(("sin(pi*x)*cos(pi*y) - y", "0")),
+        )
+    }
+}

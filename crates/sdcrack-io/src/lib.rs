@@ -1,0 +1,11 @@
+//! sdcrack-io — sdcrack's formats: the TOML scene ([`scene`], validated into sdcrack-core's
+//! `Scene`) and the results folder ([`output`]: `summary.json`, HDF5/XDMF fields, the mesh
+//! export, `sdcrack merge`). The maths and the study are sdcrack-core's; this crate only reads
+//! and writes them.
+
+// The core modules under their own names, as these modules have always called them.
+use sdcrack_core::{contact, expr, geometry, mesh, multiplier, norms, problem, study};
+
+pub mod output;
+pub mod plain;
+pub mod scene;
