@@ -37,22 +37,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 from scene_text import set_key  # noqa: E402
+from solver_run import sdcrack_bin, env  # noqa: E402
+
 SCRIPT = os.path.join(ROOT, "compare", "sdcompare")
 SCENES = os.path.join(ROOT, "scenes")
 # The expectations argument of a case that passes no --expectations (scenes/expectations.toml).
 DEFAULT = "default"
 WORKERS = max(2, min(4, os.cpu_count() or 2))
-
-
-def sdcrack_bin():
-    return os.environ.get("SDCRACK_BIN") or os.path.join(ROOT, "target", "release", "sdcrack")
-
-
-def env():
-    e = dict(os.environ)
-    e.setdefault("FF_LOADPATH", "/usr/lib/freefem++")
-    e.setdefault("MPLBACKEND", "Agg")
-    return e
 
 
 def read_text(path):

@@ -34,21 +34,11 @@ sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
 from scene_text import set_key  # noqa: E402
 from sdcompare_lib import meshcheck, theory  # noqa: E402
+from solver_run import sdcrack_bin, env  # noqa: E402
 
 SCRIPT = os.path.join(ROOT, "compare", "sdcompare")
 XFAIL = "[[verification.expected_failure]]"
 CHECKS = ("mesh size h", "graded mesh law", "graded reference rates", "field files' mesh")
-
-
-def sdcrack_bin():
-    return os.environ.get("SDCRACK_BIN") or os.path.join(ROOT, "target", "release", "sdcrack")
-
-
-def env():
-    e = dict(os.environ)
-    e.setdefault("FF_LOADPATH", "/usr/lib/freefem++")
-    e.setdefault("MPLBACKEND", "Agg")
-    return e
 
 
 def graded_scene(beta):

@@ -26,6 +26,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 from scene_text import set_key  # noqa: E402
+from solver_run import sdcrack_bin, env  # noqa: E402
 
 SCENE = "closed-exact"
 
@@ -65,16 +66,6 @@ def checkout_sdcompare():
         return None
     py = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
     return [py, script]
-
-
-def sdcrack_bin():
-    return os.environ.get("SDCRACK_BIN") or os.path.join(ROOT, "target", "release", "sdcrack")
-
-
-def env():
-    e = dict(os.environ)
-    e.setdefault("MPLBACKEND", "Agg")
-    return e
 
 
 @pytest.fixture(scope="module")

@@ -15,10 +15,7 @@ SDCOMPARE = os.path.join(ROOT, "compare", "sdcompare")
 sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
 from scene_text import set_key  # noqa: E402
-
-
-def sdcrack_bin():
-    return os.environ.get("SDCRACK_BIN") or os.path.join(ROOT, "target", "release", "sdcrack")
+from solver_run import sdcrack_bin  # noqa: E402
 
 
 def sdcompare(*args):

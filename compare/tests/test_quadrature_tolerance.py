@@ -36,6 +36,7 @@ sys.path.insert(0, HERE)
 
 import synthetic_results as sr  # noqa: E402  (puts compare/ and references/ on sys.path)
 from sdcompare_lib import checks, exact, norms, precomputed, read  # noqa: E402
+from solver_run import sdcrack_bin  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
@@ -50,10 +51,6 @@ CLOSED = sr.CLOSED
 # The "solver" of the synthetic folders: another correct rule (Stroud 6 × 6, tip 12, crack 8
 # points) with its own higher rule for its estimate, as crates/sdcrack-core/src/norms.rs does with its own rules.
 SOLVER_RULE = exact.Quadrature(n=6, tip_m=12, eta=1.0, line_n=8)
-
-
-def sdcrack_bin():
-    return os.environ.get("SDCRACK_BIN") or os.path.join(ROOT, "target", "release", "sdcrack")
 
 
 def fresh_caches(monkeypatch):
