@@ -22,13 +22,12 @@ applicable" otherwise — so the sentence is the checks' result and comes out FA
 Everything here is derived from the analysis dict `a` of compare/sdcompare; nothing is judged
 twice: the verdict does not read this module.
 """
-import math
 
-from . import verdict, yardsticks
+from . import rates, verdict, yardsticks
+from .read import REFERENCE_TOOLS as REFERENCES
 from .read import finite_number, variant_label, variant_of, variant_order
+from .render import REFERENCE_NAMES
 
-REFERENCES = ("dolfinx", "freefem")
-REFERENCE_NAMES = {"dolfinx": "dolfinx", "freefem": "FreeFEM"}
 # The check rows that judge the δ → 0 limit (Theorem 2.1).
 DELTA_CHECKS = ("δ → 0", "δ-constant", "Theorem 2.1 (exact)")
 # The quantities drawn as reference curves on the h → 0 plot (the references' own errors).
@@ -40,10 +39,10 @@ def _rate(points):
     or None without two consecutive levels with positive values."""
     pts = [(lv, x, e) for lv, x, e in points if finite_number(x) and finite_number(e)
            and x > 0 and e > 0]
-    if len(pts) < 2 or pts[-1][0] != pts[-2][0] + 1 or pts[-1][1] == pts[-2][1]:
+    if len(pts) < 2 or pts[-1][0] != pts[-2][0] + 1:
         return None
     (_, x0, e0), (_, x1, e1) = pts[-2], pts[-1]
-    return math.log(e0 / e1) / math.log(x0 / x1)
+    return rates.rate(x0, e0, x1, e1)
 
 
 def reference_parameters(res, a, tool):
@@ -206,14 +205,15 @@ GROUPS = (("converging variants", ("converges",)),
           ("other variants", None))
 
 
-def _tools_of(g):
+def tools_of(g):
+    """The references the glance's rows were measured against, in REFERENCES' order."""
     return [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
 
 
 def groups(g):
     """[(group name, rows, ratio text per tool (merged into one "… either reference" when the
     tools read the same), rates span)] of the glance's rows, non-empty groups only."""
-    tools, taken, out = _tools_of(g), set(), []
+    tools, taken, out = tools_of(g), set(), []
     for name, statuses in GROUPS:
         chosen = [r for r in g["rows"] if (r["status"] in statuses if statuses
                                            else r["status"] not in taken)]
@@ -242,7 +242,7 @@ def reference_sentence(g):
     """The first-screen sentence on sdcrack against the references, or None without them."""
     if g["level"] is None or not g["rows"]:
         return None
-    tools = _tools_of(g)
+    tools = tools_of(g)
     against = ("errors against the exact solution" if g["against"] == "exact" else
                "distances to each reference's finest level")
     own = {t: _own(g, t) for t in tools}
@@ -263,7 +263,7 @@ def index_line(g):
     if g["level"] is None or not g["rows"]:
         head = "no references"
     else:
-        tools = _tools_of(g)
+        tools = tools_of(g)
         own = {t: _own(g, t) for t in tools}
         ref_rates = " / ".join(sorted({own[t].split("(rate ")[1].rstrip(")") for t in tools}))
         parts = [f"{name} {per_tool}" + (f" (rates {rates} vs {ref_rates})"
@@ -276,7 +276,7 @@ def index_line(g):
 
 def extremes_sentence(g):
     """Which converging variant is closest to and farthest from the first reference."""
-    tools = _tools_of(g)
+    tools = tools_of(g)
     conv = [r for r in g["rows"] if r["status"] == "converges"
             and (r["refs"].get(tools[0]) or {}).get("ratio") is not None] if tools else []
     if len(conv) < 2:
