@@ -265,6 +265,9 @@ pub struct MeshRecord {
     pub crack_points: Vec<[f64; 2]>,
     /// Crack edges as pairs of indices into `crack_points` (within one crack).
     pub crack_segments: Vec<[usize; 2]>,
+    /// Each crack node's (+ dof, − dof) in `crack_points`' order, the u topology's
+    /// [`crate::mesh::UTopology::crack_dofs`] (one dof twice at a tip and in the continuous space).
+    pub crack_dofs: Vec<(usize, usize)>,
 }
 
 /// Everything a study produced.
@@ -332,6 +335,7 @@ pub fn run_study(
                     triangles: topo.triangle_dofs.clone(),
                     crack_points: ops.points.clone(),
                     crack_segments: ops.segments.clone(),
+                    crack_dofs: topo.crack_dofs.clone(),
                 });
             }
             let p_spaces = plan.p_spaces.iter().filter(|p| p.serves(u_space));

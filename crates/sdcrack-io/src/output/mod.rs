@@ -144,7 +144,6 @@ pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::TomlScene;
 
     #[test]
     fn results_dir_refuses_existing_and_cleans_up() {
@@ -165,61 +164,6 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("s")]);
-    }
-
-    /// The faces found from coordinates alone are the u topology's (+ dof, − dof) of every crack
-    /// node (the mesh export's crack.txt for the broken space): straight, kinked and reversed
-    /// cracks, two cracks, both u spaces.
-    #[test]
-    fn crack_face_dofs_are_the_topology_pairs() {
-        use crate::multiplier::CrackOperators;
-        use crate::problem::USpace;
-        let kinked = crate::scene::Scene::from_toml(
-            r#"
-name = "kinks"
-[geometry]
-domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
-cracks = [
-  { polyline = [[-0.5, -0.25], [0.0, -0.25], [0.5, 0.25]] },
-  { polyline = [[0.5, 0.75], [0.0, 0.75], [-0.25, 0.5]] },
-]
-[data]
-f = "1"
-g = "0"
-[discretization]
-cells = [8, 8]
-levels = [0, 1]
-u_spaces = ["continuous", "broken"]
-multipliers = ["M1"]
-p_mass = ["consistent"]
-deltas = [0.0]
-"#,
-        )
-        .unwrap();
-        for scene in [crate::scene::Scene::default_scene(), kinked] {
-            let source = scene.mesh_source().unwrap();
-            for level in [0, 1] {
-                let mesh = source.level(level).unwrap();
-                let ops = CrackOperators::new(&mesh);
-                for space in [USpace::Continuous, USpace::Broken] {
-                    let topo = mesh.u_topology(space);
-                    let points: Vec<[f64; 2]> =
-                        topo.dof_vertex.iter().map(|&v| mesh.vertices[v]).collect();
-                    let found =
-                        crack_face_dofs(&points, &topo.triangle_dofs, &ops.points, &ops.segments)
-                            .unwrap();
-                    assert_eq!(
-                        found, topo.crack_dofs,
-                        "{} level {level} {space}",
-                        scene.name
-                    );
-                    let split = found.iter().filter(|(p, m)| p != m).count();
-                    let interior = mesh.crack_nodes().count() - 2 * mesh.cracks.len();
-                    let want = if space == USpace::Broken { interior } else { 0 };
-                    assert_eq!(split, want);
-                }
-            }
-        }
     }
 }
 
@@ -317,7 +261,7 @@ fn write_fields(
     scene: &crate::scene::Scene,
     study: &crate::study::StudyResult,
 ) -> Result<(), WriteError> {
-    let (meshes, all) = field_data(study)?;
+    let (meshes, all) = field_data(study);
     if scene.fields.is_complete() {
         xdmf::write_fields(dir, FIELDS_STEM, &meshes, &all)?;
         return Ok(());
@@ -333,21 +277,9 @@ fn write_fields(
 
 /// The meshes and every case's fields, all quantities: u, p, its bubbles (consistent p mass
 /// only: the lumped p has none), λ and the jump [u_h] = u⁺ − u⁻ at the crack nodes.
-fn field_data(
-    study: &crate::study::StudyResult,
-) -> Result<(Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>), xdmf::OutputError> {
+fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>) {
     use crate::multiplier::CrackField;
     use xdmf::Meta;
-    // per mesh record: each crack node's (+ dof, − dof)
-    let faces: Vec<Vec<(usize, usize)>> = study
-        .meshes
-        .iter()
-        .map(|m| {
-            crack_face_dofs(&m.points, &m.triangles, &m.crack_points, &m.crack_segments).map_err(
-                |e| xdmf::OutputError::Invalid(format!("level {}, {} u: {e}", m.level, m.u_space)),
-            )
-        })
-        .collect::<Result<_, _>>()?;
     let meshes: Vec<xdmf::MeshData> = study
         .meshes
         .iter()
@@ -370,9 +302,11 @@ fn field_data(
                     (m.crack_points.clone(), m.crack_segments.clone())
                 })
                 .unwrap_or_default();
-            let jump = record
-                .filter(|_| !crack_points.is_empty())
-                .map(|i| faces[i].iter().map(|&(p, m)| f.u[p] - f.u[m]).collect());
+            let jump = record.filter(|_| !crack_points.is_empty()).map(|i| {
+                (study.meshes[i].crack_dofs.iter())
+                    .map(|&(p, m)| f.u[p] - f.u[m])
+                    .collect()
+            });
             Some(xdmf::CaseFields {
                 name: summary::case_name(c),
                 mesh_key: mesh_key(c.level, c.u_space),
@@ -401,78 +335,7 @@ fn field_data(
             })
         })
         .collect();
-    Ok((meshes, cases))
-}
-
-/// For each crack node (`crack_points`' order), the u dof on its + face and the one on its − face
-/// (the same dof at a tip and in the continuous u space), found from the u space's dof points and
-/// triangles alone: the copies of a node are the dofs at its coordinates, and a copy is on the +
-/// face (the one the normal ν, the segment direction turned by +90°, points into) when a triangle
-/// holding it and a copy of the next node of its crack lies left of that crack edge. For the
-/// broken u space these are the (plus, minus) rows of the mesh export's crack.txt, so u⁺ − u⁻ is
-/// the references' `jump`.
-pub fn crack_face_dofs(
-    points: &[[f64; 2]],
-    triangles: &[[usize; 3]],
-    crack_points: &[[f64; 2]],
-    crack_segments: &[[usize; 2]],
-) -> Result<Vec<(usize, usize)>, String> {
-    use std::collections::HashMap;
-    let bits = |p: &[f64; 2]| p.map(f64::to_bits);
-    let index: HashMap<[u64; 2], usize> = (crack_points.iter().enumerate())
-        .map(|(k, p)| (bits(p), k))
-        .collect();
-    let mut copies: Vec<Vec<usize>> = vec![Vec::new(); crack_points.len()];
-    let mut node_of = vec![usize::MAX; points.len()];
-    for (d, p) in points.iter().enumerate() {
-        if let Some(&k) = index.get(&bits(p)) {
-            copies[k].push(d);
-            node_of[d] = k;
-        }
-    }
-    let mut next = vec![usize::MAX; crack_points.len()];
-    for &[a, b] in crack_segments {
-        next[a] = b;
-    }
-    // the face of each copy that has a triangle on the crack edge from its node to the next
-    let mut on_plus: Vec<Option<bool>> = vec![None; points.len()];
-    for t in triangles {
-        for a in *t {
-            let k = node_of[a];
-            if k == usize::MAX || next[k] == usize::MAX || !t.iter().any(|&b| node_of[b] == next[k])
-            {
-                continue;
-            }
-            let (x, y) = (crack_points[k], crack_points[next[k]]);
-            let c = t.map(|v| points[v]);
-            let c = [
-                (c[0][0] + c[1][0] + c[2][0]) / 3.0,
-                (c[0][1] + c[1][1] + c[2][1]) / 3.0,
-            ];
-            let left = (y[0] - x[0]) * (c[1] - x[1]) - (y[1] - x[1]) * (c[0] - x[0]) > 0.0;
-            on_plus[a] = Some(left);
-        }
-    }
-    (copies.iter().zip(crack_points))
-        .map(|(dofs, x)| match dofs[..] {
-            [d] => Ok((d, d)),
-            [a, b] => match (on_plus[a], on_plus[b]) {
-                (Some(true), Some(false)) => Ok((a, b)),
-                (Some(false), Some(true)) => Ok((b, a)),
-                sides => Err(format!(
-                    "the two u dofs {a} and {b} at crack node ({}, {}) are not one on each face \
-                     ({sides:?})",
-                    x[0], x[1]
-                )),
-            },
-            _ => Err(format!(
-                "crack node ({}, {}) has {} u dofs, expected 1 or 2",
-                x[0],
-                x[1],
-                dofs.len()
-            )),
-        })
-        .collect()
+    (meshes, cases)
 }
 
 /// `case` with only the quantities of `fields` (p's bubbles go with p).
