@@ -63,7 +63,7 @@ pub struct System {
     /// The entries of ∂K/∂δ = −M (the u–u block) that are not zero: their positions in the
     /// pattern of `base`, with K(0)'s and ∂K/∂δ's values there. A sweep writes K(δ) into one
     /// matrix of `base`'s pattern through these ([`System::set_delta`]) instead of holding K(0)
-    /// and K(δ) side by side (issue 26).
+    /// and K(δ) side by side.
     pub delta_entries: Vec<DeltaEntry>,
     /// `‖∂K/∂δ‖₁`.
     pub delta_norm1: f64,
@@ -569,8 +569,8 @@ mod tests {
     }
 
     /// A sweep writes every δ into one matrix: after any earlier δ its values are bit for bit
-    /// K(0) + δ ∂K/∂δ computed afresh from the full ∂K/∂δ (the formula of the code before issue
-    /// 26), and ‖∂K/∂δ‖₁ is the mass matrix's, |Ω|-sized (row sums of M are the hat functions'
+    /// K(0) + δ ∂K/∂δ computed afresh from the full ∂K/∂δ (the direct formula, without the
+    /// shared pattern), and ‖∂K/∂δ‖₁ is the mass matrix's, |Ω|-sized (row sums of M are the hat functions'
     /// integrals: at most the area of a vertex's patch / 3).
     #[test]
     fn set_delta_writes_k_of_delta_bit_for_bit_after_any_sweep() {

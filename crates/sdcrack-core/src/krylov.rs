@@ -1,5 +1,5 @@
 //! Preconditioned conjugate gradients on the lumped system's Schur complement: the iterative
-//! alternative to the direct LDLᵀ that issue 26 (item 3) asks to measure.
+//! alternative to the direct LDLᵀ, which `sdcrack bench` measures against it.
 //!
 //! Owns the operator `A(δ) = C + δM + B̃ D⁻¹ B̃ᵀ` on the u unknowns (the negated Schur complement
 //! of `K(δ)` after the diagonal lumped p–p block `D` is eliminated, applied matrix-free through

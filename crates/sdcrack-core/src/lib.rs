@@ -1,7 +1,7 @@
 //! sdcrack-core — the maths and the study of the smooth-domain mixed method for a crack with
 //! unilateral contact (Belhachmi, Sac-Epée, Sokolowski, C. R. Math. 338 (2004) 499–504).
 //!
-//! No file format lives here: this crate depends on no TOML, CLI or HDF5 crate (issue 35). The
+//! No file format lives here: this crate depends on no TOML, CLI or HDF5 crate. The
 //! pipeline, one module per stage, data flowing one way:
 //! 1. [`problem`] + [`expr`]: the problem's vocabulary and its expressions; [`scene`]: the
 //!    validated scene (sdcrack-io parses it from TOML);

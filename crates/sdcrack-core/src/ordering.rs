@@ -19,6 +19,10 @@
 //! two remaining halves. Geometric bisection of a quasi-uniform mesh gives O(√n) separators, as
 //! grid lines do, in O(n log n) time.
 
+use crate::mesh::{Layout, Mesh, PTopology, UTopology};
+use crate::multiplier::CrackOperators;
+use crate::problem::PMass;
+
 /// Boxes with at most this many vertices are not split further (ordered row by row).
 const LEAF_VERTICES: usize = 64;
 
@@ -325,6 +329,67 @@ impl Dissection<'_> {
         self.dissect(upper);
         separator.sort_unstable();
         self.vertex_order.extend(separator);
+    }
+}
+
+/// The elimination order of K, with the crack nodes' p unknowns last so that the factor's
+/// trailing block yields H_N.
+///
+/// Consistent p mass: nested dissection of the vertex grid, p and u unknowns of a vertex
+/// together. Lumped p mass: the p–p block is diagonal, so the other p unknowns go first: each
+/// is a diagonal pivot whose elimination adds B̃D⁻¹B̃ᵀ to the u block and nothing else, so what
+/// the factor then does on the u unknowns (in nested-dissection order) is exactly the Cholesky
+/// of −S(δ) = −(C + δM + B̃D⁻¹B̃ᵀ), one unknown per dof instead of three.
+pub fn elimination_order(
+    mesh: &Mesh,
+    topo: &UTopology,
+    ptopo: &PTopology,
+    ops: &CrackOperators,
+    p_mass: PMass,
+) -> Vec<usize> {
+    let n_p = ptopo.n_dofs;
+    let mut crack_p = vec![false; n_p];
+    for &k in ops.node_p_dofs.iter().flatten() {
+        crack_p[k] = true;
+    }
+    match p_mass {
+        PMass::Consistent => {
+            let vertex_of: Vec<usize> = ptopo
+                .dof_vertex(mesh.vertices.len())
+                .into_iter()
+                .chain(topo.dof_vertex.iter().copied())
+                .collect();
+            let mut last = crack_p;
+            last.resize(vertex_of.len(), false);
+            vertex_order(mesh, &vertex_of, &last, 1)
+        }
+        PMass::Lumped => {
+            // S couples u dofs two grid steps apart (through a p vertex of both patches)
+            let u_order = vertex_order(
+                mesh,
+                &topo.dof_vertex,
+                &vec![false; topo.dof_vertex.len()],
+                2,
+            );
+            (0..n_p)
+                .filter(|&k| !crack_p[k])
+                .chain(u_order.into_iter().map(|k| n_p + k))
+                .chain((0..n_p).filter(|&k| crack_p[k]))
+                .collect()
+        }
+    }
+}
+
+/// Nested dissection of unknowns on the vertices of `mesh`: by grid
+/// lines on a structured grid, by the vertex graph on a refined mesh.
+fn vertex_order(mesh: &Mesh, vertex_of: &[usize], last: &[bool], reach: usize) -> Vec<usize> {
+    match mesh.layout {
+        Layout::Structured { nx, ny } => {
+            nested_dissection_with_reach(nx, ny, vertex_of, last, reach)
+        }
+        Layout::Refined { .. } | Layout::Graded { .. } => {
+            nested_dissection_mesh(&mesh.vertices, &mesh.triangles, vertex_of, last, reach)
+        }
     }
 }
 

@@ -7,9 +7,38 @@
 //! which this crate cannot see) owns the TOML format and its validation and re-exports them for
 //! its users.
 
-use std::fmt;
-
 use crate::expr::Expr;
+
+/// Gives a fieldless enum its names in scene files, the CLI and result files, one table for
+/// both directions: `name()` (variant → name), `from_name()` (name → variant, `None` for any
+/// other text, case-sensitive) and `Display` (the name). Written `scene_names!(Type { Variant =>
+/// "name", … })`; exported so that the io crate's enums can take their names the same way.
+#[macro_export]
+macro_rules! scene_names {
+    ($ty:ident { $($variant:ident => $name:literal),+ $(,)? }) => {
+        impl $ty {
+            /// Name used in scene files, the CLI and result files.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $($ty::$variant => $name,)+
+                }
+            }
+            /// Parses a scene/CLI name.
+            pub fn from_name(s: &str) -> Option<$ty> {
+                match s {
+                    $($name => Some($ty::$variant),)+
+                    _ => None,
+                }
+            }
+        }
+
+        impl ::std::fmt::Display for $ty {
+            fn fmt(&self, f: &mut ::std::fmt::Formatter<'_>) -> ::std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+    };
+}
 
 /// How u is discretised (docs/design.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -32,7 +61,7 @@ pub enum MultiplierSpace {
 }
 
 /// The space of p = ∇u (docs/design.md, The p spaces): the paper's continuous MINI field, or
-/// one whose tangential component may jump across the crack (issue 32).
+/// one whose tangential component may jump across the crack.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum PSpace {
     /// The paper's X_h: continuous vector P1 ⊕ bubble on Ω.
@@ -43,22 +72,12 @@ pub enum PSpace {
     BrokenTangential,
 }
 
+scene_names!(PSpace {
+    Continuous => "continuous",
+    BrokenTangential => "broken-tangential",
+});
+
 impl PSpace {
-    /// Name used in scene files, the CLI and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            PSpace::Continuous => "continuous",
-            PSpace::BrokenTangential => "broken-tangential",
-        }
-    }
-    /// Parses a scene/CLI name.
-    pub fn from_name(s: &str) -> Option<PSpace> {
-        match s {
-            "continuous" => Some(PSpace::Continuous),
-            "broken-tangential" => Some(PSpace::BrokenTangential),
-            _ => None,
-        }
-    }
     /// Whether this p space can run with `u_space`: a p whose tangential part jumps needs a u
     /// that may jump (a continuous u cannot open the crack, docs/design.md).
     pub fn serves(self, u_space: USpace) -> bool {
@@ -66,13 +85,7 @@ impl PSpace {
     }
 }
 
-impl fmt::Display for PSpace {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// The p–p block of the condensed system (issue 14): the paper's consistent MINI mass, or its
+/// The p–p block of the condensed system: the paper's consistent MINI mass, or its
 /// row-sum diagonal, which lets p be eliminated exactly (docs/design.md, The lumped p mass).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum PMass {
@@ -83,47 +96,21 @@ pub enum PMass {
     Lumped,
 }
 
-impl PMass {
-    /// Name used in scene files, the CLI and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            PMass::Consistent => "consistent",
-            PMass::Lumped => "lumped",
-        }
-    }
-    /// Parses a scene/CLI name.
-    pub fn from_name(s: &str) -> Option<PMass> {
-        match s {
-            "consistent" => Some(PMass::Consistent),
-            "lumped" => Some(PMass::Lumped),
-            _ => None,
-        }
-    }
-}
+scene_names!(PMass {
+    Consistent => "consistent",
+    Lumped => "lumped",
+});
 
-impl fmt::Display for PMass {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
+scene_names!(USpace {
+    Continuous => "continuous",
+    Broken => "broken",
+});
 
-impl USpace {
-    /// Name used in scene files, the CLI and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            USpace::Continuous => "continuous",
-            USpace::Broken => "broken",
-        }
-    }
-    /// Parses a scene/CLI name.
-    pub fn from_name(s: &str) -> Option<USpace> {
-        match s {
-            "continuous" => Some(USpace::Continuous),
-            "broken" => Some(USpace::Broken),
-            _ => None,
-        }
-    }
-}
+scene_names!(MultiplierSpace {
+    M0 => "M0",
+    M1 => "M1",
+    M1Star => "M1star",
+});
 
 impl MultiplierSpace {
     /// All variants in their canonical order.
@@ -132,35 +119,6 @@ impl MultiplierSpace {
         MultiplierSpace::M1,
         MultiplierSpace::M1Star,
     ];
-    /// Name used in scene files, the CLI and result files.
-    pub fn name(self) -> &'static str {
-        match self {
-            MultiplierSpace::M0 => "M0",
-            MultiplierSpace::M1 => "M1",
-            MultiplierSpace::M1Star => "M1star",
-        }
-    }
-    /// Parses a scene/CLI name.
-    pub fn from_name(s: &str) -> Option<MultiplierSpace> {
-        match s {
-            "M0" => Some(MultiplierSpace::M0),
-            "M1" => Some(MultiplierSpace::M1),
-            "M1star" => Some(MultiplierSpace::M1Star),
-            _ => None,
-        }
-    }
-}
-
-impl fmt::Display for USpace {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl fmt::Display for MultiplierSpace {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
 }
 
 /// Axis-aligned rectangle Ω = [x0, x1] × [y0, y1].
@@ -172,7 +130,7 @@ pub struct Rectangle {
     pub max: [f64; 2],
 }
 
-/// The domain Ω: today's axis-aligned rectangle or a simple polygon (issue 16).
+/// The domain Ω: an axis-aligned rectangle or a simple polygon.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Domain {
     /// Ω = [x0, x1] × [y0, y1].
@@ -239,7 +197,7 @@ pub enum Meshing {
     File(std::path::PathBuf),
 }
 
-/// Meshes graded towards every crack tip (`[discretization] grading`, issue 24): element size
+/// Meshes graded towards every crack tip (`[discretization] grading`): element size
 /// h·(r/R)^{1−β} within the radius R of a tip (r: the distance to it), h elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grading {

@@ -44,7 +44,7 @@ pub struct CondensedElement {
 }
 
 impl CondensedElement {
-    /// The same element with G̃_T replaced by its row-sum diagonal (the lumped p mass, issue 14):
+    /// The same element with G̃_T replaced by its row-sum diagonal (the lumped p mass):
     /// every row of G̃_T sums to |T|/3 − 3·(7|T|/90) = |T|/10 > 0. B̃, M and C are unchanged.
     pub fn lumped(mut self) -> CondensedElement {
         let sums = self.g.map(|row| row.iter().sum::<f64>());

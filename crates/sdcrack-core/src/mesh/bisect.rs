@@ -1,4 +1,4 @@
-//! Meshes graded towards the crack tips by newest-vertex bisection (issue 24).
+//! Meshes graded towards the crack tips by newest-vertex bisection.
 //!
 //! Near a tip u ~ r^{1/2}, and uniform meshes cap every rate at 1/2. A graded mesh uses elements
 //! of size h·(r/R)^{1−β} within a radius R of each tip (r: the distance to the tip; β ≤ 1/2 for
