@@ -15,13 +15,12 @@
 
 use std::time::Instant;
 
-use crate::assembly::assemble;
 use crate::fe::p1::TriangleGeometry;
 use crate::krylov::{self, KrylovError};
 use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, MeshError};
 use crate::multiplier::CrackOperators;
-use crate::problem::{Meshing, MultiplierSpace, PMass, PSpace, USpace};
+use crate::problem::{Meshing, MultiplierSpace, PMass, USpace};
 use crate::scene::{FieldSet, Scene};
 use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
 
@@ -543,15 +542,8 @@ fn iterative_route(scene: &Scene, lumped: &StudyResult) -> Result<IterativeRoute
     let mesh = scene.mesh_source()?.level(0)?;
     let topo = mesh.u_topology(USpace::Broken);
     let t0 = Instant::now();
-    let system = assemble(
-        &mesh,
-        &topo,
-        &mesh.p_topology(PSpace::Continuous),
-        &scene.f,
-        &scene.g,
-        PMass::Lumped,
-    )
-    .map_err(StudyError::from)?;
+    let system = krylov::continuous_p_system(&mesh, &topo, scene, PMass::Lumped)
+        .map_err(StudyError::from)?;
     let system_assembly_s = t0.elapsed().as_secs_f64();
     let solve = krylov::solve_u(&mesh, &topo, &system, 0.0, krylov::ROUTE_TOLERANCE)?;
     let peak_rss_mb = peak_rss_mb();

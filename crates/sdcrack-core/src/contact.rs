@@ -58,6 +58,19 @@ pub struct LcpSolution {
     pub status: LcpStatus,
 }
 
+impl LcpSolution {
+    /// A converged solve: the multipliers of the final active set with round-off negatives
+    /// clipped to 0 (μ ≥ 0 exactly).
+    fn converged(mu: &[f64], active: Vec<bool>, iterations: usize, status: LcpStatus) -> Self {
+        LcpSolution {
+            mu: mu.iter().map(|&v| v.max(0.0)).collect(),
+            active,
+            iterations,
+            status,
+        }
+    }
+}
+
 /// Dense symmetric LCP data: H (row-major m × m) and q.
 #[derive(Clone, Debug)]
 pub struct Lcp {
@@ -172,13 +185,7 @@ impl Lcp {
             let w = self.slack(&mu);
             let next: Vec<bool> = (0..m).map(|i| mu[i] - w[i] / diag[i] > tau).collect();
             if next == active {
-                let mu = mu.iter().map(|&v| v.max(0.0)).collect();
-                return LcpSolution {
-                    mu,
-                    active,
-                    iterations: it,
-                    status: LcpStatus::Converged,
-                };
+                return LcpSolution::converged(&mu, active, it, LcpStatus::Converged);
             }
             if seen.contains(&next) {
                 let mut sol = self.murty(next, tau, opts.max_iterations.max(10 * m));
@@ -212,13 +219,7 @@ impl Lcp {
             });
             match violated {
                 None => {
-                    let mu = mu.iter().map(|&v| v.max(0.0)).collect();
-                    return LcpSolution {
-                        mu,
-                        active,
-                        iterations: it,
-                        status: LcpStatus::ConvergedAfterCycle,
-                    };
+                    return LcpSolution::converged(&mu, active, it, LcpStatus::ConvergedAfterCycle);
                 }
                 Some(i) => active[i] = !active[i],
             }

@@ -10,10 +10,12 @@
 
 use std::collections::HashSet;
 
-use crate::assembly::System;
+use crate::assembly::{assemble, AssemblyError, System};
 use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{Cholesky, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, UTopology};
+use crate::problem::{PMass, PSpace};
+use crate::scene::Scene;
 
 /// Errors of the iterative route.
 #[derive(Debug, thiserror::Error)]
@@ -116,6 +118,27 @@ impl<'a> SchurOperator<'a> {
         }
         r
     }
+}
+
+/// The condensed system of `scene` on `mesh` with the u space of `topo`, the continuous p and
+/// the p–p block `p_mass`: the system [`solve_u`] takes (which refuses all but the lumped mass).
+///
+/// # Errors
+/// The scene's data cannot be integrated ([`AssemblyError`]).
+pub fn continuous_p_system(
+    mesh: &Mesh,
+    topo: &UTopology,
+    scene: &Scene,
+    p_mass: PMass,
+) -> Result<System, AssemblyError> {
+    assemble(
+        mesh,
+        topo,
+        &mesh.p_topology(PSpace::Continuous),
+        &scene.f,
+        &scene.g,
+        p_mass,
+    )
 }
 
 /// The preconditioner's matrix: the P1 stiffness of `topo` (the broken topology keeps the crack's
@@ -290,8 +313,7 @@ pub const MAX_ITERATIONS: usize = 2000;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::assembly::assemble;
-    use crate::problem::{PMass, PSpace, USpace};
+    use crate::problem::USpace;
     use crate::scene::{testing, Scene};
 
     fn load(name: &str) -> Scene {
@@ -314,15 +336,7 @@ mod tests {
             let mesh = source.level(2).unwrap();
             for space in [USpace::Continuous, USpace::Broken] {
                 let topo = mesh.u_topology(space);
-                let system = assemble(
-                    &mesh,
-                    &topo,
-                    &mesh.p_topology(PSpace::Continuous),
-                    &scene.f,
-                    &scene.g,
-                    PMass::Lumped,
-                )
-                .unwrap();
+                let system = continuous_p_system(&mesh, &topo, &scene, PMass::Lumped).unwrap();
                 for delta in [0.0, 1e-2] {
                     let it = solve_u(&mesh, &topo, &system, delta, ROUTE_TOLERANCE).unwrap();
                     assert!(
@@ -347,15 +361,7 @@ mod tests {
         let scene = load("mixed");
         let mesh = scene.mesh_source().unwrap().level(0).unwrap();
         let topo = mesh.u_topology(USpace::Broken);
-        let system = assemble(
-            &mesh,
-            &topo,
-            &mesh.p_topology(PSpace::Continuous),
-            &scene.f,
-            &scene.g,
-            PMass::Consistent,
-        )
-        .unwrap();
+        let system = continuous_p_system(&mesh, &topo, &scene, PMass::Consistent).unwrap();
         let err = solve_u(&mesh, &topo, &system, 0.0, 1e-12).err().unwrap();
         assert!(matches!(err, KrylovError::NotLumped { .. }), "{err}");
     }

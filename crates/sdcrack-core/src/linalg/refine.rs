@@ -5,6 +5,20 @@
 use super::{Ldlt, SymCsc, STAGNATION_STEPS};
 
 impl Ldlt {
+    /// The unrefined solve `x = K⁻¹ b`; returns a zeroed residual buffer of the dimension.
+    fn first_solve(&self, b: &[f64], x: &mut [f64]) -> Vec<f64> {
+        x.copy_from_slice(b);
+        self.solve_in_place(x);
+        vec![0.0; self.n]
+    }
+
+    /// One refinement step given the residual `r = b − K x`: `x += K⁻¹ r` (`r` is overwritten
+    /// by the correction).
+    fn correct(&self, x: &mut [f64], r: &mut [f64]) {
+        self.solve_in_place(r);
+        x.iter_mut().zip(&*r).for_each(|(xi, di)| *xi += di);
+    }
+
     /// Solve with iterative refinement against the EXACT (unregularized) `matrix`: x = solve(b); repeat { r = b - K x; x += solve(r) } up to `max_steps` (at least 1 step is always done) or until ‖r‖_inf <= tol*‖b‖_inf. Returns the final relative residual ‖b − Kx‖_inf/‖b‖_inf (0 if b = 0).
     ///
     /// Also stops after `STAGNATION_STEPS = 2` consecutive steps without a new best
@@ -31,9 +45,7 @@ impl Ldlt {
             x.fill(0.0);
             return 0.0;
         }
-        x.copy_from_slice(b);
-        self.solve_in_place(x);
-        let mut r = vec![0.0; n];
+        let mut r = self.first_solve(b, x);
         let mut rel = residual(matrix, b, x, &mut r) / b_norm;
         let mut best_rel = rel;
         let mut best_x = x.to_vec();
@@ -45,8 +57,7 @@ impl Ldlt {
             if !rel.is_finite() {
                 break;
             }
-            self.solve_in_place(&mut r);
-            x.iter_mut().zip(&r).for_each(|(xi, di)| *xi += di);
+            self.correct(x, &mut r);
             rel = residual(matrix, b, x, &mut r) / b_norm;
             if rel < best_rel {
                 best_rel = rel;
@@ -103,9 +114,7 @@ impl Ldlt {
         tol: f64,
     ) -> f64 {
         let n = self.n;
-        x.copy_from_slice(b);
-        self.solve_in_place(x);
-        let mut r = vec![0.0; n];
+        let mut r = self.first_solve(b, x);
         let mut kx = vec![0.0; n];
         let mut scale = vec![0.0; n];
         // r = b − K x and ω = max_i |r_i| / (|K||x| + |b|)_i
@@ -124,8 +133,7 @@ impl Ldlt {
             if (step > 0 && best <= tol) || !omega.is_finite() {
                 break;
             }
-            self.solve_in_place(&mut r);
-            x.iter_mut().zip(&r).for_each(|(xi, di)| *xi += di);
+            self.correct(x, &mut r);
             omega = residual(x, &mut r);
             let halved = omega < 0.5 * best;
             if omega < best {

@@ -391,17 +391,28 @@ pub(super) fn parse_nodes41(b: &mut Body) -> Result<Vec<RawNode>> {
             nodes.push(node(b, t.line, tag, xyz)?);
         }
     }
-    if i64::try_from(nodes.len()).ok() != Some(total) || blocks < 0 {
-        return Err(b.error(
-            line,
-            format!(
-                "the header announces {total} nodes, the blocks hold {}",
-                nodes.len()
-            ),
-        ));
-    }
+    check_block_total(b, line, blocks, total, nodes.len(), "nodes")?;
     b.finish()?;
     Ok(nodes)
+}
+
+/// A msh 4.1 `$Nodes` / `$Elements` header's count of blocks and of `what` (nodes or
+/// elements) against the `found` ones its blocks held; `line` is the header's line.
+fn check_block_total(
+    b: &Body,
+    line: usize,
+    blocks: i64,
+    total: i64,
+    found: usize,
+    what: &str,
+) -> Result<()> {
+    if i64::try_from(found).ok() != Some(total) || blocks < 0 {
+        return Err(b.error(
+            line,
+            format!("the header announces {total} {what}, the blocks hold {found}"),
+        ));
+    }
+    Ok(())
 }
 
 pub(super) fn parse_nodes22(b: &mut Body) -> Result<Vec<RawNode>> {
@@ -471,15 +482,7 @@ pub(super) fn parse_elements41(
             elements.push(element);
         }
     }
-    if i64::try_from(elements.len()).ok() != Some(total) || blocks < 0 {
-        return Err(b.error(
-            line,
-            format!(
-                "the header announces {total} elements, the blocks hold {}",
-                elements.len()
-            ),
-        ));
-    }
+    check_block_total(b, line, blocks, total, elements.len(), "elements")?;
     b.finish()?;
     Ok(elements)
 }
