@@ -230,3 +230,84 @@ fn paths_at_offsets_come_from_the_document() {
     );
     assert_eq!(key_position(text, "geometry.cracks[1]"), Some((2, 1)));
 }
+
+/// docs/scenes.md's table of keys, `(table, row)`: each row's first cell under the
+/// `**[table]**` row it follows (`""` before the first).
+fn documented_rows() -> Vec<(String, String)> {
+    let docs = include_str!("../../../../docs/scenes.md");
+    let table = docs
+        .split("## Tables and keys")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").nth(1))
+        .expect("docs/scenes.md has its table of keys");
+    let mut current = String::new();
+    let mut rows = Vec::new();
+    for row in table.lines().skip(2) {
+        let first = row.split('|').nth(1).unwrap_or("").trim();
+        if let Some(header) = first.strip_prefix("**`[") {
+            current = header.trim_matches(['[', ']', '`', '*']).to_string();
+            continue;
+        }
+        rows.push((current.clone(), row.to_string()));
+    }
+    rows
+}
+
+/// The names in backquotes of a row's first cell (`px`, `py` → both).
+fn row_keys(row: &str) -> Vec<String> {
+    let first = row.split('|').nth(1).unwrap_or("");
+    first
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(str::to_string)
+        .collect()
+}
+
+/// docs/scenes.md documents exactly the schema's keys: each table with a `**[table]**` row has
+/// one row per key that is not a documented table itself, and the keys of an inline table
+/// (`{ beta = β, radius = R }`) are written as `key =` in their parent key's row. A field added
+/// to a struct fails here until it is documented.
+#[test]
+fn docs_table_lists_exactly_the_schema_keys() {
+    let schema = schema();
+    let rows = documented_rows();
+    let headed = |t: &str| t.is_empty() || rows.iter().any(|(table, _)| table == t);
+    let child = |t: &str, k: &str| {
+        if t.is_empty() {
+            k.to_string()
+        } else {
+            format!("{t}.{k}")
+        }
+    };
+    for t in &schema.tables {
+        if headed(&t.table) {
+            let mut want: Vec<String> = (t.key_names().into_iter())
+                .filter(|k| {
+                    !(schema.table(&child(&t.table, k)).is_some() && headed(&child(&t.table, k)))
+                })
+                .map(str::to_string)
+                .collect();
+            let mut got: Vec<String> = (rows.iter())
+                .filter(|(table, _)| *table == t.table)
+                .flat_map(|(_, row)| row_keys(row))
+                .collect();
+            want.sort();
+            got.sort();
+            assert_eq!(got, want, "docs/scenes.md rows of [{}]", t.table);
+        } else {
+            let (parent, key) = t.table.rsplit_once('.').unwrap_or(("", &t.table));
+            let row = (rows.iter())
+                .find(|(table, row)| table == parent && row_keys(row).iter().any(|k| k == key))
+                .map(|(_, row)| row.as_str())
+                .unwrap_or_else(|| panic!("docs/scenes.md has no row for {}", t.table));
+            for k in t.key_names() {
+                assert!(
+                    row.contains(&format!("{k} =")),
+                    "docs/scenes.md's row of {} does not write `{k} =`",
+                    t.table
+                );
+            }
+        }
+    }
+}
