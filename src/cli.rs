@@ -349,13 +349,11 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             vertices,
             json,
         } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, _) = load_checked(scene)?;
             bench(&scene, vertices, json)
         }
         Command::Mesh { scene, out, level } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, _) = load_checked(scene)?;
             check_level_option(&scene, level)?;
             let levels = level.map_or_else(|| scene.levels.clone(), |l| vec![l]);
             let path =
@@ -375,8 +373,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             quiet,
             solver_only,
         } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, origin) = load_checked(scene)?;
             check_level_option(&scene, level)?;
             let filter = CaseFilter {
                 level,
@@ -395,8 +392,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             level,
             out,
         } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, _) = load_checked(scene)?;
             check_level_option(&scene, Some(level))?;
             reference(&scene, &tool, level, &out)
         }
@@ -505,6 +501,13 @@ fn load(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
         )),
         None => Ok((Scene::default_scene(), "(embedded default)".to_string())),
     }
+}
+
+/// [`load`], then [`check_meshes`]: a scene the commands that mesh it can run.
+fn load_checked(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
+    let (scene, origin) = load(path)?;
+    check_meshes(&scene, &origin)?;
+    Ok((scene, origin))
 }
 
 /// Checks the crack against the level-0 mesh (the same check every level makes).

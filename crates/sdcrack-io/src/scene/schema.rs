@@ -37,39 +37,38 @@ pub enum Kind {
 }
 
 impl Kind {
+    /// The kind in three forms: its type name for `sdcrack schema`, a value of it in words and
+    /// several values of it in words (`integer`, `an integer`, `integers`; `list of integer`,
+    /// `a list of integers`, `lists of integers`).
+    fn forms(&self) -> [String; 3] {
+        let forms = match self {
+            Kind::String => ["string", "a string", "strings"],
+            Kind::Integer => ["integer", "an integer", "integers"],
+            Kind::Number => ["number", "a number", "numbers"],
+            Kind::Bool => ["bool", "true or false", "booleans"],
+            Kind::Table => ["table", "a table", "tables"],
+            Kind::List(item) => {
+                let [name, _, many] = item.forms();
+                return [
+                    format!("list of {name}"),
+                    format!("a list of {many}"),
+                    format!("lists of {many}"),
+                ];
+            }
+        };
+        forms.map(str::to_string)
+    }
+
     /// The type as `sdcrack schema` writes it: `string`, `list of list of number`, …
     pub fn name(&self) -> String {
-        match self {
-            Kind::String => "string".into(),
-            Kind::Integer => "integer".into(),
-            Kind::Number => "number".into(),
-            Kind::Bool => "bool".into(),
-            Kind::List(item) => format!("list of {}", item.name()),
-            Kind::Table => "table".into(),
-        }
+        let [name, _, _] = self.forms();
+        name
     }
 
-    /// The value in words for a message, "a list of integers".
+    /// A value of this kind in words for a message, "a list of integers".
     fn words(&self) -> String {
-        match self {
-            Kind::String => "a string".into(),
-            Kind::Integer => "an integer".into(),
-            Kind::Number => "a number".into(),
-            Kind::Bool => "true or false".into(),
-            Kind::List(item) => format!("a list of {}", item.plural()),
-            Kind::Table => "a table".into(),
-        }
-    }
-
-    fn plural(&self) -> String {
-        match self {
-            Kind::String => "strings".into(),
-            Kind::Integer => "integers".into(),
-            Kind::Number => "numbers".into(),
-            Kind::Bool => "booleans".into(),
-            Kind::List(item) => format!("lists of {}", item.plural()),
-            Kind::Table => "tables".into(),
-        }
+        let [_, one, _] = self.forms();
+        one
     }
 }
 

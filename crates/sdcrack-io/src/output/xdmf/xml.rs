@@ -84,6 +84,43 @@ fn constant_attributes(indent: &str, h5: &str, group: &str, n: usize, case: &Cas
         .collect()
 }
 
+/// The cells of a grid: XDMF topology type, number of cells, nodes per cell, and the HDF5 path
+/// of their node indices.
+struct Cells {
+    topology: &'static str,
+    count: usize,
+    nodes_per_cell: usize,
+    connectivity: String,
+}
+
+/// A grid's `Topology` (its `cells`) and `Geometry` (the `n` XYZ points at `points` of `h5`),
+/// inside a grid opened at `indent`.
+fn topology_geometry(indent: &str, h5: &str, cells: &Cells, points: &str, n: usize) -> String {
+    let (i2, i3) = (format!("{indent}  "), format!("{indent}    "));
+    let Cells {
+        topology,
+        count,
+        nodes_per_cell,
+        connectivity,
+    } = cells;
+    let mut s = format!(
+        "{i2}<Topology TopologyType=\"{topology}\" NumberOfElements=\"{count}\" NodesPerElement=\"{nodes_per_cell}\">\n"
+    );
+    s.push_str(&data_item(
+        &i3,
+        h5,
+        connectivity,
+        &[*count, *nodes_per_cell],
+        true,
+    ));
+    s.push_str(&format!(
+        "{i2}</Topology>\n{i2}<Geometry GeometryType=\"XYZ\">\n"
+    ));
+    s.push_str(&data_item(&i3, h5, points, &[n, 3], false));
+    s.push_str(&format!("{i2}</Geometry>\n"));
+    s
+}
+
 /// The triangle grid of `case`, step `k` of its series or (None) a one-state grid.
 pub(super) fn mesh_grid_xml(
     h5: &str,
@@ -98,21 +135,19 @@ pub(super) fn mesh_grid_xml(
     let cp = format!("/cases/{}", case.name);
     let (n, t) = (mesh.points.len(), mesh.triangles.len());
     let mut s = step_head(&case.name, k, &case.metadata, indent);
-    s.push_str(&format!(
-        "{i2}<Topology TopologyType=\"Triangle\" NumberOfElements=\"{t}\" NodesPerElement=\"3\">\n"
-    ));
-    s.push_str(&data_item(
-        &i3,
+    let cells = Cells {
+        topology: "Triangle",
+        count: t,
+        nodes_per_cell: 3,
+        connectivity: format!("{mp}/triangles"),
+    };
+    s.push_str(&topology_geometry(
+        indent,
         h5,
-        &format!("{mp}/triangles"),
-        &[t, 3],
-        true,
+        &cells,
+        &format!("{mp}/points"),
+        n,
     ));
-    s.push_str(&format!(
-        "{i2}</Topology>\n{i2}<Geometry GeometryType=\"XYZ\">\n"
-    ));
-    s.push_str(&data_item(&i3, h5, &format!("{mp}/points"), &[n, 3], false));
-    s.push_str(&format!("{i2}</Geometry>\n"));
     if case.u.is_some() {
         let item = data_item(&i3, h5, &format!("{cp}/u"), &[n], false);
         s.push_str(&attribute(&i2, "u", "Scalar", "Node", item));
@@ -139,21 +174,19 @@ pub(super) fn crack_grid_xml(
     let n = case.crack_points.len();
     let ns = case.crack_segments.len();
     let mut s = step_head(&format!("{}/crack", case.name), k, &case.metadata, indent);
-    s.push_str(&format!(
-        "{i2}<Topology TopologyType=\"Polyline\" NumberOfElements=\"{ns}\" NodesPerElement=\"2\">\n"
-    ));
-    s.push_str(&data_item(
-        &i3,
+    let cells = Cells {
+        topology: "Polyline",
+        count: ns,
+        nodes_per_cell: 2,
+        connectivity: format!("{kp}/segments"),
+    };
+    s.push_str(&topology_geometry(
+        indent,
         h5,
-        &format!("{kp}/segments"),
-        &[ns, 2],
-        true,
+        &cells,
+        &format!("{kp}/points"),
+        n,
     ));
-    s.push_str(&format!(
-        "{i2}</Topology>\n{i2}<Geometry GeometryType=\"XYZ\">\n"
-    ));
-    s.push_str(&data_item(&i3, h5, &format!("{kp}/points"), &[n, 3], false));
-    s.push_str(&format!("{i2}</Geometry>\n"));
     if let Some((centering, lambda)) = &case.lambda {
         let center = match centering {
             Centering::Node => "Node",
