@@ -149,6 +149,10 @@ pub enum Command {
         #[arg(long, required = true)]
         template: bool,
     },
+    /// Print the scene schema as JSON: every table with its keys, each key's type, its words
+    /// and allowed names, and the names shared with the compare tool (quantities, checks a
+    /// scene may declare not applicable, references). Read off the loader's own structs.
+    Schema,
     /// Validate a scene file (and its crack on every level's mesh) without solving.
     Check {
         /// Scene file (TOML).
@@ -171,24 +175,40 @@ fn parse_level(s: &str) -> Result<u32, String> {
     }
 }
 
+/// `s` as one of the names a space's `from_name` knows, or a message naming `what` and `names`.
+fn parse_name<T>(
+    s: &str,
+    from_name: fn(&str) -> Option<T>,
+    what: &str,
+    names: &str,
+) -> Result<T, String> {
+    from_name(s).ok_or_else(|| format!("unknown {what} '{s}' (expected {names})"))
+}
+
 fn parse_u_space(s: &str) -> Result<USpace, String> {
-    USpace::from_name(s)
-        .ok_or_else(|| format!("unknown u space '{s}' (expected continuous or broken)"))
+    parse_name(s, USpace::from_name, "u space", "continuous or broken")
 }
 
 fn parse_p_mass(s: &str) -> Result<PMass, String> {
-    PMass::from_name(s)
-        .ok_or_else(|| format!("unknown p mass '{s}' (expected consistent or lumped)"))
+    parse_name(s, PMass::from_name, "p mass", "consistent or lumped")
 }
 
 fn parse_p_space(s: &str) -> Result<PSpace, String> {
-    PSpace::from_name(s)
-        .ok_or_else(|| format!("unknown p space '{s}' (expected continuous or broken-tangential)"))
+    parse_name(
+        s,
+        PSpace::from_name,
+        "p space",
+        "continuous or broken-tangential",
+    )
 }
 
 fn parse_multiplier(s: &str) -> Result<MultiplierSpace, String> {
-    MultiplierSpace::from_name(s)
-        .ok_or_else(|| format!("unknown multiplier space '{s}' (expected M0, M1 or M1star)"))
+    parse_name(
+        s,
+        MultiplierSpace::from_name,
+        "multiplier space",
+        "M0, M1 or M1star",
+    )
 }
 
 /// Vertex counts accepted by `bench` (the upper bound keeps one case within ~60 GB).
@@ -299,6 +319,10 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             say_raw(crate::scene::SCENE_TEMPLATE);
             Ok(0)
         }
+        Command::Schema => {
+            say!("{}", crate::scene::schema::schema().to_json());
+            Ok(0)
+        }
         Command::Check { scene, json } => {
             let s = Scene::from_file(&scene).map_err(usage)?;
             check_meshes(&s, &scene.display().to_string())?;
@@ -325,13 +349,11 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             vertices,
             json,
         } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, _) = load_checked(scene)?;
             bench(&scene, vertices, json)
         }
         Command::Mesh { scene, out, level } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, _) = load_checked(scene)?;
             check_level_option(&scene, level)?;
             let levels = level.map_or_else(|| scene.levels.clone(), |l| vec![l]);
             let path =
@@ -351,8 +373,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             quiet,
             solver_only,
         } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, origin) = load_checked(scene)?;
             check_level_option(&scene, level)?;
             let filter = CaseFilter {
                 level,
@@ -371,8 +392,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             level,
             out,
         } => {
-            let (scene, origin) = load(scene)?;
-            check_meshes(&scene, &origin)?;
+            let (scene, _) = load_checked(scene)?;
             check_level_option(&scene, Some(level))?;
             reference(&scene, &tool, level, &out)
         }
@@ -481,6 +501,13 @@ fn load(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
         )),
         None => Ok((Scene::default_scene(), "(embedded default)".to_string())),
     }
+}
+
+/// [`load`], then [`check_meshes`]: a scene the commands that mesh it can run.
+fn load_checked(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
+    let (scene, origin) = load(path)?;
+    check_meshes(&scene, &origin)?;
+    Ok((scene, origin))
 }
 
 /// Checks the crack against the level-0 mesh (the same check every level makes).

@@ -393,7 +393,7 @@ fn catalogue() -> Vec<Case> {
             "[-1.0, 0.0], [0.5, 0.0]",
             "geometry.crack.segment point 0 (-1, 0) touches the domain boundary",
         ),
-        // --- polygons, polylines, several cracks, gmsh meshes (issue 16) ---
+        // --- polygons, polylines, several cracks, gmsh meshes ---
         edit(
             "self-intersecting polygon",
             "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
@@ -1016,7 +1016,7 @@ fn catalogue_of_bad_inputs() {
         );
         assert!(err.ends_with('\n'), "{what}: {err:?}");
         assert!(err.starts_with("sdcrack: error: "), "{what}: {err}");
-        // An error in a scene file says where (issue 25, item 7): the line and column of the
+        // An error in a scene file says where: the line and column of the
         // key, of the table a missing key belongs to, or of the bad byte or TOML syntax. Only
         // what is absent from the file has no place to point at.
         let absent = [

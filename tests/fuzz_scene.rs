@@ -2,10 +2,10 @@
 //! random and mutated inputs it never panics, and every error it returns displays as one line
 //! without control characters (the CLI prints it as the one line on stderr).
 //!
-//! Inputs, from a seeded xorshift generator (deterministic, no dependency): the repository scenes
-//! mutated by byte flips, insertions of TOML-ish tokens, deletions, line duplications and swaps,
-//! values replaced by random tokens, and splices of two scenes; plus random token soups and a few
-//! pathological texts (deep nesting, the size limit). `cargo fuzz` targets doing the same without
+//! Inputs, from a seeded generator (fastrand, deterministic for its seed): the repository scenes
+//! mutated by byte flips, insertions of TOML-ish tokens and of the schema's keys and names,
+//! deletions, line duplications and swaps, values replaced by random tokens, and splices of two
+//! scenes; plus random token soups and a few pathological texts (deep nesting, the size limit). `cargo fuzz` targets doing the same without
 //! a budget are in `fuzz/` (docs/fuzzing.md).
 
 use std::collections::BTreeSet;
@@ -13,27 +13,21 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use sdcrack::scene::{Scene, TomlScene, MAX_SCENE_BYTES};
 
-struct Rng(u64);
+/// The seeded generator of the inputs (fastrand's wyrand: deterministic for a seed).
+type Rng = fastrand::Rng;
 
-impl Rng {
-    fn next(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        self.0 = x;
-        x
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn pick<'a, T>(&mut self, v: &'a [T]) -> &'a T {
-        &v[self.below(v.len())]
-    }
+/// A random element of `v`.
+fn pick<'a, T>(rng: &mut Rng, v: &'a [T]) -> &'a T {
+    &v[rng.usize(..v.len())]
 }
 
-/// Tokens that mean something to TOML or to the scene validator.
-const TOKENS: &[&str] = &[
+/// A random number in `0..n` (0 when `n` is 0).
+fn below(rng: &mut Rng, n: usize) -> usize {
+    rng.usize(..n.max(1))
+}
+
+/// Tokens that mean something to TOML or to an expression; [`tokens`] adds the scene's keys.
+const SYNTAX: &[&str] = &[
     "[",
     "]",
     "{",
@@ -89,44 +83,6 @@ const TOKENS: &[&str] = &[
     "1979-05-27T07:32:00Z",
     "true",
     "false",
-    "name",
-    "description",
-    "geometry",
-    "data",
-    "exact",
-    "discretization",
-    "outputs",
-    "domain",
-    "crack",
-    "rectangle",
-    "segment",
-    "f",
-    "g",
-    "u",
-    "px",
-    "py",
-    "jump",
-    "cells",
-    "levels",
-    "u_spaces",
-    "multipliers",
-    "p_mass",
-    "p_spaces",
-    "deltas",
-    "fields",
-    "references",
-    "\"M0\"",
-    "\"M1\"",
-    "\"M1star\"",
-    "\"continuous\"",
-    "\"broken\"",
-    "\"broken-tangential\"",
-    "\"lumped\"",
-    "\"u\"",
-    "\"p\"",
-    "\"lambda\"",
-    "\"dolfinx\"",
-    "\"freefem\"",
     "\"x\"",
     "\"sin(x)*y\"",
     "\"log(x)\"",
@@ -149,22 +105,47 @@ const TOKENS: &[&str] = &[
     "\u{feff}",
 ];
 
+/// Every token the inputs are made of: [`SYNTAX`], every key of the scene schema (the loader's
+/// own structs, as `sdcrack schema` prints them) and every name a key allows, quoted.
+fn tokens() -> Vec<String> {
+    let schema = sdcrack::scene::schema::schema();
+    let keys = schema.key_names().into_iter().map(str::to_string);
+    let names = (schema.tables.iter())
+        .flat_map(|t| &t.keys)
+        .flat_map(|k| k.values.iter().map(|v| format!("\"{v}\"")));
+    let mut out: Vec<String> = SYNTAX.iter().map(|t| t.to_string()).collect();
+    for t in keys.chain(names) {
+        if !out.contains(&t) {
+            out.push(t);
+        }
+    }
+    out
+}
+
 /// A random TOML value: number, string, array or inline table, sometimes nested.
-fn random_value(rng: &mut Rng, depth: usize) -> String {
-    match rng.below(if depth > 3 { 4 } else { 7 }) {
-        0 => rng.pick(TOKENS).to_string(),
-        1 => format!("{}", (rng.next() as i64) >> rng.below(64)),
-        2 => format!("{:e}", f64::from_bits(rng.next())),
-        3 => format!("\"{}\"", rng.pick(TOKENS).replace('"', "")),
+fn random_value(rng: &mut Rng, tokens: &[String], depth: usize) -> String {
+    match below(rng, if depth > 3 { 4 } else { 7 }) {
+        0 => pick(rng, tokens).clone(),
+        1 => format!("{}", (rng.u64(..) as i64) >> below(rng, 64)),
+        2 => format!("{:e}", f64::from_bits(rng.u64(..))),
+        3 => format!("\"{}\"", pick(rng, tokens).replace('"', "")),
         4 | 5 => {
-            let n = rng.below(4);
-            let items: Vec<String> = (0..n).map(|_| random_value(rng, depth + 1)).collect();
+            let n = below(rng, 4);
+            let items: Vec<String> = (0..n)
+                .map(|_| random_value(rng, tokens, depth + 1))
+                .collect();
             format!("[{}]", items.join(", "))
         }
         _ => {
-            let n = rng.below(3);
+            let n = below(rng, 3);
             let items: Vec<String> = (0..n)
-                .map(|_| format!("{} = {}", rng.pick(TOKENS), random_value(rng, depth + 1)))
+                .map(|_| {
+                    format!(
+                        "{} = {}",
+                        pick(rng, tokens),
+                        random_value(rng, tokens, depth + 1)
+                    )
+                })
                 .collect();
             format!("{{ {} }}", items.join(", "))
         }
@@ -181,24 +162,24 @@ fn boundary(s: &str, mut k: usize) -> usize {
 }
 
 /// One mutation of `s`.
-fn mutate(rng: &mut Rng, s: &str, seeds: &[String]) -> String {
-    match rng.below(8) {
+fn mutate(rng: &mut Rng, tokens: &[String], s: &str, seeds: &[String]) -> String {
+    match below(rng, 8) {
         // flip one bit of one byte (invalid UTF-8 is replaced, as a file read would refuse it)
         0 if !s.is_empty() => {
             let mut b = s.as_bytes().to_vec();
-            let k = rng.below(b.len());
-            b[k] ^= 1 << rng.below(8);
+            let k = below(rng, b.len());
+            b[k] ^= 1 << below(rng, 8);
             String::from_utf8_lossy(&b).into_owned()
         }
         // insert a token
         1 => {
-            let k = boundary(s, rng.below(s.len() + 1));
-            format!("{}{}{}", &s[..k], rng.pick(TOKENS), &s[k..])
+            let k = boundary(s, below(rng, s.len() + 1));
+            format!("{}{}{}", &s[..k], pick(rng, tokens), &s[k..])
         }
         // delete a range
         2 if !s.is_empty() => {
-            let a = boundary(s, rng.below(s.len()));
-            let b = boundary(s, a + 1 + rng.below(16));
+            let a = boundary(s, below(rng, s.len()));
+            let b = boundary(s, a + 1 + below(rng, 16));
             format!("{}{}", &s[..a], &s[b.max(a)..])
         }
         // replace the value of one `key = value` line
@@ -210,9 +191,9 @@ fn mutate(rng: &mut Rng, s: &str, seeds: &[String]) -> String {
             if with_value.is_empty() {
                 return s.to_string();
             }
-            let i = *rng.pick(&with_value);
+            let i = *pick(rng, &with_value);
             let key = lines[i].split('=').next().unwrap_or("").to_string();
-            lines[i] = format!("{key}= {}", random_value(rng, 0));
+            lines[i] = format!("{key}= {}", random_value(rng, tokens, 0));
             lines.join("\n")
         }
         // duplicate or drop a line, or swap two
@@ -221,9 +202,9 @@ fn mutate(rng: &mut Rng, s: &str, seeds: &[String]) -> String {
             if lines.is_empty() {
                 return s.to_string();
             }
-            let i = rng.below(lines.len());
-            let j = rng.below(lines.len());
-            match rng.below(3) {
+            let i = below(rng, lines.len());
+            let j = below(rng, lines.len());
+            match below(rng, 3) {
                 0 => lines.insert(j, lines[i]),
                 1 => {
                     lines.remove(i);
@@ -234,15 +215,17 @@ fn mutate(rng: &mut Rng, s: &str, seeds: &[String]) -> String {
         }
         // splice: the start of this text, the end of another scene
         6 => {
-            let other = rng.pick(seeds);
-            let a = boundary(s, rng.below(s.len() + 1));
-            let b = boundary(other, rng.below(other.len() + 1));
+            let other = pick(rng, seeds);
+            let a = boundary(s, below(rng, s.len() + 1));
+            let b = boundary(other, below(rng, other.len() + 1));
             format!("{}{}", &s[..a], &other[b..])
         }
         // a run of random tokens somewhere
         _ => {
-            let k = boundary(s, rng.below(s.len() + 1));
-            let soup: String = (0..1 + rng.below(6)).map(|_| *rng.pick(TOKENS)).collect();
+            let k = boundary(s, below(rng, s.len() + 1));
+            let soup: String = (0..1 + below(rng, 6))
+                .map(|_| pick(rng, tokens).as_str())
+                .collect();
             format!("{}{soup}{}", &s[..k], &s[k..])
         }
     }
@@ -297,18 +280,21 @@ fn scene_loader_never_panics_and_errors_are_one_line() {
             let _ = load(s);
         }
     }
-    let mut rng = Rng(0x5EED_5CE4_E10A_D3E5);
+    let tokens = tokens();
+    let mut rng = Rng::with_seed(0x5EED_5CE4_E10A_D3E5);
     let mut valid = 0usize;
     let mut kinds = BTreeSet::new();
     const N: usize = 100_000;
     for i in 0..N {
         let text = if i % 10 == 9 {
             // token soup
-            (0..rng.below(40)).map(|_| *rng.pick(TOKENS)).collect()
+            (0..below(&mut rng, 40))
+                .map(|_| pick(&mut rng, &tokens).as_str())
+                .collect()
         } else {
-            let mut s = rng.pick(&seeds).clone();
-            for _ in 0..1 + rng.below(3) {
-                s = mutate(&mut rng, &s, &seeds);
+            let mut s = pick(&mut rng, &seeds).clone();
+            for _ in 0..1 + below(&mut rng, 3) {
+                s = mutate(&mut rng, &tokens, &s, &seeds);
             }
             s
         };

@@ -26,6 +26,10 @@ DEFAULTS = {"kkt_tolerance": 1e-10, "reference_agreement": 1e-8, "delta_slope_to
 # Larger is looser for the tolerances, smaller is looser for min_rate.
 _LOOSER = {"kkt_tolerance": 1, "reference_agreement": 1, "delta_slope_tolerance": 1, "min_rate": -1}
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
+P_MASSES = ("consistent", "lumped")
+# The keys of one [[verification.expected_rate]] (tests/python/test_schema.py ties these names
+# to the solver's scene schema, `sdcrack schema`).
+EXPECTED_RATE_KEYS = ("u_space", "multiplier", "p_mass", "p_space", "quantity", "rate", "reason")
 
 
 def scene_lists(scene):
@@ -107,13 +111,13 @@ def _expected_rates(v, known, where):
             raise InputError(f"{name}.rate = {rate!r} must be a number in (0, 4]")
         d = {"rate": float(rate), "reason": reason, "p_mass": e.get("p_mass", "*"),
              "p_space": e.get("p_space", "*")}
-        if d["p_mass"] not in ("*", "consistent", "lumped"):
+        if d["p_mass"] not in ("*",) + P_MASSES:
             raise InputError(f"{name}.p_mass = {d['p_mass']!r} is none of consistent, lumped, '*'")
         if d["p_space"] not in ("*",) + P_SPACES:
             raise InputError(f"{name}.p_space = {d['p_space']!r} is none of "
                              f"{', '.join(P_SPACES)}, '*'")
         d.update(_series_keys(e, known, name))
-        bad = set(e) - {"u_space", "multiplier", "p_mass", "p_space", "quantity", "rate", "reason"}
+        bad = set(e) - set(EXPECTED_RATE_KEYS)
         if bad:
             raise InputError(f"{name}: unknown key(s) {sorted(bad)}")
         out.append(d)

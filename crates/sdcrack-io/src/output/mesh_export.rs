@@ -218,13 +218,9 @@ pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBu
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&parent).map_err(io(&parent))?;
-    let name = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "mesh".into());
-    let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
-    let result = (|| {
-        std::fs::create_dir(&tmp).map_err(io(&tmp))?;
+    let tmp = super::beside(out, "partial");
+    super::write_then_rename(out, &tmp, io(out), |tmp| {
+        std::fs::create_dir(tmp).map_err(io(tmp))?;
         let mut json = scene_json(scene);
         json["levels"] = serde_json::json!(levels);
         let path = tmp.join("scene.json");
@@ -234,12 +230,9 @@ pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBu
             let mesh = source.level(level)?;
             write_level(&tmp.join(format!("level{level}")), &mesh)?;
         }
-        std::fs::rename(&tmp, out).map_err(io(out))
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_dir_all(&tmp);
-    }
-    result.map(|_| out.to_path_buf())
+        Ok(())
+    })?;
+    Ok(out.to_path_buf())
 }
 
 #[cfg(test)]

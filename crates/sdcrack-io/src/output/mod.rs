@@ -4,7 +4,8 @@
 //! A run writes into a fresh hidden folder `OUT/.NAME.partial-PID` and renames it to `OUT/NAME`
 //! only when everything is written, so an interrupted run leaves no folder under the final name
 //! and an existing `OUT/NAME` is never touched: a run refuses to start when it exists. Single files
-//! are written under a temporary name, flushed and renamed ([`atomic_write`]).
+//! are written under a temporary name, flushed and renamed ([`atomic_write`]); a file or folder
+//! written whole is renamed into place by [`write_then_rename`], the one write-then-rename.
 
 pub mod merge;
 pub mod mesh_export;
@@ -77,7 +78,7 @@ impl ResultsDir {
         if final_path.exists() {
             return Err(ResultsError::Exists(final_path));
         }
-        let work_path = out.join(format!(".{name}.partial-{}", std::process::id()));
+        let work_path = beside(&final_path, "partial");
         if work_path.exists() {
             fs::remove_dir_all(&work_path).map_err(|e| unwritable(&work_path, e))?;
         }
@@ -123,20 +124,44 @@ impl Drop for ResultsDir {
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, flushed, renamed.
 pub fn atomic_write(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
+    write_then_rename(path, &beside(path, "tmp"), std::convert::identity, |tmp| {
+        let mut f = fs::File::create(tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()
+    })
+}
+
+/// `.NAME.KIND-PID` in the folder of `path` (named `NAME`): where `path` is written before it
+/// is renamed into place.
+pub fn beside(path: &Path, kind: &str) -> PathBuf {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        fs::rename(&tmp, path)
-    })();
+    dir.join(format!(".{name}.{kind}-{}", std::process::id()))
+}
+
+/// Write-then-rename, the one way sdcrack replaces a file or a folder: `write` makes `tmp` (a
+/// file or a folder in the same folder as `path`), which is then renamed to `path`, so that a
+/// reader sees the entry whole or not at all. On any error `tmp` is removed (`rename_error`
+/// turns the rename's error into the caller's) and `path` is left as it was.
+pub fn write_then_rename<E>(
+    path: &Path,
+    tmp: &Path,
+    rename_error: impl FnOnce(std::io::Error) -> E,
+    write: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), E> {
+    let result = write(tmp).and_then(|()| fs::rename(tmp, path).map_err(rename_error));
     if result.is_err() {
-        let _ = fs::remove_file(&tmp);
+        let _ = if tmp.is_dir() {
+            fs::remove_dir_all(tmp)
+        } else {
+            fs::remove_file(tmp)
+        };
     }
     result
 }

@@ -35,6 +35,7 @@
 
 use serde::Deserialize;
 
+use super::schema::{P_MASSES, P_SPACES};
 use super::{suggest, MultiplierSpace, SceneError, USpace};
 
 pub use sdcrack_core::scene::verification::{
@@ -86,32 +87,6 @@ pub(super) struct ExpectedFailureToml {
     reason: String,
 }
 
-/// Keys of the two tables, for "unknown key" messages (same order as the structs).
-pub(super) const VERIFICATION_KEYS: &[&str] = &[
-    "smoke",
-    "kkt_tolerance",
-    "reference_agreement",
-    "delta_slope_tolerance",
-    "min_rate",
-    "expected_failure",
-    "expected_rate",
-    "not_applicable",
-];
-/// Keys of one `[[verification.expected_failure]]`.
-pub(super) const EXPECTED_FAILURE_KEYS: &[&str] = &["u_space", "multiplier", "quantity", "reason"];
-/// Keys of one `[[verification.expected_rate]]`.
-pub(super) const EXPECTED_RATE_KEYS: &[&str] = &[
-    "u_space",
-    "multiplier",
-    "p_mass",
-    "p_space",
-    "quantity",
-    "rate",
-    "reason",
-];
-/// Keys of one `[[verification.not_applicable]]`.
-pub(super) const NOT_APPLICABLE_KEYS: &[&str] = &["check", "reason"];
-
 /// `"*"` → `None`; otherwise one of `known` (a value the scene runs), with a suggestion.
 fn pattern<T: Copy>(
     key: &str,
@@ -153,11 +128,7 @@ impl VerificationToml {
         let us: Vec<(USpace, String)> = u_spaces.iter().map(|&u| (u, u.to_string())).collect();
         let ms: Vec<(MultiplierSpace, String)> =
             multipliers.iter().map(|&m| (m, m.to_string())).collect();
-        let qs: Vec<(usize, String)> = QUANTITIES
-            .iter()
-            .enumerate()
-            .map(|(i, q)| (i, q.to_string()))
-            .collect();
+        let qs = indexed(&QUANTITIES);
         let mut expected_failures: Vec<ExpectedFailure> = Vec::new();
         for (i, e) in self.expected_failure.into_iter().enumerate() {
             let key = |k: &str| format!("verification.expected_failure[{i}].{k}");
@@ -214,6 +185,15 @@ impl VerificationToml {
     }
 }
 
+/// `names` with their positions, the `known` of [`pattern`].
+fn indexed(names: &[&str]) -> Vec<(usize, String)> {
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| (i, n.to_string()))
+        .collect()
+}
+
 fn non_empty(key: String, reason: &str) -> Result<String, SceneError> {
     let r = reason.trim();
     if r.is_empty() {
@@ -238,11 +218,8 @@ impl ExpectedRateToml {
                 self.rate
             )));
         }
-        let pms = [(0, "consistent".to_string()), (1, "lumped".to_string())];
-        let pss = [
-            (0, "continuous".to_string()),
-            (1, "broken-tangential".to_string()),
-        ];
+        let pms = indexed(P_MASSES);
+        let pss = indexed(P_SPACES);
         Ok(ExpectedRate {
             u_space: pattern(&key("u_space"), self.u_space.as_deref().unwrap_or("*"), us)?,
             multiplier: pattern(

@@ -1,0 +1,313 @@
+//! Unit tests of the scene module: positions in the text, toml's errors in words, the schema
+//! derived from the structs, the template, the memory limits.
+
+use super::position::{key_position, line_column, locate_message};
+use super::schema::{schema, Kind, ALLOWED, WORDS};
+use super::toml_error::{header_before, key_on_line};
+use super::*;
+
+/// Where a value error points: a key of a table, a dotted key, a key of an inline table, a
+/// key in the second of an array of tables, a table header; nothing for an absent key.
+#[test]
+fn key_positions_in_the_scene_text() {
+    let text = "name = \"x\"\n\n[data]\nf = \"1\"\n  g = \"0\"\n[discretization]\n\
+                grading = { beta = 0.5, radius = 0.25 }\nlevels = [0, 1]\n\
+                [[verification.expected_failure]]\nu_space = \"continuous\"\n\
+                [[verification.expected_failure]]\nmultiplier = \"M0\"\nu_space = \"broken\"\n";
+    assert_eq!(key_position(text, "name"), Some((1, 1)));
+    assert_eq!(key_position(text, "data.f"), Some((4, 1)));
+    assert_eq!(key_position(text, "data.g"), Some((5, 3)));
+    assert_eq!(key_position(text, "data"), Some((3, 1)));
+    assert_eq!(key_position(text, "discretization.grading"), Some((7, 1)));
+    assert_eq!(
+        key_position(text, "discretization.grading.radius"),
+        Some((7, 25))
+    );
+    assert_eq!(key_position(text, "discretization.levels"), Some((8, 1)));
+    assert_eq!(
+        key_position(text, "verification.expected_failure[0].u_space"),
+        Some((10, 1))
+    );
+    assert_eq!(
+        key_position(text, "verification.expected_failure[1].u_space"),
+        Some((13, 1))
+    );
+    assert_eq!(
+        key_position(text, "verification.expected_failure[1]"),
+        Some((11, 1))
+    );
+    assert_eq!(key_position(text, "discretization.deltas"), None);
+    assert_eq!(key_position(text, "geometry"), None);
+    assert_eq!(
+        locate_message("data.g = \"0\" evaluates to NaN".into(), text),
+        "data.g = \"0\" evaluates to NaN (at line 5, column 3)"
+    );
+    assert_eq!(
+        locate_message("missing key `cells` in [discretization]".into(), text),
+        "missing key `cells` in [discretization] (the table is at line 6, column 1)"
+    );
+    assert_eq!(locate_message("no key here".into(), text), "no key here");
+}
+
+/// The template is a valid scene, names every table and key (commented or not), and its
+/// optional tables, uncommented, are valid too.
+#[test]
+fn template_is_a_valid_scene_naming_every_key() {
+    let scene = Scene::from_toml(SCENE_TEMPLATE).expect("template parses");
+    assert_eq!(scene.name, "my-crack");
+    let schema = schema();
+    for t in &schema.tables {
+        let (table, keys) = (&t.table, t.key_names());
+        let last = table.rsplit('.').next().unwrap_or(table);
+        let named = SCENE_TEMPLATE.contains(&format!("[{table}]"))
+            || SCENE_TEMPLATE.contains(&format!("{last} = {{"))
+            || SCENE_TEMPLATE.contains(&format!("{last} = [{{"));
+        assert!(table.is_empty() || named, "template lacks [{table}]");
+        for key in keys {
+            assert!(
+                SCENE_TEMPLATE.contains(&format!("{key} ="))
+                    || schema.tables.iter().any(|t| t.table.ends_with(key)),
+                "template lacks `{key}` of [{table}]"
+            );
+        }
+    }
+    // Uncomment the optional [exact] and expected-failure blocks: still a valid scene.
+    let full = SCENE_TEMPLATE
+        .replace("# [exact]", "[exact]")
+        .replace("# u = \"...\"", "u = \"sin(pi*x)\"")
+        .replace("# [[verification", "[[verification")
+        .replace("# u_space = ", "u_space = ")
+        .replace(
+            "u_spaces = [\"broken\"]",
+            "u_spaces = [\"continuous\", \"broken\"]",
+        )
+        .replace("# reason = ", "reason = ")
+        .replace("# rate = ", "rate = ")
+        .replace("# check = ", "check = ");
+    let scene = Scene::from_toml(&full).expect("template with its options parses");
+    assert!(scene.exact.is_some());
+}
+
+/// Peak resident memory measured with `/usr/bin/time -f %M` for
+/// `sdcrack run scenes/mixed.toml --level L --u-space broken --multiplier M1 --delta 0`
+/// (cells [8, 8]; docs/design.md): the estimate must stay above each.
+#[test]
+fn memory_estimate_is_above_measured_peaks_and_admits_the_nightly() {
+    for (level, peak_kib) in [(3u32, 135_612u64), (4, 165_316), (5, 507_484)] {
+        let estimate = estimated_memory_bytes(Level0Size::Grid([8, 8]), level);
+        assert!(
+            estimate > peak_kib * 1024,
+            "level {level}: estimate {estimate} B below the measured {peak_kib} KiB"
+        );
+    }
+    // ci/nightly runs every repository scene up to level 5: cells [8, 8] and [16, 8].
+    for cells in [[8, 8], [16, 8]] {
+        for level in 0..=5 {
+            assert_eq!(
+                check_level(Level0Size::Grid(cells), level),
+                Ok(()),
+                "{cells:?} level {level}"
+            );
+        }
+    }
+    let refused = check_level(Level0Size::Grid([8, 8]), 8).unwrap_err();
+    assert!(refused.contains("more than the 16 GiB limit"), "{refused}");
+    assert!(check_level(Level0Size::Grid([1, 1]), MAX_LEVEL + 1).is_err());
+    assert_eq!(
+        estimated_memory_bytes(Level0Size::Grid([4096, 4096]), 64),
+        u64::MAX
+    );
+}
+
+#[test]
+fn toml_errors_name_table_key_line_and_column() {
+    let scene = DEFAULT_SCENE.replacen("levels =", "levles =", 1);
+    let e = Scene::from_toml(&scene).unwrap_err().to_string();
+    assert!(
+        e.contains("unknown key `levles` in [discretization] at line")
+            && e.contains("did you mean `levels`?"),
+        "{e}"
+    );
+    let scene = DEFAULT_SCENE.replacen("cells = [8, 8]", "cells = [8, \"8\"]", 1);
+    let e = Scene::from_toml(&scene).unwrap_err().to_string();
+    assert!(
+        e.contains("discretization.cells must be two integers [nx, ny], not the string \"8\""),
+        "{e}"
+    );
+    assert_eq!(line_column("ab\ncδe", 6), (2, 3));
+    assert_eq!(
+        line_column("ab\ncδe", 5),
+        (2, 2),
+        "inside δ: snapped to its start"
+    );
+    assert_eq!(
+        key_on_line("x = { rectangle = [1", 18),
+        Some("rectangle".into())
+    );
+    assert_eq!(key_on_line("[data]", 3), None);
+    assert_eq!(header_before("a = 1\n[data]\nf = 2\n[x.y]\n", 14), "data");
+    assert_eq!(header_before("a = 1\n[data]\n", 2), "");
+}
+
+#[test]
+fn messages_escape_control_characters() {
+    let scene = DEFAULT_SCENE.replacen("name = \"mixed\"", "name = \"a\\r\\nb\"", 1);
+    let e = Scene::from_toml(&scene).unwrap_err().to_string();
+    assert!(e.contains(r#"name "a\r\nb" must be"#), "{e}");
+    assert!(!e.chars().any(char::is_control), "{e:?}");
+}
+
+/// The schema is the structs': every table with its keys in field order, each key's type.
+#[test]
+fn schema_is_read_off_the_structs() {
+    let s = schema();
+    let top = s.table("").expect("top level");
+    assert_eq!(&top.key_names()[..3], ["name", "description", "geometry"]);
+    let grading = s.table("discretization.grading").expect("grading");
+    assert_eq!(grading.key_names(), ["beta", "radius"]);
+    assert!(grading.keys.iter().all(|k| *k.kind() == Kind::Number));
+    let cells = s.key("discretization", "cells").expect("cells");
+    assert_eq!(cells.type_name, "list of integer");
+    assert_eq!(cells.words, "two integers [nx, ny]");
+    let rectangle = s.key("geometry.domain", "rectangle").expect("rectangle");
+    assert_eq!(rectangle.type_name, "list of list of number");
+    let u_spaces = s.key("discretization", "u_spaces").expect("u_spaces");
+    assert_eq!(
+        u_spaces.words,
+        "a list of names from \"continuous\", \"broken\""
+    );
+    assert_eq!(u_spaces.values, ["continuous", "broken"]);
+    let smoke = s.key("verification", "smoke").expect("smoke");
+    assert_eq!(
+        (smoke.type_name.as_str(), smoke.words.as_str()),
+        ("bool", "true or false")
+    );
+    for table in [
+        "geometry.crack",
+        "geometry.cracks",
+        "verification.expected_rate",
+    ] {
+        assert!(s.table(table).is_some(), "{table}");
+    }
+    let json: serde_json::Value = serde_json::from_str(&s.to_json()).expect("JSON");
+    assert_eq!(json["vocabulary"]["quantities"][0], "u_l2");
+}
+
+/// What is kept beside the structs names keys the structs have.
+#[test]
+fn allowed_names_and_words_name_keys_of_the_schema() {
+    let s = schema();
+    for (path, names) in ALLOWED {
+        let (table, key) = path.rsplit_once('.').expect("table.key");
+        assert!(s.key(table, key).is_some(), "ALLOWED names {path}");
+        assert!(!names.is_empty(), "{path}");
+    }
+    let keys = s.key_names();
+    for (key, _) in WORDS {
+        assert!(keys.contains(key), "WORDS names {key}");
+    }
+}
+
+/// A value error inside an array of tables or an inline array names the element.
+#[test]
+fn paths_at_offsets_come_from_the_document() {
+    let text = "[geometry]\ncracks = [{ segment = 1 }, { polyline = 2 }]\n\
+                [[verification.expected_rate]]\nrate = 1.0\n\
+                [[verification.expected_rate]]\nrate = \"x\"\n";
+    let at = |needle: &str| {
+        let offset = text.find(needle).expect(needle);
+        super::position::path_at(text, offset).map(|p| super::position::path_text(&p))
+    };
+    assert_eq!(at("2 }").as_deref(), Some("geometry.cracks[1].polyline"));
+    assert_eq!(at("segment").as_deref(), Some("geometry.cracks[0].segment"));
+    assert_eq!(
+        at("\"x\"").as_deref(),
+        Some("verification.expected_rate[1].rate")
+    );
+    assert_eq!(
+        key_position(text, "verification.expected_rate[1]"),
+        Some((5, 1))
+    );
+    assert_eq!(key_position(text, "geometry.cracks[1]"), Some((2, 1)));
+}
+
+/// docs/scenes.md's table of keys, `(table, row)`: each row's first cell under the
+/// `**[table]**` row it follows (`""` before the first).
+fn documented_rows() -> Vec<(String, String)> {
+    let docs = include_str!("../../../../docs/scenes.md");
+    let table = docs
+        .split("## Tables and keys")
+        .nth(1)
+        .and_then(|rest| rest.split("\n\n").nth(1))
+        .expect("docs/scenes.md has its table of keys");
+    let mut current = String::new();
+    let mut rows = Vec::new();
+    for row in table.lines().skip(2) {
+        let first = row.split('|').nth(1).unwrap_or("").trim();
+        if let Some(header) = first.strip_prefix("**`[") {
+            current = header.trim_matches(['[', ']', '`', '*']).to_string();
+            continue;
+        }
+        rows.push((current.clone(), row.to_string()));
+    }
+    rows
+}
+
+/// The names in backquotes of a row's first cell (`px`, `py` → both).
+fn row_keys(row: &str) -> Vec<String> {
+    let first = row.split('|').nth(1).unwrap_or("");
+    first
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(str::to_string)
+        .collect()
+}
+
+/// docs/scenes.md documents exactly the schema's keys: each table with a `**[table]**` row has
+/// one row per key that is not a documented table itself, and the keys of an inline table
+/// (`{ beta = β, radius = R }`) are written as `key =` in their parent key's row. A field added
+/// to a struct fails here until it is documented.
+#[test]
+fn docs_table_lists_exactly_the_schema_keys() {
+    let schema = schema();
+    let rows = documented_rows();
+    let headed = |t: &str| t.is_empty() || rows.iter().any(|(table, _)| table == t);
+    let child = |t: &str, k: &str| {
+        if t.is_empty() {
+            k.to_string()
+        } else {
+            format!("{t}.{k}")
+        }
+    };
+    for t in &schema.tables {
+        if headed(&t.table) {
+            let mut want: Vec<String> = (t.key_names().into_iter())
+                .filter(|k| {
+                    !(schema.table(&child(&t.table, k)).is_some() && headed(&child(&t.table, k)))
+                })
+                .map(str::to_string)
+                .collect();
+            let mut got: Vec<String> = (rows.iter())
+                .filter(|(table, _)| *table == t.table)
+                .flat_map(|(_, row)| row_keys(row))
+                .collect();
+            want.sort();
+            got.sort();
+            assert_eq!(got, want, "docs/scenes.md rows of [{}]", t.table);
+        } else {
+            let (parent, key) = t.table.rsplit_once('.').unwrap_or(("", &t.table));
+            let row = (rows.iter())
+                .find(|(table, row)| table == parent && row_keys(row).iter().any(|k| k == key))
+                .map(|(_, row)| row.as_str())
+                .unwrap_or_else(|| panic!("docs/scenes.md has no row for {}", t.table));
+            for k in t.key_names() {
+                assert!(
+                    row.contains(&format!("{k} =")),
+                    "docs/scenes.md's row of {} does not write `{k} =`",
+                    t.table
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,526 @@
+//! Validation of a scene file's structs ([`super::raw`]) into sdcrack-core's [`Scene`]: every
+//! expression parsed once into an [`Expr`] tree, every number checked (cells > 0, levels
+//! distinct, δ ≥ 0 and finite, …), every name one the schema allows ([`super::schema::ALLOWED`]).
+//! Errors are [`SceneError::Value`] / [`SceneError::Expression`] naming the key first, so that
+//! [`super::position`] can append where the key is.
+
+use std::path::Path;
+
+use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
+use super::schema::{FIELDS, MULTIPLIERS, P_MASSES, P_SPACES, U_SPACES};
+use super::{
+    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass,
+    PSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
+    KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
+};
+use crate::did_you_mean::suggest;
+
+fn parse_expr(key: &str, text: &str) -> Result<Expr, SceneError> {
+    Expr::parse(text).map_err(|error| SceneError::Expression {
+        key: key.to_string(),
+        source_text: text.to_string(),
+        error,
+        at: String::new(),
+    })
+}
+
+fn check_finite_point(what: &str, p: [f64; 2]) -> Result<(), SceneError> {
+    if p.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(SceneError::Value(format!(
+            "{what} has a non-finite coordinate ({}, {})",
+            p[0], p[1]
+        )))
+    }
+}
+
+impl SceneToml {
+    /// `base_dir`: the folder relative mesh file paths are read from (the scene file's).
+    pub(super) fn validate(self, base_dir: &Path) -> Result<Scene, SceneError> {
+        let name = self.name.trim().to_string();
+        if name.is_empty()
+            || name.len() > 100
+            || !name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+        {
+            return Err(SceneError::Value(format!(
+                "name {:?} must be 1-100 characters of letters, digits, '-' or '_' (it names the results folder)",
+                self.name
+            )));
+        }
+        let d = self.discretization;
+        let meshing = validate_meshing(&d, base_dir)?;
+        let grading = d.grading.as_ref().map(validate_grading).transpose()?;
+        let mut file_triangles = 0;
+        let (domain, cracks, crack_names) = match (&meshing, self.geometry) {
+            (Meshing::File(path), None) => {
+                let (domain, cracks, triangles) = crate::mesh::msh_file_geometry(path)
+                    .map_err(|e| SceneError::Value(format!("discretization.mesh: {e}")))?;
+                file_triangles = triangles;
+                let names = (1..=cracks.len())
+                    .map(|i| format!("crack{i} of {}", path.display()))
+                    .collect();
+                (domain, cracks, names)
+            }
+            (Meshing::File(_), Some(_)) => {
+                return Err(SceneError::Value(
+                    "[geometry] must be left out with discretization.mesh: the domain and the cracks come from the mesh file's physical groups".into(),
+                ))
+            }
+            (_, None) => {
+                return Err(SceneError::Value(
+                    "[geometry] is missing: give geometry.domain and geometry.crack (or geometry.cracks)".into(),
+                ))
+            }
+            (_, Some(g)) => validate_geometry(g)?,
+        };
+        let level0 = match meshing {
+            Meshing::Cells(c) => Level0Size::Grid(c),
+            Meshing::MeshSize(h) => {
+                let area = crate::geometry::signed_area(&domain.polygon()).abs();
+                Level0Size::Triangles(1.5 * area / (3f64.sqrt() / 4.0 * h * h))
+            }
+            Meshing::File(_) => Level0Size::Triangles(file_triangles as f64),
+        };
+        let f = parse_expr("data.f", &self.data.f)?;
+        let g = parse_expr("data.g", &self.data.g)?;
+        let exact = match self.exact {
+            None => None,
+            Some(e) => {
+                let u = parse_expr("exact.u", &e.u)?;
+                let px = match e.px {
+                    Some(s) => parse_expr("exact.px", &s)?,
+                    None => u.derivative(Var::X),
+                };
+                let py = match e.py {
+                    Some(s) => parse_expr("exact.py", &s)?,
+                    None => u.derivative(Var::Y),
+                };
+                let jump = e.jump.map(|s| parse_expr("exact.jump", &s)).transpose()?;
+                Some(Exact { u, px, py, jump })
+            }
+        };
+        let levels = validate_levels(&d.levels, level0)?;
+        let u_spaces = validate_names(
+            "discretization.u_spaces",
+            &d.u_spaces,
+            USpace::from_name,
+            U_SPACES,
+        )?;
+        let multipliers = validate_names(
+            "discretization.multipliers",
+            &d.multipliers,
+            MultiplierSpace::from_name,
+            MULTIPLIERS,
+        )?;
+        let p_masses = match &d.p_mass {
+            None => vec![PMass::Consistent],
+            Some(names) => {
+                validate_names("discretization.p_mass", names, PMass::from_name, P_MASSES)?
+            }
+        };
+        let p_spaces = match &d.p_spaces {
+            None => vec![PSpace::Continuous],
+            Some(names) => validate_names(
+                "discretization.p_spaces",
+                names,
+                PSpace::from_name,
+                P_SPACES,
+            )?,
+        };
+        if !p_spaces
+            .iter()
+            .any(|p| u_spaces.iter().any(|&u| p.serves(u)))
+        {
+            return Err(SceneError::Value(
+                "discretization.p_spaces = [\"broken-tangential\"] needs broken u: a continuous u cannot open the crack, so u_spaces must list \"broken\" (or p_spaces \"continuous\")".into(),
+            ));
+        }
+        let deltas = validate_deltas(&d.deltas)?;
+        let (fields, references) = match self.outputs {
+            None => (
+                FieldSet {
+                    u: true,
+                    p: true,
+                    lambda: true,
+                },
+                Vec::new(),
+            ),
+            Some(o) => (
+                validate_fields(&o.fields)?,
+                validate_references(&o.references)?,
+            ),
+        };
+        let verification = match self.verification {
+            None => Verification::default(),
+            Some(v) => v.validate(&u_spaces, &multipliers)?,
+        };
+        Ok(Scene {
+            name,
+            description: self.description,
+            domain,
+            cracks,
+            crack_names,
+            meshing,
+            grading,
+            level0,
+            f,
+            g,
+            exact,
+            levels,
+            u_spaces,
+            multipliers,
+            p_masses,
+            p_spaces,
+            deltas,
+            fields,
+            references,
+            verification,
+            source: String::new(),
+        })
+    }
+}
+
+/// `[[x, y], [x, y]]`: exactly two points of two numbers each (TOML arrays have any length).
+fn two_points(key: &str, v: &[Vec<f64>]) -> Result<[[f64; 2]; 2], SceneError> {
+    match v {
+        [a, b] if a.len() == 2 && b.len() == 2 => Ok([[a[0], a[1]], [b[0], b[1]]]),
+        _ => Err(SceneError::Value(format!(
+            "{key} must be two points [[x, y], [x, y]]; got {} point(s) with {:?} coordinates",
+            v.len(),
+            v.iter().map(Vec::len).take(8).collect::<Vec<_>>()
+        ))),
+    }
+}
+
+/// Domain and cracks of `[geometry]`, validated ([`crate::geometry`]), with each crack's name
+/// for messages. A polygon is stored counter-clockwise.
+fn validate_geometry(g: GeometryToml) -> Result<(Domain, Vec<Polyline>, Vec<String>), SceneError> {
+    let value = |m: String| SceneError::Value(m);
+    let Some(domain) = g.domain else {
+        return Err(value(
+            "geometry.domain is missing: give { rectangle = [[x0, y0], [x1, y1]] } or { polygon = [[x, y], ...] }".into(),
+        ));
+    };
+    let domain = match (domain.rectangle, domain.polygon) {
+        (Some(r), None) => {
+            let [lo, hi] = two_points("geometry.domain.rectangle", &r)?;
+            check_finite_point("geometry.domain.rectangle", lo)?;
+            check_finite_point("geometry.domain.rectangle", hi)?;
+            if !(hi[0] > lo[0] && hi[1] > lo[1]) {
+                return Err(value(format!(
+                    "geometry.domain.rectangle [[{}, {}], [{}, {}]] must list the lower-left corner first and have positive width and height",
+                    lo[0], lo[1], hi[0], hi[1]
+                )));
+            }
+            Domain::Rectangle(Rectangle { min: lo, max: hi })
+        }
+        (None, Some(p)) => {
+            let points = points_of("geometry.domain.polygon", &p)?;
+            crate::geometry::validate_polygon(&points).map_err(|e| value(e.to_string()))?;
+            Domain::Polygon(crate::geometry::counter_clockwise(&points))
+        }
+        _ => {
+            return Err(value(
+                "geometry.domain must have exactly one of rectangle and polygon".into(),
+            ))
+        }
+    };
+    let (cracks, names): (Vec<Polyline>, Vec<String>) = match (g.crack, g.cracks) {
+        (Some(c), None) => {
+            let (crack, name) = validate_crack(c, "geometry.crack")?;
+            (vec![crack], vec![name])
+        }
+        (None, Some(list)) if !list.is_empty() => list
+            .into_iter()
+            .enumerate()
+            .map(|(i, c)| validate_crack(c, &format!("geometry.cracks[{i}]")))
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .unzip(),
+        (None, Some(_)) => {
+            return Err(value(
+                "geometry.cracks is empty: give at least one crack".into(),
+            ))
+        }
+        (None, None) => {
+            return Err(value(
+                "missing key `crack` in [geometry]: give crack = { segment = [[xa, ya], [xb, yb]] } or a list cracks = [...]".into(),
+            ))
+        }
+        _ => {
+            return Err(value(
+                "geometry must have exactly one of crack (a single crack) and cracks (a list)"
+                    .into(),
+            ))
+        }
+    };
+    let polylines: Vec<Vec<[f64; 2]>> = cracks.iter().map(|c| c.points.clone()).collect();
+    crate::geometry::validate_cracks(&domain.polygon(), &polylines).map_err(|e| {
+        // name the cracks as the scene does
+        let mut m = e.to_string();
+        for (i, name) in names.iter().enumerate().rev() {
+            m = m.replace(&format!("geometry.cracks[{i}]"), name);
+        }
+        value(m)
+    })?;
+    Ok((domain, cracks, names))
+}
+
+/// One crack: `{ segment = [a, b] }` or `{ polyline = [x0, x1, ...] }`, and its name.
+fn validate_crack(c: CrackToml, at: &str) -> Result<(Polyline, String), SceneError> {
+    match (c.segment, c.polyline) {
+        (Some(seg), None) => {
+            let key = format!("{at}.segment");
+            let [a, b] = two_points(&key, &seg)?;
+            check_finite_point(&key, a)?;
+            check_finite_point(&key, b)?;
+            if (Segment { a, b }).length() <= 0.0 {
+                return Err(SceneError::Value(format!(
+                    "{key} has zero length (its two end points coincide)"
+                )));
+            }
+            let name = if at == "geometry.crack" {
+                key
+            } else {
+                at.to_string()
+            };
+            Ok((Polyline { points: vec![a, b] }, name))
+        }
+        (None, Some(line)) => {
+            let key = format!("{at}.polyline");
+            let points = points_of(&key, &line)?;
+            if points.len() < 2 {
+                return Err(SceneError::Value(format!(
+                    "{key} must have at least two points; got {}",
+                    points.len()
+                )));
+            }
+            let name = if at == "geometry.crack" {
+                key
+            } else {
+                at.to_string()
+            };
+            Ok((Polyline { points }, name))
+        }
+        _ => Err(SceneError::Value(format!(
+            "{at} must have exactly one of segment and polyline"
+        ))),
+    }
+}
+
+/// A list of points `[[x, y], ...]` with finite coordinates.
+fn points_of(key: &str, v: &[Vec<f64>]) -> Result<Vec<[f64; 2]>, SceneError> {
+    v.iter()
+        .map(|p| match p[..] {
+            [x, y] => {
+                check_finite_point(key, [x, y])?;
+                Ok([x, y])
+            }
+            _ => Err(SceneError::Value(format!(
+                "{key} must be a list of points [x, y]; a point has {} coordinate(s)",
+                p.len()
+            ))),
+        })
+        .collect()
+}
+
+/// `grading = { beta, radius }`: 0 < β ≤ 1, R > 0.
+fn validate_grading(g: &GradingToml) -> Result<crate::problem::Grading, SceneError> {
+    if !(g.beta.is_finite() && g.beta > 0.0 && g.beta <= 1.0) {
+        return Err(SceneError::Value(format!(
+            "discretization.grading.beta must be in (0, 1] (1/2 or less for the r^(1/2) crack tip; 1 is uniform); got {}",
+            g.beta
+        )));
+    }
+    if !(g.radius.is_finite() && g.radius > 0.0) {
+        return Err(SceneError::Value(format!(
+            "discretization.grading.radius must be a positive length; got {}",
+            g.radius
+        )));
+    }
+    Ok(crate::problem::Grading {
+        beta: g.beta,
+        radius: g.radius,
+    })
+}
+
+/// Exactly one of `cells`, `mesh_size` and `mesh`.
+fn validate_meshing(d: &DiscretizationToml, base_dir: &Path) -> Result<Meshing, SceneError> {
+    match (&d.cells, d.mesh_size, &d.mesh) {
+        (Some(c), None, None) => Ok(Meshing::Cells(validate_cells(c)?)),
+        (None, Some(h), None) => {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(SceneError::Value(format!(
+                    "discretization.mesh_size must be a positive number; got {h}"
+                )));
+            }
+            Ok(Meshing::MeshSize(h))
+        }
+        (None, None, Some(m)) => {
+            if m.gmsh.is_empty() || m.gmsh.chars().any(char::is_control) {
+                return Err(SceneError::Value(format!(
+                    "discretization.mesh.gmsh {:?} must be a non-empty file path without control characters",
+                    m.gmsh
+                )));
+            }
+            Ok(Meshing::File(base_dir.join(&m.gmsh)))
+        }
+        _ => Err(SceneError::Value(
+            "discretization must have exactly one of cells (structured grid of a rectangle), mesh_size (gmsh) and mesh = { gmsh = \"file.msh\" }".into(),
+        )),
+    }
+}
+
+fn validate_cells(cells: &[i64]) -> Result<[usize; 2], SceneError> {
+    let &[nx, ny] = cells else {
+        return Err(SceneError::Value(format!(
+            "discretization.cells must be two integers [nx, ny]; got {} number(s)",
+            cells.len()
+        )));
+    };
+    let cells = [nx, ny];
+    let mut out = [0usize; 2];
+    for (o, c) in out.iter_mut().zip(cells) {
+        if c <= 0 || c as usize > MAX_CELLS {
+            return Err(SceneError::Value(format!(
+                "discretization.cells = [{}, {}]: each entry must be between 1 and {MAX_CELLS}",
+                cells[0], cells[1]
+            )));
+        }
+        *o = c as usize;
+    }
+    Ok(out)
+}
+
+fn validate_levels(levels: &[i64], size: Level0Size) -> Result<Vec<u32>, SceneError> {
+    if levels.is_empty() {
+        return Err(SceneError::Value(
+            "discretization.levels is empty: list at least one level, e.g. [0, 1, 2]".into(),
+        ));
+    }
+    let mut out = Vec::with_capacity(levels.len());
+    for &l in levels {
+        if !(0..=i64::from(MAX_LEVEL)).contains(&l) {
+            return Err(SceneError::Value(format!(
+                "discretization.levels: level {l} is outside 0..={MAX_LEVEL}"
+            )));
+        }
+        let l = l as u32;
+        if out.contains(&l) {
+            return Err(SceneError::Value(format!(
+                "discretization.levels: level {l} is listed twice"
+            )));
+        }
+        check_level(size, l)
+            .map_err(|m| SceneError::Value(format!("discretization.levels: {m}")))?;
+        out.push(l);
+    }
+    out.sort_unstable();
+    Ok(out)
+}
+
+fn validate_names<T: PartialEq + Copy>(
+    key: &str,
+    names: &[String],
+    parse: impl Fn(&str) -> Option<T>,
+    known: &[&str],
+) -> Result<Vec<T>, SceneError> {
+    if names.is_empty() {
+        return Err(SceneError::Value(format!(
+            "{key} is empty: list at least one of {}",
+            known.join(", ")
+        )));
+    }
+    let mut out = Vec::new();
+    for n in names {
+        let v = parse(n).ok_or_else(|| {
+            let hint = suggest(n, known)
+                .map(|s| format!("; did you mean \"{s}\"?"))
+                .unwrap_or_default();
+            SceneError::Value(format!(
+                "{key}: unknown value {n:?} (expected one of {}){hint}",
+                known.join(", ")
+            ))
+        })?;
+        if out.contains(&v) {
+            return Err(SceneError::Value(format!("{key}: {n:?} is listed twice")));
+        }
+        out.push(v);
+    }
+    Ok(out)
+}
+
+fn validate_deltas(deltas: &[f64]) -> Result<Vec<f64>, SceneError> {
+    if deltas.is_empty() {
+        return Err(SceneError::Value(
+            "discretization.deltas is empty: list at least one δ ≥ 0, e.g. [0.0]".into(),
+        ));
+    }
+    let mut out: Vec<f64> = Vec::new();
+    for &d in deltas {
+        if !d.is_finite() || d < 0.0 {
+            return Err(SceneError::Value(format!(
+                "discretization.deltas: {d} is not a finite number ≥ 0"
+            )));
+        }
+        if out.contains(&d) {
+            return Err(SceneError::Value(format!(
+                "discretization.deltas: {d} is listed twice"
+            )));
+        }
+        out.push(d);
+    }
+    // Largest δ first: each solve warm-starts the next, and δ → 0 is the limit studied.
+    out.sort_by(|a, b| b.total_cmp(a));
+    Ok(out)
+}
+
+fn validate_fields(fields: &[String]) -> Result<FieldSet, SceneError> {
+    let mut set = FieldSet::default();
+    for f in fields {
+        let slot = match f.as_str() {
+            "u" => &mut set.u,
+            "p" => &mut set.p,
+            "lambda" => &mut set.lambda,
+            other => {
+                let hint = suggest(other, FIELDS)
+                    .map(|s| format!("; did you mean \"{s}\"?"))
+                    .unwrap_or_default();
+                return Err(SceneError::Value(format!(
+                    "outputs.fields: unknown field {other:?} (expected u, p, lambda){hint}"
+                )));
+            }
+        };
+        if *slot {
+            return Err(SceneError::Value(format!(
+                "outputs.fields: {f:?} is listed twice"
+            )));
+        }
+        *slot = true;
+    }
+    Ok(set)
+}
+
+fn validate_references(refs: &[String]) -> Result<Vec<String>, SceneError> {
+    let mut out: Vec<String> = Vec::new();
+    for r in refs {
+        if !KNOWN_REFERENCES.contains(&r.as_str()) {
+            let hint = suggest(r, &KNOWN_REFERENCES)
+                .map(|s| format!("; did you mean \"{s}\"?"))
+                .unwrap_or_default();
+            return Err(SceneError::Value(format!(
+                "outputs.references: unknown reference {r:?} (expected dolfinx, freefem){hint}"
+            )));
+        }
+        if out.contains(r) {
+            return Err(SceneError::Value(format!(
+                "outputs.references: {r:?} is listed twice"
+            )));
+        }
+        out.push(r.clone());
+    }
+    Ok(out)
+}
