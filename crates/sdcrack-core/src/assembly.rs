@@ -554,10 +554,7 @@ mod tests {
 
     fn mesh(level: u32) -> Mesh {
         crate::mesh::structured::structured(
-            Rectangle {
-                min: [-1.0, -1.0],
-                max: [1.0, 1.0],
-            },
+            crate::problem::UNIT_SQUARE,
             [4, 4],
             &[Segment {
                 a: [-0.5, 0.0],
@@ -567,6 +564,18 @@ mod tests {
             level,
         )
         .unwrap()
+    }
+
+    /// The system of `m` with the u topology `topo` and the continuous p, source `f`, Dirichlet
+    /// data `g` and p mass `p_mass`.
+    fn assemble_with_continuous_p(
+        m: &Mesh,
+        topo: &UTopology,
+        f: &Expr,
+        g: &Expr,
+        p_mass: PMass,
+    ) -> System {
+        assemble(m, topo, &m.p_topology(PSpace::Continuous), f, g, p_mass).unwrap()
     }
 
     fn dense(k: &SymCsc) -> Vec<Vec<f64>> {
@@ -593,15 +602,7 @@ mod tests {
         let topo = m.u_topology(USpace::Broken);
         for p_mass in [PMass::Consistent, PMass::Lumped] {
             let f = Expr::parse("sin(x)*y").unwrap();
-            let sys = assemble(
-                &m,
-                &topo,
-                &m.p_topology(PSpace::Continuous),
-                &f,
-                &Expr::constant(0.0),
-                p_mass,
-            )
-            .unwrap();
+            let sys = assemble_with_continuous_p(&m, &topo, &f, &Expr::constant(0.0), p_mass);
             let full = sys.delta_values();
             assert!(
                 sys.delta_entries.len() < full.len() / 2,
@@ -635,15 +636,13 @@ mod tests {
         for space in [USpace::Continuous, USpace::Broken] {
             let m = mesh(1);
             let topo = m.u_topology(space);
-            let sys = assemble(
+            let sys = assemble_with_continuous_p(
                 &m,
                 &topo,
-                &m.p_topology(PSpace::Continuous),
                 &Expr::constant(0.0),
                 &Expr::constant(0.0),
                 PMass::Consistent,
-            )
-            .unwrap();
+            );
             let n_p = sys.n_p;
             // Σ_ij M_ij = |Ω| = 4 (−∂K/∂δ on the u block)
             let delta_values = sys.delta_values();
@@ -672,15 +671,8 @@ mod tests {
                 x[n_p + dof] = m.vertices[v][0] + 2.0 * m.vertices[v][1];
             }
             let g = Expr::parse("x + 2*y").unwrap();
-            let sys_g = assemble(
-                &m,
-                &topo,
-                &m.p_topology(PSpace::Continuous),
-                &Expr::constant(0.0),
-                &g,
-                PMass::Consistent,
-            )
-            .unwrap();
+            let sys_g =
+                assemble_with_continuous_p(&m, &topo, &Expr::constant(0.0), &g, PMass::Consistent);
             for r in 0..n_p {
                 let kx: f64 = (0..sys.n()).map(|c| k[r][c] * x[c]).sum();
                 assert!(
@@ -784,15 +776,8 @@ mod tests {
         ];
         for (source, exact) in cases {
             let f = Expr::parse(source).unwrap();
-            let sys = assemble(
-                &m,
-                &topo,
-                &m.p_topology(PSpace::Continuous),
-                &f,
-                &Expr::constant(0.0),
-                PMass::Consistent,
-            )
-            .unwrap();
+            let sys =
+                assemble_with_continuous_p(&m, &topo, &f, &Expr::constant(0.0), PMass::Consistent);
             let mut want = vec![0.0; topo.n_dofs];
             for (t, dofs) in m.triangles.iter().zip(&topo.triangle_dofs) {
                 let geo = TriangleGeometry::new(t.map(|v| m.vertices[v]));

@@ -2,16 +2,7 @@ use super::*;
 
 /// The structured mesh of (−1, 1)² without a crack: `cells` at level 0, refined `level` times.
 fn uncracked_square(cells: [usize; 2], level: u32) -> Mesh {
-    crate::mesh::structured::structured(
-        crate::problem::Rectangle {
-            min: [-1.0, -1.0],
-            max: [1.0, 1.0],
-        },
-        cells,
-        &[],
-        level,
-    )
-    .unwrap()
+    crate::mesh::structured::structured(crate::problem::UNIT_SQUARE, cells, &[], level).unwrap()
 }
 
 /// The exact solution `u` with its gradient (`px`, `py`, written out rather than derived) and
