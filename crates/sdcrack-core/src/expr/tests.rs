@@ -142,19 +142,8 @@ fn constants_and_is_constant() {
 
 #[test]
 fn derivatives_match_finite_differences() {
-    let srcs = [
-        "20*sin(2*pi*x)*sign(y)",
-        LONG,
-        "x^3*y - 2*x/y + y^2.5",
-        "exp(x*y) * log(1 + x^2)",
-        "tan(x/2) + cos(x*y)",
-        "sqrt(x^2 + y^2) * abs(x - 3)",
-        "atan2(y - 0.1, x + 0.2) * x",
-        "min(x, y) + max(x*x, y) * min(2, x)",
-        "x^y + 2^(x*y) - (1/x)",
-        "-(x - y)/(x + y)/(1 + x*y)",
-        "abs(sin(3*x)) * sign(x - y)",
-    ];
+    let srcs = shared_derivative_cases();
+    assert!(srcs.contains(&LONG));
     let mut rng = XorShift64(0x9E3779B97F4A7C15);
     let h = 1e-6;
     for src in srcs {
@@ -173,6 +162,8 @@ fn derivatives_match_finite_differences() {
                 2.0 - x,
                 (3.0 * x).sin(),
                 (2.0 * x % 1.0) - 0.5,
+                x - 1.2,
+                y - 0.9,
             ];
             if kinks.iter().any(|k| k.abs() < 1e-2) {
                 continue;
@@ -264,35 +255,49 @@ fn err(src: &str) -> ExprError {
     }
 }
 
-/// The parse errors shared with the Python translator's test (references/tests/test_sdexpr.py):
-/// references/tests/expr_error_cases.json as (source, 1-based column, message). Only the layout
-/// that file keeps is read: one case a line, `["source", column, "message"],`, strings without
-/// escapes; anything else there fails the test rather than being skipped.
-fn shared_error_cases() -> Vec<(&'static str, usize, &'static str)> {
-    let text = include_str!("../../../../references/tests/expr_error_cases.json");
-    let cases: Vec<_> = text
+/// The rows of the one list of a table shared with the Python translator's test
+/// (references/tests/test_sdexpr.py), in the layout those files keep: one row a line between
+/// the line opening the list (`"key": [`) and the line `]`, each but the last ending in a comma.
+fn shared_rows(table: &'static str) -> Vec<&'static str> {
+    let rows: Vec<&str> = table
         .lines()
         .map(str::trim)
-        .filter(|line| line.starts_with('['))
-        .map(|line| {
-            let row = line.trim_end_matches(',');
-            let fields = row.strip_prefix('[').and_then(|r| r.strip_suffix(']'));
-            let case = fields.and_then(|f| {
-                let (source, rest) = json_string(f)?;
-                let (column, rest) = rest.strip_prefix(',')?.split_once(',')?;
-                let (message, rest) = json_string(rest.trim_start())?;
-                let column = column.trim().parse().ok()?;
-                rest.is_empty().then_some((source, column, message))
-            });
-            case.unwrap_or_else(|| panic!("expr_error_cases.json: unreadable case {line}"))
-        })
+        .skip_while(|line| !line.ends_with('['))
+        .skip(1)
+        .take_while(|line| *line != "]")
+        .map(|line| line.strip_suffix(',').unwrap_or(line))
         .collect();
-    assert!(
-        cases.len() >= 20,
-        "expr_error_cases.json: {} cases",
-        cases.len()
-    );
-    cases
+    assert!(rows.len() >= 10, "a shared table of {} rows", rows.len());
+    rows
+}
+
+/// The parse errors of references/tests/expr_error_cases.json as (source, 1-based column,
+/// message), from rows `["source", column, "message"]`.
+fn shared_error_cases() -> Vec<(&'static str, usize, &'static str)> {
+    let table = include_str!("../../../../references/tests/expr_error_cases.json");
+    let case = |row: &'static str| {
+        let (source, rest) = json_string(row.strip_prefix('[')?.strip_suffix(']')?)?;
+        let (column, rest) = rest.strip_prefix(',')?.split_once(',')?;
+        let (message, rest) = json_string(rest.trim_start())?;
+        let column = column.trim().parse().ok()?;
+        rest.is_empty().then_some((source, column, message))
+    };
+    shared_rows(table)
+        .into_iter()
+        .map(|row| case(row).unwrap_or_else(|| panic!("expr_error_cases.json: row {row}")))
+        .collect()
+}
+
+/// The expressions of references/tests/expr_derivative_cases.json, one string a row.
+fn shared_derivative_cases() -> Vec<&'static str> {
+    let table = include_str!("../../../../references/tests/expr_derivative_cases.json");
+    shared_rows(table)
+        .into_iter()
+        .map(|row| match json_string(row) {
+            Some((source, "")) => source,
+            _ => panic!("expr_derivative_cases.json: row {row}"),
+        })
+        .collect()
 }
 
 /// A JSON string without escapes at the start of `s`: its text and what follows it.
