@@ -20,6 +20,7 @@
 //! The crack operators N and D = S N of the multipliers live in [`crate::multiplier`].
 
 use rayon::prelude::*;
+use std::ops::Range;
 
 use crate::expr::Expr;
 use crate::fe::mini::{condensed_element, CondensedElement};
@@ -244,34 +245,67 @@ impl FramedElement {
     }
 }
 
+/// A table of local couplings (a, b) filled in a const context: `pairs[..len]` so far. The
+/// order of a table is the order in which the element's values are scattered into K.
+struct PairTable<const N: usize> {
+    pairs: [(usize, usize); N],
+    len: usize,
+}
+
+impl<const N: usize> PairTable<N> {
+    const fn new() -> Self {
+        PairTable {
+            pairs: [(0, 0); N],
+            len: 0,
+        }
+    }
+
+    /// Appends the pair (a, b).
+    const fn push(mut self, a: usize, b: usize) -> Self {
+        self.pairs[self.len] = (a, b);
+        self.len += 1;
+        self
+    }
+
+    /// Appends every pair of the block `rows × cols`, row by row.
+    const fn block(mut self, rows: Range<usize>, cols: Range<usize>) -> Self {
+        let mut a = rows.start;
+        while a < rows.end {
+            let mut b = cols.start;
+            while b < cols.end {
+                self = self.push(a, b);
+                b += 1;
+            }
+            a += 1;
+        }
+        self
+    }
+
+    /// The filled table; it must be full.
+    const fn finish(self) -> [(usize, usize); N] {
+        assert!(self.len == N, "a pair table must be filled exactly");
+        self.pairs
+    }
+}
+
+/// The local unknowns of u (the p unknowns 0..6 come first): the rows that couple with all 9.
+const U_ROWS: Range<usize> = 6..9;
+
 /// Local couplings (a, b) of the condensed element matrix: p–p within one component (G is the
 /// scalar matrix times I₂: 18 pairs), then every u row with all 9 unknowns (B̃ and −0.7A − δM:
 /// 27 pairs). u unknowns are numbered after p, so these hold every entry of the lower triangle.
 const ELEMENT_PAIRS: [(usize, usize); 45] = {
-    let mut pairs = [(0, 0); 45];
-    let mut n = 0;
+    let mut table = PairTable::new();
     let mut k = 0;
     while k < 3 {
         let mut l = 0;
         while l < 3 {
-            pairs[n] = (2 * k, 2 * l);
-            pairs[n + 1] = (2 * k + 1, 2 * l + 1);
-            n += 2;
+            table = table.push(2 * k, 2 * l).push(2 * k + 1, 2 * l + 1);
             l += 1;
         }
         k += 1;
     }
-    let mut i = 6;
-    while i < 9 {
-        let mut a = 0;
-        while a < 9 {
-            pairs[n] = (i, a);
-            n += 1;
-            a += 1;
-        }
-        i += 1;
-    }
-    pairs
+    table.block(U_ROWS, 0..9).finish()
 };
 
 /// The (K(0), ∂K/∂δ) values of a local pair (a, b) of the condensed element, in the (x, y)
@@ -371,42 +405,23 @@ fn element_pairs(p_mass: PMass, framed: bool) -> &'static [(usize, usize)] {
 }
 
 /// Every p–p pair (36), then the 27 u rows: the couplings of a framed element.
-const FRAMED_ELEMENT_PAIRS: [(usize, usize); 63] = {
-    let mut pairs = [(0, 0); 63];
-    let mut n = 0;
-    let mut a = 0;
-    while a < 6 {
-        let mut b = 0;
-        while b < 6 {
-            pairs[n] = (a, b);
-            n += 1;
-            b += 1;
-        }
-        a += 1;
-    }
-    let mut k = 18;
-    while k < 45 {
-        pairs[n] = ELEMENT_PAIRS[k];
-        n += 1;
-        k += 1;
-    }
-    pairs
-};
+const FRAMED_ELEMENT_PAIRS: [(usize, usize); 63] = PairTable::new()
+    .block(0..6, 0..6)
+    .block(U_ROWS, 0..9)
+    .finish();
 
 /// [`ELEMENT_PAIRS`] without the off-diagonal p–p pairs (6 diagonal p pairs, then the 27 u rows).
 const LUMPED_ELEMENT_PAIRS: [(usize, usize); 33] = {
-    let mut pairs = [(0, 0); 33];
-    let mut n = 0;
+    let mut table = PairTable::new();
     let mut k = 0;
-    while k < 45 {
+    while k < ELEMENT_PAIRS.len() {
         let (a, b) = ELEMENT_PAIRS[k];
         if a >= 6 || b >= 6 || a == b {
-            pairs[n] = (a, b);
-            n += 1;
+            table = table.push(a, b);
         }
         k += 1;
     }
-    pairs
+    table.finish()
 };
 
 /// Column pointers and sorted row indices of the lower triangle coupled by the elements.
@@ -539,10 +554,7 @@ mod tests {
 
     fn mesh(level: u32) -> Mesh {
         crate::mesh::structured::structured(
-            Rectangle {
-                min: [-1.0, -1.0],
-                max: [1.0, 1.0],
-            },
+            crate::problem::UNIT_SQUARE,
             [4, 4],
             &[Segment {
                 a: [-0.5, 0.0],
@@ -552,6 +564,18 @@ mod tests {
             level,
         )
         .unwrap()
+    }
+
+    /// The system of `m` with the u topology `topo` and the continuous p, source `f`, Dirichlet
+    /// data `g` and p mass `p_mass`.
+    fn assemble_with_continuous_p(
+        m: &Mesh,
+        topo: &UTopology,
+        f: &Expr,
+        g: &Expr,
+        p_mass: PMass,
+    ) -> System {
+        assemble(m, topo, &m.p_topology(PSpace::Continuous), f, g, p_mass).unwrap()
     }
 
     fn dense(k: &SymCsc) -> Vec<Vec<f64>> {
@@ -578,15 +602,7 @@ mod tests {
         let topo = m.u_topology(USpace::Broken);
         for p_mass in [PMass::Consistent, PMass::Lumped] {
             let f = Expr::parse("sin(x)*y").unwrap();
-            let sys = assemble(
-                &m,
-                &topo,
-                &m.p_topology(PSpace::Continuous),
-                &f,
-                &Expr::constant(0.0),
-                p_mass,
-            )
-            .unwrap();
+            let sys = assemble_with_continuous_p(&m, &topo, &f, &Expr::constant(0.0), p_mass);
             let full = sys.delta_values();
             assert!(
                 sys.delta_entries.len() < full.len() / 2,
@@ -620,15 +636,13 @@ mod tests {
         for space in [USpace::Continuous, USpace::Broken] {
             let m = mesh(1);
             let topo = m.u_topology(space);
-            let sys = assemble(
+            let sys = assemble_with_continuous_p(
                 &m,
                 &topo,
-                &m.p_topology(PSpace::Continuous),
                 &Expr::constant(0.0),
                 &Expr::constant(0.0),
                 PMass::Consistent,
-            )
-            .unwrap();
+            );
             let n_p = sys.n_p;
             // Σ_ij M_ij = |Ω| = 4 (−∂K/∂δ on the u block)
             let delta_values = sys.delta_values();
@@ -657,15 +671,8 @@ mod tests {
                 x[n_p + dof] = m.vertices[v][0] + 2.0 * m.vertices[v][1];
             }
             let g = Expr::parse("x + 2*y").unwrap();
-            let sys_g = assemble(
-                &m,
-                &topo,
-                &m.p_topology(PSpace::Continuous),
-                &Expr::constant(0.0),
-                &g,
-                PMass::Consistent,
-            )
-            .unwrap();
+            let sys_g =
+                assemble_with_continuous_p(&m, &topo, &Expr::constant(0.0), &g, PMass::Consistent);
             for r in 0..n_p {
                 let kx: f64 = (0..sys.n()).map(|c| k[r][c] * x[c]).sum();
                 assert!(
@@ -769,15 +776,8 @@ mod tests {
         ];
         for (source, exact) in cases {
             let f = Expr::parse(source).unwrap();
-            let sys = assemble(
-                &m,
-                &topo,
-                &m.p_topology(PSpace::Continuous),
-                &f,
-                &Expr::constant(0.0),
-                PMass::Consistent,
-            )
-            .unwrap();
+            let sys =
+                assemble_with_continuous_p(&m, &topo, &f, &Expr::constant(0.0), PMass::Consistent);
             let mut want = vec![0.0; topo.n_dofs];
             for (t, dofs) in m.triangles.iter().zip(&topo.triangle_dofs) {
                 let geo = TriangleGeometry::new(t.map(|v| m.vertices[v]));

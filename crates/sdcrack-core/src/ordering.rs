@@ -120,6 +120,36 @@ impl Block {
     fn vertices(&self) -> usize {
         (self.i1 - self.i0) * (self.j1 - self.j0)
     }
+
+    /// The block cut across its i lines (`along_i`) or its j lines: `[before, after,
+    /// separator]`, the separator being the `reach` lines from the middle one `mid = lo +
+    /// (hi − lo)/2` of the range `[lo, hi)` (clipped at `hi`), before and after the lines on
+    /// either side of it.
+    fn split(self, along_i: bool, reach: usize) -> [Block; 3] {
+        let (lo, hi) = if along_i {
+            (self.i0, self.i1)
+        } else {
+            (self.j0, self.j1)
+        };
+        let mid = lo + (hi - lo) / 2;
+        let end = (mid + reach).min(hi);
+        let lines = |start: usize, stop: usize| {
+            if along_i {
+                Block {
+                    i0: start,
+                    i1: stop,
+                    ..self
+                }
+            } else {
+                Block {
+                    j0: start,
+                    j1: stop,
+                    ..self
+                }
+            }
+        };
+        [lines(lo, mid), lines(end, hi), lines(mid, end)]
+    }
 }
 
 /// The grid's unknowns grouped by vertex.
@@ -143,33 +173,10 @@ impl Grid<'_> {
             self.emit(block, order);
             return;
         }
-        if ni >= nj {
-            let mid = block.i0 + ni / 2;
-            let end = (mid + r).min(block.i1);
-            self.dissect(Block { i1: mid, ..block }, order);
-            self.dissect(Block { i0: end, ..block }, order);
-            self.emit(
-                Block {
-                    i0: mid,
-                    i1: end,
-                    ..block
-                },
-                order,
-            );
-        } else {
-            let mid = block.j0 + nj / 2;
-            let end = (mid + r).min(block.j1);
-            self.dissect(Block { j1: mid, ..block }, order);
-            self.dissect(Block { j0: end, ..block }, order);
-            self.emit(
-                Block {
-                    j0: mid,
-                    j1: end,
-                    ..block
-                },
-                order,
-            );
-        }
+        let [before, after, separator] = block.split(ni >= nj, r);
+        self.dissect(before, order);
+        self.dissect(after, order);
+        self.emit(separator, order);
     }
 
     /// Appends every unknown of `block`, vertex by vertex.
@@ -452,14 +459,7 @@ mod tests {
         let vertices: Vec<[f64; 2]> = (0..=ny)
             .flat_map(|j| (0..=nx).map(move |i| [i as f64, j as f64]))
             .collect();
-        let mut triangles = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                let v = j * (nx + 1) + i;
-                triangles.push([v, v + 1, v + nx + 2]);
-                triangles.push([v, v + nx + 2, v + nx + 1]);
-            }
-        }
+        let triangles = crate::mesh::structured::grid_triangles(nx, ny);
         for reach in [1, 2] {
             let vertex_of: Vec<usize> = (0..2 * vertices.len()).map(|k| k / 2).collect();
             let last: Vec<bool> = (0..vertex_of.len()).map(|k| k % 101 == 7).collect();

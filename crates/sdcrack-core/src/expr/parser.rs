@@ -100,43 +100,42 @@ impl Parser {
         self.depth -= 1;
     }
 
+    /// A sum: terms joined by `+` and `−` (a lone term is itself).
     fn parse_expr(&mut self) -> Result<Node, ExprError> {
-        let first = self.parse_term()?;
-        let mut terms = Vec::new();
-        loop {
-            let neg = match self.peek().tok {
-                Tok::Plus => false,
-                Tok::Minus => true,
-                _ => break,
-            };
-            self.advance();
-            terms.push((neg, self.parse_term()?));
-        }
-        if terms.is_empty() {
-            Ok(first)
-        } else {
-            terms.insert(0, (false, first));
-            Ok(Node::Sum(terms))
-        }
+        self.parse_chain([Tok::Plus, Tok::Minus], Self::parse_term, Node::Sum)
     }
 
+    /// A product: factors joined by `*` and `/` (a lone factor is itself).
     fn parse_term(&mut self) -> Result<Node, ExprError> {
-        let first = self.parse_unary()?;
-        let mut factors = Vec::new();
+        self.parse_chain([Tok::Star, Tok::Slash], Self::parse_unary, Node::Prod)
+    }
+
+    /// A left-associative chain `operand (op operand)*` of one precedence level whose operators
+    /// are `[direct, inverse]` (`+`/`−`, `*`/`/`): a lone operand is returned as it is, two or
+    /// more become `chain` of the operands in order, each flagged `true` after the inverse
+    /// operator (the first `false`).
+    fn parse_chain(
+        &mut self,
+        [direct, inverse]: [Tok; 2],
+        operand: fn(&mut Self) -> Result<Node, ExprError>,
+        chain: fn(Vec<(bool, Node)>) -> Node,
+    ) -> Result<Node, ExprError> {
+        let first = operand(self)?;
+        let mut rest = Vec::new();
         loop {
-            let div = match self.peek().tok {
-                Tok::Star => false,
-                Tok::Slash => true,
+            let inverted = match &self.peek().tok {
+                t if *t == direct => false,
+                t if *t == inverse => true,
                 _ => break,
             };
             self.advance();
-            factors.push((div, self.parse_unary()?));
+            rest.push((inverted, operand(self)?));
         }
-        if factors.is_empty() {
+        if rest.is_empty() {
             Ok(first)
         } else {
-            factors.insert(0, (false, first));
-            Ok(Node::Prod(factors))
+            rest.insert(0, (false, first));
+            Ok(chain(rest))
         }
     }
 

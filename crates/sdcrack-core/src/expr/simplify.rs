@@ -20,25 +20,65 @@ pub(super) fn neg(a: Node) -> Node {
     }
 }
 
+/// A chain being flattened (a sum's terms flagged when negated, a product's factors flagged when
+/// divided): its operands are visited left to right, depth first, a nested chain of the same
+/// kind spliced in place with its flags combined (`−(a − b)` gives −a, +b) and an operand pushed
+/// back visited next; those the caller does not fold away are kept, in visiting order. The
+/// explicit stack keeps deep trees off the call stack.
+struct Flattening {
+    /// The operands still to visit, the next one last.
+    pending: Vec<(bool, Node)>,
+    /// The operands kept so far.
+    kept: Vec<(bool, Node)>,
+}
+
+impl Flattening {
+    fn new(chain: Vec<(bool, Node)>) -> Self {
+        Flattening {
+            pending: chain.into_iter().rev().collect(),
+            kept: Vec::new(),
+        }
+    }
+
+    /// The next operand with its flag, `None` once all are visited.
+    fn pop(&mut self) -> Option<(bool, Node)> {
+        self.pending.pop()
+    }
+
+    /// Visits `node` next, with the flag `flag`.
+    fn push(&mut self, flag: bool, node: Node) {
+        self.pending.push((flag, node));
+    }
+
+    /// Visits the operands of the nested chain `inner` next, in order, each with its flag
+    /// xor-ed with the chain's own `flag`.
+    fn splice(&mut self, flag: bool, inner: Vec<(bool, Node)>) {
+        for (f, n) in inner.into_iter().rev() {
+            self.pending.push((flag ^ f, n));
+        }
+    }
+
+    /// Keeps `node` with its flag as an operand of the flattened chain.
+    fn keep(&mut self, flag: bool, node: Node) {
+        self.kept.push((flag, node));
+    }
+}
+
 /// Sum with flattening, zero removal and folding of the numeric terms.
 pub(super) fn add(terms: Vec<(bool, Node)>) -> Node {
-    let mut out: Vec<(bool, Node)> = Vec::new();
     let mut c = 0.0f64;
-    let mut stack: Vec<(bool, Node)> = terms.into_iter().rev().collect();
-    while let Some((s, t)) = stack.pop() {
+    let mut operands = Flattening::new(terms);
+    while let Some((s, t)) = operands.pop() {
         match t {
             Node::Num(v) if (c + if s { -v } else { v }).is_finite() => {
                 c += if s { -v } else { v };
             }
-            Node::Sum(inner) => {
-                for (s2, t2) in inner.into_iter().rev() {
-                    stack.push((s ^ s2, t2));
-                }
-            }
-            Node::Neg(inner) => stack.push((!s, *inner)),
-            other => out.push((s, other)),
+            Node::Sum(inner) => operands.splice(s, inner),
+            Node::Neg(inner) => operands.push(!s, *inner),
+            other => operands.keep(s, other),
         }
     }
+    let mut out = operands.kept;
     if c != 0.0 {
         out.push((c < 0.0, num(c.abs())));
     }
@@ -60,27 +100,23 @@ pub(super) fn add(terms: Vec<(bool, Node)>) -> Node {
 
 /// Product with flattening, `0*a -> 0`, `1*a -> a` and folding of the numeric factors.
 pub(super) fn mul(factors: Vec<(bool, Node)>) -> Node {
-    let mut out: Vec<(bool, Node)> = Vec::new();
     let mut c = 1.0f64;
-    let mut stack: Vec<(bool, Node)> = factors.into_iter().rev().collect();
-    while let Some((d, f)) = stack.pop() {
+    let mut operands = Flattening::new(factors);
+    while let Some((d, f)) = operands.pop() {
         match f {
             Node::Num(v) if !d && v == 0.0 => return num(0.0),
             Node::Num(v) if (if d { c / v } else { c * v }).is_finite() && v != 0.0 => {
                 c = if d { c / v } else { c * v };
             }
-            Node::Prod(inner) => {
-                for (d2, f2) in inner.into_iter().rev() {
-                    stack.push((d ^ d2, f2));
-                }
-            }
+            Node::Prod(inner) => operands.splice(d, inner),
             Node::Neg(inner) => {
                 c = -c;
-                stack.push((d, *inner));
+                operands.push(d, *inner);
             }
-            other => out.push((d, other)),
+            other => operands.keep(d, other),
         }
     }
+    let mut out = operands.kept;
     if c == 0.0 {
         return num(0.0);
     }

@@ -142,19 +142,8 @@ fn constants_and_is_constant() {
 
 #[test]
 fn derivatives_match_finite_differences() {
-    let srcs = [
-        "20*sin(2*pi*x)*sign(y)",
-        LONG,
-        "x^3*y - 2*x/y + y^2.5",
-        "exp(x*y) * log(1 + x^2)",
-        "tan(x/2) + cos(x*y)",
-        "sqrt(x^2 + y^2) * abs(x - 3)",
-        "atan2(y - 0.1, x + 0.2) * x",
-        "min(x, y) + max(x*x, y) * min(2, x)",
-        "x^y + 2^(x*y) - (1/x)",
-        "-(x - y)/(x + y)/(1 + x*y)",
-        "abs(sin(3*x)) * sign(x - y)",
-    ];
+    let srcs = shared_derivative_cases();
+    assert!(srcs.contains(&LONG));
     let mut rng = XorShift64(0x9E3779B97F4A7C15);
     let h = 1e-6;
     for src in srcs {
@@ -173,6 +162,8 @@ fn derivatives_match_finite_differences() {
                 2.0 - x,
                 (3.0 * x).sin(),
                 (2.0 * x % 1.0) - 0.5,
+                x - 1.2,
+                y - 0.9,
             ];
             if kinks.iter().any(|k| k.abs() < 1e-2) {
                 continue;
@@ -264,71 +255,66 @@ fn err(src: &str) -> ExprError {
     }
 }
 
+/// The rows of the one list of a table shared with the Python translator's test
+/// (references/tests/test_sdexpr.py), in the layout those files keep: one row a line between
+/// the line opening the list (`"key": [`) and the line `]`, each but the last ending in a comma.
+fn shared_rows(table: &'static str) -> Vec<&'static str> {
+    let rows: Vec<&str> = table
+        .lines()
+        .map(str::trim)
+        .skip_while(|line| !line.ends_with('['))
+        .skip(1)
+        .take_while(|line| *line != "]")
+        .map(|line| line.strip_suffix(',').unwrap_or(line))
+        .collect();
+    assert!(rows.len() >= 10, "a shared table of {} rows", rows.len());
+    rows
+}
+
+/// The parse errors of references/tests/expr_error_cases.json as (source, 1-based column,
+/// message), from rows `["source", column, "message"]`.
+fn shared_error_cases() -> Vec<(&'static str, usize, &'static str)> {
+    let table = include_str!("../../../../references/tests/expr_error_cases.json");
+    let case = |row: &'static str| {
+        let (source, rest) = json_string(row.strip_prefix('[')?.strip_suffix(']')?)?;
+        let (column, rest) = rest.strip_prefix(',')?.split_once(',')?;
+        let (message, rest) = json_string(rest.trim_start())?;
+        let column = column.trim().parse().ok()?;
+        rest.is_empty().then_some((source, column, message))
+    };
+    shared_rows(table)
+        .into_iter()
+        .map(|row| case(row).unwrap_or_else(|| panic!("expr_error_cases.json: row {row}")))
+        .collect()
+}
+
+/// The expressions of references/tests/expr_derivative_cases.json, one string a row.
+fn shared_derivative_cases() -> Vec<&'static str> {
+    let table = include_str!("../../../../references/tests/expr_derivative_cases.json");
+    shared_rows(table)
+        .into_iter()
+        .map(|row| match json_string(row) {
+            Some((source, "")) => source,
+            _ => panic!("expr_derivative_cases.json: row {row}"),
+        })
+        .collect()
+}
+
+/// A JSON string without escapes at the start of `s`: its text and what follows it.
+fn json_string(s: &str) -> Option<(&str, &str)> {
+    let (text, rest) = s.strip_prefix('"')?.split_once('"')?;
+    (!text.contains('\\')).then_some((text, rest))
+}
+
 #[test]
 fn error_messages() {
     let long = "x+".repeat(5000) + "x";
     let deep = "(".repeat(201) + "x" + &")".repeat(201);
-    let cases: Vec<(&str, usize, &str)> = vec![
-        ("", 1, "empty expression"),
-        ("   ", 1, "empty expression"),
-        ("2 $ x", 3, "unexpected character '$'"),
-        (
-            "sinn(x)",
-            1,
-            "unknown function 'sinn' (did you mean 'sin'?)",
-        ),
-        (
-            "1 + sqr(x)",
-            5,
-            "unknown function 'sqr' (did you mean 'sqrt'?)",
-        ),
-        ("foo(x)", 1, "unknown function 'foo'"),
-        ("z", 1, "unknown variable 'z' (expected x, y or pi)"),
-        ("2*X", 3, "unknown variable 'X' (did you mean 'x'?)"),
-        ("atan2(x)", 1, "atan2 takes 2 arguments, got 1"),
-        ("1+sin(x, y)", 3, "sin takes 1 argument, got 2"),
-        ("max()", 1, "max takes 2 arguments, got 0"),
-        ("(x+1", 1, "unclosed parenthesis"),
-        ("sin(x", 4, "unclosed parenthesis"),
-        ("x+1)", 4, "unmatched ')'"),
-        (")", 1, "unmatched ')'"),
-        ("()", 1, "empty parentheses"),
-        ("x y", 3, "unexpected trailing input 'y'"),
-        ("x+", 2, "missing operand after '+'"),
-        ("2*(x-)", 5, "missing operand after '-'"),
-        ("x^", 2, "missing operand after '^'"),
-        ("atan2(x,)", 8, "missing argument after ','"),
-        (
-            "1e999",
-            1,
-            "number '1e999' is too large (overflows to infinity)",
-        ),
-        (
-            "x + 1e999 $",
-            5,
-            "number '1e999' is too large (overflows to infinity)",
-        ),
-        (
-            "sin",
-            1,
-            "function 'sin' must be followed by '(' and its arguments",
-        ),
-        (
-            "x(1)",
-            1,
-            "'x' is a variable, not a function (write 'x*(...)')",
-        ),
-        ("(x y)", 4, "expected ')' or an operator, found 'y'"),
-        ("x + 1.", 5, ""), // "1." is a valid number: checked below
-    ];
-    for (src, col, msg) in cases {
-        if msg.is_empty() {
-            assert!(Expr::parse(src).is_ok());
-            continue;
-        }
+    for (src, col, msg) in shared_error_cases() {
         let e = err(src);
         assert_eq!((e.column, e.message.as_str()), (col, msg), "input {src:?}");
     }
+    assert!(Expr::parse("x + 1.").is_ok(), "\"1.\" is a valid number");
     let e = err(&long);
     assert!(e
         .message

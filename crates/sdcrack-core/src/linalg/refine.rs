@@ -45,30 +45,17 @@ impl Ldlt {
             x.fill(0.0);
             return 0.0;
         }
-        let mut r = self.first_solve(b, x);
-        let mut rel = residual(matrix, b, x, &mut r) / b_norm;
-        let mut best_rel = rel;
-        let mut best_x = x.to_vec();
+        let relative_residual = |x: &[f64], r: &mut [f64]| residual(matrix, b, x, r) / b_norm;
         let mut stagnant = 0;
-        for step in 0..max_steps.max(1) {
-            if step > 0 && (best_rel <= tol || stagnant >= STAGNATION_STEPS) {
-                break;
-            }
-            if !rel.is_finite() {
-                break;
-            }
-            self.correct(x, &mut r);
-            rel = residual(matrix, b, x, &mut r) / b_norm;
+        let not_stagnant = |rel: f64, best_rel: f64| {
             if rel < best_rel {
-                best_rel = rel;
-                best_x.copy_from_slice(x);
                 stagnant = 0;
             } else {
                 stagnant += 1;
             }
-        }
-        x.copy_from_slice(&best_x);
-        best_rel
+            stagnant < STAGNATION_STEPS
+        };
+        self.refine_keeping_best(b, x, max_steps, tol, relative_residual, not_stagnant)
     }
 
     /// [`Ldlt::solve_refined`] for `k` right-hand sides (column-major `n × k` in `b` and `x`),
@@ -97,56 +84,74 @@ impl Ldlt {
         // One column at a time: faer's multi-column solve does not give a column the bits of a
         // single-column solve, and a rerun of one multiplier space must reproduce the full run's
         // numbers bit for bit (tests/python/test_campaign.py).
+        // a step that does not halve ω means the round-off floor: another would not help
+        let halved = |omega: f64, best: f64| omega < 0.5 * best;
         b.chunks_exact(n)
             .zip(x.chunks_exact_mut(n))
-            .map(|(bj, xj)| self.refine_column(matrix, bj, xj, max_steps, tol))
+            .map(|(bj, xj)| {
+                let omega = backward_error(matrix, bj);
+                self.refine_keeping_best(bj, xj, max_steps, tol, omega, halved)
+            })
             .collect()
     }
 
-    /// Solve and refine one right-hand side on the componentwise backward error (see
-    /// [`Ldlt::solve_refined_many`]); returns the best ω.
-    fn refine_column(
+    /// Iterative refinement that keeps the best iterate: `x = K⁻¹ b`, then steps
+    /// `x += K⁻¹ (b − K x)`, each followed by `measure(x, r)`, which fills the residual
+    /// `r = b − K x` and returns the measure of the error (the smaller the better). Stops before
+    /// a step once the best measure is at most `tol` (not before the first step) or the current
+    /// one is not finite, after `max_steps` steps (at least 1), or after a step where
+    /// `go_on(measure, best before the step)` is false. Leaves the best iterate in `x` and
+    /// returns its measure.
+    fn refine_keeping_best(
         &self,
-        matrix: &SymCsc,
         b: &[f64],
         x: &mut [f64],
         max_steps: usize,
         tol: f64,
+        mut measure: impl FnMut(&[f64], &mut [f64]) -> f64,
+        mut go_on: impl FnMut(f64, f64) -> bool,
     ) -> f64 {
-        let n = self.n;
         let mut r = self.first_solve(b, x);
-        let mut kx = vec![0.0; n];
-        let mut scale = vec![0.0; n];
-        // r = b − K x and ω = max_i |r_i| / (|K||x| + |b|)_i
-        let mut residual = |x: &[f64], r: &mut [f64]| -> f64 {
-            matrix.mul_vec_with_abs(x, &mut kx, &mut scale);
-            for i in 0..n {
-                r[i] = b[i] - kx[i];
-                scale[i] += b[i].abs();
-            }
-            componentwise_backward_error(r, &scale)
-        };
-        let mut omega = residual(x, &mut r);
-        let mut best = omega;
+        let mut current = measure(x, &mut r);
+        let mut best = current;
         let mut best_x = x.to_vec();
         for step in 0..max_steps.max(1) {
-            if (step > 0 && best <= tol) || !omega.is_finite() {
+            if (step > 0 && best <= tol) || !current.is_finite() {
                 break;
             }
             self.correct(x, &mut r);
-            omega = residual(x, &mut r);
-            let halved = omega < 0.5 * best;
-            if omega < best {
-                best = omega;
+            current = measure(x, &mut r);
+            let going_on = go_on(current, best);
+            if current < best {
+                best = current;
                 best_x.copy_from_slice(x);
             }
-            // a step that does not halve ω means the round-off floor: another would not help
-            if !halved {
+            if !going_on {
                 break;
             }
         }
         x.copy_from_slice(&best_x);
         best
+    }
+}
+
+/// The measure of [`Ldlt::solve_refined_many`]'s refinement of `K x = b`: given `x`, fills
+/// `r = b − K x` and returns its componentwise backward error
+/// `ω = max_i |r_i| / (|K||x| + |b|)_i`.
+fn backward_error<'a>(
+    matrix: &'a SymCsc,
+    b: &'a [f64],
+) -> impl FnMut(&[f64], &mut [f64]) -> f64 + 'a {
+    let n = b.len();
+    let mut kx = vec![0.0; n];
+    let mut scale = vec![0.0; n];
+    move |x: &[f64], r: &mut [f64]| -> f64 {
+        matrix.mul_vec_with_abs(x, &mut kx, &mut scale);
+        for i in 0..n {
+            r[i] = b[i] - kx[i];
+            scale[i] += b[i].abs();
+        }
+        componentwise_backward_error(r, &scale)
     }
 }
 

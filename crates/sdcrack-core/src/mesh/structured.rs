@@ -143,7 +143,11 @@ fn grid_vertices(domain: Rectangle, nx: usize, ny: usize) -> Vec<[f64; 2]> {
     v
 }
 
-fn grid_triangles(nx: usize, ny: usize) -> Vec<[usize; 3]> {
+/// The triangles of the `nx × ny` cells of a grid whose `(nx + 1) × (ny + 1)` vertices are
+/// numbered row by row (vertex (i, j) is `j (nx + 1) + i`): each cell cut by its diagonal from
+/// the lower left to the upper right corner into two counter-clockwise triangles, lower right
+/// one first, cells row by row.
+pub fn grid_triangles(nx: usize, ny: usize) -> Vec<[usize; 3]> {
     let mut t = Vec::with_capacity(2 * nx * ny);
     for j in 0..ny {
         for i in 0..nx {

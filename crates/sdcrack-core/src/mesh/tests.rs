@@ -5,15 +5,15 @@ fn seg(a: [f64; 2], b: [f64; 2]) -> Segment {
     Segment { a, b }
 }
 
+/// The structured mesh of [`UNIT_SQUARE`] = (−1, 1)² with `cells` at level 0, cut by the one
+/// straight crack from `a` to `b`, at `level`.
+fn cut_square(cells: [usize; 2], a: [f64; 2], b: [f64; 2], level: u32) -> Result<Mesh, MeshError> {
+    structured::structured(UNIT_SQUARE, cells, &[seg(a, b).into()], level)
+}
+
 #[test]
 fn counts_and_nesting() {
-    let m = structured::structured(
-        UNIT_SQUARE,
-        [4, 2],
-        &[seg([-0.5, 0.0], [0.5, 0.0]).into()],
-        2,
-    )
-    .unwrap();
+    let m = cut_square([4, 2], [-0.5, 0.0], [0.5, 0.0], 2).unwrap();
     assert_eq!(m.layout, Layout::Structured { nx: 16, ny: 8 });
     assert_eq!(m.vertices.len(), 17 * 9);
     assert_eq!(m.triangles.len(), 2 * 16 * 8);
@@ -33,13 +33,7 @@ fn counts_and_nesting() {
 
 #[test]
 fn sides_and_broken_topology() {
-    let m = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([-0.5, 0.0], [0.5, 0.0]).into()],
-        1,
-    )
-    .unwrap();
+    let m = cut_square([4, 4], [-0.5, 0.0], [0.5, 0.0], 1).unwrap();
     assert_eq!(m.cracks[0].normals[0], [0.0, 1.0]);
     let topo = m.u_topology(USpace::Broken);
     let interior = m.cracks[0].nodes.len() - 2;
@@ -139,43 +133,19 @@ fn broken_tangential_p_keeps_the_normal_component_shared() {
 #[test]
 fn crack_directions() {
     // vertical crack: ν = (-1, 0)
-    let m = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([0.0, -0.5], [0.0, 0.5]).into()],
-        0,
-    )
-    .unwrap();
+    let m = cut_square([4, 4], [0.0, -0.5], [0.0, 0.5], 0).unwrap();
     assert_eq!(m.cracks[0].nodes.len(), 3);
     assert!((m.cracks[0].normals[0][0] + 1.0).abs() < 1e-15);
     // diagonal crack
-    let m = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([-0.5, -0.5], [0.5, 0.5]).into()],
-        1,
-    )
-    .unwrap();
+    let m = cut_square([4, 4], [-0.5, -0.5], [0.5, 0.5], 1).unwrap();
     assert_eq!(m.cracks[0].nodes.len(), 5);
 }
 
 #[test]
 fn crack_errors() {
-    let e = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([-0.4, 0.0], [0.5, 0.0]).into()],
-        0,
-    )
-    .unwrap_err();
+    let e = cut_square([4, 4], [-0.4, 0.0], [0.5, 0.0], 0).unwrap_err();
     assert!(matches!(e, MeshError::OffMesh { .. }));
-    let e = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([-0.5, 0.0], [1.5, 0.0]).into()],
-        0,
-    )
-    .unwrap_err();
+    let e = cut_square([4, 4], [-0.5, 0.0], [1.5, 0.0], 0).unwrap_err();
     assert!(matches!(
         e,
         MeshError::NotInside {
@@ -183,13 +153,7 @@ fn crack_errors() {
             ..
         }
     ));
-    let e = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([-1.0, 0.0], [0.5, 0.0]).into()],
-        0,
-    )
-    .unwrap_err();
+    let e = cut_square([4, 4], [-1.0, 0.0], [0.5, 0.0], 0).unwrap_err();
     assert!(matches!(
         e,
         MeshError::NotInside {
@@ -197,21 +161,9 @@ fn crack_errors() {
             ..
         }
     ));
-    let e = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([-0.5, 0.0], [0.5, 0.5]).into()],
-        0,
-    )
-    .unwrap_err();
+    let e = cut_square([4, 4], [-0.5, 0.0], [0.5, 0.5], 0).unwrap_err();
     assert!(matches!(e, MeshError::NotOnMeshLine { .. }));
     // NW-SE diagonal is not a mesh line
-    let e = structured::structured(
-        UNIT_SQUARE,
-        [4, 4],
-        &[seg([-0.5, 0.5], [0.5, -0.5]).into()],
-        0,
-    )
-    .unwrap_err();
+    let e = cut_square([4, 4], [-0.5, 0.5], [0.5, -0.5], 0).unwrap_err();
     assert!(matches!(e, MeshError::NotOnMeshLine { .. }));
 }

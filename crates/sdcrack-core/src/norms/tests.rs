@@ -2,16 +2,51 @@ use super::*;
 
 /// The structured mesh of (−1, 1)² without a crack: `cells` at level 0, refined `level` times.
 fn uncracked_square(cells: [usize; 2], level: u32) -> Mesh {
-    crate::mesh::structured::structured(
-        crate::problem::Rectangle {
-            min: [-1.0, -1.0],
-            max: [1.0, 1.0],
-        },
-        cells,
-        &[],
-        level,
-    )
-    .unwrap()
+    crate::mesh::structured::structured(crate::problem::UNIT_SQUARE, cells, &[], level).unwrap()
+}
+
+/// The exact solution `u` with its gradient (`px`, `py`, written out rather than derived) and
+/// no crack jump, parsed.
+fn exact_without_jump(u: &str, px: &str, py: &str) -> Exact {
+    let parse = |s: &str| crate::expr::Expr::parse(s).unwrap();
+    Exact {
+        u: parse(u),
+        px: parse(px),
+        py: parse(py),
+        jump: None,
+    }
+}
+
+/// A discrete field the tests own: u at the u dofs, p at the u dofs, the bubble coefficients
+/// of p per triangle and λ_h; [`Field::solution`] lends it to the norms.
+struct Field {
+    u: Vec<f64>,
+    p: Vec<[f64; 2]>,
+    bubbles: Vec<[f64; 2]>,
+    lambda: CrackField,
+}
+
+impl Field {
+    /// u = 0, p = 0 and zero bubbles on `mesh` with the u dofs of `topo`, and λ_h = `lambda`.
+    fn zero(mesh: &Mesh, topo: &UTopology, lambda: CrackField) -> Self {
+        Field {
+            u: vec![0.0; topo.n_dofs],
+            p: vec![[0.0; 2]; topo.n_dofs],
+            bubbles: vec![[0.0; 2]; mesh.triangles.len()],
+            lambda,
+        }
+    }
+
+    /// The field as the norms take it, with the source f of the X-norm's divergence term.
+    fn solution<'a>(&'a self, source: &'a crate::expr::Expr) -> DiscreteSolution<'a> {
+        DiscreteSolution {
+            u: &self.u,
+            p: &self.p,
+            bubbles: &self.bubbles,
+            lambda: &self.lambda,
+            source,
+        }
+    }
 }
 
 #[test]
@@ -42,17 +77,9 @@ fn zero_field_norms(scene: Scene, level: u32) -> (ErrorNorms, Mesh) {
     let mesh = scene.mesh_source().unwrap().level(level).unwrap();
     let topo = mesh.u_topology(USpace::Broken);
     let exact = scene.exact.as_ref().expect("exact scene");
-    let u = vec![0.0; topo.n_dofs];
-    let p = vec![[0.0; 2]; topo.n_dofs];
-    let bubbles = vec![[0.0; 2]; mesh.triangles.len()];
     let lambda = CrackField::PerNode(vec![0.0; mesh.cracks[0].nodes.len()]);
-    let sol = DiscreteSolution {
-        u: &u,
-        p: &p,
-        bubbles: &bubbles,
-        lambda: &lambda,
-        source: &scene.f,
-    };
+    let field = Field::zero(&mesh, &topo, lambda);
+    let sol = field.solution(&scene.f);
     let norms = error_norms(&mesh, &topo, exact, &sol, NormQuadrature::default());
     (norms, mesh)
 }
@@ -109,30 +136,20 @@ fn norms_of_a_known_discrete_field_against_a_polynomial_are_the_closed_forms() {
     let mesh = uncracked_square([4, 4], 1);
     assert_eq!(mesh.triangles.len(), 2 * 8 * 8);
     let topo = mesh.u_topology(USpace::Continuous);
-    let parse = |s: &str| crate::expr::Expr::parse(s).unwrap();
-    let exact = Exact {
-        u: parse("x^2 + x*y + 3*y"),
-        px: parse("2*x + y"),
-        py: parse("x + 3"),
-        jump: None,
-    };
+    let exact = exact_without_jump("x^2 + x*y + 3*y", "2*x + y", "x + 3");
     let (beta, c, s) = (0.6, [0.3, -0.2], 0.25);
-    let u = vec![0.0; topo.n_dofs];
-    let p: Vec<[f64; 2]> = mesh
-        .vertices
-        .iter()
-        .map(|&[x, y]| [2.0 * x + y + beta * x, x + 3.0])
-        .collect();
-    let bubbles = vec![c; mesh.triangles.len()];
-    let lambda = CrackField::PerNode(vec![]);
-    let source = parse("-2");
-    let sol = DiscreteSolution {
-        u: &u,
-        p: &p,
-        bubbles: &bubbles,
-        lambda: &lambda,
-        source: &source,
+    let field = Field {
+        u: vec![0.0; topo.n_dofs],
+        p: mesh
+            .vertices
+            .iter()
+            .map(|&[x, y]| [2.0 * x + y + beta * x, x + 3.0])
+            .collect(),
+        bubbles: vec![c; mesh.triangles.len()],
+        lambda: CrackField::PerNode(vec![]),
     };
+    let source = crate::expr::Expr::parse("-2").unwrap();
+    let sol = field.solution(&source);
     let n = error_norms(&mesh, &topo, &exact, &sol, NormQuadrature::default());
     let close = |a: f64, b: f64, what: &str| {
         assert!((a - b).abs() <= 1e-12 * b, "{what}: {a} vs closed form {b}");
@@ -321,25 +338,14 @@ fn quadrature_estimate_of_a_non_polynomial_integrand_bounds_the_rules_error() {
     let mesh = uncracked_square([2, 2], 0);
     assert_eq!(mesh.triangles.len(), 2 * 2 * 2);
     let topo = mesh.u_topology(USpace::Continuous);
-    let parse = |s: &str| crate::expr::Expr::parse(s).unwrap();
-    let exact = Exact {
-        u: parse("sin(pi*x)*cos(pi*y)"),
-        px: parse("pi*cos(pi*x)*cos(pi*y)"),
-        py: parse("-pi*sin(pi*x)*sin(pi*y)"),
-        jump: None,
-    };
-    let u = vec![0.0; topo.n_dofs];
-    let p = vec![[0.0; 2]; topo.n_dofs];
-    let bubbles = vec![[0.0; 2]; mesh.triangles.len()];
-    let lambda = CrackField::PerNode(vec![]);
-    let source = parse("2*pi^2*sin(pi*x)*cos(pi*y)");
-    let sol = DiscreteSolution {
-        u: &u,
-        p: &p,
-        bubbles: &bubbles,
-        lambda: &lambda,
-        source: &source,
-    };
+    let exact = exact_without_jump(
+        "sin(pi*x)*cos(pi*y)",
+        "pi*cos(pi*x)*cos(pi*y)",
+        "-pi*sin(pi*x)*sin(pi*y)",
+    );
+    let field = Field::zero(&mesh, &topo, CrackField::PerNode(vec![]));
+    let source = crate::expr::Expr::parse("2*pi^2*sin(pi*x)*cos(pi*y)").unwrap();
+    let sol = field.solution(&source);
     let (e, estimate) =
         error_norms_estimated(&mesh, &topo, &exact, &sol, NormQuadrature::default());
     for (got, closed, q, what) in [
@@ -359,16 +365,13 @@ fn quadrature_estimate_of_a_non_polynomial_integrand_bounds_the_rules_error() {
     }
     assert!(estimate.p_x > 0.0);
     // several solutions in one pass: each gets the norms it gets alone, bit for bit
-    let u2: Vec<f64> = (0..topo.n_dofs).map(|i| 0.1 * i as f64).collect();
-    let p2: Vec<[f64; 2]> = (0..topo.n_dofs).map(|i| [0.3, -0.02 * i as f64]).collect();
-    let b2 = vec![[0.2, 0.1]; mesh.triangles.len()];
-    let other = DiscreteSolution {
-        u: &u2,
-        p: &p2,
-        bubbles: &b2,
-        lambda: &lambda,
-        source: &source,
+    let other_field = Field {
+        u: (0..topo.n_dofs).map(|i| 0.1 * i as f64).collect(),
+        p: (0..topo.n_dofs).map(|i| [0.3, -0.02 * i as f64]).collect(),
+        bubbles: vec![[0.2, 0.1]; mesh.triangles.len()],
+        lambda: CrackField::PerNode(vec![]),
     };
+    let other = other_field.solution(&source);
     let both = error_norms_estimated_many(
         &mesh,
         &topo,
@@ -380,7 +383,6 @@ fn quadrature_estimate_of_a_non_polynomial_integrand_bounds_the_rules_error() {
         error_norms_estimated(&mesh, &topo, &exact, &sol, NormQuadrature::default()),
         error_norms_estimated(&mesh, &topo, &exact, &other, NormQuadrature::default()),
     ];
-    let bits = |n: ErrorNorms| [n.u_l2, n.p_l2, n.p_x, n.lambda_l2].map(f64::to_bits);
     for (together, (e, q)) in both.into_iter().zip(alone) {
         assert_eq!(bits(together.0), bits(e));
         assert_eq!(bits(together.1), bits(q));

@@ -48,9 +48,58 @@ fn h_n_from_the_trailing_block_matches_block_solves() {
     }
 }
 
+/// What a level's solves are built from, for one mesh and discretization: the u and p
+/// topologies, the crack operators in the p unknowns, the assembled system and its symbolic
+/// factorization in the study's elimination order.
+struct Discretized {
+    topo: UTopology,
+    ptopo: PTopology,
+    ops: CrackOperators,
+    system: System,
+    p_mass: PMass,
+    symbolic: SymbolicLdlt,
+}
+
+impl Discretized {
+    /// `scene`'s problem on `mesh` with the u space `space`, the p space `p_space` and the p
+    /// mass `p_mass`.
+    fn new(scene: &Scene, mesh: &Mesh, space: USpace, p_space: PSpace, p_mass: PMass) -> Self {
+        let topo = mesh.u_topology(space);
+        let ptopo = mesh.p_topology(p_space);
+        let ops = CrackOperators::new(mesh).with_p_topology(&ptopo);
+        let system = assemble(mesh, &topo, &ptopo, &scene.f, &scene.g, p_mass).unwrap();
+        let order = elimination_order(mesh, &topo, &ptopo, &ops, p_mass);
+        let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
+        Discretized {
+            topo,
+            ptopo,
+            ops,
+            system,
+            p_mass,
+            symbolic,
+        }
+    }
+
+    /// The level context of a study without multiplier spaces or norms.
+    fn context<'a>(&'a self, scene: &'a Scene, mesh: &'a Mesh) -> LevelContext<'a> {
+        LevelContext {
+            scene,
+            mesh,
+            topo: &self.topo,
+            ptopo: &self.ptopo,
+            ops: &self.ops,
+            multipliers: &[],
+            system: &self.system,
+            p_mass: self.p_mass,
+            symbolic: &self.symbolic,
+            norm_cache: None,
+            base_timings: Timings::default(),
+        }
+    }
+}
+
 fn h_n_agrees_on(scene: &Scene) {
     let mesh = scene.mesh_source().unwrap().level(1).unwrap();
-    let ops = CrackOperators::new(&mesh);
     for (space, p_mass, p_space) in [
         (USpace::Continuous, PMass::Consistent, PSpace::Continuous),
         (USpace::Broken, PMass::Consistent, PSpace::Continuous),
@@ -58,26 +107,10 @@ fn h_n_agrees_on(scene: &Scene) {
         (USpace::Broken, PMass::Consistent, PSpace::BrokenTangential),
         (USpace::Broken, PMass::Lumped, PSpace::BrokenTangential),
     ] {
-        let topo = mesh.u_topology(space);
-        let ptopo = mesh.p_topology(p_space);
-        let ops = ops.clone().with_p_topology(&ptopo);
-        let system = assemble(&mesh, &topo, &ptopo, &scene.f, &scene.g, p_mass).unwrap();
-        let order = elimination_order(&mesh, &topo, &ptopo, &ops, p_mass);
-        let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
-        let ctx = LevelContext {
-            scene,
-            mesh: &mesh,
-            topo: &topo,
-            ptopo: &ptopo,
-            ops: &ops,
-            multipliers: &[],
-            system: &system,
-            p_mass,
-            symbolic: &symbolic,
-            norm_cache: None,
-            base_timings: Timings::default(),
-        };
-        let ldlt = Ldlt::factor(&symbolic, &system.matrix(1e-3), &system.signs).unwrap();
+        let level = Discretized::new(scene, &mesh, space, p_space, p_mass);
+        let ctx = level.context(scene, &mesh);
+        let system = &level.system;
+        let ldlt = Ldlt::factor(&level.symbolic, &system.matrix(1e-3), &system.signs).unwrap();
         let dense = ctx.h_n_from_trailing_block(&ldlt).unwrap();
         let solved = ctx.h_n_by_solves(&ldlt);
         let scale = solved.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -163,10 +196,8 @@ fn lumped_elimination_is_exact(scene: Scene, p_space: PSpace) {
     .unwrap()
     .level(1)
     .unwrap();
-    let topo = mesh.u_topology(USpace::Broken);
-    let ptopo = mesh.p_topology(p_space);
-    let ops = CrackOperators::new(&mesh).with_p_topology(&ptopo);
-    let system = assemble(&mesh, &topo, &ptopo, &scene.f, &scene.g, PMass::Lumped).unwrap();
+    let level = Discretized::new(&scene, &mesh, USpace::Broken, p_space, PMass::Lumped);
+    let (ptopo, ops, system) = (&level.ptopo, &level.ops, &level.system);
     let (n_p, n_u) = (system.n_p, system.n_u);
     // D = 0.1 Σ_{T∋i} |T| per component; at a doubled vertex p·τ sums one face's triangles
     let nv = mesh.vertices.len();
@@ -192,8 +223,6 @@ fn lumped_elimination_is_exact(scene: Scene, p_space: PSpace) {
         0
     };
     assert_eq!(n_p, 2 * nv + doubled, "{p_space}");
-    let order = elimination_order(&mesh, &topo, &ptopo, &ops, PMass::Lumped);
-    let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
     for delta in [0.0, 1e-2] {
         let k = dense(&system.matrix(delta));
         for i in 0..n_p {
@@ -222,7 +251,7 @@ fn lumped_elimination_is_exact(scene: Scene, p_space: PSpace) {
         let p: Vec<f64> = (0..n_p)
             .map(|i| (g[i] - (0..n_u).map(|a| bt(i, a) * u[a]).sum::<f64>()) / d[i])
             .collect();
-        let ldlt = Ldlt::factor(&symbolic, &system.matrix(delta), &system.signs).unwrap();
+        let ldlt = Ldlt::factor(&level.symbolic, &system.matrix(delta), &system.signs).unwrap();
         let mut x = system.rhs.clone();
         ldlt.solve_in_place(&mut x);
         let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -249,19 +278,7 @@ fn lumped_elimination_is_exact(scene: Scene, p_space: PSpace) {
             })
             .collect();
         let s_inv_w: Vec<Vec<f64>> = w.iter().map(|wj| cholesky_solve(&l, wj)).collect();
-        let ctx = LevelContext {
-            scene: &scene,
-            mesh: &mesh,
-            topo: &topo,
-            ptopo: &ptopo,
-            ops: &ops,
-            multipliers: &[],
-            system: &system,
-            p_mass: PMass::Lumped,
-            symbolic: &symbolic,
-            norm_cache: None,
-            base_timings: Timings::default(),
-        };
+        let ctx = level.context(&scene, &mesh);
         let h_n = ctx.h_n_from_trailing_block(&ldlt).unwrap();
         let h_scale = h_n.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for i in 0..m {

@@ -222,6 +222,38 @@ impl<'a> Body<'a> {
         Ok((t.line, values))
     }
 
+    /// A count read from the file at `line`: `value`, or the error `negative` below zero.
+    fn count(&self, line: usize, value: i64, negative: &str) -> Result<usize> {
+        usize::try_from(value).map_err(|_| self.error(line, negative))
+    }
+
+    /// The next line as a single count: `what` says which (for errors), `negative` is the error
+    /// when it is below zero.
+    fn count_line(&mut self, what: &'a str, negative: &str) -> Result<usize> {
+        let (line, header) = self.ints(what, 1)?;
+        self.count(line, header[0], negative)
+    }
+
+    /// The records of a msh 2.2 `$Nodes` or `$Elements` section: a line with their count
+    /// (`count` says which, `negative` is the error when it is below zero), then one record a
+    /// line, laid out as `record` says and read by `parse`, then the section's end.
+    fn records22<T>(
+        &mut self,
+        count: &'a str,
+        negative: &str,
+        record: &'a str,
+        mut parse: impl FnMut(&Self, Tokens<'a>) -> Result<T>,
+    ) -> Result<Vec<T>> {
+        let n = self.count_line(count, negative)?;
+        let mut records = Vec::with_capacity(n.min(self.remaining()));
+        for _ in 0..n {
+            let t = self.tokens(record)?;
+            records.push(parse(self, t)?);
+        }
+        self.finish()?;
+        Ok(records)
+    }
+
     /// Lines not consumed yet (bounds preallocation by counts read from the file).
     fn remaining(&self) -> usize {
         self.lines.len().saturating_sub(self.pos)
@@ -302,8 +334,7 @@ impl<'a> Tokens<'a> {
 }
 
 pub(super) fn parse_physical_names(b: &mut Body) -> Result<HashMap<(u8, i64), String>> {
-    let (line, header) = b.ints("the number of names", 1)?;
-    let n = usize::try_from(header[0]).map_err(|_| b.error(line, "negative count"))?;
+    let n = b.count_line("the number of names", "negative count")?;
     let mut names = HashMap::new();
     for _ in 0..n {
         let (line, text) = b.next("`dimension tag \"name\"`")?;
@@ -340,7 +371,7 @@ pub(super) fn parse_entities(b: &mut Body) -> Result<HashMap<(u8, i64), Vec<i64>
     let (line, counts) = b.ints("`numPoints numCurves numSurfaces numVolumes`", 4)?;
     let mut map = HashMap::new();
     for (dim, &count) in counts.iter().enumerate() {
-        let count = usize::try_from(count).map_err(|_| b.error(line, "negative entity count"))?;
+        let count = b.count(line, count, "negative entity count")?;
         let dim = dim as u8;
         for _ in 0..count {
             let mut t = b.tokens("an entity line")?;
@@ -379,7 +410,7 @@ pub(super) fn parse_nodes41(b: &mut Body) -> Result<Vec<RawNode>> {
                 ),
             ));
         }
-        let n = usize::try_from(block[3]).map_err(|_| b.error(bline, "negative node count"))?;
+        let n = b.count(bline, block[3], "negative node count")?;
         let mut tags = Vec::with_capacity(n.min(b.remaining()));
         for _ in 0..n {
             tags.push(b.ints("a node tag", 1)?.1[0]);
@@ -416,18 +447,13 @@ fn check_block_total(
 }
 
 pub(super) fn parse_nodes22(b: &mut Body) -> Result<Vec<RawNode>> {
-    let (line, header) = b.ints("the number of nodes", 1)?;
-    let n = usize::try_from(header[0]).map_err(|_| b.error(line, "negative node count"))?;
-    let mut nodes = Vec::with_capacity(n.min(b.remaining()));
-    for _ in 0..n {
-        let mut t = b.tokens("`node-number x y z`")?;
+    let (count, negative) = ("the number of nodes", "negative node count");
+    b.records22(count, negative, "`node-number x y z`", |b, mut t| {
         let tag = t.int()?;
         let xyz = [t.float()?, t.float()?, t.float()?];
         t.done()?;
-        nodes.push(node(b, t.line, tag, xyz)?);
-    }
-    b.finish()?;
-    Ok(nodes)
+        node(b, t.line, tag, xyz)
+    })
 }
 
 pub(super) fn node(b: &Body, line: usize, tag: i64, xyz: [f64; 3]) -> Result<RawNode> {
@@ -465,7 +491,7 @@ pub(super) fn parse_elements41(
             .ok_or_else(|| b.error(bline, format!("bad dimension {}", block[0])))?;
         let physicals = entities.get(&(dim, block[1])).cloned().unwrap_or_default();
         let etype = block[2];
-        let n = usize::try_from(block[3]).map_err(|_| b.error(bline, "negative element count"))?;
+        let n = b.count(bline, block[3], "negative element count")?;
         for _ in 0..n {
             let mut t = b.tokens("`elementTag nodeTag …`")?;
             let tag = t.int()?;
@@ -488,11 +514,9 @@ pub(super) fn parse_elements41(
 }
 
 pub(super) fn parse_elements22(b: &mut Body) -> Result<Vec<RawElement>> {
-    let (line, header) = b.ints("the number of elements", 1)?;
-    let n = usize::try_from(header[0]).map_err(|_| b.error(line, "negative element count"))?;
-    let mut elements = Vec::with_capacity(n.min(b.remaining()));
-    for _ in 0..n {
-        let mut t = b.tokens("`elm-number elm-type number-of-tags tags… nodes…`")?;
+    let (count, negative) = ("the number of elements", "negative element count");
+    let record = "`elm-number elm-type number-of-tags tags… nodes…`";
+    b.records22(count, negative, record, |b, mut t| {
         let (tag, etype, ntags) = (t.int()?, t.int()?, t.count()?);
         let tags = (0..ntags).map(|_| t.int()).collect::<Result<Vec<_>>>()?;
         let nodes = t.rest_ints()?;
@@ -518,10 +542,8 @@ pub(super) fn parse_elements22(b: &mut Body) -> Result<Vec<RawElement>> {
             nodes,
         };
         check_node_count(b, &element)?;
-        elements.push(element);
-    }
-    b.finish()?;
-    Ok(elements)
+        Ok(element)
+    })
 }
 
 pub(super) fn check_node_count(b: &Body, e: &RawElement) -> Result<()> {

@@ -4,7 +4,7 @@ use super::*;
 use std::collections::BTreeSet;
 use std::collections::HashSet;
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use crate::geometry::L_SHAPE;
@@ -26,10 +26,45 @@ fn have_gmsh() -> bool {
     }
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sdgmsh-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    dir
+/// A test's scratch directory `sdgmsh-{name}-{pid}` under the temporary directory, absent when
+/// made (a leftover is removed) and removed again when the test passes; a failing test leaves
+/// it for inspection.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("sdgmsh-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        Scratch(dir)
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+/// The scratch directory of a test that runs gmsh, or `None` where gmsh is not installed (the
+/// test is then skipped, saying so).
+fn gmsh_scratch(name: &str) -> Option<Scratch> {
+    have_gmsh().then(|| Scratch::new(name))
 }
 
 fn area(m: &CoarseMesh, t: &[usize; 3]) -> f64 {
@@ -142,10 +177,9 @@ fn geo_script_names_groups_and_embeds_cracks() {
 
 #[test]
 fn l_shape_mesh_is_valid() {
-    if !have_gmsh() {
+    let Some(dir) = gmsh_scratch("lshape") else {
         return;
-    }
-    let dir = scratch("lshape");
+    };
     let (mesh, run) = mesh_polygon(&L_SHAPE, &l_cracks(), 0.25, &dir).expect("meshing");
     println!(
         "gmsh {}: L-shape, {} vertices, {} triangles in {:.3} s",
@@ -156,33 +190,28 @@ fn l_shape_mesh_is_valid() {
     );
     check_mesh(&mesh, 3.0, 8.0, &l_cracks());
     assert!(run.msh_text.starts_with("$MeshFormat\n4.1 0 8"));
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn gmsh_is_deterministic() {
-    if !have_gmsh() {
+    let (Some(d1), Some(d2)) = (gmsh_scratch("det1"), gmsh_scratch("det2")) else {
         return;
-    }
-    let (d1, d2) = (scratch("det1"), scratch("det2"));
+    };
     let (m1, r1) = mesh_polygon(&L_SHAPE, &l_cracks(), 0.25, &d1).expect("first run");
     let (m2, r2) = mesh_polygon(&L_SHAPE, &l_cracks(), 0.25, &d2).expect("second run");
     assert_eq!(r1.msh_text, r2.msh_text);
     assert_eq!(m1, m2);
-    let _ = std::fs::remove_dir_all(&d1);
-    let _ = std::fs::remove_dir_all(&d2);
 }
 
 #[test]
 fn seventeen_digit_points_are_exact() {
-    if !have_gmsh() {
+    let Some(dir) = gmsh_scratch("digits") else {
         return;
-    }
+    };
     // gmsh prints 16 significant digits: 0.1 + 0.2 = 0.30000000000000004 comes back as
     // 0.3, and 1/3 + 0.9 = 1.2333333333333334 as 1.233333333333333, unless restored.
     let polygon = [[0.0, 0.0], [1.0, 0.0], [0.1 + 0.2, 1.0 / 3.0 + 0.9]];
     let cracks = vec![vec![[0.1 + 0.2, 0.2], [0.6, 0.1 + 0.2]]];
-    let dir = scratch("digits");
     let (mesh, run) = mesh_polygon(&polygon, &cracks, 0.1, &dir).expect("meshing");
     let unrestored = read_msh(&run.msh_text, "coarse.msh").expect("reading");
     assert!(!unrestored.vertices.contains(&cracks[0][0]));
@@ -193,7 +222,6 @@ fn seventeen_digit_points_are_exact() {
     for p in polygon {
         assert!(mesh.vertices.contains(&p), "polygon vertex {p:?} not exact");
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Coordinates as bits, triangles rotated to start at their least vertex.
@@ -227,10 +255,9 @@ fn canonical(m: &CoarseMesh) -> Canonical {
 
 #[test]
 fn msh22_conversion_reads_the_same_mesh() {
-    if !have_gmsh() {
+    let Some(dir) = gmsh_scratch("msh22") else {
         return;
-    }
-    let dir = scratch("msh22");
+    };
     let (mesh, _) = mesh_polygon(&L_SHAPE, &l_cracks(), 0.25, &dir).expect("meshing");
     let status = Command::new("gmsh")
         .args([
@@ -252,7 +279,6 @@ fn msh22_conversion_reads_the_same_mesh() {
     let mesh22 = read_msh(&text, "coarse22.msh").expect("reading msh 2.2");
     assert_eq!(canonical(&mesh), canonical(&mesh22));
     check_mesh(&mesh22, 3.0, 8.0, &l_cracks());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 // ---- hand-written files: the unit square with an interior crack P–Q ----------------
@@ -307,6 +333,11 @@ fn square(names: &str, cracks: &[&[&str]]) -> String {
 
 fn square_ok() -> String {
     square(SQUARE_NAMES, &[&["6 5"]])
+}
+
+/// [`square_ok`] with the physical name `from` (quoted as in the file) renamed `to`.
+fn square_renaming(from: &str, to: &str) -> String {
+    square(&SQUARE_NAMES.replace(from, to), &[&["6 5"]])
 }
 
 fn error_of(text: &str) -> String {
@@ -366,21 +397,15 @@ fn reads_msh41_with_sparse_node_tags() {
 
 #[test]
 fn missing_boundary_group() {
-    let text = square(
-        &SQUARE_NAMES.replace("\"boundary\"", "\"outer\""),
-        &[&["6 5"]],
-    );
+    let text = square_renaming("\"boundary\"", "\"outer\"");
     assert_error(&text, &["no physical curve group named \"boundary\""]);
 }
 
 #[test]
 fn missing_crack_group() {
-    let text = square(&SQUARE_NAMES.replace("\"crack1\"", "\"slit\""), &[&["6 5"]]);
+    let text = square_renaming("\"crack1\"", "\"slit\"");
     assert_error(&text, &["no physical curve group named crack1"]);
-    let text = square(
-        &SQUARE_NAMES.replace("\"crack1\"", "\"crack2\""),
-        &[&["6 5"]],
-    );
+    let text = square_renaming("\"crack1\"", "\"crack2\"");
     assert_error(&text, &["crack1 is missing"]);
 }
 
@@ -489,10 +514,9 @@ fn garbage_text() {
 
 #[test]
 fn gmsh_failure_reports_the_cause() {
-    if !have_gmsh() {
+    let Some(dir) = gmsh_scratch("fail") else {
         return;
-    }
-    let dir = scratch("fail");
+    };
     std::fs::create_dir_all(&dir).expect("scratch dir");
     let geo = "Point(1) = {0, 0, 0, 1};\nLine(1) = {1, 2};\n";
     std::fs::write(dir.join("bad.geo"), geo).expect("write");
@@ -502,15 +526,13 @@ fn gmsh_failure_reports_the_cause() {
         first_error_line(&output),
         "Unknown control point 2 in GEO curve 1"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn crack_leaving_the_domain_is_reported() {
-    if !have_gmsh() {
+    let Some(dir) = gmsh_scratch("outside") else {
         return;
-    }
-    let dir = scratch("outside");
+    };
     let cracks = vec![vec![[0.5, -0.5], [1.5, -0.5]]];
     let e = mesh_polygon(&L_SHAPE, &cracks, 0.25, &dir).expect_err("crack crosses ∂Ω");
     let message = e.to_string();
@@ -518,15 +540,13 @@ fn crack_leaving_the_domain_is_reported() {
         message.contains("gmsh failed") || message.contains("crack1"),
         "{e}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn gmsh_binary_output_is_refused() {
-    if !have_gmsh() {
+    let Some(dir) = gmsh_scratch("binary") else {
         return;
-    }
-    let dir = scratch("binary");
+    };
     mesh_polygon(&L_SHAPE, &l_cracks(), 0.5, &dir).expect("meshing");
     let status = Command::new("gmsh")
         .args(["coarse.msh", "-0", "-bin", "-o", "binary.msh", "-v", "2"])
@@ -542,7 +562,6 @@ fn gmsh_binary_output_is_refused() {
         "{e}"
     );
     assert!(read_msh_file(&dir.join("coarse.msh")).is_ok());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -579,7 +598,7 @@ fn damaged_files_give_errors_not_panics() {
 
 #[test]
 fn mesh_polygon_rejects_bad_input() {
-    let dir = scratch("bad-input");
+    let dir = Scratch::new("bad-input");
     let e = mesh_polygon(&L_SHAPE, &l_cracks(), 0.0, &dir).expect_err("zero size");
     assert!(e.to_string().contains("mesh_size"), "{e}");
     let e = mesh_polygon(&L_SHAPE, &[], 0.25, &dir).expect_err("no cracks");
