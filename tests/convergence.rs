@@ -5,8 +5,8 @@
 //! expected order minus the compare tool's margin (scenes/orders.toml, as the compare tool reads
 //! it) and to the measured regression bounds the compare tool checks at level 4
 //! (scenes/expectations.toml: the rate from level 3 to 4 and the level-4 error, which these tests
-//! solve). The measured errors and rates are in docs/verification.md (Measured orders of the exact
-//! scenes).
+//! solve). The measured errors and rates are in docs/verification.md (Measured by the Rust
+//! tests).
 //!
 //! On the closed crack the lumped p, a patch-averaged gradient, is superconvergent; the tests
 //! assert only the first order that any gradient approximation of this kind guarantees.

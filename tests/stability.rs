@@ -164,21 +164,6 @@ fn data_text(name: &str, key: &str) -> String {
 // 1. δ from 1 down to 1e-14, and δ = 0
 // ---------------------------------------------------------------------------------------------
 
-/// Least-squares slope of log e against log δ.
-fn loglog_slope(points: &[(f64, f64)]) -> f64 {
-    let n = points.len() as f64;
-    let (mx, my) = points
-        .iter()
-        .fold((0.0, 0.0), |a, (d, e)| (a.0 + d.ln() / n, a.1 + e.ln() / n));
-    let (num, den) = points.iter().fold((0.0, 0.0), |a, (d, e)| {
-        (
-            a.0 + (d.ln() - mx) * (e.ln() - my),
-            a.1 + (d.ln() - mx).powi(2),
-        )
-    });
-    num / den
-}
-
 /// Every variant of `name` at levels 1 and 3 for δ = 1, 1e-1, …, 1e-14, 0: solved to KKT ≤ 1e-10
 /// at every δ; d(δ) = max(‖u_δ − u_0‖∞/‖u_0‖∞, ‖p_δ − p_0‖∞/‖p_0‖∞) has log-log slope 1 ± 0.1
 /// where d ≥ 1e-10 (four orders above the round-off floor, measured ≤ 6.2e-14), and never exceeds
@@ -230,7 +215,7 @@ fn delta_sweep(name: &str) {
                 let fit: Vec<(f64, f64)> =
                     dist.iter().copied().filter(|&(_, e)| e >= 1e-10).collect();
                 assert!(fit.len() >= 8, "{id}: only {} δ above 1e-10", fit.len());
-                let slope = loglog_slope(&fit);
+                let slope = common::loglog_slope(&fit);
                 // C from δ = 1e-6, where the O(δ²) curvature (≤ 15 % at δ = 1) is 1e-6 relative
                 // and round-off 1e-7 relative
                 let c_lin = dist

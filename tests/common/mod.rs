@@ -36,6 +36,25 @@ pub fn sdcrack(args: &[&str]) -> std::process::Output {
         .expect("binary runs")
 }
 
+/// Runs `sdcrack run SCENE --out OUT` with the further `args` (filters, `--quiet`) and waits
+/// for it.
+pub fn sdcrack_run(
+    scene: impl AsRef<std::path::Path>,
+    out: &std::path::Path,
+    args: &[&str],
+) -> std::process::Output {
+    let scene = scene.as_ref().to_str().expect("a UTF-8 scene path");
+    let out = out.to_str().expect("a UTF-8 results path");
+    sdcrack(&[&["run", scene, "--out", out], args].concat())
+}
+
+/// The `summary.json` of a results folder.
+pub fn summary(folder: &std::path::Path) -> serde_json::Value {
+    let path = folder.join("summary.json");
+    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_slice(&bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// A process's stderr as text.
 pub fn stderr(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -104,6 +123,22 @@ pub fn last_two_rates(s: &[(f64, [f64; 4])], q: usize) -> [f64; 2] {
     let n = s.len();
     let r = |a: usize, b: usize| rate(s[a].0, s[a].1[q], s[b].0, s[b].1[q]);
     [r(n - 3, n - 2), r(n - 2, n - 1)]
+}
+
+/// Least-squares slope of log e against log δ of the points (δ, e), all positive: the observed
+/// order of e in δ.
+pub fn loglog_slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |a, (d, e)| (a.0 + d.ln() / n, a.1 + e.ln() / n));
+    let (num, den) = points.iter().fold((0.0, 0.0), |a, (d, e)| {
+        (
+            a.0 + (d.ln() - mx) * (e.ln() - my),
+            a.1 + (d.ln() - mx).powi(2),
+        )
+    });
+    num / den
 }
 
 /// (h, e_u, e_p, e_λ) per level of one variant of a scene with `[exact]`.
