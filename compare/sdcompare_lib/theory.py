@@ -61,33 +61,37 @@ import tomllib
 
 from .read import BROKEN_TANGENTIAL, DEFAULT_P_SPACE
 
-# The table of expected orders, in the repository's scenes/ (installed with the package as
-# `sdcompare_scenes`, pyproject.toml: the same package verdict.default_expectations looks in).
+# The table of expected orders, in the repository's scenes/.
 ORDERS_NAME = "orders.toml"
+# The repository's scenes/ folder as pip installs it (pyproject.toml: package-dir and package-data).
 PACKAGED_SCENES = "sdcompare_scenes"
 
 
-def orders_file():
-    """The orders table this module judges with: scenes/orders.toml of the checkout it belongs to
-    (the nearest folder above this file holding Cargo.toml and scenes/orders.toml), else the copy
-    installed with the package; FileNotFoundError when neither exists."""
-    folder = os.path.dirname(os.path.abspath(__file__))
-    while True:
-        candidate = os.path.join(folder, "scenes", ORDERS_NAME)
-        if os.path.isfile(os.path.join(folder, "Cargo.toml")) and os.path.isfile(candidate):
-            return candidate
-        parent = os.path.dirname(folder)
-        if parent == folder:
-            break
-        folder = parent
+def packaged_scenes_file(name):
+    """The path of file `name` of the scenes/ folder installed with the package (pip:
+    `sdcompare_scenes`, the repository's scenes/ with their expectations and orders), or None."""
     try:
         spec = importlib.util.find_spec(PACKAGED_SCENES)
     except (ImportError, ValueError):
         spec = None
     for folder in (spec.submodule_search_locations or []) if spec else []:
-        candidate = os.path.join(folder, ORDERS_NAME)
-        if os.path.isfile(candidate):
-            return candidate
+        path = os.path.join(folder, name)
+        if os.path.isfile(path):
+            return os.path.normpath(path)
+    return None
+
+
+def orders_file():
+    """The orders table this module judges with: scenes/orders.toml of the checkout it belongs to
+    (beside compare/, this package's folder), else the copy installed with the package;
+    FileNotFoundError when neither exists."""
+    package = os.path.dirname(os.path.abspath(__file__))
+    here = os.path.join(package, "..", "..", "scenes", ORDERS_NAME)
+    if os.path.isfile(here):
+        return os.path.normpath(here)
+    packaged = packaged_scenes_file(ORDERS_NAME)
+    if packaged is not None:
+        return packaged
     raise FileNotFoundError(f"no {ORDERS_NAME}: neither scenes/{ORDERS_NAME} of a checkout nor "
                             f"the installed package {PACKAGED_SCENES}")
 

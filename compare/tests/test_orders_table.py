@@ -33,13 +33,12 @@ def edited(text, old, new):
 
 def theory_reading(tmp_path, text):
     """The theory module loaded afresh from a copy of its file inside a checkout-like folder
-    (Cargo.toml and scenes/orders.toml = `text`), so that it reads that table: its relative
-    imports are the real package's."""
-    (tmp_path / "Cargo.toml").write_text("")
+    (compare/PACKAGE/theory.py beside scenes/orders.toml = `text`), so that it reads that table:
+    its relative imports are the real package's."""
     (tmp_path / "scenes").mkdir()
     (tmp_path / "scenes" / "orders.toml").write_text(text, encoding="utf-8")
-    (tmp_path / "lib").mkdir()
-    copy = tmp_path / "lib" / "theory.py"
+    (tmp_path / "compare" / "lib").mkdir(parents=True)
+    copy = tmp_path / "compare" / "lib" / "theory.py"
     shutil.copyfile(theory.__file__, copy)
     package = theory.__name__.rpartition(".")[0]
     spec = importlib.util.spec_from_file_location(f"{package}._orders_probe", copy)
@@ -67,9 +66,10 @@ def judgements(th):
 def test_the_compare_tool_reads_the_repository_table():
     path = theory.orders_file()
     module_dir = os.path.dirname(os.path.abspath(theory.__file__))
-    if os.path.commonpath([module_dir, ROOT]) == ROOT:
+    if os.path.samefile(os.path.dirname(os.path.dirname(module_dir)), ROOT):
         assert os.path.samefile(path, TABLE)
     else:  # installed (ci/test-pip): the packaged copy of the same file
+        assert not os.path.samefile(path, TABLE)
         with open(path, "rb") as a, open(TABLE, "rb") as b:
             assert a.read() == b.read()
     with open(TABLE, "rb") as fh:
