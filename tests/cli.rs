@@ -3,10 +3,10 @@
 
 mod common;
 
-use std::path::Path;
-use std::process::Command;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
-use common::{sdcrack, stderr};
+use common::{sdcrack, sdcrack_run, stderr, summary};
 
 fn write_scene(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);
@@ -16,16 +16,26 @@ fn write_scene(dir: &Path, name: &str, text: &str) -> String {
 
 use common::SMALL_SCENE as SMALL;
 
+/// Runs the small scene's file `scene` into `out` with `--quiet` and the further `args` (one
+/// string, split at spaces), asserts that it succeeds and returns the process, the results folder
+/// and its summary.json.
+fn run_small(scene: &str, out: &Path, args: &str) -> (Output, PathBuf, serde_json::Value) {
+    let args: Vec<&str> = std::iter::once("--quiet")
+        .chain(args.split_whitespace())
+        .collect();
+    let o = sdcrack_run(scene, out, &args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let folder = out.join("small");
+    let summary = summary(&folder);
+    (o, folder, summary)
+}
+
 #[test]
 fn run_writes_summary_and_fields_and_never_overwrites() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), "small.toml", SMALL);
     let out = dir.path().join("res");
-    let o = sdcrack(&["run", &scene, "--out", out.to_str().unwrap(), "--quiet"]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let folder = out.join("small");
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    let (o, folder, summary) = run_small(&scene, &out, "");
     assert_eq!(summary["scene"], "small");
     let cases = summary["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2 * 2 * 3 * 2);
@@ -80,7 +90,7 @@ fn run_writes_summary_and_fields_and_never_overwrites() {
     assert_eq!(prov["scene_origin"], scene.as_str());
     assert_eq!(prov["sdcrack_version"], env!("CARGO_PKG_VERSION"));
     // the last line: the command's whole time, and the solve's (summary.json's wall_s) beside it
-    // (issue 34: "9 cases in 0.0 s" after 6 s of references)
+    // (the solve's alone read "9 cases in 0.0 s" after 6 s of references)
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     let last = stdout.lines().last().unwrap_or_default();
     let (counts, rest) = last.split_once(" s (solving ").expect(last);
@@ -104,7 +114,7 @@ fn run_writes_summary_and_fields_and_never_overwrites() {
     assert_eq!(names, vec!["small".to_string()]);
     // a second run refuses and leaves the first untouched
     let before = std::fs::read(folder.join("summary.json")).unwrap();
-    let o = sdcrack(&["run", &scene, "--out", out.to_str().unwrap(), "--quiet"]);
+    let o = sdcrack_run(&scene, &out, &["--quiet"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("already exists"), "{}", stderr(&o));
     assert_eq!(std::fs::read(folder.join("summary.json")).unwrap(), before);
@@ -116,28 +126,11 @@ fn no_fields_asked_no_field_files_and_filters_select_one_case() {
     let text = SMALL.replace(r#"fields = ["u", "p", "lambda"]"#, "fields = []");
     let scene = write_scene(dir.path(), "small.toml", &text);
     let out = dir.path().join("res");
-    let o = sdcrack(&[
-        "run",
-        &scene,
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--level",
-        "1",
-        "--u-space",
-        "broken",
-        "--multiplier",
-        "M1star",
-        "--delta",
-        "0",
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let folder = out.join("small");
+    let args = "--level 1 --u-space broken --multiplier M1star --delta 0";
+    let (_, folder, summary) = run_small(&scene, &out, args);
     assert!(!folder.join("fields.h5").exists() && !folder.join("fields").exists());
     // but what the compare tool recomputes the errors from (tests/verification.rs)
     assert!(folder.join("verification.h5").is_file());
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["recomputation_file"], "verification.h5");
     let cases = summary["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 1);
@@ -150,51 +143,27 @@ fn no_fields_asked_no_field_files_and_filters_select_one_case() {
 fn bad_inputs_give_one_line_and_exit_2() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("res");
-    let cases: Vec<(&str, String, &str)> = vec![
-        ("missing file", "".into(), "cannot read scene file"),
-        (
-            "unknown key",
-            SMALL.replace("cells =", "cels ="),
-            "did you mean `cells`",
-        ),
-        (
-            "off mesh",
-            SMALL.replace("[-0.5, 0.0], [0.5, 0.0]", "[-0.4, 0.0], [0.5, 0.0]"),
-            "not a vertex of the level-0 mesh",
-        ),
-        (
-            "touches boundary",
-            SMALL.replace("[-0.5, 0.0], [0.5, 0.0]", "[-1.0, 0.0], [0.5, 0.0]"),
-            "touches the domain boundary",
-        ),
-        (
-            "bad expression",
-            SMALL.replace("20*sin(2*pi*x)", "20*sinn(2*pi*x)"),
-            "data.f",
-        ),
-        (
-            "NaN data",
-            SMALL.replace(r#"g = "0""#, r#"g = "log(x - 2)""#),
-            "evaluates to NaN",
-        ),
-        (
-            "negative delta",
-            SMALL.replace("deltas = [1e-2, 0.0]", "deltas = [-1.0]"),
-            "not a finite number ≥ 0",
-        ),
-        (
-            "unknown multiplier",
-            SMALL.replace(r#""M1star"]"#, r#""M2"]"#),
-            "unknown value \"M2\"",
-        ),
+    // (what, a text of the small scene, what replaces it, the words of the error); the first
+    // row names a file that does not exist
+    #[rustfmt::skip]
+    let cases = [
+        ("missing file", "", "", "cannot read scene file"),
+        ("unknown key", "cells =", "cels =", "did you mean `cells`"),
+        ("off mesh", "[-0.5, 0.0]", "[-0.4, 0.0]", "not a vertex of the level-0 mesh"),
+        ("touches boundary", "[-0.5, 0.0]", "[-1.0, 0.0]", "touches the domain boundary"),
+        ("bad expression", "20*sin(2*pi*x)", "20*sinn(2*pi*x)", "data.f"),
+        ("NaN data", r#"g = "0""#, r#"g = "log(x - 2)""#, "evaluates to NaN"),
+        ("negative delta", "deltas = [1e-2, 0.0]", "deltas = [-1.0]", "not a finite number ≥ 0"),
+        ("unknown multiplier", r#""M1star"]"#, r#""M2"]"#, "unknown value \"M2\""),
     ];
-    for (what, text, needle) in cases {
-        let scene = if text.is_empty() {
+    for (what, old, new, needle) in cases {
+        let scene = if old.is_empty() {
             dir.path().join("nope.toml").display().to_string()
         } else {
-            write_scene(dir.path(), "bad.toml", &text)
+            assert_eq!(SMALL.matches(old).count(), 1, "{what}: {old:?} once");
+            write_scene(dir.path(), "bad.toml", &SMALL.replace(old, new))
         };
-        let o = sdcrack(&["run", &scene, "--out", out.to_str().unwrap(), "--quiet"]);
+        let o = sdcrack_run(&scene, &out, &["--quiet"]);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{what}: {err}");
         assert!(
@@ -226,26 +195,26 @@ fn bad_inputs_give_one_line_and_exit_2() {
 }
 
 /// The terminal table of a scene without [exact] says how much of the crack is open (λ > 0), in
-/// words a contact researcher reads right ("active" reads as "in contact": issue 25).
+/// words a contact researcher reads right ("active" reads as "in contact").
 #[test]
 fn the_terminal_table_counts_open_multipliers() {
     let dir = tempfile::tempdir().unwrap();
     let scene = common::scene_path("mixed");
     let out = dir.path().join("res");
-    let o = sdcrack(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--level",
-        "1",
-        "--u-space",
-        "broken",
-        "--multiplier",
-        "M1",
-        "--delta",
-        "0",
-    ]);
+    let o = sdcrack_run(
+        &scene,
+        &out,
+        &[
+            "--level",
+            "1",
+            "--u-space",
+            "broken",
+            "--multiplier",
+            "M1",
+            "--delta",
+            "0",
+        ],
+    );
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     let header = text
@@ -258,8 +227,8 @@ fn the_terminal_table_counts_open_multipliers() {
     );
 }
 
-/// `check` accepts a scene with nothing to judge against but says so (issue 25 item 7): no
-/// [exact] and no references leave the compare tool nothing but INCONCLUSIVE.
+/// `check` accepts a scene with nothing to judge against but says so: no [exact] and no
+/// references leave the compare tool nothing but INCONCLUSIVE.
 #[test]
 fn check_warns_when_a_scene_has_nothing_to_judge_against() {
     let dir = tempfile::tempdir().unwrap();
@@ -353,23 +322,8 @@ fn lumped_p_mass_runs_alone_and_is_named_in_the_results() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path(), "small.toml", SMALL);
     let out = dir.path().join("res");
-    let o = sdcrack(&[
-        "run",
-        &scene,
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--p-mass",
-        "lumped",
-        "--u-space",
-        "broken",
-        "--multiplier",
-        "M1",
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let folder = out.join("small");
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    let args = "--p-mass lumped --u-space broken --multiplier M1";
+    let (_, folder, summary) = run_small(&scene, &out, args);
     assert_eq!(summary["plan"]["p_masses"], serde_json::json!(["lumped"]));
     for c in summary["cases"].as_array().unwrap() {
         assert_eq!(c["p_mass"], "lumped");
@@ -405,23 +359,8 @@ fn broken_tangential_p_runs_alone_and_its_field_jumps_only_tangentially() {
     let plan: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(plan["p_spaces"], serde_json::json!(["continuous"]));
     let out = dir.path().join("res");
-    let o = sdcrack(&[
-        "run",
-        &scene,
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-        "--p-space",
-        "broken-tangential",
-        "--multiplier",
-        "M1",
-        "--delta",
-        "0",
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let folder = out.join("small");
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap();
+    let args = "--p-space broken-tangential --multiplier M1 --delta 0";
+    let (_, folder, summary) = run_small(&scene, &out, args);
     assert_eq!(
         summary["plan"]["p_spaces"],
         serde_json::json!(["broken-tangential"])
@@ -501,7 +440,7 @@ fn bench_json_reports_the_lumped_case_beside_the_consistent_one() {
     }
     assert!(r["case_lumped_phases"]["factorization"].as_f64().is_some());
     assert_eq!(r["all_converged"], true);
-    // the three goals of issue #14, each with its bound and the measured ratio recomputed here
+    // the bench's three goals, each with its bound and the measured ratio recomputed here
     let y = r["bare_cholesky_s"].as_f64().unwrap();
     let goals = r["goals"].as_array().expect("goals");
     let ratio = |k: &str, d: f64| r[k].as_f64().unwrap() / d;

@@ -1,4 +1,4 @@
-//! The condition estimate's reuse between δ (issue 26): a δ of a sweep may report κ₁(K(δ)) with
+//! The condition estimate's reuse between δ: a δ of a sweep may report κ₁(K(δ)) with
 //! the `‖K⁻¹‖₁` estimated at an earlier δ' only where the perturbation bound says the two
 //! differ by at most `CONDITION_REUSE_FACTOR`. Checked against estimates made afresh, δ by δ, in
 //! studies of one δ each, over a sweep whose large δ change κ₁ by 10× per step (so that a reuse

@@ -56,19 +56,7 @@ fn distance_to_delta_zero_is_linear_in_delta() {
                     (c.delta, du.max(dp))
                 })
                 .collect();
-            // least-squares slope of log(dist) against log(δ)
-            let n = dist.len() as f64;
-            let (sx, sy) = dist
-                .iter()
-                .fold((0.0, 0.0), |a, (d, e)| (a.0 + d.ln(), a.1 + e.ln()));
-            let (mx, my) = (sx / n, sy / n);
-            let (num, den) = dist.iter().fold((0.0, 0.0), |a, (d, e)| {
-                (
-                    a.0 + (d.ln() - mx) * (e.ln() - my),
-                    a.1 + (d.ln() - mx).powi(2),
-                )
-            });
-            let slope = num / den;
+            let slope = common::loglog_slope(&dist);
             assert!(
                 (slope - 1.0).abs() <= 0.1,
                 "{u_space} {m} {p_mass:?} {p_space}: slope {slope}, distances {dist:?}"
@@ -105,8 +93,8 @@ fn flat(fields: &sdcrack::study::CaseFieldData) -> [Vec<f64>; 4] {
     ]
 }
 
-/// Issue 33, item 1: δ = 0 reached at the end of a sweep (each LCP warm-started from the previous
-/// δ's active set, K(δ) refactorised in place) and δ = 0 solved alone (cold start) are the same
+/// δ = 0 reached at the end of a sweep (each LCP warm-started from the previous δ's active set,
+/// K(δ) refactorised in place) and δ = 0 solved alone (cold start) are the same
 /// discrete solution: the LCP's solution is unique and both paths end in the same reduced linear
 /// system, so their fields agree to round-off of that solve, ≤ 10·κ·ε relative (κ the reported
 /// condition estimate). mixed has a partly open crack, so the warm start really starts from another

@@ -87,13 +87,20 @@ fn face_values(s: &Scene, x: f64) -> (f64, f64, f64) {
     (up - um, dplus, dminus)
 }
 
+/// Checks the PDE and boundary data of scene `name` (check_pde_and_boundary) and returns
+/// (x, face_values) at 39 interior points of its crack (−1/2, 1/2) × {0}.
+fn along_the_crack(name: &str) -> Vec<(f64, (f64, f64, f64))> {
+    check_pde_and_boundary(name);
+    let s = common::load(name);
+    (1..40)
+        .map(|k| -0.5 + k as f64 / 40.0)
+        .map(|x| (x, face_values(&s, x)))
+        .collect()
+}
+
 #[test]
 fn closed_exact_solution_satisfies_the_crack_problem() {
-    check_pde_and_boundary("closed-exact");
-    let s = common::load("closed-exact");
-    for k in 1..40 {
-        let x = -0.5 + k as f64 / 40.0;
-        let (jump, dp, dm) = face_values(&s, x);
+    for (_, (jump, dp, dm)) in along_the_crack("closed-exact") {
         assert!(jump.abs() < 1e-14, "closed: [u] = {jump}");
         assert!((dp - dm).abs() < 1e-6, "[∂u/∂ν] = {}", dp - dm);
         assert!(dp < -0.5, "closed: ∂u/∂ν = {dp} must be < 0");
@@ -102,11 +109,7 @@ fn closed_exact_solution_satisfies_the_crack_problem() {
 
 #[test]
 fn open_exact_solution_satisfies_the_crack_problem() {
-    check_pde_and_boundary("open-exact");
-    let s = common::load("open-exact");
-    for k in 1..40 {
-        let x = -0.5 + k as f64 / 40.0;
-        let (jump, dp, dm) = face_values(&s, x);
+    for (x, (jump, dp, dm)) in along_the_crack("open-exact") {
         assert!(jump > 0.0, "open: [u] = {jump} must be > 0");
         assert!((jump - 2.0 * (0.25 - x * x).sqrt()).abs() < 1e-12);
         assert!(

@@ -1,8 +1,8 @@
 //! A run killed with SIGKILL (no clean-up possible) while it solves, and again while it writes its
 //! field files: earlier results in the same `--out` stay byte for byte as they were, nothing
 //! appears under the killed run's final name (only its staging folder `OUT/.NAME.partial-PID`
-//! remains, see crates/sdcrack-io/src/output/mod.rs), and a later run to the same final name succeeds without
-//! touching that leftover.
+//! remains, see crates/sdcrack-io/src/output/mod.rs), and a later run to the same final name
+//! succeeds without touching that leftover.
 
 mod common;
 
@@ -11,6 +11,8 @@ use std::os::unix::process::ExitStatusExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+use common::{listing, sdcrack_run, stderr, summary};
 
 /// Every file and folder under `dir` (relative path → bytes; folders end in `/` with no bytes).
 fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
@@ -29,22 +31,6 @@ fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     let mut out = BTreeMap::new();
     walk(dir, dir, &mut out);
     out
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
-
-fn run(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_sdcrack"))
-        .args(args)
-        .output()
-        .expect("binary runs")
 }
 
 fn spawn(args: &[&str]) -> Child {
@@ -92,19 +78,8 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
     // earlier, complete results: the small scene with fields, under another name
     let earlier_text = common::SMALL_SCENE.replace("name = \"small\"", "name = \"earlier\"");
     std::fs::write(&earlier_scene, earlier_text).unwrap();
-    let o = run(&[
-        "run",
-        earlier_scene.to_str().unwrap(),
-        "--out",
-        out_s,
-        "--quiet",
-    ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let o = sdcrack_run(&earlier_scene, &out, &["--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let earlier = out.join("earlier");
     let before = snapshot(&earlier);
     assert!(
@@ -143,7 +118,7 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
     assert!(!final_path.exists(), "no folder under the final name");
     assert_eq!(snapshot(&earlier), before, "earlier results unchanged");
     assert_eq!(
-        names(&out),
+        listing(&out),
         vec![
             staging1.file_name().unwrap().to_string_lossy().into_owned(),
             "earlier".into()
@@ -169,23 +144,9 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
     let leftovers = snapshot(&out);
 
     // 3. A rerun to the same final name succeeds and leaves the leftovers alone.
-    let o = run(&[
-        "run",
-        big.to_str().unwrap(),
-        "--level",
-        "0",
-        "--out",
-        out_s,
-        "--quiet",
-    ]);
-    assert_eq!(
-        o.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(final_path.join("summary.json")).unwrap()).unwrap();
+    let o = sdcrack_run(&big, &out, &["--level", "0", "--quiet"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let summary = summary(&final_path);
     assert_eq!(summary["scene"], "mixed");
     // 2 u spaces × 3 multipliers × 2 p masses × 6 δ
     assert_eq!(summary["cases"].as_array().unwrap().len(), 2 * 3 * 2 * 6);
@@ -203,7 +164,7 @@ fn killed_runs_leave_earlier_results_alone_and_a_rerun_succeeds() {
     ];
     expected.sort();
     assert_eq!(
-        names(&out),
+        listing(&out),
         expected,
         "only the two staging leftovers besides the results"
     );

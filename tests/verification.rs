@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use common::{assert_same_h5, h5_contents, sdcrack, stderr};
+use common::{assert_same_h5, h5_contents, sdcrack_run, stderr, summary};
 
 /// The small scene with both p masses (the lumped one has no p bubble) and `fields`.
 fn scene_text(fields: &str) -> String {
@@ -29,19 +29,9 @@ fn run(dir: &Path, tag: &str, fields: &str) -> PathBuf {
     let scene = dir.join(format!("{tag}.toml"));
     std::fs::write(&scene, scene_text(fields)).unwrap();
     let out = dir.join(tag);
-    let o = sdcrack(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--quiet",
-    ]);
+    let o = sdcrack_run(&scene, &out, &["--quiet"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     out.join("small")
-}
-
-fn summary(folder: &Path) -> Value {
-    serde_json::from_slice(&std::fs::read(folder.join("summary.json")).unwrap()).unwrap()
 }
 
 /// The summary without what describes the process or the XDMF series.

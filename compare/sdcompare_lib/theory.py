@@ -4,7 +4,9 @@ A series (u space × multiplier × p mass × p space × quantity) is judged by i
 against an expected order p*: it converges iff its errors decrease and each of its last two
 observed rates is ≥ p* − RATE_MARGIN (the order-of-accuracy rule of MOOSE's and deal.II's
 convergence tests). p* comes from the regularity of the solution and the p space, never from the
-output judged:
+output judged. The numbers (the margin, the orders, the classification threshold) are those of
+scenes/orders.toml, with their sources, the one table the Rust tests read too; this module says
+which order applies to which series, and why:
 
 * **Regularity index s** (u ∈ H^{1+s} on each side of the crack, s ≤ 1). With an exact solution,
   s is read from the exact solution alone: the compare tool interpolates the exact u in P1 on the
@@ -29,8 +31,7 @@ output judged:
   interpolation estimates give it, and the paper's order for λ, which it bounds on its own. Whether
   the crack is closed is read from the exact solution too (‖[u]‖_{L²(Γc)} = 0); without one it is
   taken as open.
-* **Orders of the broken-tangential p** (p space "broken-tangential", issue 32, run with broken u
-  only). Its tangential component has one value per crack face at every interior vertex where the
+* **Orders of the broken-tangential p** (p space "broken-tangential", run with broken u only). Its tangential component has one value per crack face at every interior vertex where the
   crack is straight, while p·ν stays shared (the flux ∂u/∂ν is one value on both faces of Γc), so
   p_h can follow the tangential jump of ∇u where the crack opens, and the continuous p's O(1)
   strip error is gone. The method is then as accurate as P1 on the cracked mesh whatever the crack
@@ -44,7 +45,7 @@ output judged:
   | lambda_l2, M0 | 1 smooth, Theorem 4.3's 1/2 at a tip | a P0 multiplier approximates the smooth jump [u] to order h at best; at an r^{1/2} tip its λ_h (the multiplier of ∫_{t_k} p·ν ≤ 0, not the L² projection of [u]) is measured at 0.83 → 0.68 over levels 0–5 of open-exact, falling, with either p: the paper's h^{1/2} is the order held |
 
   On graded meshes the interpolation rate (per halving of N^{-1/2}) classifies a tip-singular u as
-  smooth already: s = 1 there. (Measured with the sdcrack of issue 32, last rates of levels 1–4:
+  smooth already: s = 1 there. (Measured when the broken-tangential p came, last rates of levels 1–4:
   smooth open crack u 2.01, p 1.02, λ 2.02, M0's λ 1.00; open-graded u 2.17, p 1.16, λ 2.18;
   open-exact, s = 1/2: u 1.03, p 0.50, λ 0.93, but M0's λ 0.73 < 1 − RATE_MARGIN, an open
   question: compare/README.md.)
@@ -54,24 +55,91 @@ A scene may declare its own expected order for some series with a reason
 reason it comes from.
 """
 
+import importlib.util
+import os
+import tomllib
+
 from .read import BROKEN_TANGENTIAL, DEFAULT_P_SPACE
 
+# The table of expected orders, in the repository's scenes/.
+ORDERS_NAME = "orders.toml"
+# The repository's scenes/ folder as pip installs it (pyproject.toml: package-dir and package-data).
+PACKAGED_SCENES = "sdcompare_scenes"
+
+
+def packaged_scenes_file(name):
+    """The path of file `name` of the scenes/ folder installed with the package (pip:
+    `sdcompare_scenes`, the repository's scenes/ with their expectations and orders), or None."""
+    try:
+        spec = importlib.util.find_spec(PACKAGED_SCENES)
+    except (ImportError, ValueError):
+        spec = None
+    for folder in (spec.submodule_search_locations or []) if spec else []:
+        path = os.path.join(folder, name)
+        if os.path.isfile(path):
+            return os.path.normpath(path)
+    return None
+
+
+def orders_file():
+    """The orders table this module judges with: scenes/orders.toml of the checkout it belongs to
+    (beside compare/, this package's folder), else the copy installed with the package;
+    FileNotFoundError when neither exists."""
+    package = os.path.dirname(os.path.abspath(__file__))
+    here = os.path.join(package, "..", "..", "scenes", ORDERS_NAME)
+    if os.path.isfile(here):
+        return os.path.normpath(here)
+    packaged = packaged_scenes_file(ORDERS_NAME)
+    if packaged is not None:
+        return packaged
+    raise FileNotFoundError(f"no {ORDERS_NAME}: neither scenes/{ORDERS_NAME} of a checkout nor "
+                            f"the installed package {PACKAGED_SCENES}")
+
+
+# The (section, key) of every number theory.py reads from the table; `lambda.paper` is a table of
+# multiplier → order.
+ORDER_KEYS = (("rule", "margin"), ("regularity", "smooth_s"), ("regularity", "singular_s"),
+              ("regularity", "smooth_interpolation_rate"), ("p1", "u_l2"), ("p1", "p_l2"),
+              ("p1", "p_x"), ("open_crack", "order"), ("lambda", "p0_jump"))
+MULTIPLIERS = ("M0", "M1", "M1star")
+
+
+def load_orders(path):
+    """The orders table at `path` (a dict of sections, tomllib), every number theory.py reads
+    checked to be one (ValueError names the missing or bad key)."""
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    wanted = list(ORDER_KEYS) + [("lambda.paper", m) for m in MULTIPLIERS]
+    for section, key in wanted:
+        table = data
+        for part in section.split("."):
+            table = table.get(part, {}) if isinstance(table, dict) else {}
+        value = table.get(key) if isinstance(table, dict) else None
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{path}: [{section}] {key} must be a number, got {value!r}")
+    return data
+
+
+ORDERS = load_orders(orders_file())
 # The observed rate may fall short of the expected order by this much on each of the last two
-# steps (an observed rate is an estimate from two levels): MOOSE's order-of-accuracy tests.
-RATE_MARGIN = 0.1
-# ‖∇(u − I_h u)‖ of a smooth u has rate 1; of an r^{1/2} singular u, 1/2. The classification
-# threshold lies between them, nearer 1 (a pre-asymptotic smooth u shows rates ≥ 0.95 from level 1
-# on the repository's meshes; an r^{1/2} one 0.5–0.6).
-SMOOTH_INTERPOLATION_RATE = 0.9
-SINGULAR_S = 0.5
-PAPER_LAMBDA_RATE = {"M0": 0.5, "M1": 0.5, "M1star": 0.75}
-# p_h is continuous on Ω (the smooth-domain method): where the crack opens, ∇u jumps across Γc and
-# p_h's error in a strip of width h is O(1), so ‖p − p_h‖ = O(h^{1/2}) whatever the regularity; u,
-# bounded by p and λ without a duality gain, is held to the same order.
-OPEN_CRACK_RATE = 0.5
-# A P0 multiplier (M0) approximates the smooth jump [u] to order h at best; at an r^{1/2} tip its
-# λ_h is held to Theorem 4.3's h^{1/2} (measured 0.83 → 0.68 over levels 0–5 of open-exact, falling).
-P0_JUMP_RATE = 1.0
+# steps (an observed rate is an estimate from two levels).
+RATE_MARGIN = float(ORDERS["rule"]["margin"])
+# s of a smooth u, and at a crack tip's r^{1/2} singularity (the worst case, and the s assumed
+# without an exact solution).
+SMOOTH_S = float(ORDERS["regularity"]["smooth_s"])
+SINGULAR_S = float(ORDERS["regularity"]["singular_s"])
+# ‖∇(u − I_h u)‖ has rate s: at or above this rate the exact u is classified smooth.
+SMOOTH_INTERPOLATION_RATE = float(ORDERS["regularity"]["smooth_interpolation_rate"])
+# P1's orders on the cracked mesh as multiples of s (p1_order).
+P1_ORDER_PER_S = {q: float(ORDERS["p1"][q]) for q in ("u_l2", "p_l2", "p_x")}
+# Theorem 4.3's order of λ_h per multiplier.
+PAPER_LAMBDA_RATE = {m: float(ORDERS["lambda"]["paper"][m]) for m in MULTIPLIERS}
+# The continuous p_h where the crack opens (an O(1) error in a strip of width h along Γc), and u
+# with it.
+OPEN_CRACK_RATE = float(ORDERS["open_crack"]["order"])
+# A P0 multiplier (M0) on a smooth jump [u]; at an r^{1/2} tip its λ_h is held to Theorem 4.3's
+# h^{1/2} (measured 0.83 → 0.68 over levels 0–5 of open-exact, falling).
+P0_JUMP_RATE = float(ORDERS["lambda"]["p0_jump"])
 
 
 def regularity(interpolation_rate, has_exact=True):
@@ -83,8 +151,8 @@ def regularity(interpolation_rate, has_exact=True):
                "with stored fields)")
         return SINGULAR_S, f"{why}: s = 1/2, the crack tip's r^{{1/2}} singularity (the worst case)"
     if interpolation_rate >= SMOOTH_INTERPOLATION_RATE:
-        return 1.0, (f"smooth exact u: its P1 interpolation error ‖∇(u − I_h u)‖ has rate "
-                     f"{interpolation_rate:.2f} ≥ {SMOOTH_INTERPOLATION_RATE:g}")
+        return SMOOTH_S, (f"smooth exact u: its P1 interpolation error ‖∇(u − I_h u)‖ has rate "
+                          f"{interpolation_rate:.2f} ≥ {SMOOTH_INTERPOLATION_RATE:g}")
     return SINGULAR_S, (f"singular exact u: its P1 interpolation error ‖∇(u − I_h u)‖ has rate "
                         f"{interpolation_rate:.2f} < {SMOOTH_INTERPOLATION_RATE:g} (r^{{1/2}} at a "
                         "crack tip: s = 1/2)")
@@ -98,27 +166,29 @@ def expected_rate(quantity, multiplier, p_mass, s, crack_closed=False, p_space=D
     the tangential jump of ∇u."""
     if p_space == BROKEN_TANGENTIAL:
         return tangential_rate(quantity, multiplier, p_mass, s)
-    smooth = s >= 1.0
+    smooth = s >= SMOOTH_S
     paper = PAPER_LAMBDA_RATE[multiplier]
     if quantity == "u_l2":
         if crack_closed:
-            return 2.0 * s, (f"crack closed ([u] = 0: the contact term vanishes): P1 "
-                             f"interpolation and the duality gain give h^{2.0 * s:g}")
+            order = p1_order(quantity, s)
+            return order, (f"crack closed ([u] = 0: the contact term vanishes): P1 "
+                           f"interpolation and the duality gain give h^{order:g}")
         return OPEN_CRACK_RATE, (
             "crack open somewhere (or no exact solution): the mixed method's ‖u − u_h‖ is bounded "
-            "by ‖p − p_h‖ + ‖λ − λ_h‖, no duality gain, and p_h converges as h^0.5 there: h^0.5 "
-            "(measured: 1.35 → 0.66 over levels 3–7 of open-exact, → 1 on a smooth open crack, "
-            "0.56–0.78 on graded meshes; docs/design.md)")
+            f"by ‖p − p_h‖ + ‖λ − λ_h‖, no duality gain, and p_h converges as "
+            f"h^{OPEN_CRACK_RATE:g} there: h^{OPEN_CRACK_RATE:g} (measured: 1.35 → 0.66 over "
+            "levels 3–7 of open-exact, → 1 on a smooth open crack, 0.56–0.78 on graded meshes; "
+            "docs/design.md)")
     if quantity in ("p_l2", "p_x"):
         what = _p_name(p_mass)
         if not crack_closed:
             return OPEN_CRACK_RATE, (
                 f"crack open somewhere: {what} is continuous across Γc while ∇u jumps there, an O(1) "
-                "error in a strip of width h along the crack: h^0.5 (measured on a smooth open "
-                "crack and on graded meshes: rates → 0.54, docs/design.md)")
+                f"error in a strip of width h along the crack: h^{OPEN_CRACK_RATE:g} (measured on "
+                "a smooth open crack and on graded meshes: rates → 0.54, docs/design.md)")
         if smooth:
-            return 1.0, f"smooth u: {what} approximates ∇u to order h"
-        return s, f"singular u: ∇u ~ r^(s−1) near a tip limits {what} to h^s"
+            return p1_order(quantity, SMOOTH_S), f"smooth u: {what} approximates ∇u to order h"
+        return p1_order(quantity, s), f"singular u: ∇u ~ r^(s−1) near a tip limits {what} to h^s"
     if quantity == "lambda_l2":
         return paper, f"Theorem 4.3: λ_h of {multiplier} converges as h^{paper:g}"
     raise ValueError(f"unknown quantity {quantity!r}")
@@ -143,7 +213,7 @@ def tangential_rate(quantity, multiplier, p_mass, s):
         order = p1_order(quantity, s)
         return order, f"{why}: h^{order:g} ({'2s' if quantity == 'u_l2' else 's'}, s = {s:g})"
     if quantity == "lambda_l2":
-        if multiplier == "M0" and s >= 1.0:
+        if multiplier == "M0" and s >= SMOOTH_S:
             return P0_JUMP_RATE, (f"{why}; a P0 multiplier (M0) approximates the smooth jump [u] "
                                   f"to order h at best: h^{P0_JUMP_RATE:g}")
         if multiplier == "M0":
@@ -152,8 +222,9 @@ def tangential_rate(quantity, multiplier, p_mass, s):
                            "∫ p·ν ≤ 0 per segment and not the L² projection of [u], is held to "
                            f"Theorem 4.3's h^{paper:g} (measured 0.83 → 0.68 over levels 0–5 of "
                            "open-exact, falling, with either p)")
-        return 2.0 * s, (f"{why}: λ = [u] is approximated by the jump of the broken P1 u, of the "
-                         f"order of u in L²: h^{2.0 * s:g} (2s, s = {s:g})")
+        order = p1_order("u_l2", s)
+        return order, (f"{why}: λ = [u] is approximated by the jump of the broken P1 u, of the "
+                       f"order of u in L²: h^{order:g} (2s, s = {s:g})")
     raise ValueError(f"unknown quantity {quantity!r}")
 
 
@@ -161,7 +232,8 @@ def p1_order(quantity, s):
     """The order of P1 on the cracked mesh for regularity s, of the references' error (P1
     Galerkin, conforming) and of the P1 interpolation error alike: u 2s (duality), p s; None for λ
     (the references' jump [u_h] superconverges on smooth solutions)."""
-    return {"u_l2": 2.0 * s, "p_l2": s, "p_x": s}.get(quantity)
+    factor = P1_ORDER_PER_S.get(quantity)
+    return None if factor is None else factor * s
 
 
 def reaches_p1_order(quantity, expected, s):

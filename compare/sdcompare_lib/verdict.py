@@ -439,8 +439,6 @@ def _scene_names_beside(path):
 
 
 EXPECTATIONS_NAME = "expectations.toml"
-# The repository's scenes/ folder as pip installs it (pyproject.toml: package-dir and package-data).
-PACKAGED_SCENES = "sdcompare_scenes"
 
 
 def default_expectations(script_dir):
@@ -451,17 +449,7 @@ def default_expectations(script_dir):
     here = os.path.join(script_dir, "..", "scenes", EXPECTATIONS_NAME)
     if os.path.isfile(here):
         return os.path.normpath(here)
-    import importlib.util
-
-    try:
-        spec = importlib.util.find_spec(PACKAGED_SCENES)
-    except (ImportError, ValueError):
-        spec = None
-    for folder in (spec.submodule_search_locations or []) if spec else []:
-        path = os.path.join(folder, EXPECTATIONS_NAME)
-        if os.path.isfile(path):
-            return os.path.normpath(path)
-    return None
+    return theory.packaged_scenes_file(EXPECTATIONS_NAME)
 
 
 def load_expectations(path):

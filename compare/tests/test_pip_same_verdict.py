@@ -167,8 +167,9 @@ def test_installed_and_checkout_sdcompare_agree(tools, tmp_path, case):
 
 
 def test_an_sdcompare_without_expectations_refuses_to_judge(tmp_path):
-    """A copy of the tool with neither scenes/expectations.toml beside it nor the package's copy
-    (Debian's python has no sdcompare_scenes) exits 2 with one line, writing no report."""
+    """A copy of the tool with its orders table (scenes/orders.toml) but neither
+    scenes/expectations.toml beside it nor the package's copy (Debian's python has no
+    sdcompare_scenes) exits 2 with one line, writing no report."""
     checkout = checkout_sdcompare()
     if checkout is None or not os.access(sdcrack_bin(), os.X_OK):
         pytest.skip("needs the checkout's sdcompare and the sdcrack binary")
@@ -183,6 +184,9 @@ def test_an_sdcompare_without_expectations_refuses_to_judge(tmp_path):
                     ignore=shutil.ignore_patterns("tests", "__pycache__"))
     common = os.path.join(os.path.dirname(os.path.dirname(script)), "references", "common")
     shutil.copytree(common, tmp_path / "tool" / "references" / "common")
+    os.makedirs(tmp_path / "tool" / "scenes")
+    shutil.copy2(os.path.join(os.path.dirname(os.path.dirname(script)), "scenes", "orders.toml"),
+                 tmp_path / "tool" / "scenes")
     folder = results(str(tmp_path), "[]")
     p = subprocess.run([py, str(tool / "sdcompare"), folder], capture_output=True, text=True,
                        env=env(), timeout=600, cwd=str(tmp_path))

@@ -1,6 +1,10 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod expectations;
+pub mod orders;
+
+use sdcrack::norms::ErrorNorms;
 use sdcrack::scene::{MultiplierSpace, Scene, TomlScene, USpace};
 use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
 
@@ -32,6 +36,25 @@ pub fn sdcrack(args: &[&str]) -> std::process::Output {
         .expect("binary runs")
 }
 
+/// Runs `sdcrack run SCENE --out OUT` with the further `args` (filters, `--quiet`) and waits
+/// for it.
+pub fn sdcrack_run(
+    scene: impl AsRef<std::path::Path>,
+    out: &std::path::Path,
+    args: &[&str],
+) -> std::process::Output {
+    let scene = scene.as_ref().to_str().expect("a UTF-8 scene path");
+    let out = out.to_str().expect("a UTF-8 results path");
+    sdcrack(&[&["run", scene, "--out", out], args].concat())
+}
+
+/// The `summary.json` of a results folder.
+pub fn summary(folder: &std::path::Path) -> serde_json::Value {
+    let path = folder.join("summary.json");
+    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_slice(&bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
 /// A process's stderr as text.
 pub fn stderr(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -60,6 +83,62 @@ pub fn solve(scene: &Scene, filter: CaseFilter) -> Vec<CaseResult> {
 /// Observed rate log(e0/e1)/log(h0/h1).
 pub fn rate(h0: f64, e0: f64, h1: f64, e1: f64) -> f64 {
     (e0 / e1).ln() / (h0 / h1).ln()
+}
+
+/// The error quantities of [`errors_by_level`], in its order, as the expectations and the compare
+/// tool name them.
+pub const QUANTITIES: [&str; 4] = ["u_l2", "p_l2", "p_x", "lambda_l2"];
+
+/// The four errors of a case, in the order of [`QUANTITIES`]: [e_u, e_p, e_p_x, e_λ].
+pub fn quantities(e: &ErrorNorms) -> [f64; 4] {
+    [e.u_l2, e.p_l2, e.p_x, e.lambda_l2]
+}
+
+/// One series of a scene with `[exact]`, levels increasing: (size, [e_u, e_p, e_p_x, e_λ]) of the
+/// cases `keep` selects (one variant); the size is h, or N^{-1/2} (N the unknowns) when
+/// `by_unknowns` (the mesh parameter of graded meshes).
+pub fn errors_by_level(
+    cases: &[CaseResult],
+    keep: impl Fn(&CaseResult) -> bool,
+    by_unknowns: bool,
+) -> Vec<(f64, [f64; 4])> {
+    cases
+        .iter()
+        .filter(|c| keep(c))
+        .map(|c| {
+            let e = c.errors.expect("exact scene has errors");
+            let size = if by_unknowns {
+                (c.unknowns as f64).powf(-0.5)
+            } else {
+                c.h
+            };
+            (size, quantities(&e))
+        })
+        .collect()
+}
+
+/// The observed rates of the last two steps of quantity `q` (an index of [`QUANTITIES`]) of an
+/// [`errors_by_level`] series.
+pub fn last_two_rates(s: &[(f64, [f64; 4])], q: usize) -> [f64; 2] {
+    let n = s.len();
+    let r = |a: usize, b: usize| rate(s[a].0, s[a].1[q], s[b].0, s[b].1[q]);
+    [r(n - 3, n - 2), r(n - 2, n - 1)]
+}
+
+/// Least-squares slope of log e against log δ of the points (δ, e), all positive: the observed
+/// order of e in δ.
+pub fn loglog_slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |a, (d, e)| (a.0 + d.ln() / n, a.1 + e.ln() / n));
+    let (num, den) = points.iter().fold((0.0, 0.0), |a, (d, e)| {
+        (
+            a.0 + (d.ln() - mx) * (e.ln() - my),
+            a.1 + (d.ln() - mx).powi(2),
+        )
+    });
+    num / den
 }
 
 /// (h, e_u, e_p, e_λ) per level of one variant of a scene with `[exact]`.
