@@ -17,10 +17,10 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "freefem" / "solve.py"
-sys.path.insert(0, str(HERE))
-from fake_export import write_fake_export  # noqa: E402
-from output_checks import assert_fields_readable, assert_provenance  # noqa: E402
-from sdfields import crack_field  # noqa: E402  (output_checks put references/common on the path)
+from conftest import run_env
+from fake_export import write_fake_export
+from output_checks import assert_fields_readable, assert_provenance
+from sdcompare_lib.sdfields import crack_field
 
 _spec = importlib.util.spec_from_file_location("freefem_solve", SOLVE)
 ffsolve = importlib.util.module_from_spec(_spec)
@@ -35,7 +35,7 @@ CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
 
 def run_solve(export, out, *extra):
     return subprocess.run([sys.executable, str(SOLVE), str(export), "--out", str(out), *extra],
-                          capture_output=True, text=True)
+                          capture_output=True, text=True, env=run_env())
 
 
 def solved(tmp_path, name, f, g, exact, levels=(0, 1, 2)):
