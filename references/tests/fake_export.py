@@ -75,8 +75,17 @@ def write_fake_export(out, name, f, g, exact=None, levels=(0, 1, 2), n0=8):
     return out
 
 
+# The scenes' exact solutions both references' tests solve on a fake export (scene-grammar
+# strings): the open straight crack y = 0, |x| < 1/2 (u = Im sqrt((z - 1/2)(z + 1/2)), harmonic,
+# its jump OPEN_JUMP), and the smooth closed one (f = CLOSED_F = -Δ CLOSED_U).
+OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
+OPEN_JUMP = "2*sqrt(0.25 - x^2)"
+CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
+CLOSED_F = "2*pi^2*sin(pi*x)*cos(pi*y)"
+
+
 # ---------------------------------------------------------------------------------------------
-# The export format of issue 16: several polyline cracks, structured or uniformly refined meshes
+# The multi-crack export format: several polyline cracks, structured or uniformly refined meshes
 # ---------------------------------------------------------------------------------------------
 #
 # write_export writes scene.json with "domain", "cracks" (and the legacy "crack" only for one crack

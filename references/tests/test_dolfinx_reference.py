@@ -4,7 +4,6 @@ Run: /usr/bin/python3 -m pytest references/tests/test_dolfinx_reference.py
 Skipped when dolfinx is not installed.
 """
 
-import importlib.util
 import json
 import math
 import subprocess
@@ -17,20 +16,13 @@ dolfinx = pytest.importorskip("dolfinx")
 pytest.importorskip("scipy")
 np = pytest.importorskip("numpy")
 
+from conftest import run_env
+from fake_export import CLOSED_F, CLOSED_U, OPEN_JUMP, OPEN_U, write_fake_export
+from output_checks import assert_fields_readable, assert_provenance, load_module
+
 HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "dolfinx" / "solve.py"
-from conftest import run_env
-from fake_export import write_fake_export
-from output_checks import assert_fields_readable, assert_provenance
-
-_spec = importlib.util.spec_from_file_location("dolfinx_solve", SOLVE)
-solve = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(solve)
-
-OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
-OPEN_JUMP = "2*sqrt(0.25 - x^2)"
-CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
-CLOSED_F = "2*pi^2*sin(pi*x)*cos(pi*y)"
+solve = load_module("dolfinx_solve", SOLVE)
 
 
 def rates(cases, key):

@@ -3,7 +3,6 @@
 Run: /usr/bin/python3 -m pytest references/tests/test_freefem_reference.py -q
 """
 
-import importlib.util
 import json
 import math
 import re
@@ -15,22 +14,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-HERE = Path(__file__).resolve().parent
-SOLVE = HERE.parent / "freefem" / "solve.py"
 from conftest import run_env
-from fake_export import write_fake_export
-from output_checks import assert_fields_readable, assert_provenance
+from fake_export import CLOSED_U, OPEN_U, write_fake_export
+from output_checks import assert_fields_readable, assert_provenance, load_module
 from sdcompare_lib.sdfields import crack_field
 
-_spec = importlib.util.spec_from_file_location("freefem_solve", SOLVE)
-ffsolve = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ffsolve)
+HERE = Path(__file__).resolve().parent
+SOLVE = HERE.parent / "freefem" / "solve.py"
+ffsolve = load_module("freefem_solve", SOLVE)
 
 pytestmark = pytest.mark.skipif(shutil.which("FreeFem++") is None,
                                 reason="FreeFem++ not installed (apt-get install -y freefem++ libfreefem++)")
 
-OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
-CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
 
 
 def run_solve(export, out, *extra):
