@@ -1,7 +1,9 @@
 //! Runs the reference solvers (the reference problem of docs/design.md) that a scene lists in `[outputs] references`.
 //!
 //! Each reference is an independent program under `references/<tool>/solve.py`, run with Debian's
-//! `/usr/bin/python3` as `solve.py MESH_EXPORT --out RESULTS/<tool> [--fields]`. It reads the mesh
+//! `/usr/bin/python3` as `solve.py MESH_EXPORT --out RESULTS/<tool> [--fields]`, with the folder
+//! `compare/` beside `references/` (the package `sdcompare_lib`, whose modules the scripts share
+//! with the compare tool) first on `PYTHONPATH` ([`python`]). It reads the mesh
 //! export written by [`crate::output::mesh_export`] (the same vertices and triangles as the solver)
 //! and writes `summary.json` (and fields) into its own subfolder of the results. Before anything is
 //! solved, every requested tool is checked to be installed; a missing one is reported in one line
@@ -66,6 +68,24 @@ pub fn scripts_dir() -> PathBuf {
         .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("references"))
 }
 
+/// `/usr/bin/python3 SCRIPT` with `PYTHONPATH` starting with the folder `compare/` beside
+/// [`scripts_dir`] (where the package `sdcompare_lib` that the scripts import lives), followed by
+/// any `PYTHONPATH` of the caller. The one place that says where the scripts find their package.
+fn python(script: &Path) -> Command {
+    let package_dir = scripts_dir()
+        .parent()
+        .map(|root| root.join("compare"))
+        .unwrap_or_else(|| PathBuf::from("compare"));
+    let inherited = std::env::var_os("PYTHONPATH").unwrap_or_default();
+    // An empty entry would put the working directory on the path: only the caller's real ones.
+    let inherited = std::env::split_paths(&inherited).filter(|p| !p.as_os_str().is_empty());
+    let path =
+        std::env::join_paths(std::iter::once(package_dir).chain(inherited)).unwrap_or_default();
+    let mut cmd = Command::new(PYTHON);
+    cmd.arg(script).env("PYTHONPATH", path);
+    cmd
+}
+
 /// The last non-empty line of a program's stderr (its one-line error), or `no message`.
 fn last_line(stderr: &[u8]) -> String {
     String::from_utf8_lossy(stderr)
@@ -108,8 +128,7 @@ pub fn check_available(tool: &str) -> Result<(), ReferenceError> {
     }
     if tool == "dolfinx" {
         // The script refuses a dolfinx outside the versions it supports, in one line.
-        let check = Command::new(PYTHON)
-            .arg(&script)
+        let check = python(&script)
             .arg("--check-install")
             .output()
             .map_err(|e| ReferenceError::Spawn {
@@ -170,11 +189,8 @@ pub fn run_reference(
     let start = Instant::now();
     // Absolute paths: a tool may change its working directory.
     let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    let mut cmd = Command::new(PYTHON);
-    cmd.arg(&script)
-        .arg(absolute(mesh_dir))
-        .arg("--out")
-        .arg(absolute(out));
+    let mut cmd = python(&script);
+    cmd.arg(absolute(mesh_dir)).arg("--out").arg(absolute(out));
     if fields {
         cmd.arg("--fields");
     }

@@ -1,11 +1,16 @@
-"""sdcompare: convergence / agreement report for one sdcrack results folder.
+"""sdcompare_lib: the Python side of sdcrack's verification, one package.
 
-In a checkout the references' shared modules (references/common: sdexpr, sdexport, ...) are made
-importable here; installed (pyproject.toml), they are top-level modules beside this package."""
-import os
-import sys
+It holds the compare tool (compare/sdcompare, compare/sdcompare-rerun: read, verdict, render, ...)
+and the modules the reference solvers (references/<tool>/solve.py) share with it: sdexpr (the
+scenes' expression grammar), sdexport (the mesh export's files), sdquad (the load quadrature),
+sdfields (the field files) and sdresults (summary.json, provenance, the atomic writes).
 
-_COMMON = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
-                       "references", "common")
-if os.path.isdir(_COMMON) and _COMMON not in sys.path:
-    sys.path.insert(0, _COMMON)
+Where it is found, with nothing edited in sys.path:
+- installed (`pip install .`, pyproject.toml): site-packages/sdcompare_lib/;
+- compare/sdcompare and compare/sdcompare-rerun: beside them (a script's folder is on sys.path);
+- the tests in a checkout: pyproject.toml's [tool.pytest.ini_options] `pythonpath` names compare/;
+- the reference solvers (references/<tool>/solve.py): the folder compare/ on PYTHONPATH, set by
+  whoever launches them (sdcrack: src/references.rs; the tests: conftest.py's run_env), e.g.
+  `PYTHONPATH=compare /usr/bin/python3 references/dolfinx/solve.py MESH --out DIR`; ci/cases
+  sets it likewise for the script it runs.
+"""

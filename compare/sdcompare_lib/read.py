@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-import sdexport  # the references' shared reader of the mesh export's cracks (sdcompare_lib/__init__.py)
+from . import sdexport  # the reader of the mesh export's cracks, shared with the references
 
 REFERENCE_TOOLS = ("dolfinx", "freefem")
 
@@ -227,7 +227,7 @@ class ExportLevel:
     """One level of the mesh export the references solved on: the cracked mesh (points (N,2),
     tris (T,3)), crack (I,2) the (plus, minus) rows of crack.txt, ranges [(first, n)] its cracks
     (cracks.txt), kind "structured" | "refined" | "graded" (mesh.json;
-    references/common/sdexport.py), parents (graded levels: parents.txt)."""
+    compare/sdcompare_lib/sdexport.py), parents (graded levels: parents.txt)."""
 
     level: int
     points: np.ndarray

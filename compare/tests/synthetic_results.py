@@ -21,19 +21,14 @@ continuous p is O(1) off in a strip of width h (order 1/2), a broken-tangential 
 import json
 import math
 import os
-import sys
 
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-for _p in (os.path.join(ROOT, "compare"), os.path.join(ROOT, "references", "common"),
-           os.path.join(ROOT, "references", "tests")):
-    if _p not in sys.path:
-        sys.path.insert(0, _p)
 
-import fake_export as fe  # noqa: E402
-from sdcompare_lib import exact  # noqa: E402
+import fake_export as fe
+from sdcompare_lib import exact
 
 CRACK = [(-0.5, 0.0), (0.5, 0.0)]
 # smooth on each face, open on the crack ([u] = 2 m³ > 0), tangential ∂u/∂x jumps, ∂u/∂y = 0 on

@@ -35,9 +35,8 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
-from scene_text import set_key  # noqa: E402
-from solver_run import sdcrack_bin, env  # noqa: E402
+from scene_text import set_key
+from conftest import run_env, sdcrack_bin
 
 SCRIPT = os.path.join(ROOT, "compare", "sdcompare")
 SCENES = os.path.join(ROOT, "scenes")
@@ -124,7 +123,7 @@ def run_base(name, where):
     write_text(path, small_scene(scene, **opts))
     out = os.path.join(where, "out")
     p = subprocess.run([sdcrack_bin(), "run", path, "--out", out, "--quiet", *args],
-                       capture_output=True, text=True, env=env(), timeout=600)
+                       capture_output=True, text=True, env=run_env(), timeout=600)
     assert p.returncode == 0, f"sdcrack run of base {name!r} failed: {p.stderr[-2000:]}"
     return os.path.join(out, scene)
 
@@ -348,8 +347,6 @@ def u_error_times(factor):
     def damage(folder, others):
         import h5py
 
-        sys.path.insert(0, os.path.join(ROOT, "compare"))
-        sys.path.insert(0, os.path.join(ROOT, "references", "common"))
         from sdcompare_lib import exact
 
         s = load(folder)
@@ -565,7 +562,7 @@ def judge(name, base_futures, exps, where):
     damage(folder, [base_futures[o].result() for o in others])
     args = [] if exp == DEFAULT else ["--expectations", exps[exp]]
     p = subprocess.run([sys.executable, SCRIPT, folder, *args], capture_output=True, text=True,
-                       env=env(), timeout=600)
+                       env=run_env(), timeout=600)
     rep = os.path.join(folder, "report", "report.json")
     report = json.loads(read_text(rep)) if os.path.exists(rep) else None
     return {"rc": p.returncode, "out": p.stdout, "err": p.stderr, "report": report,

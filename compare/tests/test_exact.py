@@ -6,7 +6,6 @@ The agreement test with the solver runs target/release/sdcrack (skipped when it 
 import json
 import math
 import subprocess
-import sys
 import tomllib
 from fractions import Fraction
 from math import factorial
@@ -16,13 +15,11 @@ import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "compare"))
-from sdcompare_lib import exact as E  # noqa: E402
-from sdcompare_lib import norms  # noqa: E402
-import sdexpr  # noqa: E402  (put on sys.path by exact)
+from sdcompare_lib import exact as E
+from sdcompare_lib import norms
+from sdcompare_lib import sdexpr
 
-sys.path.insert(0, str(ROOT / "tests" / "python"))
-from scene_text import set_key  # noqa: E402
+from scene_text import set_key
 
 SCENES = ROOT / "scenes"
 BINARY = ROOT / "target" / "release" / "sdcrack"

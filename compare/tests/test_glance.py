@@ -4,14 +4,12 @@ line to FAIL; a forged error moves the ratio; a variant that stops converging le
 "converging variants" group; no references says so."""
 import math
 import os
-import sys
 
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.dirname(HERE))
 
-from sdcompare_lib import glance, yardsticks  # noqa: E402
+from sdcompare_lib import glance, yardsticks
 
 LEVELS = [2, 3, 4]
 H = [0.25, 0.125, 0.0625]

@@ -10,13 +10,10 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "compare"))
-sys.path.insert(0, os.path.join(ROOT, "references", "common"))
-sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
-from scene_text import set_key  # noqa: E402
-from sdcompare_lib import norms, read  # noqa: E402
-from solver_run import sdcrack_bin  # noqa: E402
+from scene_text import set_key
+from sdcompare_lib import norms, read
+from conftest import sdcrack_bin
 
 
 @pytest.fixture(scope="module")

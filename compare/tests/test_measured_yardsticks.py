@@ -27,11 +27,10 @@ import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
 
-import synthetic_results as sr  # noqa: E402  (puts compare/ and references/ on sys.path)
-import fake_export as fe  # noqa: E402
-from sdcompare_lib import exact, ratios, read, theory  # noqa: E402
+import synthetic_results as sr
+import fake_export as fe
+from sdcompare_lib import exact, ratios, read, theory
 
 SCRIPT = os.path.join(os.path.dirname(HERE), "sdcompare")
 ROOT = os.path.dirname(os.path.dirname(HERE))

@@ -28,13 +28,10 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "compare"))
-sys.path.insert(0, os.path.join(ROOT, "references", "common"))
-sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
-from scene_text import set_key  # noqa: E402
-from sdcompare_lib import meshcheck, theory  # noqa: E402
-from solver_run import sdcrack_bin, env  # noqa: E402
+from scene_text import set_key
+from sdcompare_lib import meshcheck, theory
+from conftest import run_env, sdcrack_bin
 
 SCRIPT = os.path.join(ROOT, "compare", "sdcompare")
 XFAIL = "[[verification.expected_failure]]"
@@ -73,7 +70,7 @@ def run(tmp, name, text):
     scene = where / "scene.toml"
     scene.write_text(text)
     p = subprocess.run([sdcrack_bin(), "run", str(scene), "--out", str(where / "out"), "--quiet"],
-                       capture_output=True, text=True, env=env(), timeout=600)
+                       capture_output=True, text=True, env=run_env(), timeout=600)
     assert p.returncode == 0, p.stderr[-2000:]
     (folder,) = [d for d in (where / "out").iterdir() if d.is_dir()]
     return str(folder)
@@ -101,7 +98,7 @@ def judge(folder, tmp_path, damage=None, scene_from=None):
     if damage is not None:
         damage(str(copy))
     p = subprocess.run([sys.executable, SCRIPT, str(copy), "--quiet"], capture_output=True,
-                       text=True, env=env(), timeout=600)
+                       text=True, env=run_env(), timeout=600)
     assert p.returncode in (0, 1), p.stderr[-2000:]
     report = json.loads((copy / "report" / "report.json").read_text())
     return p.returncode, p.stdout.strip(), {c["check"]: c for c in report["checks"]}

@@ -12,19 +12,16 @@ Run: /usr/bin/python3 -m pytest compare/tests/test_multi_crack.py -q
 """
 import math
 import os
-import sys
 
 import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "references", "tests"))
 
-import fake_export as fe  # noqa: E402
-from sdcompare_lib import exact as E  # noqa: E402
-from sdcompare_lib import checks, norms, read, verdict  # noqa: E402
+import fake_export as fe
+from sdcompare_lib import exact as E
+from sdcompare_lib import checks, norms, read, verdict
 
 
 def linear(p):

@@ -5,16 +5,13 @@ tests read it through tests/common/orders.rs (tests/orders_table.rs)."""
 import importlib.util
 import os
 import shutil
-import sys
 import tomllib
 
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "compare"))
-
-from sdcompare_lib import theory  # noqa: E402
+from sdcompare_lib import theory
 
 TABLE = os.path.join(ROOT, "scenes", "orders.toml")
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")

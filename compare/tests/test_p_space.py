@@ -17,10 +17,9 @@ import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
 
-import synthetic_results as sr  # noqa: E402  (puts compare/ and references/ on sys.path)
-from sdcompare_lib import (checks, exact, norms, plots, precomputed, read, render,  # noqa: E402
+import synthetic_results as sr
+from sdcompare_lib import (checks, exact, norms, plots, precomputed, read, render,
                            settings, theory, verdict, yardsticks)
 
 SCRIPT = os.path.join(os.path.dirname(HERE), "sdcompare")

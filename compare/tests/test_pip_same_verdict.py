@@ -24,9 +24,8 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
-from scene_text import set_key  # noqa: E402
-from solver_run import sdcrack_bin, env  # noqa: E402
+from scene_text import set_key
+from conftest import run_env, sdcrack_bin
 
 SCENE = "closed-exact"
 
@@ -117,7 +116,7 @@ def judge(cmd, folder):
     """Runs one sdcompare on a private copy of `folder`: (exit code, report.json or None)."""
     copy = folder + "-" + str(abs(hash(tuple(cmd))))
     shutil.copytree(folder, copy)
-    p = subprocess.run([*cmd, copy], capture_output=True, text=True, env=env(), timeout=900)
+    p = subprocess.run([*cmd, copy], capture_output=True, text=True, env=run_env(), timeout=900)
     rep = os.path.join(copy, "report", "report.json")
     report = None
     if os.path.exists(rep):
@@ -182,14 +181,12 @@ def test_an_sdcompare_without_expectations_refuses_to_judge(tmp_path):
     tool = tmp_path / "tool" / "compare"
     shutil.copytree(os.path.dirname(script), tool,
                     ignore=shutil.ignore_patterns("tests", "__pycache__"))
-    common = os.path.join(os.path.dirname(os.path.dirname(script)), "references", "common")
-    shutil.copytree(common, tmp_path / "tool" / "references" / "common")
     os.makedirs(tmp_path / "tool" / "scenes")
     shutil.copy2(os.path.join(os.path.dirname(os.path.dirname(script)), "scenes", "orders.toml"),
                  tmp_path / "tool" / "scenes")
     folder = results(str(tmp_path), "[]")
     p = subprocess.run([py, str(tool / "sdcompare"), folder], capture_output=True, text=True,
-                       env=env(), timeout=600, cwd=str(tmp_path))
+                       env=run_env(), timeout=600, cwd=str(tmp_path))
     assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
     assert "no expectations file" in p.stderr
     assert not os.path.exists(os.path.join(folder, "report"))

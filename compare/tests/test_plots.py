@@ -3,33 +3,17 @@ data, legends and notes inside the image, coinciding lines said, a δ tick at ea
 the references' curves on the h → 0 plot, and the smallest text carried to the page."""
 import os
 import re
-import sys
 
 import pytest
 
 COMPARE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, COMPARE)
 
-from sdcompare_lib import plots, render  # noqa: E402
-from sdcompare_lib.read import BROKEN_TANGENTIAL  # noqa: E402
+from sdcompare_lib import plots, render
+from sdcompare_lib.read import BROKEN_TANGENTIAL
 
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
 # the width (CSS px) a plot is shown at in an 800 px window, and the smallest text it may show
 NARROW_PX, MIN_CSS_PX = 772, 9
-
-
-@pytest.fixture
-def figs(monkeypatch):
-    """The figures the plot functions would save, laid out, instead of PNG files."""
-    captured = []
-
-    def save(fig, folder, name):
-        captured.append(fig)
-        return name
-    monkeypatch.setattr(plots, "_save", save)
-    yield captured
-    for fig in captured:
-        plots.plt.close(fig)
 
 
 def variants():

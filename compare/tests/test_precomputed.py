@@ -12,10 +12,9 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 SDCOMPARE = os.path.join(ROOT, "compare", "sdcompare")
-sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
-from scene_text import set_key  # noqa: E402
-from solver_run import sdcrack_bin  # noqa: E402
+from scene_text import set_key
+from conftest import sdcrack_bin
 
 
 def sdcompare(*args):

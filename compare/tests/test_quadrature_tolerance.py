@@ -26,17 +26,15 @@ Run: /usr/bin/python3 -m pytest -q -p no:cacheprovider compare/tests/test_quadra
 import json
 import os
 import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
 
-import synthetic_results as sr  # noqa: E402  (puts compare/ and references/ on sys.path)
-from sdcompare_lib import checks, exact, norms, precomputed, read  # noqa: E402
-from solver_run import sdcrack_bin  # noqa: E402
+import synthetic_results as sr
+from sdcompare_lib import checks, exact, norms, precomputed, read
+from conftest import sdcrack_bin
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
@@ -308,7 +306,6 @@ def inclined(tmp_path_factory):
     kinks run across the triangles (the nightly FAILed it under the bare 1e-8)."""
     if not os.access(sdcrack_bin(), os.X_OK):
         pytest.skip("no sdcrack binary (cargo build --release, or SDCRACK_BIN)")
-    sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
     from scene_text import set_key
 
     tmp = tmp_path_factory.mktemp("inclined")

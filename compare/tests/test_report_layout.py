@@ -19,9 +19,8 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tests", "python"))
 
-from scene_text import set_key  # noqa: E402
+from scene_text import set_key
 
 MEASURE = """<script>
 function posY(e) { return e ? e.getBoundingClientRect().top + window.scrollY : null; }

@@ -11,15 +11,13 @@ import sys
 import numpy as np
 import pytest
 
+from conftest import run_env, sdcrack_bin
+from scene_text import set_key
+from sdcompare_lib import norms, rates, verdict
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 COMPARE = os.path.dirname(HERE)
 SCRIPT = os.path.join(COMPARE, "sdcompare")
-sys.path.insert(0, COMPARE)
-
-from sdcompare_lib import norms, rates, verdict  # noqa: E402
-
-sys.path.insert(0, os.path.join(os.path.dirname(COMPARE), "tests", "python"))
-from scene_text import set_key  # noqa: E402
 
 
 # ------------------------------------------------------------------ exact P1 L² norms
@@ -365,35 +363,47 @@ def test_gradient_and_crack_difference_formulas():
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
 
-@pytest.fixture(scope="module")
-def small_open_run(tmp_path_factory):
-    """`sdcrack run` on the repo's open-exact scene at levels 1-3 (δ = 1e-2, 1e-4, 0, the consistent
-    p mass only, fields, both references); returns the results folder, to be copied by each test."""
-    exe = os.environ.get("SDCRACK_BIN", os.path.join(ROOT, "target", "release", "sdcrack"))
+def run_open_exact(tmp_path_factory, name, keys):
+    """`sdcrack run` of the repository's open-exact scene with the scene `keys` (key, value) set,
+    in a fresh folder `name`: its results folder, to be copied by each test (copy_of); skips when
+    the binary is not built."""
+    exe = sdcrack_bin()
     if not os.path.isfile(exe):
         pytest.skip("sdcrack binary not built")
-    tmp = tmp_path_factory.mktemp("open")
+    tmp = tmp_path_factory.mktemp(name)
     text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
-    for key, value in (("p_mass", '["consistent"]'), ("levels", "[1, 2, 3]"),
-                       ("deltas", "[1e-2, 1e-4, 0.0]")):
+    for key, value in keys:
         text = set_key(text, key, value)
-    assert 'fields = ["u", "p", "lambda"]' in text
     scene = tmp / "open.toml"
     scene.write_text(text)
-    env = dict(os.environ, FF_LOADPATH="/usr/lib/freefem++")
     p = subprocess.run([exe, "run", str(scene), "--out", str(tmp / "r"), "--quiet"],
-                       capture_output=True, text=True, env=env)
+                       capture_output=True, text=True, env=run_env())
     assert p.returncode == 0, p.stderr
     return tmp / "r" / "open-exact"
 
 
-@pytest.fixture
-def open_run(small_open_run, tmp_path):
+def copy_of(results, tmp_path):
+    """A private copy of a module's results folder, for one test to write its report into."""
     import shutil
 
     d = tmp_path / "open-exact"
-    shutil.copytree(small_open_run, d)
+    shutil.copytree(results, d)
     return d
+
+
+@pytest.fixture(scope="module")
+def small_open_run(tmp_path_factory):
+    """`sdcrack run` on the repo's open-exact scene at levels 1-3 (δ = 1e-2, 1e-4, 0, the consistent
+    p mass only, fields, both references)."""
+    folder = run_open_exact(tmp_path_factory, "open", (
+        ("p_mass", '["consistent"]'), ("levels", "[1, 2, 3]"), ("deltas", "[1e-2, 1e-4, 0.0]")))
+    assert 'fields = ["u", "p", "lambda"]' in (folder / "scene.toml").read_text()
+    return folder
+
+
+@pytest.fixture
+def open_run(small_open_run, tmp_path):
+    return copy_of(small_open_run, tmp_path)
 
 
 def test_real_small_run_of_sdcrack(open_run, empty_exps):
@@ -637,22 +647,11 @@ def test_rerun_command_is_absolute():
                    "--delta 1e-2 --out sdcrack-rerun/s-l1-broken-M1-d1e-2")
 
 
-def _captured_figures(monkeypatch):
-    from sdcompare_lib import plots
-
-    figs = []
-
-    def save(fig, folder, name):
-        figs.append(fig)
-        return name
-    monkeypatch.setattr(plots, "_save", save)
-    return plots, figs
-
-
-def test_references_are_told_apart_in_plots(monkeypatch):
+def test_references_are_told_apart_in_plots(figs):
     """dolfinx and FreeFEM differ in marker, line style and label, not only in colour; lines that
     coincide say so in the legend."""
-    plots, figs = _captured_figures(monkeypatch)
+    from sdcompare_lib import plots
+
     d, f = plots.REF_STYLE["dolfinx"], plots.REF_STYLE["freefem"]
     for key in ("marker", "linestyle", "label", "color"):
         assert d[key] != f[key], key
@@ -682,10 +681,11 @@ def test_references_are_told_apart_in_plots(monkeypatch):
         plots.plt.close(figs[0])
 
 
-def test_a_single_delta_plots_visible_markers(monkeypatch):
+def test_a_single_delta_plots_visible_markers(figs):
     """One δ > 0 (a sweep δ ∈ {1e-2, 0}): each variant is one marker inside sane limits, with a
     note, and the δ ticks are written 1e-2."""
-    plots, figs = _captured_figures(monkeypatch)
+    from sdcompare_lib import plots
+
     entries = [{"level": 2, "u_space": u, "multiplier": "M1", "quantity": q, "deltas": [1e-2],
                 "diffs": [3e-4 if u == "broken" else 5e-5], "slope": None, "points_fitted": 1}
                for u in ("broken", "continuous") for q in ("u_l2", "p_l2", "lambda_l2")]
@@ -878,30 +878,14 @@ def test_lumped_reference_distance_has_no_bubble(tmp_path):
 def small_lumped_run(tmp_path_factory):
     """`sdcrack run` on open-exact at levels 1-3 with both p masses, multiplier M1, δ = 1e-2, 1e-4,
     0, fields, no references (36 cases)."""
-    exe = os.environ.get("SDCRACK_BIN", os.path.join(ROOT, "target", "release", "sdcrack"))
-    if not os.path.isfile(exe):
-        pytest.skip("sdcrack binary not built")
-    tmp = tmp_path_factory.mktemp("lumped")
-    text = open(os.path.join(ROOT, "scenes", "open-exact.toml")).read()
-    for key, value in (("levels", "[1, 2, 3]"), ("multipliers", '["M1"]'),
-                       ("deltas", "[1e-2, 1e-4, 0.0]"), ("references", "[]"),
-                       ("p_mass", '["consistent", "lumped"]')):
-        text = set_key(text, key, value)
-    scene = tmp / "open.toml"
-    scene.write_text(text)
-    p = subprocess.run([exe, "run", str(scene), "--out", str(tmp / "r"), "--quiet"],
-                       capture_output=True, text=True)
-    assert p.returncode == 0, p.stderr
-    return tmp / "r" / "open-exact"
+    return run_open_exact(tmp_path_factory, "lumped", (
+        ("levels", "[1, 2, 3]"), ("multipliers", '["M1"]'), ("deltas", "[1e-2, 1e-4, 0.0]"),
+        ("references", "[]"), ("p_mass", '["consistent", "lumped"]')))
 
 
 @pytest.fixture
 def lumped_run(small_lumped_run, tmp_path):
-    import shutil
-
-    d = tmp_path / "open-exact"
-    shutil.copytree(small_lumped_run, d)
-    return d
+    return copy_of(small_lumped_run, tmp_path)
 
 
 def test_consistent_and_lumped_are_separate_series(lumped_run, empty_exps, tmp_path):
@@ -1005,12 +989,13 @@ def test_a_consistent_only_run_shows_no_p_mass(open_run, empty_exps):
     assert not any("--p-mass" in k["rerun"] for k in r["kkt"])
 
 
-def test_plots_are_readable(monkeypatch):
+def test_plots_are_readable(figs):
     """Issue 25, item 4, on the h → 0 and δ → 0 plots of a run with both p masses and both u
     spaces: one legend for the figure and none over a panel's data; consistent and lumped differ
     in colour, not only dashing; the slope-guide labels lie below every data point; λ is never
     spelled "lambda"; every title fits inside the figure."""
-    plots, figs = _captured_figures(monkeypatch)
+    from sdcompare_lib import plots
+
     rate_entries, delta_entries = [], []
     for u in ("broken", "continuous"):
         for m in ("M0", "M1", "M1star"):
@@ -1047,11 +1032,12 @@ def test_plots_are_readable(monkeypatch):
         plots.plt.close(fig)
 
 
-def test_work_precision_leaves_start_up_apart(monkeypatch):
+def test_work_precision_leaves_start_up_apart(figs):
     """dolfinx's form compilation (its summary's timings_s.forms, cached between runs) is not
     plotted as work on the level: the points are total − forms, and the range is written under the
     plot (issue 25, item 4: it drew a zigzag of cache hits and misses)."""
-    plots, figs = _captured_figures(monkeypatch)
+    from sdcompare_lib import plots
+
     from sdcompare_lib import verdict
 
     assert verdict.startup_time({"forms": 0.7, "total": 1.0}) == 0.7

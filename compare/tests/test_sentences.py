@@ -2,12 +2,10 @@
 computed from the numbers it describes, here on the numbers of the report that once printed "the
 distance falls as δ decreases on every level" over a table where it rose."""
 import os
-import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(HERE)))
 
-from sdcompare_lib import sentences  # noqa: E402
+from sdcompare_lib import sentences
 
 # mixed's report (issue 34): broken/M1star, distance to dolfinx per level and δ
 MIXED = {

@@ -4,17 +4,14 @@ the regularity measured from the exact solution. Fast: no sdcrack run (the damag
 in test_damaged_results.py)."""
 import math
 import os
-import sys
 
 import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "compare"))
-sys.path.insert(0, os.path.join(ROOT, "references", "common"))
 
-from sdcompare_lib import checks, exact, read, settings, theory, verdict, yardsticks  # noqa: E402
+from sdcompare_lib import checks, exact, read, settings, theory, verdict, yardsticks
 
 H0 = 0.25
 LEVELS = [0, 1, 2, 3, 4]

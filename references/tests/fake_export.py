@@ -5,7 +5,7 @@ per triangle): structured mesh of [-1,1]² with n×n cells split by SW–NE diag
 -0.5 ≤ x ≤ 0.5 (normal (0, 1)), n = n0·2^level (n0 divisible by 4).
 
 kinked_export, two_cracks_export, refined_export: the format of issue 16 (polyline cracks, several
-cracks, uniformly refined meshes; see the section below and references/common/sdexport.py).
+cracks, uniformly refined meshes; see the section below and compare/sdcompare_lib/sdexport.py).
 Standard library and numpy only.
 """
 
@@ -75,14 +75,23 @@ def write_fake_export(out, name, f, g, exact=None, levels=(0, 1, 2), n0=8):
     return out
 
 
+# The scenes' exact solutions both references' tests solve on a fake export (scene-grammar
+# strings): the open straight crack y = 0, |x| < 1/2 (u = Im sqrt((z - 1/2)(z + 1/2)), harmonic,
+# its jump OPEN_JUMP), and the smooth closed one (f = CLOSED_F = -Δ CLOSED_U).
+OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
+OPEN_JUMP = "2*sqrt(0.25 - x^2)"
+CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
+CLOSED_F = "2*pi^2*sin(pi*x)*cos(pi*y)"
+
+
 # ---------------------------------------------------------------------------------------------
-# The export format of issue 16: several polyline cracks, structured or uniformly refined meshes
+# The multi-crack export format: several polyline cracks, structured or uniformly refined meshes
 # ---------------------------------------------------------------------------------------------
 #
 # write_export writes scene.json with "domain", "cracks" (and the legacy "crack" only for one crack
 # of two points), and per level mesh.json with "kind", "coarse_triangles", "n_cracks",
 # crack.txt / cracks.txt / crack_normals.txt for the cracks in scene order, and sides.txt with one
-# value per triangle corner (references/common/sdexport.py documents the formats). The scenarios:
+# value per triangle corner (compare/sdcompare_lib/sdexport.py documents the formats). The scenarios:
 # kinked_export (a kink on a structured grid), two_cracks_export (that kink and a straight crack),
 # refined_export (a perturbed coarse triangulation refined uniformly with the 4t + c numbering).
 

@@ -1,19 +1,18 @@
-"""Writes expr_cases.json: values of the Python translator (references/common/sdexpr.py) at
+"""Writes expr_cases.json: values of the Python translator (compare/sdcompare_lib/sdexpr.py) at
 random points, crack faces (y = +0.0 / -0.0) included (non-finite values as the strings
 'inf', '-inf', 'nan'), and its parse errors. The Rust test
 tests/expr_crosscheck.rs evaluates the same strings with crates/sdcrack-core/src/expr.rs and must agree, and
 test_expr_cases.py checks that the Python back-ends still give these values. Regenerate with
-`/usr/bin/python3 references/tests/make_expr_cases.py` after changing the grammar."""
+`PYTHONPATH=compare /usr/bin/python3 references/tests/make_expr_cases.py` after changing the
+grammar (the package sdcompare_lib is in compare/)."""
 
 import json
 import math
 import pathlib
 import random
-import sys
 
 HERE = pathlib.Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "common"))
-from sdexpr import ExprError, evaluate, parse  # noqa: E402
+from sdcompare_lib.sdexpr import ExprError, evaluate, parse
 
 EXPRESSIONS = [
     "20*sin(2*pi*x)*sign(y)",

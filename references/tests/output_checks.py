@@ -6,14 +6,12 @@ import importlib.util
 import json
 import platform
 import re
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
-import sdfields  # noqa: E402
-import sdresults  # noqa: E402
+from sdcompare_lib import sdfields
+from sdcompare_lib import sdresults
 
 # The references' crack fields, named as in every solver's files (README's field table).
 CRACK_FIELDS = {"jump", "contact_force"}

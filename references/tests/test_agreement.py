@@ -11,7 +11,7 @@ relative (or to 1e-14 absolute, for an error that is round-off, e.g. lambda_l2 o
 quadratures (FreeFEM script: geometric grading toward the tips in numpy; dolfinx: UFL forms with
 Duffy-σ² tip rules), and the fields agree to ~1e-14 (measured: <= 2.1e-14 relative).
 
-Both references assemble the load with the same rule (references/common/sdquad.py), so they solve the
+Both references assemble the load with the same rule (compare/sdcompare_lib/sdquad.py), so they solve the
 same discrete problem to round-off even on coarse meshes, where the integrals of a non-polynomial f
 depend on the rule: test_references_agree_to_roundoff_on_coarse_meshes checks
 max |u_dolfinx - u_freefem| <= 1e-12 (absolute; max |u| is 0.3-0.7) on mixed at levels 0-1 and on a
@@ -31,13 +31,16 @@ import subprocess
 import numpy as np
 import pytest
 
+from conftest import run_env, sdcrack_bin
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 PY = "/usr/bin/python3"
 SCENES = ["mixed", "closed-exact", "open-exact"]
 
 
-def sdcrack_bin():
-    b = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack"))
+def sdcrack_or_skip():
+    """The sdcrack binary (conftest.sdcrack_bin) for a module fixture; skips when not built."""
+    b = pathlib.Path(sdcrack_bin())
     if not b.is_file():
         pytest.skip(f"sdcrack binary not built ({b})")
     return b
@@ -51,9 +54,9 @@ def have_dolfinx():
 def solved(tmp_path_factory):
     if shutil.which("FreeFem++") is None or not have_dolfinx():
         pytest.skip("needs both FreeFem++ and dolfinx")
-    exe = sdcrack_bin()
+    exe = sdcrack_or_skip()
     root = tmp_path_factory.mktemp("agreement")
-    env = dict(os.environ, FF_LOADPATH="/usr/lib/freefem++")
+    env = run_env()
     out = {}
     for scene in SCENES:
         export = root / f"{scene}-mesh"
@@ -126,8 +129,6 @@ def test_errors_agree_without_exact_gradient(tmp_path, scene):
     u and the FreeFEM script uses sdexpr.derivative: the errors still agree to 1e-6."""
     if shutil.which("FreeFem++") is None or not have_dolfinx():
         pytest.skip("needs both FreeFem++ and dolfinx")
-    import sys
-    sys.path.insert(0, str(ROOT / "references" / "tests"))
     from fake_export import write_fake_export
 
     if scene == "open":
@@ -136,7 +137,7 @@ def test_errors_agree_without_exact_gradient(tmp_path, scene):
     else:
         u = "sin(pi*x)*cos(pi*y) - y"
         export = write_fake_export(tmp_path / "e", "closed", "2*pi^2*sin(pi*x)*cos(pi*y)", u, {"u": u})
-    env = dict(os.environ, FF_LOADPATH="/usr/lib/freefem++")
+    env = run_env()
     cases = {}
     for tool in ["dolfinx", "freefem"]:
         subprocess.run([PY, str(ROOT / "references" / tool / "solve.py"), str(export), "--out",
@@ -166,7 +167,7 @@ def test_kkt_and_contact_pattern(solved, scene):
 
 
 def run_references(export, root):
-    env = dict(os.environ, FF_LOADPATH="/usr/lib/freefem++")
+    env = run_env()
     out = {}
     for tool in ["dolfinx", "freefem"]:
         out[tool] = root / tool
@@ -181,7 +182,7 @@ def coarse_mixed(tmp_path_factory):
     sin(2*pi*x), where load rules of degree 8-9 differ by ~1e-7 (exported with the real binary)."""
     if shutil.which("FreeFem++") is None or not have_dolfinx():
         pytest.skip("needs both FreeFem++ and dolfinx")
-    exe = sdcrack_bin()
+    exe = sdcrack_or_skip()
     root = tmp_path_factory.mktemp("coarse-mixed")
     text = (ROOT / "scenes" / "mixed.toml").read_text()
     coarse = text.replace("cells = [8, 8]", "cells = [4, 4]").replace("levels = [0, 1, 2, 3, 4]", "levels = [0]")

@@ -4,7 +4,6 @@ Run: /usr/bin/python3 -m pytest references/tests/test_dolfinx_reference.py
 Skipped when dolfinx is not installed.
 """
 
-import importlib.util
 import json
 import math
 import subprocess
@@ -17,20 +16,13 @@ dolfinx = pytest.importorskip("dolfinx")
 pytest.importorskip("scipy")
 np = pytest.importorskip("numpy")
 
+from conftest import run_env
+from fake_export import CLOSED_F, CLOSED_U, OPEN_JUMP, OPEN_U, write_fake_export
+from output_checks import assert_fields_readable, assert_provenance, load_module
+
 HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "dolfinx" / "solve.py"
-sys.path.insert(0, str(HERE))
-from fake_export import write_fake_export  # noqa: E402
-from output_checks import assert_fields_readable, assert_provenance  # noqa: E402
-
-_spec = importlib.util.spec_from_file_location("dolfinx_solve", SOLVE)
-solve = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(solve)
-
-OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
-OPEN_JUMP = "2*sqrt(0.25 - x^2)"
-CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
-CLOSED_F = "2*pi^2*sin(pi*x)*cos(pi*y)"
+solve = load_module("dolfinx_solve", SOLVE)
 
 
 def rates(cases, key):
@@ -208,17 +200,17 @@ def test_fields_readable_by_meshio(open_run):
 def test_cli_errors_and_atomicity(tmp_path, closed_run):
     exp, _, out = closed_run
     py = sys.executable
-    r = subprocess.run([py, str(SOLVE), str(exp), "--out", str(out)], capture_output=True, text=True)
+    r = subprocess.run([py, str(SOLVE), str(exp), "--out", str(out)], capture_output=True, text=True, env=run_env())
     assert r.returncode != 0
     assert r.stderr.strip().count("\n") == 0 and "exists" in r.stderr
     r = subprocess.run([py, str(SOLVE), str(tmp_path / "nope"), "--out", str(tmp_path / "o")],
-                       capture_output=True, text=True)
+                       capture_output=True, text=True, env=run_env())
     assert r.returncode != 0 and r.stderr.strip().count("\n") == 0 and not (tmp_path / "o").exists()
     bad = write_fake_export(tmp_path / "bad", "bad", "sin(x", "0", levels=(0,))
-    r = subprocess.run([py, str(SOLVE), str(bad), "--out", str(tmp_path / "o")], capture_output=True, text=True)
+    r = subprocess.run([py, str(SOLVE), str(bad), "--out", str(tmp_path / "o")], capture_output=True, text=True, env=run_env())
     assert r.returncode != 0 and "column 4" in r.stderr and r.stderr.strip().count("\n") == 0
     r = subprocess.run([py, str(SOLVE), str(exp), "--out", str(tmp_path / "ok"), "--fields"],
-                       capture_output=True, text=True)
+                       capture_output=True, text=True, env=run_env())
     assert r.returncode == 0, r.stderr
     s = json.loads((tmp_path / "ok" / "summary.json").read_text())
     assert s["tool"] == "dolfinx"

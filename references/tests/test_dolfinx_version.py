@@ -12,6 +12,8 @@ from pathlib import Path
 
 import pytest
 
+from conftest import run_env
+
 HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "dolfinx" / "solve.py"
 
@@ -54,8 +56,7 @@ def test_version_rule(monkeypatch, version, ok):
 @pytest.mark.parametrize("version", ["0.7.0", "0.6.0"])
 def test_unsupported_dolfinx_exits_2_with_one_line(tmp_path, version):
     marker = fake_dolfinx(tmp_path / "site", version)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [str(tmp_path / "site")] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
+    env = run_env(tmp_path / "site")
     r = subprocess.run([sys.executable, str(SOLVE), str(tmp_path / "no-export"), "--out", str(tmp_path / "o")],
                        capture_output=True, text=True, env=env)
     assert r.returncode == 2, (r.returncode, r.stderr)
@@ -71,7 +72,7 @@ def test_missing_dolfinx_exits_2_with_one_line(tmp_path):
     pkg = tmp_path / "site" / "dolfinx"
     pkg.mkdir(parents=True)
     (pkg / "__init__.py").write_text("raise ImportError('libdolfinx.so: cannot open shared object file\\nsecond line')\n")
-    env = dict(os.environ, PYTHONPATH=str(tmp_path / "site"))
+    env = run_env(tmp_path / "site")
     r = subprocess.run([sys.executable, str(SOLVE), str(tmp_path / "no-export"), "--out", str(tmp_path / "o")],
                        capture_output=True, text=True, env=env)
     assert r.returncode == 2, r.stderr

@@ -3,13 +3,11 @@ tests/expr_crosscheck.rs checks against crates/sdcrack-core/src/expr.rs)."""
 
 import json
 import pathlib
-import sys
 
 import pytest
 
 HERE = pathlib.Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "common"))
-from sdexpr import evaluate, parse, to_numpy  # noqa: E402
+from sdcompare_lib.sdexpr import evaluate, parse, to_numpy
 
 CASES = json.loads((HERE / "expr_cases.json").read_text())
 

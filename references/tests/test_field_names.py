@@ -3,14 +3,11 @@
 issue 34, whose contact force is `multiplier`, is still read by sdfields.crack_field, through h5py
 and meshio alike."""
 
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
-import sdfields  # noqa: E402
+from sdcompare_lib import sdfields
 
 
 def field_set(crack_fields):

@@ -3,7 +3,6 @@
 Run: /usr/bin/python3 -m pytest references/tests/test_freefem_reference.py -q
 """
 
-import importlib.util
 import json
 import math
 import re
@@ -15,27 +14,23 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import run_env
+from fake_export import CLOSED_U, OPEN_U, write_fake_export
+from output_checks import assert_fields_readable, assert_provenance, load_module
+from sdcompare_lib.sdfields import crack_field
+
 HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "freefem" / "solve.py"
-sys.path.insert(0, str(HERE))
-from fake_export import write_fake_export  # noqa: E402
-from output_checks import assert_fields_readable, assert_provenance  # noqa: E402
-from sdfields import crack_field  # noqa: E402  (output_checks put references/common on the path)
-
-_spec = importlib.util.spec_from_file_location("freefem_solve", SOLVE)
-ffsolve = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(ffsolve)
+ffsolve = load_module("freefem_solve", SOLVE)
 
 pytestmark = pytest.mark.skipif(shutil.which("FreeFem++") is None,
                                 reason="FreeFem++ not installed (apt-get install -y freefem++ libfreefem++)")
 
-OPEN_U = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)"
-CLOSED_U = "sin(pi*x)*cos(pi*y) - y"
 
 
 def run_solve(export, out, *extra):
     return subprocess.run([sys.executable, str(SOLVE), str(export), "--out", str(out), *extra],
-                          capture_output=True, text=True)
+                          capture_output=True, text=True, env=run_env())
 
 
 def solved(tmp_path, name, f, g, exact, levels=(0, 1, 2)):

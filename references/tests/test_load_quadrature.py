@@ -1,4 +1,4 @@
-"""The load rule shared by the two references (references/common/sdquad.py) and its use by each.
+"""The load rule shared by the two references (compare/sdcompare_lib/sdquad.py) and its use by each.
 
 The rule: exact to degree 16, fully symmetric (so the physical points do not depend on how a tool
 orders a cell's vertices), interior points with positive weights, basix's Xiao–Gimbutas rule.
@@ -13,7 +13,6 @@ import math
 import os
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -21,10 +20,9 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 REFS = HERE.parent
-sys.path.insert(0, str(REFS / "common"))
-import sdexpr  # noqa: E402
-import sdquad  # noqa: E402
-from output_checks import load_module  # noqa: E402
+from sdcompare_lib import sdexpr
+from sdcompare_lib import sdquad
+from output_checks import load_module
 
 
 

@@ -3,7 +3,7 @@
 Fake exports (tests/fake_export.py): a kinked crack on a structured grid (grid line, then a cell
 diagonal), two cracks (that kink and a straight one), two parallel cracks one cell apart, and a
 "refined" mesh (a perturbed coarse triangulation refined uniformly, triangle 4t + c in t). On each:
-references/common/sdexport.py reads and checks the crack files (one-line errors naming the file and
+compare/sdcompare_lib/sdexport.py reads and checks the crack files (one-line errors naming the file and
 the crack); both references solve with partial contact and agree to <= 1e-8 at every vertex; a smooth
 exact u whose ∂u/∂ν < 0 on every segment (so that every crack node closes and u is also the limit of
 the discrete contact problem) converges at the P1 rates (u: >= 1.8, ∇u: >= 0.9; measured 1.97, 0.99);
@@ -16,19 +16,16 @@ Run: /usr/bin/python3 -m pytest references/tests/test_multi_crack_exports.py -q
 import json
 import math
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "common"))
-sys.path.insert(0, str(HERE))
-import fake_export as fe  # noqa: E402
-import sdexport  # noqa: E402
-import sdexpr  # noqa: E402
-from output_checks import assert_fields_readable, load_module  # noqa: E402
+import fake_export as fe
+from sdcompare_lib import sdexport
+from sdcompare_lib import sdexpr
+from output_checks import assert_fields_readable, load_module
 
 
 

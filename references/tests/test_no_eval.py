@@ -1,4 +1,4 @@
-"""Scene text is parsed by the grammar of references/common/sdexpr.py, never evaluated as code.
+"""Scene text is parsed by the grammar of compare/sdcompare_lib/sdexpr.py, never evaluated as code.
 
 Hostile expressions (attribute access, dunder names, calls outside the grammar, string literals,
 Python-only syntax, FreeFEM statements) fed to every Python entry point that takes an expression
@@ -25,11 +25,11 @@ np = pytest.importorskip("numpy")
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-sys.path.insert(0, str(HERE.parent / "common"))
-sys.path.insert(0, str(HERE))
-import sdexpr  # noqa: E402
-from output_checks import load_module  # noqa: E402
-from fake_export import write_fake_export  # noqa: E402
+from sdcompare_lib import exact as sdexact
+from sdcompare_lib import sdexpr
+from output_checks import load_module
+from conftest import run_env
+from fake_export import write_fake_export
 
 PWNED = "PWNED"  # replaced by a path under the test's tmp_path
 
@@ -44,8 +44,6 @@ def hostile(src, tmp_path):
 
 ffsolve = load_module("freefem_solve_no_eval", HERE.parent / "freefem" / "solve.py")
 dxsolve = load_module("dolfinx_solve_no_eval", HERE.parent / "dolfinx" / "solve.py")
-sys.path.insert(0, str(ROOT / "compare"))
-from sdcompare_lib import exact as sdexact  # noqa: E402
 
 
 def ufl_coordinate():
@@ -191,7 +189,7 @@ def test_dolfinx_solver_rejects_hostile_scene(tmp_path):
         pytest.skip("needs dolfinx 0.5.x")
     export = write_fake_export(tmp_path / "e", "hostile", hostile(HOSTILE_F, tmp_path), "0", levels=(0,))
     r = subprocess.run([sys.executable, str(HERE.parent / "dolfinx" / "solve.py"), str(export),
-                        "--out", str(tmp_path / "o")], capture_output=True, text=True)
+                        "--out", str(tmp_path / "o")], capture_output=True, text=True, env=run_env())
     assert r.returncode == 2, (r.returncode, r.stderr)
     assert len(r.stderr.splitlines()) == 1 and "scene expression f" in r.stderr, r.stderr
     assert not (tmp_path / "o").exists() and not (tmp_path / "pwned").exists()
@@ -205,7 +203,7 @@ def test_freefem_solver_rejects_hostile_scene(tmp_path):
     fake.write_text(f"#!/bin/sh\ntouch {tmp_path / 'freefem-ran'}\n")
     fake.chmod(0o755)
     export = write_fake_export(tmp_path / "e", "hostile", "0", hostile(HOSTILE_G, tmp_path), levels=(0,))
-    env = dict(os.environ, FF_LOADPATH=os.environ.get("FF_LOADPATH", "/usr/lib/freefem++"))
+    env = run_env()
     r = subprocess.run([sys.executable, str(HERE.parent / "freefem" / "solve.py"), str(export),
                         "--out", str(tmp_path / "o"), "--freefem", str(fake)], capture_output=True, text=True, env=env)
     assert r.returncode == 2, (r.returncode, r.stderr)

@@ -1,14 +1,11 @@
-"""Tests of references/common/sdexpr.py (run: /usr/bin/python3 -m pytest references/tests)."""
+"""Tests of compare/sdcompare_lib/sdexpr.py (run: /usr/bin/python3 -m pytest references/tests)."""
 
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
-import sdexpr  # noqa: E402
-from sdexpr import ExprError, evaluate, parse, to_freefem, to_numpy  # noqa: E402
+from sdcompare_lib import sdexpr
+from sdcompare_lib.sdexpr import ExprError, evaluate, parse, to_freefem, to_numpy
 
 np = pytest.importorskip("numpy")
 

@@ -1,4 +1,4 @@
-"""The case status both references write (references/common/sdresults.py): "converged" only when the
+"""The case status both references write (compare/sdcompare_lib/sdresults.py): "converged" only when the
 QP solver reported success and every KKT residual is within the tolerance; any damaged residual,
 missing or NaN residual, or solver failure gives "not_converged: <reasons>".
 
@@ -6,13 +6,10 @@ Run: /usr/bin/python3 -m pytest references/tests/test_status.py -q
 """
 
 import math
-import sys
-from pathlib import Path
 
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "common"))
-import sdresults  # noqa: E402
+from sdcompare_lib import sdresults
 
 GOOD = {"equations": 2e-16, "primal": 0.0, "dual": 0.0, "complementarity": 1e-17}
 

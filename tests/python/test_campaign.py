@@ -117,9 +117,6 @@ def test_case_list_of_a_results_folder_is_the_reports_rerun_list(tmp_path):
     the folder's recorded binary (a campaign's pinned copy, not this checkout's), `sdcrack` from
     PATH when none is recorded, and --rerun-dir (tests/python/test_reruns.py compares with a real
     report's table)."""
-    import sys
-
-    sys.path.insert(0, str(ROOT / "compare"))
     import tomllib
 
     from sdcompare_lib import render
@@ -280,9 +277,6 @@ def test_case_list_of_both_p_spaces(tmp_path):
         assert target == str(tmp_path / "camp" / "shards" / "closed-exact" / "solver"
                              / f"l{r[1]}-{r[2]}-{r[3]}-{r[4]}")
     if EXE.is_file():  # and they are exactly the workflow's solver jobs of the scene's plan
-        import sys
-
-        sys.path.insert(0, str(ROOT / "tests" / "python"))
         import ci_script
 
         prepare = ci_script.load("ci/workflow/prepare.py")
@@ -296,9 +290,6 @@ def test_case_list_of_a_p_spaces_results_folder_is_the_reports_rerun_list(tmp_pa
     """For a results folder with both p spaces in its plan, ci/cases prints exactly the commands
     the folder's report lists (render.rerun_command with the case's p_space), for the served
     units only; a folder of a `--p-space broken-tangential` run lists its own units."""
-    import sys
-
-    sys.path.insert(0, str(ROOT / "compare"))
     import tomllib
 
     from sdcompare_lib import render

@@ -72,11 +72,8 @@ def kinds(row):
 def test_tolerances_are_sdcompares():
     """The index reads verdict.BASELINE_* from compare/sdcompare_lib/verdict.py's source (one
     home; the module itself imports numpy): the values are the module's."""
-    sys.path.insert(0, str(ROOT / "compare"))
-    try:
-        from sdcompare_lib import verdict
-    finally:
-        sys.path.remove(str(ROOT / "compare"))
+    from sdcompare_lib import verdict
+
     assert TOL == {"BASELINE_RATE_ATOL": verdict.BASELINE_RATE_ATOL,
                    "BASELINE_ERROR_RTOL": verdict.BASELINE_ERROR_RTOL}
 

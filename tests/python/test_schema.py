@@ -11,23 +11,22 @@ import json
 import os
 import pathlib
 import subprocess
-import sys
 
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack"))
-sys.path.insert(0, str(ROOT / "compare"))
-from sdcompare_lib import read, settings  # noqa: E402
+from conftest import sdcrack_bin
+from sdcompare_lib import read, settings
 
 SETTINGS_SOURCE = pathlib.Path(settings.__file__).read_text(encoding="utf-8")
 
 
 @pytest.fixture(scope="module")
 def schema():
-    if not EXE.is_file():
-        pytest.skip(f"no sdcrack binary at {EXE} (cargo build --release, or set SDCRACK_BIN)")
-    out = subprocess.run([str(EXE), "schema"], capture_output=True, text=True, check=True)
+    exe = sdcrack_bin()
+    if not os.access(exe, os.X_OK):
+        pytest.skip(f"no sdcrack binary at {exe} (cargo build --release, or set SDCRACK_BIN)")
+    out = subprocess.run([exe, "schema"], capture_output=True, text=True, check=True)
     return json.loads(out.stdout)
 
 

@@ -1,0 +1,59 @@
+"""What the Python tests of every tree (tests/python, references/tests, compare/tests) share: the
+sdcrack binary they run, the environment of the programs they start, the figures the report's plot
+functions would save. The one conftest.py of the repository; where the tests import from is said
+once, in pyproject.toml's [tool.pytest.ini_options].
+
+Module-level uses (a skip condition, a path computed at import) import the plain functions:
+`from conftest import sdcrack_bin, run_env`."""
+import os
+
+import pytest
+
+ROOT = os.path.dirname(os.path.abspath(__file__))
+# The folder holding the package sdcompare_lib in a checkout (see its __init__.py).
+PACKAGE_DIR = os.path.join(ROOT, "compare")
+
+
+def sdcrack_bin():
+    """$SDCRACK_BIN, else this checkout's release build (which may not exist: callers skip)."""
+    return os.environ.get("SDCRACK_BIN") or os.path.join(ROOT, "target", "release", "sdcrack")
+
+
+def run_env(*first):
+    """The process environment of a program a test starts: FreeFEM's plugin path (Debian's) and
+    matplotlib's headless backend unless already set, and on PYTHONPATH the folders `first` (e.g.
+    a fake package's), then compare/, where the reference scripts find the package sdcompare_lib
+    (as sdcrack launches them), then the caller's. Under ci/test-pip that folder has no
+    sdcompare_lib and the installed one is found."""
+    e = dict(os.environ)
+    e.setdefault("FF_LOADPATH", "/usr/lib/freefem++")
+    e.setdefault("MPLBACKEND", "Agg")
+    inherited = [p for p in e.get("PYTHONPATH", "").split(os.pathsep) if p]
+    e["PYTHONPATH"] = os.pathsep.join([str(p) for p in first] + [PACKAGE_DIR] + inherited)
+    return e
+
+
+@pytest.fixture
+def sdcrack():
+    """The sdcrack binary (sdcrack_bin), or the test skips when it is not built."""
+    exe = sdcrack_bin()
+    if not os.access(exe, os.X_OK):
+        pytest.skip(f"no sdcrack binary at {exe} (cargo build --release, or set SDCRACK_BIN)")
+    return exe
+
+
+@pytest.fixture
+def figs(monkeypatch):
+    """The figures the report's plot functions would save (sdcompare_lib.plots._save), kept open
+    and laid out instead of written as PNG files; closed after the test."""
+    from sdcompare_lib import plots
+
+    captured = []
+
+    def save(fig, folder, name):
+        captured.append(fig)
+        return name
+    monkeypatch.setattr(plots, "_save", save)
+    yield captured
+    for fig in captured:
+        plots.plt.close(fig)
