@@ -164,7 +164,7 @@ impl CasePlan {
 }
 
 /// Wall-clock seconds per phase of one case.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Timings {
     /// Mesh and assembly of K and b (shared by every δ and multiplier of a level and u space).
     pub assembly: f64,
