@@ -25,10 +25,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use super::summary::{CaseSummary, PlanSummary, Provenance, ShardRecord, Summary};
+use super::summary::{CaseSummary, Provenance, ShardRecord, Summary};
 use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
-use crate::scene::{Scene, TomlScene};
-use crate::study::{CaseFilter, CasePlan};
+use crate::scene::{CaseAxes, Scene, TomlScene};
 
 /// Errors of a merge.
 #[derive(Debug, thiserror::Error)]
@@ -170,7 +169,7 @@ impl Shard {
 type CaseKey = (usize, usize, usize, usize, usize, usize);
 
 /// Where the case `c` sits in `plan`; `None` when it is not a case of it.
-fn case_key(plan: &PlanSummary, c: &CaseSummary) -> Option<CaseKey> {
+fn case_key(plan: &CaseAxes, c: &CaseSummary) -> Option<CaseKey> {
     if !c.p_space.serves(c.u_space) {
         return None;
     }
@@ -223,8 +222,8 @@ pub fn merge_shards(
     }
     let scene = Scene::from_toml_in(&first.scene_text, &scene_folder(&shards))
         .map_err(|e| shard_err(&first.path, format!("invalid {SCENE_COPY}: {e}")))?;
-    let plan = CasePlan::new(&scene, &CaseFilter::default());
-    let plan_summary = PlanSummary::from_plan(&plan);
+    // the merge makes a single run of the whole scene: its plan is the scene's axes, unfiltered
+    let plan = &scene.axes;
 
     let solver: Vec<SolverShard> = (shards.iter())
         .filter_map(|s| Some((s.path.as_path(), s.summary.as_ref()?)))
@@ -235,7 +234,7 @@ pub fn merge_shards(
         ));
     };
     check_one_build(&solver)?;
-    let cases = ordered_cases(&solver, &plan_summary)?;
+    let cases = ordered_cases(&solver, plan)?;
     let references = ordered_references(&shards, &scene, &plan.levels)?;
 
     let results = ResultsDir::create(out, &scene.name)?;
@@ -255,7 +254,7 @@ pub fn merge_shards(
     let n_cases = cases.len();
     let summary = Summary {
         provenance: provenance(&lead.provenance.scene_origin),
-        plan: plan_summary,
+        plan: plan.clone(),
         all_converged: not_converged == 0,
         wall_s: solver.iter().map(|(_, s)| s.wall_s).sum(),
         fields_write_s,
@@ -317,10 +316,7 @@ fn check_one_build(solver: &[SolverShard]) -> Result<(), MergeError> {
 }
 
 /// Every case of the plan, exactly once, in a single run's order.
-fn ordered_cases(
-    solver: &[SolverShard],
-    plan: &PlanSummary,
-) -> Result<Vec<CaseSummary>, MergeError> {
+fn ordered_cases(solver: &[SolverShard], plan: &CaseAxes) -> Result<Vec<CaseSummary>, MergeError> {
     let mut found: BTreeMap<CaseKey, (&CaseSummary, &Path)> = BTreeMap::new();
     for &(path, s) in solver {
         for c in &s.cases {
@@ -343,14 +339,7 @@ fn ordered_cases(
             found.insert(key, (c, path));
         }
     }
-    let pairs = (plan.u_spaces.iter())
-        .map(|&u| plan.p_spaces.iter().filter(|p| p.serves(u)).count())
-        .sum::<usize>();
-    let expected = plan.levels.len()
-        * pairs
-        * plan.p_masses.len()
-        * plan.deltas.len()
-        * plan.multipliers.len();
+    let expected = plan.case_count();
     if found.len() != expected {
         let missing = first_missing(plan, &found);
         return Err(MergeError::Incomplete(format!(
@@ -362,7 +351,7 @@ fn ordered_cases(
 }
 
 /// The first case of `plan` (in run order) that `found` lacks, in words.
-fn first_missing<V>(plan: &PlanSummary, found: &BTreeMap<CaseKey, V>) -> String {
+fn first_missing<V>(plan: &CaseAxes, found: &BTreeMap<CaseKey, V>) -> String {
     for (l, level) in plan.levels.iter().enumerate() {
         for (u, u_space) in plan.u_spaces.iter().enumerate() {
             for (s, p_space) in plan.p_spaces.iter().enumerate() {

@@ -18,6 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::contact::KktResiduals;
 use crate::norms::ErrorNorms;
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use crate::scene::CaseAxes;
 use crate::study::{CaseResult, Timings, KKT_TOLERANCE};
 
 /// Timing phases shared by several cases (reported with each of them): summary.json's
@@ -43,8 +44,9 @@ pub struct Summary {
     pub provenance: Provenance,
     /// The KKT tolerance a case must meet to count as converged.
     pub kkt_tolerance: f64,
-    /// The cases the run was asked for: the scene's lists, restricted by the command line's filters.
-    pub plan: PlanSummary,
+    /// The cases the run was asked for: the scene's case axes, restricted by the command line's
+    /// filters.
+    pub plan: CaseAxes,
     /// Timing phases shared by several cases (reported with each of them): [`SHARED_TIMINGS`].
     pub shared_timings: [String; 5],
     /// True when every case converged.
@@ -101,7 +103,7 @@ impl Summary {
             sdcrack_version: provenance.sdcrack_version.clone(),
             provenance: provenance.clone(),
             kkt_tolerance: KKT_TOLERANCE,
-            plan: PlanSummary::from_plan(plan),
+            plan: plan.axes.clone(),
             shared_timings: SHARED_TIMINGS.map(String::from),
             all_converged: study.cases.iter().all(|c| c.converged),
             wall_s,
@@ -196,38 +198,6 @@ impl Provenance {
             date_utc: humantime::format_rfc3339_seconds(start).to_string(),
             cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
             scene_origin: scene_origin.to_string(),
-        }
-    }
-}
-
-/// What a run was asked to solve: every combination of these is a case of `cases`.
-#[derive(Serialize, Deserialize, Debug, Clone)]
-pub struct PlanSummary {
-    /// Levels, increasing.
-    pub levels: Vec<u32>,
-    /// u spaces.
-    pub u_spaces: Vec<USpace>,
-    /// Multiplier spaces.
-    pub multipliers: Vec<MultiplierSpace>,
-    /// p masses (`consistent`, `lumped`).
-    pub p_masses: Vec<PMass>,
-    /// p spaces (`continuous`, `broken-tangential`); the broken-tangential p runs with broken u
-    /// only, so the cases are every combination but (continuous u, broken-tangential p).
-    pub p_spaces: Vec<PSpace>,
-    /// δ values, decreasing.
-    pub deltas: Vec<f64>,
-}
-
-impl PlanSummary {
-    /// The summary of `plan`.
-    pub fn from_plan(plan: &crate::study::CasePlan) -> PlanSummary {
-        PlanSummary {
-            levels: plan.levels.clone(),
-            u_spaces: plan.u_spaces.clone(),
-            multipliers: plan.multipliers.clone(),
-            p_masses: plan.p_masses.clone(),
-            p_spaces: plan.p_spaces.clone(),
-            deltas: plan.deltas.clone(),
         }
     }
 }
