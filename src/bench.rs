@@ -21,7 +21,7 @@ use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, MeshError};
 use crate::multiplier::CrackOperators;
 use crate::problem::{Meshing, MultiplierSpace, PMass, USpace};
-use crate::scene::{FieldSet, Scene};
+use crate::scene::{CaseAxes, FieldSet, Scene};
 use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
 
 /// The δ values of the sweep (largest first, as every study runs them).
@@ -425,7 +425,7 @@ pub fn run_bench(
     let mut bench_scene = scene.clone();
     bench_scene.meshing = Meshing::Cells(cells);
     bench_scene.level0 = crate::scene::Level0Size::Grid(cells);
-    bench_scene.levels = vec![0];
+    bench_scene.axes.levels = vec![0];
     bench_scene.fields = FieldSet::default();
     bench_scene.exact = None;
     bench_scene.references.clear();
@@ -436,15 +436,18 @@ pub fn run_bench(
     let yardstick_peak_rss_mb = peak_rss_mb();
 
     reset_peak_rss();
+    let one_case = CaseFilter {
+        level: Some(0),
+        u_space: Some(USpace::Broken),
+        multiplier: Some(MultiplierSpace::M1),
+        p_mass: Some(PMass::Consistent),
+        p_space: None,
+        delta: Some(0.0),
+    };
     let case_plan = CasePlan {
-        levels: vec![0],
-        u_spaces: vec![USpace::Broken],
-        multipliers: vec![MultiplierSpace::M1],
-        p_masses: vec![PMass::Consistent],
-        deltas: vec![0.0],
         // the solver alone: no field arrays kept for output
         keep_fields: false,
-        ..CasePlan::new(&bench_scene, &CaseFilter::default())
+        ..CasePlan::new(&bench_scene, &one_case)
     };
     let t0 = Instant::now();
     let case = run_study(&bench_scene, &case_plan, observer)?;
@@ -453,12 +456,15 @@ pub fn run_bench(
 
     reset_peak_rss();
     let sweep_plan = CasePlan {
-        multipliers: vec![
-            MultiplierSpace::M0,
-            MultiplierSpace::M1,
-            MultiplierSpace::M1Star,
-        ],
-        deltas: SWEEP_DELTAS.to_vec(),
+        axes: CaseAxes {
+            multipliers: vec![
+                MultiplierSpace::M0,
+                MultiplierSpace::M1,
+                MultiplierSpace::M1Star,
+            ],
+            deltas: SWEEP_DELTAS.to_vec(),
+            ..case_plan.axes.clone()
+        },
         ..case_plan.clone()
     };
     let t1 = Instant::now();
@@ -469,7 +475,10 @@ pub fn run_bench(
     observer.phase("lumped p mass: one case and the sweep");
     reset_peak_rss();
     let lumped_plan = CasePlan {
-        p_masses: vec![PMass::Lumped],
+        axes: CaseAxes {
+            p_masses: vec![PMass::Lumped],
+            ..case_plan.axes.clone()
+        },
         ..case_plan
     };
     let t2 = Instant::now();
@@ -477,7 +486,10 @@ pub fn run_bench(
     let case_lumped_s = t2.elapsed().as_secs_f64();
     let case_lumped_peak_rss_mb = peak_rss_mb();
     let sweep_lumped_plan = CasePlan {
-        p_masses: vec![PMass::Lumped],
+        axes: CaseAxes {
+            p_masses: vec![PMass::Lumped],
+            ..sweep_plan.axes.clone()
+        },
         ..sweep_plan.clone()
     };
     let t3 = Instant::now();
@@ -489,9 +501,9 @@ pub fn run_bench(
     let iterative = iterative_route(&bench_scene, &case_lumped)?;
 
     let first = &case.cases[0];
-    let sweep_lumped_phases = sweep_phases(&sweep_lumped, sweep_plan.multipliers.len());
+    let sweep_lumped_phases = sweep_phases(&sweep_lumped, sweep_plan.axes.multipliers.len());
     let sweep_lumped_factorization_s = sweep_lumped_phases.factorization;
-    let sweep_phases = sweep_phases(&sweep, sweep_plan.multipliers.len());
+    let sweep_phases = sweep_phases(&sweep, sweep_plan.axes.multipliers.len());
     let sweep_factorization_s = sweep_phases.factorization;
     let (worst_kkt, all_converged) = summarize(&[&case, &sweep, &case_lumped, &sweep_lumped]);
     let mut report = BenchReport {

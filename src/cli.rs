@@ -334,7 +334,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                 "{}: valid scene '{}' ({} cases)",
                 scene.display(),
                 s.name,
-                s.case_count()
+                s.axes.case_count()
             );
             if s.exact.is_none() && s.references.is_empty() {
                 eprintln!(
@@ -355,7 +355,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
         Command::Mesh { scene, out, level } => {
             let (scene, _) = load_checked(scene)?;
             check_level_option(&scene, level)?;
-            let levels = level.map_or_else(|| scene.levels.clone(), |l| vec![l]);
+            let levels = level.map_or_else(|| scene.axes.levels.clone(), |l| vec![l]);
             let path =
                 crate::output::mesh_export::export_meshes(&scene, &levels, &out).map_err(usage)?;
             say!("meshes of levels {levels:?} written to {}", path.display());
@@ -402,10 +402,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
 
 /// The JSON object of `sdcrack check --json`.
 fn plan_json(scene: &Scene) -> String {
-    let names = |v: Vec<String>| serde_json::Value::from(v);
-    let memory: serde_json::Map<String, serde_json::Value> = scene
-        .levels
-        .iter()
+    let memory: serde_json::Map<String, serde_json::Value> = (scene.axes.levels.iter())
         .map(|&l| {
             let mib = crate::scene::estimated_memory_bytes(scene.level0, l).div_ceil(1 << 20);
             (l.to_string(), serde_json::Value::from(mib))
@@ -413,13 +410,13 @@ fn plan_json(scene: &Scene) -> String {
         .collect();
     let value = serde_json::json!({
         "name": scene.name,
-        "cases": scene.case_count(),
-        "levels": scene.levels,
-        "u_spaces": names(scene.u_spaces.iter().map(ToString::to_string).collect()),
-        "multipliers": names(scene.multipliers.iter().map(ToString::to_string).collect()),
-        "p_masses": names(scene.p_masses.iter().map(ToString::to_string).collect()),
-        "p_spaces": names(scene.p_spaces.iter().map(ToString::to_string).collect()),
-        "deltas": scene.deltas,
+        "cases": scene.axes.case_count(),
+        "levels": scene.axes.levels,
+        "u_spaces": scene.axes.u_spaces,
+        "multipliers": scene.axes.multipliers,
+        "p_masses": scene.axes.p_masses,
+        "p_spaces": scene.axes.p_spaces,
+        "deltas": scene.axes.deltas,
         "references": scene.references,
         "fields": !scene.fields.is_empty(),
         "memory_mb": memory,
@@ -532,15 +529,11 @@ fn invalid_scene(scene: &Scene, origin: &str, message: String) -> Failure {
 /// Refuses a run whose u spaces and p spaces make no case: the broken-tangential p only runs
 /// with broken u ([`PSpace::serves`]).
 fn check_space_pairs(scene: &Scene, filter: &CaseFilter) -> Result<(), Failure> {
-    if !CasePlan::new(scene, filter).space_pairs().is_empty() {
+    let axes = filter.restrict(&scene.axes);
+    if !axes.space_pairs().is_empty() {
         return Ok(());
     }
-    let u: Vec<&str> = filter
-        .u_space
-        .map_or_else(|| scene.u_spaces.clone(), |u| vec![u])
-        .iter()
-        .map(|u| u.name())
-        .collect();
+    let u: Vec<&str> = axes.u_spaces.iter().map(|u| u.name()).collect();
     Err(usage(format!(
         "the broken-tangential p needs broken u, and this run's u spaces are {}: a continuous u cannot open the crack (pass --u-space broken, or --p-space continuous)",
         u.join(", ")
@@ -613,8 +606,13 @@ fn run(
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
     write_run(results.work_path(), scene, &plan, &study, wall, &provenance).map_err(runtime)?;
-    let references_converged =
-        run_references(scene, references, &plan.levels, results.work_path(), quiet)?;
+    let references_converged = run_references(
+        scene,
+        references,
+        &plan.axes.levels,
+        results.work_path(),
+        quiet,
+    )?;
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);
     let failed = study.cases.iter().filter(|c| !c.converged).count();

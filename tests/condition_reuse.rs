@@ -12,7 +12,7 @@ use sdcrack::study::{CaseFilter, CONDITION_REUSE_FACTOR};
 #[test]
 fn reused_condition_estimates_are_within_the_declared_factor_of_fresh_ones() {
     let mut scene = common::load("mixed");
-    scene.levels = vec![1];
+    scene.axes.levels = vec![1];
     let deltas = vec![1e6, 1e4, 1e2, 1.0, 1e-2, 1e-4, 1e-6, 0.0];
     let mut reused = 0;
     let mut steps_beyond_the_factor = 0;
@@ -23,12 +23,12 @@ fn reused_condition_estimates_are_within_the_declared_factor_of_fresh_ones() {
             p_mass: Some(p_mass),
             ..CaseFilter::default()
         };
-        scene.deltas = deltas.clone();
+        scene.axes.deltas = deltas.clone();
         let sweep = common::solve(&scene, filter);
         assert_eq!(sweep.len(), deltas.len());
         let mut previous_fresh: Option<f64> = None;
         for case in &sweep {
-            scene.deltas = vec![case.delta];
+            scene.axes.deltas = vec![case.delta];
             let alone = common::solve(&scene, filter);
             let fresh = &alone[0];
             assert_eq!(

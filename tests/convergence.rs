@@ -28,10 +28,10 @@ use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
 /// has its own test).
 fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
     let mut s = common::load(name);
-    s.levels = levels.to_vec();
-    s.p_masses = vec![PMass::Consistent];
-    s.p_spaces = vec![PSpace::Continuous];
-    s.deltas = vec![0.0];
+    s.axes.levels = levels.to_vec();
+    s.axes.p_masses = vec![PMass::Consistent];
+    s.axes.p_spaces = vec![PSpace::Continuous];
+    s.axes.deltas = vec![0.0];
     s.fields = Default::default();
     s
 }
@@ -250,7 +250,7 @@ fn collapsed_tip_rule_gives_the_graded_rules_norms_to_1e10() {
         "open-graded",
     ] {
         let mut scene = scene_at_levels(name, &[0, 2]);
-        scene.p_masses = vec![PMass::Consistent, PMass::Lumped];
+        scene.axes.p_masses = vec![PMass::Consistent, PMass::Lumped];
         let mut plan = CasePlan::new(&scene, &CaseFilter::default());
         assert!(matches!(
             plan.norm_quadrature.tip,

@@ -18,8 +18,8 @@ const VARIANTS: [(USpace, PMass, PSpace); 5] = [
 #[test]
 fn distance_to_delta_zero_is_linear_in_delta() {
     let mut scene = common::load("mixed");
-    scene.levels = vec![3];
-    scene.deltas = vec![1e-2, 1e-3, 1e-4, 1e-5, 0.0];
+    scene.axes.levels = vec![3];
+    scene.axes.deltas = vec![1e-2, 1e-3, 1e-4, 1e-5, 0.0];
     scene.fields = FieldSet {
         u: true,
         p: true,
@@ -102,15 +102,15 @@ fn flat(fields: &sdcrack::study::CaseFieldData) -> [Vec<f64>; 4] {
 #[test]
 fn delta_zero_at_the_end_of_a_sweep_is_delta_zero_solved_alone() {
     let mut sweep = common::load("mixed");
-    sweep.levels = vec![2];
-    sweep.deltas = vec![1.0, 1e-2, 1e-4, 0.0];
+    sweep.axes.levels = vec![2];
+    sweep.axes.deltas = vec![1.0, 1e-2, 1e-4, 0.0];
     sweep.fields = FieldSet {
         u: true,
         p: true,
         lambda: true,
     };
     let mut alone = sweep.clone();
-    alone.deltas = vec![0.0];
+    alone.axes.deltas = vec![0.0];
     let mut compared = 0;
     for (u_space, p_mass, p_space) in VARIANTS {
         let filter = CaseFilter {

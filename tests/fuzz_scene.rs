@@ -253,7 +253,7 @@ fn load(text: &str) -> Option<String> {
         Err(_) => panic!("the scene loader panicked on {text:?}"),
         Ok(Ok(scene)) => {
             assert!(
-                scene.case_count() > 0,
+                scene.axes.case_count() > 0,
                 "valid scene without cases: {text:?}"
             );
             None

@@ -13,10 +13,10 @@ use sdcrack::study::CaseFilter;
 /// The repository scene `name` at levels 0–3, δ = 0, consistent p mass, no fields.
 fn exact_scene(name: &str) -> Scene {
     let mut scene = common::load(name);
-    scene.levels = vec![0, 1, 2, 3];
-    scene.deltas = vec![0.0];
-    scene.p_masses = vec![PMass::Consistent];
-    scene.p_spaces = vec![PSpace::Continuous];
+    scene.axes.levels = vec![0, 1, 2, 3];
+    scene.axes.deltas = vec![0.0];
+    scene.axes.p_masses = vec![PMass::Consistent];
+    scene.axes.p_spaces = vec![PSpace::Continuous];
     scene.fields = Default::default();
     scene
 }
@@ -65,7 +65,7 @@ fn closed_kinked_and_double_cracks_converge_at_the_p1_rates() {
 #[test]
 fn a_straight_polyline_is_the_segment_bit_for_bit() {
     let mut segment = common::load("mixed");
-    segment.levels = vec![0, 1, 2];
+    segment.axes.levels = vec![0, 1, 2];
     segment.fields = Default::default();
     let mut polyline = segment.clone();
     polyline.cracks = vec![Polyline {

@@ -23,10 +23,10 @@ fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
 
 /// `s` at `levels`, δ = 0, no fields, both p spaces and both p masses.
 fn at_levels(mut s: Scene, levels: &[u32]) -> Scene {
-    s.levels = levels.to_vec();
-    s.p_masses = vec![PMass::Consistent, PMass::Lumped];
-    s.p_spaces = vec![PSpace::Continuous, PSpace::BrokenTangential];
-    s.deltas = vec![0.0];
+    s.axes.levels = levels.to_vec();
+    s.axes.p_masses = vec![PMass::Consistent, PMass::Lumped];
+    s.axes.p_spaces = vec![PSpace::Continuous, PSpace::BrokenTangential];
+    s.axes.deltas = vec![0.0];
     s.fields = Default::default();
     s
 }
@@ -171,7 +171,7 @@ fn broken_tangential_p_converges_on_an_oblique_open_crack() {
         Scene::from_file(&path).expect("test scene is valid"),
         &[1, 2, 3, 4],
     );
-    scene.multipliers = vec![MultiplierSpace::M1];
+    scene.axes.multipliers = vec![MultiplierSpace::M1];
     let cases = solve_broken(&scene);
     assert_orders(
         "open-smooth-inclined",
@@ -189,7 +189,7 @@ fn broken_tangential_p_converges_on_an_oblique_open_crack() {
 #[test]
 fn broken_tangential_p_reaches_the_references_orders_on_graded_meshes() {
     let mut scene = scene_at_levels("open-graded", &[0, 1, 2, 3, 4, 5]);
-    scene.p_spaces = vec![PSpace::BrokenTangential];
+    scene.axes.p_spaces = vec![PSpace::BrokenTangential];
     let cases = solve_broken(&scene);
     let p_floor = Orders::repository().regression.graded_tangential_p_rate;
     let all = MultiplierSpace::ALL;
@@ -208,9 +208,9 @@ fn closed_cracks_are_unchanged_by_the_broken_tangential_p() {
     let (u_min, p_min) = (o.lowest_rate(o.p1_u(s)), o.lowest_rate(o.p1_p(s)));
     for name in ["closed-exact", "kinked-exact", "two-cracks-exact"] {
         let mut scene = scene_at_levels(name, &[1, 2, 3]);
-        scene.multipliers = vec![MultiplierSpace::M1, MultiplierSpace::M1Star];
+        scene.axes.multipliers = vec![MultiplierSpace::M1, MultiplierSpace::M1Star];
         let cases = solve_broken(&scene);
-        for m in &scene.multipliers {
+        for m in &scene.axes.multipliers {
             for (p_mass, p_band) in [(PMass::Consistent, 0.005), (PMass::Lumped, 0.04)] {
                 let new = series(&cases, (*m, p_mass, PSpace::BrokenTangential), false);
                 let old = series(&cases, (*m, p_mass, PSpace::Continuous), false);

@@ -170,16 +170,19 @@ fn data_text(name: &str, key: &str) -> String {
 /// the line C·δ by more than 10 % plus 1e-12: no jump between the smallest δ and δ = 0.
 fn delta_sweep(name: &str) {
     let mut scene = common::load(name);
-    scene.levels = vec![1, 3];
+    scene.axes.levels = vec![1, 3];
     let mut deltas: Vec<f64> = (0..=14).map(|k| 10f64.powi(-k)).collect();
     deltas.push(0.0);
-    scene.deltas = deltas.clone();
+    scene.axes.deltas = deltas.clone();
     scene.fields = ALL_FIELDS;
     scene.exact = None; // the error norms are not what is measured here
     let cases = common::solve(&scene, CaseFilter::default());
     assert_eq!(
         cases.len(),
-        2 * scene.u_spaces.len() * scene.multipliers.len() * scene.p_masses.len() * deltas.len()
+        2 * scene.axes.u_spaces.len()
+            * scene.axes.multipliers.len()
+            * scene.axes.p_masses.len()
+            * deltas.len()
     );
     for &d in &deltas {
         let w = cases
@@ -190,11 +193,12 @@ fn delta_sweep(name: &str) {
     }
     assert_solved(&cases, name);
     for level in [1, 3] {
-        for &u in &scene.u_spaces {
+        for &u in &scene.axes.u_spaces {
             for (&m, &pm) in scene
+                .axes
                 .multipliers
                 .iter()
-                .flat_map(|m| scene.p_masses.iter().map(move |pm| (m, pm)))
+                .flat_map(|m| scene.axes.p_masses.iter().map(move |pm| (m, pm)))
             {
                 let series: Vec<&CaseResult> = cases
                     .iter()
@@ -299,10 +303,10 @@ fn lambda_pattern(c: &CaseResult) -> Vec<i8> {
 /// Level 2, δ ∈ {1e-2, 0}, every variant, fields on; with the scene's f and g texts.
 fn scaling_base(name: &str) -> (Scene, String, String) {
     let mut scene = common::load(name);
-    scene.levels = vec![2];
-    scene.deltas = vec![1e-2, 0.0];
-    scene.u_spaces = vec![USpace::Continuous, USpace::Broken];
-    scene.multipliers = MultiplierSpace::ALL.to_vec();
+    scene.axes.levels = vec![2];
+    scene.axes.deltas = vec![1e-2, 0.0];
+    scene.axes.u_spaces = vec![USpace::Continuous, USpace::Broken];
+    scene.axes.multipliers = MultiplierSpace::ALL.to_vec();
     scene.fields = ALL_FIELDS;
     scene.exact = None;
     (scene, data_text(name, "f"), data_text(name, "g"))
@@ -397,7 +401,7 @@ fn dilate(scene: &Scene, f: &str, g: &str, l: f64) -> Scene {
     big.f = expr(&format!("({})/{:e}", substitute_xy(f, &sx, &sy), l * l));
     big.g = expr(&substitute_xy(g, &sx, &sy));
     map_geometry(&mut big, |p| p.map(|v| v * l));
-    big.deltas = scene.deltas.iter().map(|d| d / (l * l)).collect();
+    big.axes.deltas = scene.axes.deltas.iter().map(|d| d / (l * l)).collect();
     big
 }
 
@@ -509,8 +513,8 @@ fn anisotropic_scene(dir: Direction, cells: [usize; 2]) -> Scene {
         c[0], c[1], c[0], c[1]
     ));
     set_cells(&mut scene, cells);
-    scene.levels = vec![0, 1];
-    scene.deltas = vec![1e-4, 0.0];
+    scene.axes.levels = vec![0, 1];
+    scene.axes.deltas = vec![1e-4, 0.0];
     scene.fields = FieldSet::default();
     scene
 }
@@ -571,13 +575,13 @@ fn exact_solutions_converge_on_aspect_4_meshes() {
         for cells in [[8, 32], [32, 8]] {
             let mut scene = common::load(name);
             set_cells(&mut scene, cells);
-            scene.levels = vec![0, 1, 2];
-            scene.deltas = vec![0.0];
+            scene.axes.levels = vec![0, 1, 2];
+            scene.axes.deltas = vec![0.0];
             scene.fields = FieldSet::default();
             // the rates below are the consistent mass's; the lumped one on these meshes is
             // solved by `anisotropic_meshes_solve_to_tolerance`
-            scene.p_masses = vec![PMass::Consistent];
-            scene.p_spaces = vec![PSpace::Continuous];
+            scene.axes.p_masses = vec![PMass::Consistent];
+            scene.axes.p_spaces = vec![PSpace::Continuous];
             let cases = common::solve(&scene, CaseFilter::default());
             assert_solved(&cases, name);
             for u in [USpace::Continuous, USpace::Broken] {
@@ -683,7 +687,7 @@ fn assert_alternates(c: &CaseResult, crack_length: f64, kind: &str) {
 #[test]
 fn stress_scene_alternates_open_and_closed_many_times() {
     let mut scene = common::load("stress-active-set");
-    scene.levels = vec![2, 3, 4];
+    scene.axes.levels = vec![2, 3, 4];
     scene.fields = ALL_FIELDS;
     let cases = common::solve(&scene, CaseFilter::default());
     // levels × u spaces × multipliers × δ × p masses
@@ -766,7 +770,7 @@ fn lcp_iteration_cap_is_reported_and_every_start_converges() {
     let scene = common::load("stress-active-set");
     let level = 4;
     let mut study_scene = scene.clone();
-    study_scene.levels = vec![level];
+    study_scene.axes.levels = vec![level];
     study_scene.fields = ALL_FIELDS;
     let study = common::solve(
         &study_scene,

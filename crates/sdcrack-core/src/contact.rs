@@ -235,7 +235,7 @@ impl Lcp {
 }
 
 /// Relative KKT residuals of one discrete solution (all dimensionless).
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct KktResiduals {
     /// ‖K x + [Dᵀμ; 0] − b‖_∞ / max(‖b‖_∞, ‖Dᵀμ‖_∞).
     pub equations: f64,

@@ -463,7 +463,7 @@ impl PTopology {
 }
 
 /// What a gmsh run or a mesh file contributed to a scene's meshes (recorded in the results).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CoarseProvenance {
     /// `gmsh` for generated meshes, or the mesh file's path.
     pub source: String,

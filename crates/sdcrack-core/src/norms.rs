@@ -37,7 +37,7 @@ use crate::problem::{eval_on_face, Exact};
 mod tests;
 
 /// The three error norms of a case.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct ErrorNorms {
     /// ‖u_h − u‖_{L²(Ω)}.
     pub u_l2: f64,

@@ -13,6 +13,9 @@ use crate::expr::Expr;
 /// both directions: `name()` (variant → name), `from_name()` (name → variant, `None` for any
 /// other text, case-sensitive) and `Display` (the name). Written `scene_names!(Type { Variant =>
 /// "name", … })`; exported so that the io crate's enums can take their names the same way.
+/// The same table gives serde's `Serialize` (the name, a JSON string) and `Deserialize` (the
+/// name back; any other text is an unknown variant): the results files' case axes (the crate
+/// using the macro must depend on serde).
 #[macro_export]
 macro_rules! scene_names {
     ($ty:ident { $($variant:ident => $name:literal),+ $(,)? }) => {
@@ -35,6 +38,21 @@ macro_rules! scene_names {
         impl ::std::fmt::Display for $ty {
             fn fmt(&self, f: &mut ::std::fmt::Formatter<'_>) -> ::std::fmt::Result {
                 f.write_str(self.name())
+            }
+        }
+
+        impl ::serde::Serialize for $ty {
+            fn serialize<S: ::serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.serialize_str(self.name())
+            }
+        }
+
+        impl<'de> ::serde::Deserialize<'de> for $ty {
+            fn deserialize<D: ::serde::Deserializer<'de>>(d: D) -> Result<$ty, D::Error> {
+                let name = <String as ::serde::Deserialize>::deserialize(d)?;
+                $ty::from_name(&name).ok_or_else(|| {
+                    <D::Error as ::serde::de::Error>::unknown_variant(&name, &[$($name),+])
+                })
             }
         }
     };

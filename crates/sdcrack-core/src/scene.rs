@@ -59,19 +59,8 @@ pub struct Scene {
     pub g: Expr,
     /// Exact solution, if the scene has one.
     pub exact: Option<Exact>,
-    /// Refinement levels to run (level ℓ has 2^ℓ·cells cells per direction).
-    pub levels: Vec<u32>,
-    /// u spaces to run.
-    pub u_spaces: Vec<USpace>,
-    /// Multiplier spaces to run.
-    pub multipliers: Vec<MultiplierSpace>,
-    /// p masses to run (default: the consistent one only).
-    pub p_masses: Vec<PMass>,
-    /// p spaces to run (default: the paper's continuous p only); each runs with the u spaces it
-    /// serves ([`PSpace::serves`]).
-    pub p_spaces: Vec<PSpace>,
-    /// Regularisation parameters δ ≥ 0 to run.
-    pub deltas: Vec<f64>,
+    /// The cases to run: every combination of these values.
+    pub axes: CaseAxes,
     /// Fields to write.
     pub fields: FieldSet,
     /// Reference tools to run (`dolfinx`, `freefem`).
@@ -97,15 +86,51 @@ impl Scene {
                 .graded(self.grading),
         )
     }
+}
 
-    /// Total number of cases (level × served (u space, p space) pair × multiplier × p mass × δ).
-    pub fn case_count(&self) -> usize {
-        let pairs = self
-            .u_spaces
+/// The axes of a study's cases, one list of values each: a case is one value of every axis,
+/// except that a p space runs only with the u spaces it serves ([`PSpace::serves`]). The scene
+/// lists them (`[discretization]`), a run's plan restricts them (sdcrack's `CaseFilter`), and
+/// summary.json reports the plan's as `plan` (each value by its name, δ as a number).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CaseAxes {
+    /// Refinement levels, increasing (level ℓ has 2^ℓ·cells cells per direction).
+    pub levels: Vec<u32>,
+    /// u spaces.
+    pub u_spaces: Vec<USpace>,
+    /// Multiplier spaces.
+    pub multipliers: Vec<MultiplierSpace>,
+    /// p masses (`consistent`, `lumped`; a scene's default: the consistent one only).
+    pub p_masses: Vec<PMass>,
+    /// p spaces (`continuous`, `broken-tangential`; a scene's default: the paper's continuous p
+    /// only); each runs with the u spaces it serves ([`PSpace::serves`]).
+    pub p_spaces: Vec<PSpace>,
+    /// Regularisation parameters δ ≥ 0, decreasing.
+    pub deltas: Vec<f64>,
+}
+
+impl CaseAxes {
+    /// The (u space, p space) pairs that make cases, u spaces outermost: every pair the p space
+    /// serves ([`PSpace::serves`]; a continuous u runs with the continuous p only).
+    pub fn space_pairs(&self) -> Vec<(USpace, PSpace)> {
+        self.u_spaces
             .iter()
-            .map(|&u| self.p_spaces.iter().filter(|p| p.serves(u)).count())
-            .sum::<usize>();
-        self.levels.len() * pairs * self.multipliers.len() * self.p_masses.len() * self.deltas.len()
+            .flat_map(|&u| {
+                self.p_spaces
+                    .iter()
+                    .filter(move |p| p.serves(u))
+                    .map(move |&p| (u, p))
+            })
+            .collect()
+    }
+
+    /// Number of cases: levels × (u space, p space) pairs × multipliers × p masses × δ.
+    pub fn case_count(&self) -> usize {
+        self.levels.len()
+            * self.space_pairs().len()
+            * self.multipliers.len()
+            * self.p_masses.len()
+            * self.deltas.len()
     }
 }
 

@@ -25,7 +25,7 @@ use crate::multiplier::{CrackField, CrackOperators, Multiplier};
 use crate::norms::{DiscreteSolution, ErrorNorms, NormCache, NormQuadrature, NORM_CACHE_BUDGET};
 use crate::ordering::elimination_order;
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
-use crate::scene::Scene;
+use crate::scene::{CaseAxes, Scene};
 
 #[cfg(test)]
 mod tests;
@@ -83,21 +83,28 @@ pub struct CaseFilter {
     pub delta: Option<f64>,
 }
 
+impl CaseFilter {
+    /// `axes` with each axis this filter names replaced by its one value.
+    pub fn restrict(&self, axes: &CaseAxes) -> CaseAxes {
+        fn one_or_all<T: Copy>(one: Option<T>, all: &[T]) -> Vec<T> {
+            one.map_or_else(|| all.to_vec(), |v| vec![v])
+        }
+        CaseAxes {
+            levels: one_or_all(self.level, &axes.levels),
+            u_spaces: one_or_all(self.u_space, &axes.u_spaces),
+            multipliers: one_or_all(self.multiplier, &axes.multipliers),
+            p_masses: one_or_all(self.p_mass, &axes.p_masses),
+            p_spaces: one_or_all(self.p_space, &axes.p_spaces),
+            deltas: one_or_all(self.delta, &axes.deltas),
+        }
+    }
+}
+
 /// The cases a scene asks for after a filter.
 #[derive(Clone, Debug)]
 pub struct CasePlan {
-    /// Levels, increasing.
-    pub levels: Vec<u32>,
-    /// u spaces.
-    pub u_spaces: Vec<USpace>,
-    /// Multiplier spaces.
-    pub multipliers: Vec<MultiplierSpace>,
-    /// p masses.
-    pub p_masses: Vec<PMass>,
-    /// p spaces; each runs with the u spaces it serves ([`PSpace::serves`]).
-    pub p_spaces: Vec<PSpace>,
-    /// δ values, decreasing.
-    pub deltas: Vec<f64>,
+    /// The scene's case axes, each restricted by the filter.
+    pub axes: CaseAxes,
     /// Quadrature of the error norms.
     pub norm_quadrature: NormQuadrature,
     /// Keep every case's fields (u, p with its bubbles for the consistent p mass, λ) and the
@@ -111,50 +118,15 @@ impl CasePlan {
     /// The plan of `scene` restricted by `filter`.
     pub fn new(scene: &Scene, filter: &CaseFilter) -> CasePlan {
         CasePlan {
-            levels: filter
-                .level
-                .map_or_else(|| scene.levels.clone(), |l| vec![l]),
-            u_spaces: filter
-                .u_space
-                .map_or_else(|| scene.u_spaces.clone(), |s| vec![s]),
-            multipliers: filter
-                .multiplier
-                .map_or_else(|| scene.multipliers.clone(), |m| vec![m]),
-            p_masses: filter
-                .p_mass
-                .map_or_else(|| scene.p_masses.clone(), |m| vec![m]),
-            p_spaces: filter
-                .p_space
-                .map_or_else(|| scene.p_spaces.clone(), |s| vec![s]),
-            deltas: filter
-                .delta
-                .map_or_else(|| scene.deltas.clone(), |d| vec![d]),
+            axes: filter.restrict(&scene.axes),
             norm_quadrature: NormQuadrature::default(),
             keep_fields: true,
         }
     }
 
-    /// Number of cases: levels × (u space, p space) pairs × multipliers × p masses × δ.
+    /// Number of cases ([`CaseAxes::case_count`]).
     pub fn len(&self) -> usize {
-        self.levels.len()
-            * self.space_pairs().len()
-            * self.multipliers.len()
-            * self.p_masses.len()
-            * self.deltas.len()
-    }
-
-    /// The (u space, p space) pairs of the plan, u spaces outermost: every pair the p space
-    /// serves ([`PSpace::serves`]; a continuous u runs with the continuous p only).
-    pub fn space_pairs(&self) -> Vec<(USpace, PSpace)> {
-        self.u_spaces
-            .iter()
-            .flat_map(|&u| {
-                self.p_spaces
-                    .iter()
-                    .filter(move |p| p.serves(u))
-                    .map(move |&p| (u, p))
-            })
-            .collect()
+        self.axes.case_count()
     }
 
     /// True when the plan has no case.
@@ -164,7 +136,7 @@ impl CasePlan {
 }
 
 /// Wall-clock seconds per phase of one case.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Timings {
     /// Mesh and assembly of K and b (shared by every δ and multiplier of a level and u space).
     pub assembly: f64,
@@ -306,27 +278,26 @@ pub fn run_study(
     let mut result = StudyResult::default();
     let source = scene.mesh_source()?;
     result.coarse_mesh = source.provenance.clone();
-    for &level in &plan.levels {
+    for &level in &plan.axes.levels {
         let t0 = Instant::now();
         let mesh = source.level(level)?;
         let ops = CrackOperators::new(&mesh);
         // S of each multiplier space: the mesh's, shared by every u space, p space, p mass and δ
-        let multipliers: Vec<Multiplier> = plan
-            .multipliers
-            .iter()
+        let multipliers: Vec<Multiplier> = (plan.axes.multipliers.iter())
             .map(|&space| Multiplier::new(space, &ops))
             .collect();
         let mesh_time = t0.elapsed().as_secs_f64();
         // the exact data at the norms' points, evaluated in the level's first norm pass and read
         // by all the others; a level of one pass (one δ, u space, p space and p mass) keeps
         // nothing: storing the values would only add to its one evaluation
-        let passes = plan.space_pairs().len() * plan.p_masses.len() * plan.deltas.len();
+        let passes =
+            plan.axes.space_pairs().len() * plan.axes.p_masses.len() * plan.axes.deltas.len();
         let budget = if passes > 1 { NORM_CACHE_BUDGET } else { 0 };
         let norm_cache = scene
             .exact
             .as_ref()
             .map(|exact| NormCache::new(&mesh, exact, &scene.f, plan.norm_quadrature, budget));
-        for &u_space in &plan.u_spaces {
+        for &u_space in &plan.axes.u_spaces {
             observer.phase(&format!("level {level}, {u_space}: assembling"));
             let t1 = Instant::now();
             let topo = mesh.u_topology(u_space);
@@ -342,11 +313,11 @@ pub fn run_study(
                     crack_dofs: topo.crack_dofs.clone(),
                 });
             }
-            let p_spaces = plan.p_spaces.iter().filter(|p| p.serves(u_space));
+            let p_spaces = plan.axes.p_spaces.iter().filter(|p| p.serves(u_space));
             for &p_space in p_spaces {
                 let ptopo = mesh.p_topology(p_space);
                 let p_ops = ops.clone().with_p_topology(&ptopo);
-                for &p_mass in &plan.p_masses {
+                for &p_mass in &plan.axes.p_masses {
                     observer.phase(&format!(
                         "level {level}, {u_space} u, {p_space} p, {p_mass} p mass: assembling"
                     ));
@@ -475,7 +446,7 @@ impl LevelContext<'_> {
         let mut spare: Option<Ldlt> = None;
         let mut inverse_norm: Option<InverseNorm> = None;
         let dk_norm1 = self.system.delta_norm1;
-        for &delta in &plan.deltas {
+        for &delta in &plan.axes.deltas {
             observer.phase(&format!(
                 "level {}, {}, δ = {delta:e}: factorising",
                 self.mesh.level, self.topo.space

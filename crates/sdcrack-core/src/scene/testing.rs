@@ -97,16 +97,18 @@ pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -
         f: Expr::parse(f).unwrap(),
         g: Expr::parse(g).unwrap(),
         exact,
-        levels: vec![0, 1, 2, 3, 4],
-        u_spaces: vec![USpace::Continuous, USpace::Broken],
-        multipliers: vec![
-            MultiplierSpace::M0,
-            MultiplierSpace::M1,
-            MultiplierSpace::M1Star,
-        ],
-        p_masses: vec![PMass::Consistent, PMass::Lumped],
-        p_spaces: vec![PSpace::Continuous],
-        deltas: vec![1.0, 1e-2, 1e-4, 1e-6, 1e-8, 0.0],
+        axes: super::CaseAxes {
+            levels: vec![0, 1, 2, 3, 4],
+            u_spaces: vec![USpace::Continuous, USpace::Broken],
+            multipliers: vec![
+                MultiplierSpace::M0,
+                MultiplierSpace::M1,
+                MultiplierSpace::M1Star,
+            ],
+            p_masses: vec![PMass::Consistent, PMass::Lumped],
+            p_spaces: vec![PSpace::Continuous],
+            deltas: vec![1.0, 1e-2, 1e-4, 1e-6, 1e-8, 0.0],
+        },
         fields: FieldSet {
             u: true,
             p: true,

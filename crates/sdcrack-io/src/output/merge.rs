@@ -4,8 +4,9 @@
 //! p mass) of a scene as `sdcrack run --solver-only` with filters and each (level, reference
 //! tool) as `sdcrack reference`; every job writes a results folder of its own, a *shard*. This
 //! module puts the shards of one scene together into the folder a single `sdcrack run` of the
-//! scene writes: the same files, the cases in the same order, the numbers the same (summary
-//! values are parsed back to the same `f64` and written by the same serializer), the field
+//! scene writes: the same files, the cases in the same order, the numbers the same (the shards'
+//! summaries are read into the one [`Summary`] type, every value parsed back to the same `f64`,
+//! and written by the same [`Summary::write`]), the field
 //! datasets of `fields.h5` and `verification.h5` copied bit for bit (HDF5's `H5Ocopy`), the
 //! series files and reference outputs copied byte for byte, the mesh export written afresh by the
 //! same code. What differs from a single run is what describes the process: the timings of each case are those of its shard, `wall_s` is
@@ -22,12 +23,11 @@ use std::collections::BTreeMap;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use serde_json::{Map, Value};
+use serde_json::Value;
 
-use super::summary::{PlanSummary, Provenance};
+use super::summary::{CaseSummary, Provenance, ShardRecord, Summary};
 use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
-use crate::scene::{Scene, TomlScene};
-use crate::study::{CaseFilter, CasePlan};
+use crate::scene::{CaseAxes, Scene, TomlScene};
 
 /// Errors of a merge.
 #[derive(Debug, thiserror::Error)]
@@ -84,7 +84,7 @@ struct Shard {
     path: PathBuf,
     scene_text: String,
     /// `summary.json` of a solver shard.
-    summary: Option<Value>,
+    summary: Option<Summary>,
     /// `(tool, <tool>/summary.json)` of a reference shard.
     tools: Vec<(String, Value)>,
 }
@@ -95,19 +95,13 @@ struct Shard {
 fn scene_folder(shards: &[Shard]) -> PathBuf {
     let provenance = shards
         .iter()
-        .find_map(|s| s.summary.as_ref()?.get("provenance").cloned());
-    let field = |k: &str| {
-        provenance
-            .as_ref()
-            .and_then(|p| p.get(k)?.as_str().map(PathBuf::from))
-    };
-    match (field("working_directory"), field("scene_origin")) {
-        (Some(cwd), Some(scene)) => cwd
-            .join(scene)
-            .parent()
-            .map_or_else(|| PathBuf::from("."), Path::to_path_buf),
-        _ => PathBuf::from("."),
-    }
+        .find_map(|s| Some(&s.summary.as_ref()?.provenance));
+    provenance
+        .and_then(|p| {
+            let scene = Path::new(&p.working_directory).join(&p.scene_origin);
+            scene.parent().map(Path::to_path_buf)
+        })
+        .unwrap_or_else(|| PathBuf::from("."))
 }
 
 fn shard_err(path: &Path, reason: impl std::fmt::Display) -> MergeError {
@@ -142,7 +136,9 @@ impl Shard {
             .map_err(|e| shard_err(dir, format!("cannot read {SCENE_COPY}: {e}")))?;
         let summary_path = dir.join("summary.json");
         let summary = if summary_path.is_file() {
-            Some(read_json(&summary_path, dir)?)
+            let summary = Summary::read(&summary_path)
+                .map_err(|e| shard_err(dir, format!("summary.json: {e}")))?;
+            Some(summary)
         } else {
             None
         };
@@ -172,63 +168,33 @@ impl Shard {
 /// multiplier: the loops of [`crate::study::run_study`]).
 type CaseKey = (usize, usize, usize, usize, usize, usize);
 
-/// Whether the plan's u space `u` and p space `p` (names) make cases: the broken-tangential p
-/// runs with broken u only ([`crate::problem::PSpace::serves`]).
-fn served(u: &str, p: &str) -> bool {
-    match (
-        crate::problem::USpace::from_name(u),
-        crate::problem::PSpace::from_name(p),
-    ) {
-        (Some(u), Some(p)) => p.serves(u),
-        _ => false,
-    }
-}
-
-/// Where the case `c` (a `summary.json` case) sits in `plan`; `None` when it is not a case of it.
-fn case_key(plan: &PlanSummary, c: &Value) -> Option<CaseKey> {
-    let text = |k: &str| c.get(k).and_then(Value::as_str);
-    let level = c.get("level").and_then(Value::as_u64)?;
-    let delta = c.get("delta").and_then(Value::as_f64)?;
-    if !served(text("u_space")?, text("p_space")?) {
+/// Where the case `c` sits in `plan`; `None` when it is not a case of it.
+fn case_key(plan: &CaseAxes, c: &CaseSummary) -> Option<CaseKey> {
+    if !c.p_space.serves(c.u_space) {
         return None;
     }
     Some((
-        plan.levels.iter().position(|&l| u64::from(l) == level)?,
-        plan.u_spaces
-            .iter()
-            .position(|s| Some(s.as_str()) == text("u_space"))?,
-        plan.p_spaces
-            .iter()
-            .position(|s| Some(s.as_str()) == text("p_space"))?,
-        plan.p_masses
-            .iter()
-            .position(|s| Some(s.as_str()) == text("p_mass"))?,
-        plan.deltas
-            .iter()
-            .position(|&d| d.to_bits() == delta.to_bits())?,
-        plan.multipliers
-            .iter()
-            .position(|s| Some(s.as_str()) == text("multiplier"))?,
+        plan.levels.iter().position(|&l| l == c.level)?,
+        plan.u_spaces.iter().position(|&u| u == c.u_space)?,
+        plan.p_spaces.iter().position(|&p| p == c.p_space)?,
+        plan.p_masses.iter().position(|&m| m == c.p_mass)?,
+        (plan.deltas.iter()).position(|&d| d.to_bits() == c.delta.to_bits())?,
+        plan.multipliers.iter().position(|&m| m == c.multiplier)?,
     ))
 }
 
 /// The case `c` in words, for messages.
-fn case_words(c: &Value) -> String {
-    let get = |k: &str| c.get(k).map(ToString::to_string).unwrap_or_default();
-    format!(
-        "level {} {} {} {} {} p δ = {}",
-        get("level"),
-        get("u_space"),
-        get("multiplier"),
-        get("p_mass"),
-        get("p_space"),
-        get("delta")
-    )
-    .replace('"', "")
+fn case_words(c: &CaseSummary) -> String {
+    let (level, u, m, pm, ps, delta) = (
+        c.level,
+        c.u_space,
+        c.multiplier,
+        c.p_mass,
+        c.p_space,
+        c.delta,
+    );
+    format!("level {level} {u} {m} {pm} {ps} p δ = {delta}")
 }
-
-/// The provenance keys that identify the build: shards of one merge must agree on them.
-const BUILD_KEYS: [&str; 3] = ["sdcrack_version", "git_commit", "git_dirty"];
 
 /// Merges the shard folders `shards` into `out/<scene name>`; `provenance` is the merge's own.
 pub fn merge_shards(
@@ -256,17 +222,19 @@ pub fn merge_shards(
     }
     let scene = Scene::from_toml_in(&first.scene_text, &scene_folder(&shards))
         .map_err(|e| shard_err(&first.path, format!("invalid {SCENE_COPY}: {e}")))?;
-    let plan = CasePlan::new(&scene, &CaseFilter::default());
-    let plan_summary = PlanSummary::from_plan(&plan);
+    // the merge makes a single run of the whole scene: its plan is the scene's axes, unfiltered
+    let plan = &scene.axes;
 
-    let solver: Vec<&Shard> = shards.iter().filter(|s| s.summary.is_some()).collect();
-    let Some(&lead) = solver.first() else {
+    let solver: Vec<SolverShard> = (shards.iter())
+        .filter_map(|s| Some((s.path.as_path(), s.summary.as_ref()?)))
+        .collect();
+    let Some(&(_, lead)) = solver.first() else {
         return Err(MergeError::Incomplete(
             "no solver shard (summary.json) among the shards".into(),
         ));
     };
     check_one_build(&solver)?;
-    let cases = ordered_cases(&solver, &plan_summary)?;
+    let cases = ordered_cases(&solver, plan)?;
     let references = ordered_references(&shards, &scene, &plan.levels)?;
 
     let results = ResultsDir::create(out, &scene.name)?;
@@ -278,41 +246,25 @@ pub fn merge_shards(
     let t0 = std::time::Instant::now();
     // fields.h5 and its series when the scene lists fields, verification.h5 when it does not
     // list them all, coarse.msh for a gmsh scene: whatever the shards hold
-    let sources: Vec<&Path> = solver.iter().map(|s| s.path.as_path()).collect();
+    let sources: Vec<&Path> = solver.iter().map(|&(path, _)| path).collect();
     merge_field_files(&sources, &dir, &["summary.json", SCENE_COPY])?;
     let fields_write_s = t0.elapsed().as_secs_f64();
 
-    let lead_summary = lead.summary.as_ref().expect("solver shards have a summary");
-    let origin = lead_summary
-        .pointer("/provenance/scene_origin")
-        .and_then(Value::as_str)
-        .unwrap_or("(unknown)")
-        .to_string();
-    let not_converged = cases
-        .iter()
-        .filter(|c| c.get("converged") != Some(&Value::Bool(true)))
-        .count();
+    let not_converged = cases.iter().filter(|c| !c.converged).count();
     let n_cases = cases.len();
-    let wall_s: f64 = solver
-        .iter()
-        .filter_map(|s| s.summary.as_ref()?.get("wall_s")?.as_f64())
-        .sum();
-    let mut summary = lead_summary.clone();
-    let object = summary
-        .as_object_mut()
-        .ok_or_else(|| shard_err(&lead.path, "summary.json is not an object"))?;
-    object.insert("provenance".into(), json(&provenance(&origin)));
-    object.insert("plan".into(), json(&plan_summary));
-    object.insert("all_converged".into(), Value::Bool(not_converged == 0));
-    object.insert("wall_s".into(), Value::from(wall_s));
-    object.insert("fields_write_s".into(), Value::from(fields_write_s));
-    object.insert(
-        "recomputation_file".into(),
-        Value::from(super::recomputation_file(&scene.fields)),
-    );
-    object.insert("cases".into(), Value::Array(cases));
-    object.insert("shards".into(), shard_list(&solver, |s| s.summary.as_ref()));
-    write_json(&dir.join("summary.json"), &summary)?;
+    let summary = Summary {
+        provenance: provenance(&lead.provenance.scene_origin),
+        plan: plan.clone(),
+        all_converged: not_converged == 0,
+        wall_s: solver.iter().map(|(_, s)| s.wall_s).sum(),
+        fields_write_s,
+        recomputation_file: super::recomputation_file(&scene.fields),
+        cases,
+        shards: Some(shard_records(&solver)),
+        ..lead.clone()
+    };
+    let summary_path = dir.join("summary.json");
+    (summary.write(&summary_path)).map_err(|e| write_err(&summary_path, e))?;
 
     let mut references_not_converged = 0;
     if !scene.references.is_empty() {
@@ -333,35 +285,28 @@ pub fn merge_shards(
     })
 }
 
-/// `value` as JSON (the summary types merged in always serialize).
-fn json<T: serde::Serialize>(value: &T) -> Value {
-    serde_json::to_value(value).unwrap_or(Value::Null)
+/// A solver shard: its folder and its summary.
+type SolverShard<'a> = (&'a Path, &'a Summary);
+
+/// What identifies the sdcrack build that wrote a summary (version, commit, dirty): shards of
+/// one merge must agree on it.
+fn build_of(s: &Summary) -> (&str, Option<&str>, Option<bool>) {
+    let p = &s.provenance;
+    (&p.sdcrack_version, p.git_commit.as_deref(), p.git_dirty)
 }
 
 /// Refuses shards written by different sdcrack builds: their union would not be one run's.
-fn check_one_build(solver: &[&Shard]) -> Result<(), MergeError> {
-    let build = |s: &Shard| -> Vec<Value> {
-        let summary = s.summary.as_ref();
-        BUILD_KEYS
-            .iter()
-            .map(|k| {
-                summary
-                    .and_then(|v| v.get("provenance"))
-                    .and_then(|p| p.get(*k))
-                    .cloned()
-                    .unwrap_or(Value::Null)
-            })
-            .collect()
-    };
-    let reference = build(solver[0]);
-    for s in &solver[1..] {
-        if build(s) != reference {
+fn check_one_build(solver: &[SolverShard]) -> Result<(), MergeError> {
+    let (lead_path, lead) = solver[0];
+    let reference = build_of(lead);
+    for &(path, s) in &solver[1..] {
+        if build_of(s) != reference {
             return Err(shard_err(
-                &s.path,
+                path,
                 format!(
                     "written by another sdcrack build than {} (version, commit, dirty: {:?} vs {:?})",
-                    solver[0].path.display(),
-                    build(s),
+                    lead_path.display(),
+                    build_of(s),
                     reference
                 ),
             ));
@@ -371,25 +316,19 @@ fn check_one_build(solver: &[&Shard]) -> Result<(), MergeError> {
 }
 
 /// Every case of the plan, exactly once, in a single run's order.
-fn ordered_cases(solver: &[&Shard], plan: &PlanSummary) -> Result<Vec<Value>, MergeError> {
-    let mut found: BTreeMap<CaseKey, (Value, &Path)> = BTreeMap::new();
-    for s in solver {
-        let cases = s
-            .summary
-            .as_ref()
-            .and_then(|v| v.get("cases"))
-            .and_then(Value::as_array)
-            .ok_or_else(|| shard_err(&s.path, "summary.json has no cases list"))?;
-        for c in cases {
+fn ordered_cases(solver: &[SolverShard], plan: &CaseAxes) -> Result<Vec<CaseSummary>, MergeError> {
+    let mut found: BTreeMap<CaseKey, (&CaseSummary, &Path)> = BTreeMap::new();
+    for &(path, s) in solver {
+        for c in &s.cases {
             let key = case_key(plan, c).ok_or_else(|| {
                 shard_err(
-                    &s.path,
+                    path,
                     format!("case {} is not a case of the scene's plan", case_words(c)),
                 )
             })?;
             if let Some((_, other)) = found.get(&key) {
                 return Err(shard_err(
-                    &s.path,
+                    path,
                     format!(
                         "case {} is also in shard {}",
                         case_words(c),
@@ -397,19 +336,10 @@ fn ordered_cases(solver: &[&Shard], plan: &PlanSummary) -> Result<Vec<Value>, Me
                     ),
                 ));
             }
-            found.insert(key, (c.clone(), &s.path));
+            found.insert(key, (c, path));
         }
     }
-    let pairs = plan
-        .u_spaces
-        .iter()
-        .map(|u| plan.p_spaces.iter().filter(|p| served(u, p)).count())
-        .sum::<usize>();
-    let expected = plan.levels.len()
-        * pairs
-        * plan.p_masses.len()
-        * plan.deltas.len()
-        * plan.multipliers.len();
+    let expected = plan.case_count();
     if found.len() != expected {
         let missing = first_missing(plan, &found);
         return Err(MergeError::Incomplete(format!(
@@ -417,15 +347,15 @@ fn ordered_cases(solver: &[&Shard], plan: &PlanSummary) -> Result<Vec<Value>, Me
             found.len()
         )));
     }
-    Ok(found.into_values().map(|(c, _)| c).collect())
+    Ok(found.into_values().map(|(c, _)| c.clone()).collect())
 }
 
 /// The first case of `plan` (in run order) that `found` lacks, in words.
-fn first_missing(plan: &PlanSummary, found: &BTreeMap<CaseKey, (Value, &Path)>) -> String {
+fn first_missing<V>(plan: &CaseAxes, found: &BTreeMap<CaseKey, V>) -> String {
     for (l, level) in plan.levels.iter().enumerate() {
         for (u, u_space) in plan.u_spaces.iter().enumerate() {
             for (s, p_space) in plan.p_spaces.iter().enumerate() {
-                if !served(u_space, p_space) {
+                if !p_space.serves(*u_space) {
                     continue;
                 }
                 for (p, p_mass) in plan.p_masses.iter().enumerate() {
@@ -545,24 +475,18 @@ fn merge_reference(tool: &str, parts: &ReferenceParts, dir: &Path) -> Result<usi
     Ok(not_converged)
 }
 
-/// `[{"folder", "provenance", "wall_s"}]` of the solver shards.
-fn shard_list(shards: &[&Shard], summary: impl Fn(&Shard) -> Option<&Value>) -> Value {
-    Value::Array(
-        shards
-            .iter()
-            .map(|s| {
-                let mut entry = Map::new();
-                entry.insert("folder".into(), Value::from(s.path.display().to_string()));
-                for key in ["provenance", "wall_s"] {
-                    let v = summary(s).and_then(|v| v.get(key)).cloned();
-                    entry.insert(key.into(), v.unwrap_or(Value::Null));
-                }
-                Value::Object(entry)
-            })
-            .collect(),
-    )
+/// The merged summary's record of its solver shards.
+fn shard_records(solver: &[SolverShard]) -> Vec<ShardRecord> {
+    (solver.iter())
+        .map(|&(path, s)| ShardRecord {
+            folder: path.display().to_string(),
+            provenance: s.provenance.clone(),
+            wall_s: s.wall_s,
+        })
+        .collect()
 }
 
+/// Writes a reference's merged `summary.json` (written by the reference tool, merged as JSON).
 fn write_json(path: &Path, value: &Value) -> Result<(), MergeError> {
     let text = serde_json::to_string_pretty(value).map_err(|e| write_err(path, e))?;
     atomic_write(path, text.as_bytes()).map_err(|e| write_err(path, e))

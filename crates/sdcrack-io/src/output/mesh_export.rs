@@ -110,7 +110,7 @@ fn scene_json(scene: &Scene) -> serde_json::Value {
         "cracks": scene.cracks.iter().map(|c| serde_json::json!({"points": c.points})).collect::<Vec<_>>(),
         "cells": match scene.meshing { Meshing::Cells(c) => Some(c), _ => None },
         "mesh_size": match scene.meshing { Meshing::MeshSize(h) => Some(h), _ => None },
-        "levels": scene.levels,
+        "levels": scene.axes.levels,
     });
     // the single straight crack of older exports, for readers that know only that
     if let [c] = &scene.cracks[..] {

@@ -235,41 +235,12 @@ pub fn write_run(
             reason: e.to_string(),
         })?;
     }
-    let with_fields = !scene.fields.is_empty();
     let t0 = std::time::Instant::now();
     write_fields(dir, scene, study)?;
     let fields_write_s = t0.elapsed().as_secs_f64();
-    let summary = summary::Summary {
-        scene: scene.name.clone(),
-        description: scene.description.clone(),
-        sdcrack_version: provenance.sdcrack_version,
-        provenance: provenance.clone(),
-        kkt_tolerance: crate::study::KKT_TOLERANCE,
-        plan: summary::PlanSummary::from_plan(plan),
-        shared_timings: [
-            "assembly",
-            "symbolic",
-            "factorization",
-            "crack_reduction",
-            "condition",
-        ],
-        all_converged: study.cases.iter().all(|c| c.converged),
-        wall_s,
-        fields_write_s,
-        recomputation_file: recomputation_file(&scene.fields),
-        coarse_mesh: study.coarse_mesh.clone(),
-        cases: study
-            .cases
-            .iter()
-            .map(|c| summary::CaseSummary::from_case(c, with_fields))
-            .collect(),
-    };
+    let summary = summary::Summary::of_run(scene, plan, study, wall_s, fields_write_s, provenance);
     let path = dir.join("summary.json");
-    let text = serde_json::to_string_pretty(&summary).map_err(|e| WriteError::Io {
-        path: path.clone(),
-        reason: e.to_string(),
-    })?;
-    atomic_write(&path, text.as_bytes()).map_err(|e| WriteError::Io {
+    summary.write(&path).map_err(|e| WriteError::Io {
         path,
         reason: e.to_string(),
     })

@@ -4,36 +4,58 @@
 //! status, the active-set size and the factorisation's regularised pivots, the case's group in
 //! the field files (`fields_grid`), and at the top level the file the compare tool recomputes
 //! the errors from (`recomputation_file`).
+//!
+//! [`Summary`] is the file's one schema, both ways: `sdcrack run` builds it from a study
+//! ([`Summary::of_run`]) and `sdcrack merge` reads the shards' files back into it
+//! ([`Summary::read`]); both write it with [`Summary::write`]. Every `f64` is written as the
+//! shortest text that parses back to the same bits, so a summary read and written again is the
+//! same text.
 
-use serde::Serialize;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
 
 use crate::contact::KktResiduals;
 use crate::norms::ErrorNorms;
+use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use crate::scene::CaseAxes;
 use crate::study::{CaseResult, Timings, KKT_TOLERANCE};
 
+/// Timing phases shared by several cases (reported with each of them): summary.json's
+/// `shared_timings`.
+pub const SHARED_TIMINGS: [&str; 5] = [
+    "assembly",
+    "symbolic",
+    "factorization",
+    "crack_reduction",
+    "condition",
+];
+
 /// The whole summary file.
-#[derive(Serialize, Debug)]
+#[derive(Serialize, Deserialize, Debug, Clone)]
 pub struct Summary {
     /// Scene name.
     pub scene: String,
     /// Scene description.
     pub description: String,
     /// Version of sdcrack that wrote it.
-    pub sdcrack_version: &'static str,
+    pub sdcrack_version: String,
     /// Where the results come from: command line, binary, commit, date, machine.
     pub provenance: Provenance,
     /// The KKT tolerance a case must meet to count as converged.
     pub kkt_tolerance: f64,
-    /// The cases the run was asked for: the scene's lists, restricted by the command line's filters.
-    pub plan: PlanSummary,
-    /// Timing phases shared by several cases (reported with each of them).
-    pub shared_timings: [&'static str; 5],
+    /// The cases the run was asked for: the scene's case axes, restricted by the command line's
+    /// filters.
+    pub plan: CaseAxes,
+    /// Timing phases shared by several cases (reported with each of them): [`SHARED_TIMINGS`].
+    pub shared_timings: [String; 5],
     /// True when every case converged.
     pub all_converged: bool,
-    /// Wall-clock seconds of the solves (all cases, before writing files).
+    /// Wall-clock seconds of the solves (all cases, before writing files); for a merge, the sum
+    /// of the shards'.
     pub wall_s: f64,
     /// Seconds spent writing the field files (`fields.h5` with its series `fields/*.xdmf`,
-    /// `verification.h5`), all cases together.
+    /// `verification.h5`), all cases together; for a merge, the merge's.
     pub fields_write_s: f64,
     /// The file holding every field the compare tool recomputes the errors from: `fields.h5`
     /// when the scene's `fields` lists u, p and λ, otherwise `verification.h5` (the same HDF5
@@ -42,14 +64,74 @@ pub struct Summary {
     pub recomputation_file: String,
     /// For an unstructured scene: where level 0 came from (gmsh's version and seconds, or the
     /// mesh file) and its size; gmsh's level 0 is also written as `coarse.msh`.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coarse_mesh: Option<crate::mesh::CoarseProvenance>,
     /// The cases.
     pub cases: Vec<CaseSummary>,
+    /// Only in a merged summary (`sdcrack merge`): the solver shards it was made of, in the
+    /// order given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shards: Option<Vec<ShardRecord>>,
+}
+
+/// One solver shard of a merged summary: its folder, and what describes its process.
+#[derive(Serialize, Deserialize, Debug, Clone)]
+pub struct ShardRecord {
+    /// The shard folder as given to `sdcrack merge`.
+    pub folder: String,
+    /// The shard's own provenance.
+    pub provenance: Provenance,
+    /// The shard's solve seconds (its summary's `wall_s`).
+    pub wall_s: f64,
+}
+
+impl Summary {
+    /// The summary of a run of `scene` over `plan`: its `study`, solved in `wall_s` seconds,
+    /// its field files written in `fields_write_s` seconds, by the process `provenance`.
+    pub fn of_run(
+        scene: &crate::scene::Scene,
+        plan: &crate::study::CasePlan,
+        study: &crate::study::StudyResult,
+        wall_s: f64,
+        fields_write_s: f64,
+        provenance: &Provenance,
+    ) -> Summary {
+        let with_fields = !scene.fields.is_empty();
+        Summary {
+            scene: scene.name.clone(),
+            description: scene.description.clone(),
+            sdcrack_version: provenance.sdcrack_version.clone(),
+            provenance: provenance.clone(),
+            kkt_tolerance: KKT_TOLERANCE,
+            plan: plan.axes.clone(),
+            shared_timings: SHARED_TIMINGS.map(String::from),
+            all_converged: study.cases.iter().all(|c| c.converged),
+            wall_s,
+            fields_write_s,
+            recomputation_file: super::recomputation_file(&scene.fields),
+            coarse_mesh: study.coarse_mesh.clone(),
+            cases: (study.cases.iter())
+                .map(|c| CaseSummary::from_case(c, with_fields))
+                .collect(),
+            shards: None,
+        }
+    }
+
+    /// Reads the summary file `path`; the error says what is wrong, without the path.
+    pub fn read(path: &Path) -> Result<Summary, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+        serde_json::from_str(&text).map_err(|e| format!("not a summary of sdcrack: {e}"))
+    }
+
+    /// Writes the summary to `path` (pretty JSON, keys in the order of the struct), atomically.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
+        super::atomic_write(path, text.as_bytes())
+    }
 }
 
 /// Where a results folder comes from: enough to rerun it and to tell two runs apart.
-#[derive(Serialize, Debug, Clone)]
+#[derive(Serialize, Deserialize, Debug, Clone)]
 pub struct Provenance {
     /// The command line exactly as given (`argv`, lossily converted to UTF-8).
     pub command_line: Vec<String>,
@@ -59,9 +141,9 @@ pub struct Provenance {
     /// Absolute path of the sdcrack binary that ran.
     pub executable: String,
     /// Version of sdcrack (Cargo.toml).
-    pub sdcrack_version: &'static str,
+    pub sdcrack_version: String,
     /// Git commit the binary was built from (`None` outside a git checkout).
-    pub git_commit: Option<&'static str>,
+    pub git_commit: Option<String>,
     /// True when the binary's sources (`src/`, `Cargo.*`, `build.rs`) differed from that
     /// commit at build time (`None` outside a git checkout).
     pub git_dirty: Option<bool>,
@@ -106,8 +188,8 @@ impl Provenance {
                 .collect(),
             working_directory: absolute(std::env::current_dir()),
             executable: absolute(std::env::current_exe()),
-            sdcrack_version: build.version,
-            git_commit: (!commit.is_empty()).then_some(commit),
+            sdcrack_version: build.version.to_string(),
+            git_commit: (!commit.is_empty()).then(|| commit.to_string()),
             git_dirty: match build.git_dirty {
                 "true" => Some(true),
                 "false" => Some(false),
@@ -120,53 +202,21 @@ impl Provenance {
     }
 }
 
-/// What a run was asked to solve: every combination of these is a case of `cases`.
-#[derive(Serialize, Debug)]
-pub struct PlanSummary {
-    /// Levels, increasing.
-    pub levels: Vec<u32>,
-    /// u spaces.
-    pub u_spaces: Vec<String>,
-    /// Multiplier spaces.
-    pub multipliers: Vec<String>,
-    /// p masses (`consistent`, `lumped`).
-    pub p_masses: Vec<String>,
-    /// p spaces (`continuous`, `broken-tangential`); the broken-tangential p runs with broken u
-    /// only, so the cases are every combination but (continuous u, broken-tangential p).
-    pub p_spaces: Vec<String>,
-    /// δ values, decreasing.
-    pub deltas: Vec<f64>,
-}
-
-impl PlanSummary {
-    /// The summary of `plan`.
-    pub fn from_plan(plan: &crate::study::CasePlan) -> PlanSummary {
-        PlanSummary {
-            levels: plan.levels.clone(),
-            u_spaces: plan.u_spaces.iter().map(ToString::to_string).collect(),
-            multipliers: plan.multipliers.iter().map(ToString::to_string).collect(),
-            p_masses: plan.p_masses.iter().map(ToString::to_string).collect(),
-            p_spaces: plan.p_spaces.iter().map(ToString::to_string).collect(),
-            deltas: plan.deltas.clone(),
-        }
-    }
-}
-
 /// One case of the summary.
-#[derive(Serialize, Debug)]
+#[derive(Serialize, Deserialize, Debug, Clone)]
 pub struct CaseSummary {
     /// Level ℓ.
     pub level: u32,
     /// Mesh size (triangle diameter).
     pub h: f64,
     /// `continuous` or `broken`.
-    pub u_space: String,
+    pub u_space: USpace,
     /// `M0`, `M1` or `M1star`.
-    pub multiplier: String,
+    pub multiplier: MultiplierSpace,
     /// `consistent` (the paper's MINI p, with bubble) or `lumped` (p = D⁻¹(…), P1, no bubble).
-    pub p_mass: String,
+    pub p_mass: PMass,
     /// `continuous` (the paper's p) or `broken-tangential` (p·τ one value per crack face).
-    pub p_space: String,
+    pub p_space: PSpace,
     /// δ.
     pub delta: f64,
     /// Unknowns (p vertex values, u dofs, multipliers).
@@ -180,12 +230,14 @@ pub struct CaseSummary {
     /// True when the case met the KKT tolerance.
     pub converged: bool,
     /// KKT residuals (relative).
+    #[serde(deserialize_with = "non_finite::record")]
     pub kkt: KktResiduals,
     /// Multipliers with μ > 0.
     pub active_multipliers: usize,
     /// Pivots regularised in the LDLᵀ of K(δ).
     pub regularized_pivots: usize,
     /// Estimate of κ₁(K(δ)) = ‖K‖₁‖K⁻¹‖₁ (Hager–Higham, a lower bound usually within 3×).
+    #[serde(deserialize_with = "non_finite::number")]
     pub condition_estimate: f64,
     /// The δ' at which ‖K⁻¹‖₁ was estimated: δ, or an earlier δ of the sweep whose estimate
     /// holds for K(δ) to within a factor 1.1 by a perturbation bound.
@@ -193,13 +245,21 @@ pub struct CaseSummary {
     /// Seconds per phase.
     pub timings_s: Timings,
     /// Errors against `[exact]`, when the scene has it.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "non_finite::optional_record"
+    )]
     pub errors: Option<ErrorNorms>,
     /// With `errors`: an estimate of the quadrature error of each, |e(rule) − e(higher rule)| in
     /// the units of the error (the rule of [`crate::norms::NormQuadrature::default`] against
     /// [`crate::norms::NormQuadrature::higher`]); the compare tool's tolerance for its own
     /// recomputation of `errors` is built from it (absent in a summary of an older sdcrack).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "non_finite::optional_record"
+    )]
     pub errors_quadrature: Option<ErrorNorms>,
     /// Name of the case in the field files, always set: its group `/cases/<fields_grid>` in
     /// `fields.h5` and in `verification.h5` (whichever exist), and its step grid in the series
@@ -208,11 +268,11 @@ pub struct CaseSummary {
     /// The series file (relative to the results folder, `fields/<series>.series.xdmf`) whose
     /// time steps are this case's δ sweep, when the XDMF files are written (the scene lists
     /// fields); `meshio.xdmf.TimeSeriesReader` reads it.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fields_series: Option<String>,
     /// This case's one-state file (`fields/<fields_grid>.xdmf`), written with the series;
     /// `meshio.read` reads it.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fields_state: Option<String>,
 }
 
@@ -256,10 +316,10 @@ impl CaseSummary {
         CaseSummary {
             level: c.level,
             h: c.h,
-            u_space: c.u_space.name().to_string(),
-            multiplier: c.multiplier.name().to_string(),
-            p_mass: c.p_mass.name().to_string(),
-            p_space: c.p_space.name().to_string(),
+            u_space: c.u_space,
+            multiplier: c.multiplier,
+            p_mass: c.p_mass,
+            p_space: c.p_space,
             delta: c.delta,
             unknowns: c.unknowns,
             multipliers: c.multipliers,
@@ -296,11 +356,46 @@ impl CaseSummary {
     }
 }
 
+/// Reading back what serde_json writes for a non-finite `f64` (NaN, ±∞): `null`. A solved case's
+/// KKT residuals, condition estimate and errors may be non-finite (a failed solve); read back, a
+/// `null` is NaN, which is written `null` again, so the summary's text is unchanged.
+mod non_finite {
+    use std::collections::BTreeMap;
+
+    use serde::de::value::MapDeserializer;
+    use serde::{Deserialize, Deserializer};
+
+    /// A number, or `null` as NaN.
+    pub fn number<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
+
+    /// A record whose fields are all numbers (KKT residuals, error norms), each `null` as NaN.
+    pub fn record<'de, D: Deserializer<'de>, T: Deserialize<'de>>(d: D) -> Result<T, D::Error> {
+        from_fields(BTreeMap::<String, Option<f64>>::deserialize(d)?)
+    }
+
+    /// An optional [`record`].
+    pub fn optional_record<'de, D: Deserializer<'de>, T: Deserialize<'de>>(
+        d: D,
+    ) -> Result<Option<T>, D::Error> {
+        Option::<BTreeMap<String, Option<f64>>>::deserialize(d)?
+            .map(from_fields)
+            .transpose()
+    }
+
+    fn from_fields<'de, T: Deserialize<'de>, E: serde::de::Error>(
+        fields: BTreeMap<String, Option<f64>>,
+    ) -> Result<T, E> {
+        let values = (fields.into_iter()).map(|(k, v)| (k, v.unwrap_or(f64::NAN)));
+        T::deserialize(MapDeserializer::<_, E>::new(values))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::contact::LcpStatus;
-    use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
     use crate::scene::TomlScene;
 
     /// A solved case with awkward numbers: the shortest round trip needs 17 digits, a

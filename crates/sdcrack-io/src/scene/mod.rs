@@ -34,7 +34,7 @@ pub use crate::problem::{
 // The validated scene and its limits are sdcrack-core's (the study runs them without this
 // parser); re-exported so that a scene's users find them here too.
 pub use sdcrack_core::scene::{
-    check_level, estimated_memory_bytes, ExpectedFailure, FieldSet, Level0Size, Scene,
+    check_level, estimated_memory_bytes, CaseAxes, ExpectedFailure, FieldSet, Level0Size, Scene,
     Verification, MAX_LEVEL, MAX_MEMORY_BYTES, MEMORY_BYTES_PER_CELL,
 };
 

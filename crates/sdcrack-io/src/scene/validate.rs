@@ -9,8 +9,8 @@ use std::path::Path;
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
 use super::schema::{FIELDS, MULTIPLIERS, P_MASSES, P_SPACES, U_SPACES};
 use super::{
-    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass,
-    PSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
+    check_level, CaseAxes, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace,
+    PMass, PSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
     KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
 };
 use crate::did_you_mean::suggest;
@@ -169,12 +169,14 @@ impl SceneToml {
             f,
             g,
             exact,
-            levels,
-            u_spaces,
-            multipliers,
-            p_masses,
-            p_spaces,
-            deltas,
+            axes: CaseAxes {
+                levels,
+                u_spaces,
+                multipliers,
+                p_masses,
+                p_spaces,
+                deltas,
+            },
             fields,
             references,
             verification,
