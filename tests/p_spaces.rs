@@ -176,7 +176,7 @@ fn broken_tangential_p_converges_on_an_oblique_open_crack() {
     assert_orders(
         "open-smooth-inclined",
         &cases,
-        &scene.multipliers,
+        &scene.axes.multipliers,
         false,
         None,
     );
