@@ -2,7 +2,8 @@
 //! format and its validation live in sdcrack-io's `scene`, which builds this struct and
 //! re-exports it; the study ([`crate::study`]) runs it.
 
-pub mod testing;
+#[cfg(test)]
+pub(crate) mod testing;
 pub mod verification;
 
 use crate::expr::Expr;

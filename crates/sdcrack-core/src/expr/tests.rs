@@ -1,7 +1,7 @@
 use super::*;
 use std::f64::consts::PI;
 
-use crate::scene::testing::XorShift64;
+use fastrand::Rng;
 
 fn p(s: &str) -> Expr {
     match Expr::parse(s) {
@@ -140,11 +140,16 @@ fn constants_and_is_constant() {
         .is_nan());
 }
 
+/// A number in `[lo, hi)`.
+fn uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * rng.f64()
+}
+
 #[test]
 fn derivatives_match_finite_differences() {
     let srcs = shared_derivative_cases();
     assert!(srcs.contains(&LONG));
-    let mut rng = XorShift64(0x9E3779B97F4A7C15);
+    let mut rng = Rng::with_seed(0x9E3779B97F4A7C15);
     let h = 1e-6;
     for src in srcs {
         let e = p(src);
@@ -154,7 +159,7 @@ fn derivatives_match_finite_differences() {
         assert_eq!(dx.source(), dx.to_string_infix());
         let mut checked = 0;
         while checked < 20 {
-            let (x, y) = (rng.uniform(0.3, 1.6), rng.uniform(0.35, 1.5));
+            let (x, y) = (uniform(&mut rng, 0.3, 1.6), uniform(&mut rng, 0.35, 1.5));
             // stay away from kinks of abs/sign/min/max and jumps of sign
             let kinks = [
                 x - y,
@@ -215,14 +220,14 @@ fn render_round_trip() {
         "--x",
         "sign(-0*y)",
     ]);
-    let mut rng = XorShift64(12345);
+    let mut rng = Rng::with_seed(12345);
     for src in srcs {
         let e = p(src);
         let r = e.to_string_infix();
         let back = p(&r);
         assert_eq!(back.to_string_infix(), r, "rendering is a fixed point");
         for _ in 0..50 {
-            let (x, y) = (rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0));
+            let (x, y) = (uniform(&mut rng, -3.0, 3.0), uniform(&mut rng, -3.0, 3.0));
             for (x, y) in [(x, y), (x, 0.0), (x, -0.0)] {
                 let (a, b) = (e.eval(x, y), back.eval(x, y));
                 assert!(
@@ -236,7 +241,7 @@ fn render_round_trip() {
             let d = e.derivative(var);
             let back = p(&d.to_string_infix());
             for _ in 0..20 {
-                let (x, y) = (rng.uniform(-3.0, 3.0), rng.uniform(-3.0, 3.0));
+                let (x, y) = (uniform(&mut rng, -3.0, 3.0), uniform(&mut rng, -3.0, 3.0));
                 let (a, b) = (d.eval(x, y), back.eval(x, y));
                 assert!(
                     close(a, b, 1e-14) || !a.is_finite(),
@@ -368,24 +373,24 @@ fn no_panic_on_random_inputs() {
     let alphabet: Vec<char> = "0123456789.eE+-*/^(),xyzpisnqrtabgexmlc \t$_"
         .chars()
         .collect();
-    let mut rng = XorShift64(0xDEADBEEF12345678);
+    let mut rng = Rng::with_seed(0xDEADBEEF12345678);
     let mut parsed = 0;
     for i in 0..100_000 {
         let s: String = if i % 2 == 0 {
-            let mut v: Vec<char> = seeds[rng.below(seeds.len())].chars().collect();
-            for _ in 0..1 + rng.below(4) {
-                let c = alphabet[rng.below(alphabet.len())];
-                match rng.below(3) {
+            let mut v: Vec<char> = seeds[rng.usize(..seeds.len())].chars().collect();
+            for _ in 0..1 + rng.usize(..4) {
+                let c = alphabet[rng.usize(..alphabet.len())];
+                match rng.usize(..3) {
                     0 => {
-                        let k = rng.below(v.len() + 1);
+                        let k = rng.usize(..v.len() + 1);
                         v.insert(k, c);
                     }
                     1 if !v.is_empty() => {
-                        let k = rng.below(v.len());
+                        let k = rng.usize(..v.len());
                         v.remove(k);
                     }
                     _ if !v.is_empty() => {
-                        let k = rng.below(v.len());
+                        let k = rng.usize(..v.len());
                         v[k] = c;
                     }
                     _ => v.push(c),
@@ -393,9 +398,9 @@ fn no_panic_on_random_inputs() {
             }
             v.into_iter().collect()
         } else {
-            let len = rng.below(24);
+            let len = rng.usize(..24);
             (0..len)
-                .map(|_| alphabet[rng.below(alphabet.len())])
+                .map(|_| alphabet[rng.usize(..alphabet.len())])
                 .collect()
         };
         if let Ok(e) = Expr::parse(&s) {

@@ -1,7 +1,7 @@
 use super::*;
 
 use super::refine::{inf_norm, residual};
-use crate::scene::testing::SplitMix64;
+use fastrand::Rng;
 
 /// Dense row-major copy of the full symmetric matrix.
 fn dense(m: &SymCsc) -> Vec<f64> {
@@ -49,20 +49,25 @@ fn rel_residual(m: &SymCsc, b: &[f64], x: &[f64]) -> f64 {
     residual(m, b, x, &mut r) / inf_norm(b)
 }
 
-fn random_vec(rng: &mut SplitMix64, n: usize) -> Vec<f64> {
-    (0..n).map(|_| rng.symmetric_unit()).collect()
+/// A number in `[-1, 1)`.
+fn symmetric_unit(rng: &mut Rng) -> f64 {
+    2.0 * rng.f64() - 1.0
+}
+
+fn random_vec(rng: &mut Rng, n: usize) -> Vec<f64> {
+    (0..n).map(|_| symmetric_unit(rng)).collect()
 }
 
 /// Random sparse SPD matrix: random symmetric off-diagonals, diagonally dominant.
 fn random_spd(n: usize, per_row: usize, seed: u64) -> SymCsc {
-    let mut rng = SplitMix64(seed);
+    let mut rng = Rng::with_seed(seed);
     let mut trip = Vec::new();
     let mut rowsum = vec![0.0; n];
     for i in 0..n {
         for _ in 0..per_row {
-            let j = rng.below(n);
+            let j = rng.usize(..n);
             if j != i {
-                let v = rng.symmetric_unit();
+                let v = symmetric_unit(&mut rng);
                 trip.push((i, j, v));
                 rowsum[i] += v.abs();
                 rowsum[j] += v.abs();
@@ -70,7 +75,7 @@ fn random_spd(n: usize, per_row: usize, seed: u64) -> SymCsc {
         }
     }
     for (i, s) in rowsum.iter().enumerate() {
-        trip.push((i, i, s + 0.5 + rng.symmetric_unit().abs()));
+        trip.push((i, i, s + 0.5 + symmetric_unit(&mut rng).abs()));
     }
     SymCsc::from_triplets(n, &trip).unwrap()
 }
@@ -81,7 +86,7 @@ fn random_spd(n: usize, per_row: usize, seed: u64) -> SymCsc {
 /// nearby grid nodes (full row rank, so `K` is nonsingular even for
 /// `s_scale = 0`). Returns `(K, signs, n_g)`.
 fn saddle_scaled(m: usize, seed: u64, s_scale: f64) -> (SymCsc, Vec<i8>, usize) {
-    let mut rng = SplitMix64(seed);
+    let mut rng = Rng::with_seed(seed);
     let ng = m * m;
     let ns = m * m;
     let id = |i: usize, j: usize| i * m + j;
@@ -111,9 +116,9 @@ fn saddle_scaled(m: usize, seed: u64, s_scale: f64) -> (SymCsc, Vec<i8>, usize) 
             trip.push((ng + k, ng + k, -s_scale * deg));
             trip.push((ng + k, k, 1.0));
             for _ in 0..2 {
-                let ii = (i + rng.below(3)).saturating_sub(1).min(m - 1);
-                let jj = (j + rng.below(3)).saturating_sub(1).min(m - 1);
-                trip.push((ng + k, id(ii, jj), 0.3 * rng.symmetric_unit()));
+                let ii = (i + rng.usize(..3)).saturating_sub(1).min(m - 1);
+                let jj = (j + rng.usize(..3)).saturating_sub(1).min(m - 1);
+                trip.push((ng + k, id(ii, jj), 0.3 * symmetric_unit(&mut rng)));
             }
         }
     }
@@ -133,7 +138,7 @@ fn random_spd_matches_dense() {
     let f = Ldlt::factor(&sym, &k, &vec![1; n]).unwrap();
     assert_eq!(f.stats().positive_pivots, n);
     assert_eq!(f.stats().regularized_pivots, 0);
-    let mut rng = SplitMix64(3);
+    let mut rng = Rng::with_seed(3);
     let b = random_vec(&mut rng, n);
     let mut x = b.clone();
     f.solve_in_place(&mut x);
@@ -158,7 +163,7 @@ fn check_saddle(m: usize) {
     assert_eq!(st.positive_pivots, ng, "{st:?}");
     assert_eq!(st.negative_pivots, n - ng, "{st:?}");
     assert!(st.min_abs_pivot > 0.0 && st.max_abs_pivot.is_finite());
-    let mut rng = SplitMix64(5);
+    let mut rng = Rng::with_seed(5);
     let b = random_vec(&mut rng, n);
     let mut x = vec![0.0; n];
     let rel = f.solve_refined(&k, &b, &mut x, 10, 1e-14);
@@ -213,7 +218,7 @@ fn trailing_inverse_matches_solves() {
 #[test]
 fn cholesky_solve_matches_ldlt() {
     let k = random_spd(300, 4, 9);
-    let mut rng = SplitMix64(4);
+    let mut rng = Rng::with_seed(4);
     let b = random_vec(&mut rng, k.n);
     let mut x = b.clone();
     let t = cholesky_solve(&k, &mut x).unwrap();
@@ -234,7 +239,7 @@ fn refactor_and_block_refinement_match_single_solves() {
     let again = Ldlt::refactor(&sym, &shifted, &signs, Some(first)).unwrap();
     let fresh = Ldlt::factor(&sym, &shifted, &signs).unwrap();
     assert_eq!(again.values, fresh.values);
-    let mut rng = SplitMix64(8);
+    let mut rng = Rng::with_seed(8);
     let mut b = random_vec(&mut rng, 3 * k.n);
     b[k.n..2 * k.n].fill(0.0);
     let mut x = vec![0.0; b.len()];
@@ -315,7 +320,7 @@ fn zero_s_block_is_regularized_and_refined() {
         assert!(st.regularized_pivots > 0, "{st:?}");
         assert_eq!(st.positive_pivots, ng, "{st:?}");
         assert_eq!(st.negative_pivots, k.n - ng, "{st:?}");
-        let mut rng = SplitMix64(2);
+        let mut rng = Rng::with_seed(2);
         let b = random_vec(&mut rng, k.n);
         let mut x = vec![0.0; k.n];
         let rel = f.solve_refined(&k, &b, &mut x, 10, 1e-14);
@@ -343,12 +348,12 @@ fn wrong_sign_and_singular_pivots_are_regularized() {
 fn symbolic_reuse_and_same_pattern() {
     let (k1, signs, _) = saddle(12, 1);
     let mut k2 = k1.clone();
-    let mut rng = SplitMix64(9);
+    let mut rng = Rng::with_seed(9);
     // Same pattern, different values: scale G rows / perturb couplings.
     for j in 0..k2.n {
         for p in k2.col_ptr[j]..k2.col_ptr[j + 1] {
             if k2.row_idx[p] != j {
-                k2.values[p] *= 1.0 + 0.2 * rng.symmetric_unit();
+                k2.values[p] *= 1.0 + 0.2 * symmetric_unit(&mut rng);
             } else {
                 k2.values[p] *= 1.5;
             }
@@ -408,7 +413,7 @@ fn solve_many_matches_single_solves() {
         let n = k.n;
         let sym = SymbolicLdlt::analyze(&k).unwrap();
         let f = Ldlt::factor(&sym, &k, &signs).unwrap();
-        let mut rng = SplitMix64(8);
+        let mut rng = Rng::with_seed(8);
         let b = random_vec(&mut rng, n * ncols);
         let mut many = b.clone();
         f.solve_many_in_place(&mut many, ncols);
@@ -455,7 +460,7 @@ fn from_triplets_sums_mirrors_and_multiplies() {
     // Random larger check against the dense product.
     let big = random_spd(50, 4, 2);
     let ad = dense(&big);
-    let mut rng = SplitMix64(1);
+    let mut rng = Rng::with_seed(1);
     let x = random_vec(&mut rng, 50);
     let mut y = vec![0.0; 50];
     big.mul_vec(&x, &mut y);
