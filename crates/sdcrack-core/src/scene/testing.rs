@@ -1,6 +1,6 @@
-//! Test support of the core: the repository's scenes that unit tests solve, built without their
-//! TOML (this crate has no parser): keep domain, crack, meshing, f, g and the exact solution as
-//! scenes/*.toml have them. (Random tests draw from `fastrand::Rng::with_seed`, one seeded
+//! Test support of the core: the repository's scenes that unit tests solve, built without a TOML
+//! parser (this crate has none): f, g and the exact solution are read off scenes/*.toml's lines,
+//! whose domain, crack and level-0 cells are checked to be the ones built here. (Random tests draw from `fastrand::Rng::with_seed`, one seeded
 //! generator for the whole workspace, so a failure reproduces.)
 
 use super::*;
@@ -60,22 +60,60 @@ pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -
 }
 
 /// scenes/mixed.toml, the default scene: partly open, partly closed.
-pub(crate) fn mixed() -> Scene {
-    scene("mixed", "20*sin(2*pi*x)*sign(y)", "0", None)
+/// The string value of the first line `key = "…"` of a scene file's text (the repository's scene
+/// files write f, g, u and jump that way); panics when there is none, so a test scene cannot drift
+/// from its file unnoticed.
+fn string_value<'a>(text: &'a str, key: &str) -> &'a str {
+    text.lines()
+        .find_map(|line| {
+            let (k, v) = line.split_once('=')?;
+            (k.trim() == key).then(|| v.trim().strip_prefix('"')?.strip_suffix('"'))?
+        })
+        .unwrap_or_else(|| panic!("no line {key} = \"…\" in the scene file"))
 }
 
-/// scenes/open-exact.toml: the fully open crack, u = Im √(z² − 1/4).
-pub(crate) fn open_exact() -> Scene {
-    let u = "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)";
-    scene("open-exact", "0", u, Some((u, "2*sqrt(0.25 - x^2)")))
-}
-
-/// scenes/closed-exact.toml: the closed crack, u = sin(πx) cos(πy) − y.
-pub(crate) fn closed_exact() -> Scene {
+/// The scene built from a repository scene file's expressions (f, g and, when `exact`, u and
+/// jump); the file's domain, crack and level-0 cells must be the ones [`scene`] builds.
+fn from_file(name: &str, text: &str, exact: bool) -> Scene {
+    for line in [
+        "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
+        "crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }",
+        "cells = [8, 8]",
+    ] {
+        assert!(
+            text.lines().any(|l| l.trim() == line),
+            "{name}: no line {line}"
+        );
+    }
+    let exact = exact.then(|| (string_value(text, "u"), string_value(text, "jump")));
     scene(
+        name,
+        string_value(text, "f"),
+        string_value(text, "g"),
+        exact,
+    )
+}
+
+pub(crate) fn mixed() -> Scene {
+    from_file(
+        "mixed",
+        include_str!("../../../../scenes/mixed.toml"),
+        false,
+    )
+}
+
+pub(crate) fn open_exact() -> Scene {
+    from_file(
+        "open-exact",
+        include_str!("../../../../scenes/open-exact.toml"),
+        true,
+    )
+}
+
+pub(crate) fn closed_exact() -> Scene {
+    from_file(
         "closed-exact",
-        "2*pi^2*sin(pi*x)*cos(pi*y)",
-        "sin(pi*x)*cos(pi*y) - y",
-        Some(("sin(pi*x)*cos(pi*y) - y", "0")),
+        include_str!("../../../../scenes/closed-exact.toml"),
+        true,
     )
 }
