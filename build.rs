@@ -12,7 +12,7 @@ const SOURCES: [&str; 5] = ["src", "crates", "Cargo.toml", "Cargo.lock", "build.
 
 /// Runs git without its optional locks: a plain `git status` refreshes the index and rewrites
 /// `.git/index` (a watched path below) when the files' stat data is racy, as right after a clone,
-/// so the second build of a fresh clone recompiled the crate (74 s, issue 34).
+/// so the second build of a fresh clone recompiled the crate (74 s).
 fn git(args: &[&str]) -> Option<String> {
     let out = Command::new("git")
         .arg("--no-optional-locks")

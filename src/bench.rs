@@ -1,12 +1,12 @@
 //! `sdcrack bench`: the cost of the smooth-domain solver against one sparse Cholesky of its mesh.
 //!
-//! Owns the benchmark protocol of issue #7, measured in one process, one after the other:
+//! Owns the benchmark protocol (docs/performance.md), measured in one process, one after the other:
 //! 1. the yardstick: faer's sparse Cholesky (AMD, symbolic + numeric + one solve) of the P1
 //!    Laplacian on the interior vertices of the same structured mesh;
 //! 2. one complete case (broken u, M1, δ = 0): mesh, assembly, ordering and symbolic analysis,
 //!    numeric factorisation, crack reduction, contact solve; no field, no error norm, no reference;
 //! 3. a sweep of 6 δ × 3 multipliers (18 cases, 6 numeric factorisations) on the same mesh;
-//! 4. the same case and sweep with the lumped p mass (issue #14), and that variant's goals
+//! 4. the same case and sweep with the lumped p mass, and that variant's goals
 //!    ([`GoalCheck`]: one case ≤ 3 yardsticks, peak memory ≤ 3 × the yardstick's, sweep ≤ 1.3 × its
 //!    own factorisations), each with the factor by which it is missed and the phases carrying it.
 //!
@@ -98,7 +98,7 @@ pub struct BenchReport {
     pub sweep_lumped_factorization_s: f64,
     /// Phases of the lumped sweep, counted as in `sweep_phases`.
     pub sweep_lumped_phases: Timings,
-    /// The performance goals of the lumped variant (issue #14), measured.
+    /// The performance goals of the lumped variant, measured.
     pub goals: Vec<GoalCheck>,
     /// Peak resident memory of the yardstick phase.
     pub yardstick_peak_rss_mb: f64,
@@ -116,7 +116,7 @@ pub struct BenchReport {
     pub iterative: IterativeRoute,
 }
 
-/// The iterative route of issue 26 (item 3), measured on the lumped case's system (broken, δ = 0):
+/// The iterative route (preconditioned CG instead of the factorisation), measured on the lumped case's system (broken, δ = 0):
 /// PCG on the Schur operator ([`crate::krylov`]) for x₀, and what a whole case by that route needs.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct IterativeRoute {
@@ -193,7 +193,7 @@ fn named_phases(t: &Timings) -> Vec<(String, f64)> {
     .collect()
 }
 
-/// The goals of issue #14 for the lumped p mass: one case ≤ 3 yardsticks, its peak memory ≤ 3 ×
+/// The goals for the lumped p mass: one case ≤ 3 yardsticks, its peak memory ≤ 3 ×
 /// the yardstick's, the 18-case sweep ≤ 1.3 × its own numeric factorisations.
 fn lumped_goals(r: &BenchReport) -> Vec<GoalCheck> {
     let y = r.bare_cholesky_s;
@@ -234,7 +234,7 @@ fn lumped_goals(r: &BenchReport) -> Vec<GoalCheck> {
 fn goal_lines(goals: &[GoalCheck]) -> String {
     let mut out = String::from(
         "
-goals of the lumped p mass (issue #14):
+goals of the lumped p mass:
 ",
     );
     for g in goals {
@@ -366,7 +366,7 @@ impl BenchReport {
         let direct = self.case_lumped_s / y;
         let bound = it.case_lower_bound_s / y;
         format!(
-            "\npreconditioned CG on S (issue 26; lumped, broken, δ = 0; preconditioner: Cholesky of \
+            "\npreconditioned CG on S (lumped, broken, δ = 0; preconditioner: Cholesky of \
              the P1 stiffness + boundary mass / h):\n\
              \x20 preconditioner: assembly {:.2} s, Cholesky {:.2} s ({:.2} yardsticks)\n\
              \x20 one solve: {} iterations (recursive residual ≤ {:.0e}; true relative residual \

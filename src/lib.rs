@@ -1,7 +1,7 @@
 //! sdcrack — the smooth-domain mixed method for a crack with unilateral contact
 //! (Belhachmi, Sac-Epée, Sokolowski, C. R. Math. 338 (2004) 499–504).
 //!
-//! A workspace of three crates, layered (issue 35; tests/python/test_layout.py states the graph):
+//! A workspace of three crates, layered (tests/python/test_layout.py states the graph):
 //! - `sdcrack-core` (crates/sdcrack-core): the maths and the study — [`problem`], [`expr`],
 //!   [`mesh`], [`geometry`], [`fe`], [`assembly`], [`linalg`], [`ordering`], [`contact`],
 //!   [`multiplier`], [`krylov`], [`norms`], the validated [`scene`] struct and [`study`], which
