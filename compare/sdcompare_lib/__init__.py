@@ -11,6 +11,6 @@ Where it is found, with nothing edited in sys.path:
 - the tests in a checkout: pyproject.toml's [tool.pytest.ini_options] `pythonpath` names compare/;
 - the reference solvers (references/<tool>/solve.py): the folder compare/ on PYTHONPATH, set by
   whoever launches them (sdcrack: src/references.rs; the tests: conftest.py's run_env), e.g.
-  `PYTHONPATH=compare /usr/bin/python3 references/dolfinx/solve.py MESH --out DIR`; ci/cases
+  `PYTHONPATH=compare /usr/bin/python3 references/dolfinx/solve.py MESH --out DIR`; tools/cases
   sets it likewise for the script it runs.
 """

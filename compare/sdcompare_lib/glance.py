@@ -258,7 +258,7 @@ def reference_sentence(g):
 
 
 def index_line(g):
-    """The campaign index's line (ci/campaign_index.py shows it as written): the ratios per
+    """The campaign index's line (tools/campaign_index.py shows it as written): the ratios per
     group at the comparison level, the rates on both sides, and the δ → 0 outcome."""
     if g["level"] is None or not g["rows"]:
         head = "no references"

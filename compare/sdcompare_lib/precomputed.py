@@ -1,7 +1,7 @@
 """Independent errors recomputed per shard of a workflow campaign, kept beside it, read back by
 the scene's report.
 
-In a campaign (ci/workflow/Snakefile) a `check` job runs ``sdcompare --precompute SHARD --out
+In a campaign (tools/workflow/Snakefile) a `check` job runs ``sdcompare --precompute SHARD --out
 FILE`` on every solver and reference shard as soon as the shard is written, in parallel with the
 other jobs; the scene's report job then runs ``sdcompare RESULTS --precomputed FILE ...``. An
 entry is this tool's own recomputation (exact.py) of one case's errors against the exact

@@ -337,7 +337,7 @@ def provenance(summary, refs):
 
 
 # A rerun writes where it is run from, never into the results tree: its --out is this folder,
-# relative, unless ci/cases --rerun-dir names another one.
+# relative, unless tools/cases --rerun-dir names another one.
 RERUN_FOLDER = "sdcrack-rerun"
 CHECKOUT_BINARY = ("target", "release", "sdcrack")
 
@@ -346,7 +346,7 @@ def rerun_executable(summary, checkout=None):
     """The binary a rerun command names. For a results folder (summary.json's dict): the binary
     that wrote it (provenance `executable`, when recorded and absolute), else `sdcrack` from PATH.
     For a scene file (`summary` None): the checkout's target/release/sdcrack under `checkout`.
-    One home for the reports (rerun_command) and ci/cases."""
+    One home for the reports (rerun_command) and tools/cases."""
     if summary is None:
         return os.path.join(checkout, *CHECKOUT_BINARY)
     prov = summary.get("provenance") if isinstance(summary, dict) else None
@@ -362,7 +362,7 @@ def rerun_command(results_dir, summary, scene_file, k, rerun_dir=None):
     warm-started from the previous one, as in the run, so the numbers come back exactly; `--delta`
     only when the run was restricted to one δ), into rerun_out(rerun_dir, ...): by default the
     relative folder sdcrack-rerun/<scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>] of the
-    directory it is run from. The command ci/cases prints for the same folder."""
+    directory it is run from. The command tools/cases prints for the same folder."""
     from .settings import scene_lists
 
     plan_deltas = sorted({float(d) for d in ((summary.get("plan") or {}).get("deltas") or [])})
@@ -386,7 +386,7 @@ def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir=None):
     multiplier, p mass, p space; absent p_mass / p_space: consistent / continuous): the whole δ
     sweep, or `--delta` alone when `only_delta` is given, into
     rerun_out(RERUN_DIR, <scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>]) (the suffixes of the
-    solver's field names). One home for the commands of the reports and of ci/cases."""
+    solver's field names). One home for the commands of the reports and of tools/cases."""
     import shlex
 
     args = [exe, "run", scene_path, "--level", str(k["level"]), "--u-space", str(k["u_space"]),

@@ -41,7 +41,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def parse_args(argv):
-    p = _Parser(prog=PROG, description="Compares a rerun (the output of a report's or ci/cases' "
+    p = _Parser(prog=PROG, description="Compares a rerun (the output of a report's or tools/cases' "
                 "rerun command) with the results folder it reruns: every dataset of the rerun's "
                 "fields.h5 / verification.h5 and the numbers of each rerun case in summary.json. "
                 "Exit 0 the same, 1 different, 2 bad input.")

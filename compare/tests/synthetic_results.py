@@ -32,7 +32,7 @@ from sdcompare_lib import exact
 
 CRACK = [(-0.5, 0.0), (0.5, 0.0)]
 # smooth on each face, open on the crack ([u] = 2 m³ > 0), tangential ∂u/∂x jumps, ∂u/∂y = 0 on
-# both faces (ci/untuned-scenes/smooth-open.toml on [-1, 1]²)
+# both faces (tools/untuned-scenes/smooth-open.toml on [-1, 1]²)
 OPEN = {"u": "sign(y)*max(0.25-x^2,0)^3*cos(y)", "jump": "2*max(0.25-x^2,0)^3",
         "f": "sign(y)*cos(y)*(max(0.25-x^2,0)^3 + 6*max(0.25-x^2,0)^2 - 24*x^2*max(0.25-x^2,0))"}
 # smooth and closed everywhere (scenes/closed-exact.toml)

@@ -152,10 +152,10 @@ INDEX_MEASURE = MEASURE.replace(
 
 @pytest.mark.parametrize("width", [1280, 800])
 def test_campaign_index_says_per_scene_what_converged(report, width, tmp_path):
-    """ci/campaign_index.py on the report's results root: one row per scene with what converged,
+    """tools/campaign_index.py on the report's results root: one row per scene with what converged,
     the last rates and the first problem (none here), and no sideways scrolling."""
     root = report.parent.parent.parent
-    subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "ci", "campaign_index.py"), str(root)],
+    subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "campaign_index.py"), str(root)],
                    check=True, capture_output=True, timeout=120)
     page = root / "index.html"
     probe = tmp_path / "index.html"

@@ -1,4 +1,4 @@
-"""ci/bench_references.py: equal-error speed-ups of both p masses and both p spaces, the report,
+"""tools/bench_references.py: equal-error speed-ups of both p masses and both p spaces, the report,
 the goals of issues 24 and 32, load control.
 
 The arithmetic is checked on hand-made rows whose expected ratios are worked out by hand below;
@@ -18,11 +18,11 @@ import pytest
 import ci_script
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-SCRIPT = ROOT / "ci" / "bench_references.py"
+SCRIPT = ROOT / "tools" / "bench_references.py"
 EXE = ROOT / "target" / "release" / "sdcrack"
 
 
-br = ci_script.load("ci/bench_references.py")
+br = ci_script.load("tools/bench_references.py")
 
 
 def entry(u_l2, solver_s, wall_s, norms_s=None):

@@ -1,7 +1,7 @@
 """A no-op `cargo build --release` does not rebuild the crate (issue 25, item 10).
 
 build.rs once watched .git/packed-refs, which a checkout may lack; cargo reruns a build script whose
-watched path is missing, so every build recompiled sdcrack (~40 s) and a no-op ci/campaign took
+watched path is missing, so every build recompiled sdcrack (~40 s) and a no-op tools/campaign took
 33-54 s instead of 2 s. Runs where this file is in a git checkout with a release build (ci/test);
 skipped elsewhere (ci/test-pip's copy has no .git, and a first build would take minutes)."""
 import glob

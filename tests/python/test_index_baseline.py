@@ -1,4 +1,4 @@
-"""ci/campaign_index.py --baseline: what changed per scene since an earlier campaign folder
+"""tools/campaign_index.py --baseline: what changed per scene since an earlier campaign folder
 (verdicts, scenes new or gone, series' last rates and finest errors beyond sdcompare's
 verdict.BASELINE_* tolerances), on small hand-made campaign folders; and the GitHub nightly that
 hands it the last successful night (.github/workflows/nightly.yml)."""
@@ -14,8 +14,8 @@ import yaml  # python3-yaml, installed by ci/setup
 import ci_script
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-INDEX = ROOT / "ci" / "campaign_index.py"
-ci = ci_script.load("ci/campaign_index.py")
+INDEX = ROOT / "tools" / "campaign_index.py"
+ci = ci_script.load("tools/campaign_index.py")
 TOL = ci.baseline_tolerances()
 RATE_ATOL, ERROR_RTOL = TOL["BASELINE_RATE_ATOL"], TOL["BASELINE_ERROR_RTOL"]
 

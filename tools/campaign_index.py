@@ -1,10 +1,10 @@
 #!/usr/bin/python3
 """The index of a campaign folder: DIR/index.html and DIR/index.json, one row per scene.
 
-    ci/campaign_index.py DIR [--scene NAME ...] [--baseline BASEDIR [--baseline-label TEXT]
+    tools/campaign_index.py DIR [--scene NAME ...] [--baseline BASEDIR [--baseline-label TEXT]
                                                  | --no-baseline REASON]
 
-DIR is a campaign folder of ci/campaign or ci/nightly (DIR/<name>/report/report.json per scene,
+DIR is a campaign folder of tools/campaign or ci/nightly (DIR/<name>/report/report.json per scene,
 the jobs' logs under DIR/logs/<name>/), or a folder of such scene folders put together, e.g. the
 GitHub nightly's downloaded artifacts. The scenes are the --scene names, else those of
 DIR/inputs/config.json (the last campaign run there), else every DIR/<name>/ holding a report,

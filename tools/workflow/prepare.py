@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Prepares a campaign folder's inputs/ for ci/workflow/Snakefile (called by ci/campaign).
+"""Prepares a campaign folder's inputs/ for tools/workflow/Snakefile (called by tools/campaign).
 
     prepare.py --out DIR --bin SDCRACK --repo ROOT [--levels A-B] [--threads N]
                [--baseline OLD_DIR] [--expectations FILE] [--dry-run] SCENE.toml...
