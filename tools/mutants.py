@@ -30,6 +30,8 @@ import sys
 import time
 import tomllib
 
+from sdcompare_lib.sdresults import write_atomic
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CATALOGUE = os.path.join(ROOT, "tools", "mutants.toml")
 DEFAULT_SCENES = ["scenes/closed-exact.toml", "scenes/open-exact.toml", "scenes/mixed.toml",
@@ -281,10 +283,7 @@ def record(path, table):
     _, sep2, tail = rest.partition(END)
     if not (sep1 and sep2):
         raise UsageError(f"{path} lacks the markers {BEGIN} … {END}")
-    tmp = path + ".tmp"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(f"{head}{BEGIN}\n{table}\n{END}{tail}")
-    os.replace(tmp, path)
+    write_atomic(path, f"{head}{BEGIN}\n{table}\n{END}{tail}")
 
 
 def parse_args(argv):

@@ -64,6 +64,7 @@ import re
 import tomllib
 
 from . import theory
+from .sdresults import write_atomic
 from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, InputError, finite_number, p_mass, p_space,
                    variant_label, variant_of, variant_order)
 
@@ -655,27 +656,25 @@ def record(a, res, path, out=print):
         new_text = text.rstrip("\n") + "\n\n" + block + "\n"
     # what changed, then the file written atomically and read back
     changes = _changes(old, rows)
-    tmp = path + ".record-partial"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(new_text)
     try:
-        load_expectations(tmp)
-        back = [r for r in load_rows(tmp) if r["scene"] == scene]
-        others = [r for r in load_rows(tmp) if r["scene"] != scene]
-    except (ValueError, OSError) as exc:
-        os.unlink(tmp)
-        raise InputError(f"not recorded: the new {path} would not load: {exc}")
-    strip = [{k: v for k, v in r.items() if k != "index"} for r in back]
-    same_others = [{k: v for k, v in r.items() if k != "index"} for r in others] == \
-        [{k: v for k, v in r.items() if k != "index"} for r in old_all if r["scene"] != scene]
-    if strip != rows or not same_others:
-        os.unlink(tmp)
-        raise InputError(f"not recorded: {path} would not read back as written")
-    try:
-        os.chmod(tmp, os.stat(path).st_mode & 0o7777)
+        mode = os.stat(path).st_mode & 0o7777
     except OSError:
-        pass
-    os.replace(tmp, path)
+        mode = None
+
+    def reads_back(tmp):
+        """The new file loads, holds `rows` for the scene and the other scenes' rows unchanged."""
+        try:
+            load_expectations(tmp)
+            back = [r for r in load_rows(tmp) if r["scene"] == scene]
+            others = [r for r in load_rows(tmp) if r["scene"] != scene]
+        except (ValueError, OSError) as exc:
+            raise InputError(f"not recorded: the new {path} would not load: {exc}")
+        strip = [{k: v for k, v in r.items() if k != "index"} for r in back]
+        same_others = [{k: v for k, v in r.items() if k != "index"} for r in others] == \
+            [{k: v for k, v in r.items() if k != "index"} for r in old_all if r["scene"] != scene]
+        if strip != rows or not same_others:
+            raise InputError(f"not recorded: {path} would not read back as written")
+    write_atomic(path, new_text, mode, reads_back)
     for line in changes:
         out(line)
     out(f"{scene}: {len(rows)} [[ratio]] row(s) recorded in {path} against {tool}, from "

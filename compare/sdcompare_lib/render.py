@@ -15,6 +15,7 @@ import shutil
 import struct
 import tempfile
 
+from .sdresults import replace_folder
 from .read import DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag
 
 # Tables longer than this are folded (<details>) outside the summary section.
@@ -252,21 +253,14 @@ def publish(tmp, results_dir, replace=False):
 
     Without replace: refuse (ReportExists) if report/ exists; the rename of a directory onto a
     missing name is atomic, so readers see either no report or a complete one.
-    With replace: the old report is first renamed to a hidden name, then the new one is renamed
-    into place, then the old one is deleted (two atomic renames; report/ is never half-written,
-    but it is absent for the instant between them)."""
+    With replace: sdresults.replace_folder (the old report renamed aside, the new one into place,
+    the old one deleted: report/ is never half-written, absent only for the instant between)."""
     final = os.path.join(results_dir, "report")
     make_readable(tmp)
-    if os.path.lexists(final):
-        if not replace:
-            shutil.rmtree(tmp, ignore_errors=True)
-            raise ReportExists(f"{final} exists (use --replace to replace it atomically)")
-        old = tempfile.mkdtemp(prefix=".report.old-", dir=results_dir)
-        os.rename(final, os.path.join(old, "report"))
-        os.rename(tmp, final)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.rename(tmp, final)
+    if os.path.lexists(final) and not replace:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise ReportExists(f"{final} exists (use --replace to replace it atomically)")
+    replace_folder(tmp, final)
     return final
 
 

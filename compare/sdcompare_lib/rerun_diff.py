@@ -11,7 +11,6 @@ subset of the original's datasets and cases: that is the normal case. Exit codes
 stderr). See compare/README.md, "Rerun commands".
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -91,14 +90,12 @@ def results_folder(path):
 
 
 def load_summary(folder):
+    """folder/summary.json (read.load_json), which must hold a `cases` list; BadInput otherwise."""
     path = os.path.join(folder, "summary.json")
     try:
-        with open(path, encoding="utf-8") as fh:
-            summary = json.load(fh)
-    except OSError as exc:
-        raise BadInput(f"{path}: unreadable ({exc.strerror})")
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise BadInput(f"{path}: malformed JSON ({exc})")
+        summary = read.load_json(path)
+    except read.InputError as exc:
+        raise BadInput(str(exc))
     if not isinstance(summary, dict) or not isinstance(summary.get("cases"), list):
         raise BadInput(f"{path}: no `cases` list: not an sdcrack summary.json")
     return summary

@@ -28,7 +28,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
 import fake_export as fe
-from sdcompare_lib import exact
+from sdcompare_lib import exact, read
 
 CRACK = [(-0.5, 0.0), (0.5, 0.0)]
 # smooth on each face, open on the crack ([u] = 2 m³ > 0), tangential ∂u/∂x jumps, ∂u/∂y = 0 on
@@ -193,8 +193,8 @@ def write_results(out, name="pspace", solution=OPEN, levels=(0, 1, 2),
 
 
 def load_summary(folder):
-    with open(os.path.join(folder, "summary.json"), encoding="utf-8") as fh:
-        return json.load(fh)
+    """folder/summary.json, read as the compare tool reads it."""
+    return read.load_json(os.path.join(folder, "summary.json"))
 
 
 def save_summary(folder, summary):

@@ -20,6 +20,7 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
+from conftest import run_env
 from scene_text import set_key
 
 MEASURE = """<script>
@@ -156,7 +157,7 @@ def test_campaign_index_says_per_scene_what_converged(report, width, tmp_path):
     the last rates and the first problem (none here), and no sideways scrolling."""
     root = report.parent.parent.parent
     subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "campaign_index.py"), str(root)],
-                   check=True, capture_output=True, timeout=120)
+                   env=run_env(), check=True, capture_output=True, timeout=120)
     page = root / "index.html"
     probe = tmp_path / "index.html"
     probe.write_text(page.read_text().replace("</body>", INDEX_MEASURE + "</body>"))

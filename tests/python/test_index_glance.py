@@ -9,6 +9,7 @@ import subprocess
 import sys
 
 import ci_script
+from conftest import run_env
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 ci = ci_script.load("tools/campaign_index.py")
@@ -47,7 +48,7 @@ def test_index_shows_the_line(tmp_path):
         (tmp_path / name / "report").mkdir(parents=True)
         (tmp_path / name / "report" / "report.json").write_text(json.dumps(rep))
     r = subprocess.run([sys.executable, str(ROOT / "tools" / "campaign_index.py"), str(tmp_path)],
-                       capture_output=True, text=True, timeout=60)
+                       env=run_env(), capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     rows = {s["name"]: s for s in json.loads((tmp_path / "index.json").read_text())["scenes"]}
     assert rows["a"]["glance"]["line"] == LINE and rows["b"]["glance"]["line"] == "no references"

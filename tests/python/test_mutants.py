@@ -12,6 +12,7 @@ import sys
 import pytest
 
 import ci_script
+from conftest import run_env
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 mutants = ci_script.load("tools/mutants.py")
@@ -97,5 +98,5 @@ def test_docs_record_a_run_of_the_whole_catalogue():
 
 def test_bad_usage_exits_2_with_one_line():
     p = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "mutants.py"), "--only", "nope"],
-                       capture_output=True, text=True)
+                       env=run_env(), capture_output=True, text=True)
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "no mutant named nope" in p.stderr

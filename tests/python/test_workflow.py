@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 import pytest
+from conftest import run_env
 from scene_text import add_key, set_key
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -300,14 +301,15 @@ def test_index_of_downloaded_scene_folders(full_run, tmp_path):
         shutil.copytree(out / name / "report", tmp_path / name / "report")
     shutil.copytree(out / "logs" / "mixed", tmp_path / "logs" / "mixed")
     r = subprocess.run(["/usr/bin/python3", str(ROOT / "tools" / "campaign_index.py"), str(tmp_path)],
-                       capture_output=True, text=True)
+                       env=run_env(), capture_output=True, text=True)
     index = json.loads((tmp_path / "index.json").read_text())
     want = {s["name"]: s["verdict"] for s in json.loads((out / "index.json").read_text())["scenes"]}
     assert {s["name"]: s["verdict"] for s in index["scenes"]} == want
     assert r.returncode == (0 if set(want.values()) == {"PASS"} else 1)
     # an expected scene without a folder is FAIL
     r = subprocess.run(["/usr/bin/python3", str(ROOT / "tools" / "campaign_index.py"), str(tmp_path),
-                        "--scene", "mixed", "--scene", "absent"], capture_output=True, text=True)
+                        "--scene", "mixed", "--scene", "absent"], env=run_env(),
+                       capture_output=True, text=True)
     assert r.returncode == 1
     assert "  FAIL  absent: no report" in r.stdout
 
@@ -660,7 +662,8 @@ def test_dry_run_of_both_p_spaces(scenes, tmp_path):
     sm = subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "tools" / "workflow" / "Snakefile"),
                          "--directory", str(out), "--configfile",
                          str(out / "inputs" / "config.dry-run.json"), "--cores", "1",
-                         "--dry-run", "--printshellcmds"], capture_output=True, text=True)
+                         "--dry-run", "--printshellcmds"], env=run_env(), capture_output=True,
+                        text=True)
     assert sm.returncode == 0, sm.stdout[-3000:] + sm.stderr[-3000:]
     blocks = dry_run_blocks(sm.stdout)
     solver = {b["output"]: b["shell"] for b in blocks if b["rule"] == "solver"}
