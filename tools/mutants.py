@@ -1,4 +1,4 @@
-"""Mutation tests of the verification (issue 23): tools/mutants' engine.
+"""Mutation tests of the verification: tools/mutants' engine.
 
 Each mutant of tools/mutants.toml is one realistic bug (a wrong factor, a swapped pair, a sign) in the
 solver (Rust: src/, crates/), a reference (references/) or the compare tool (compare/). It is

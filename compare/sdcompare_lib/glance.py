@@ -1,4 +1,4 @@
-"""The comparison at a glance (issue 34, item 2): sdcrack against dolfinx and FreeFEM, and the
+"""The comparison at a glance: sdcrack against dolfinx and FreeFEM, and the
 δ → 0 outcome, for the first screen of a report and the campaign index.
 
 What it measures, per variant (u space × multiplier × p mass × p space), is the u error at the

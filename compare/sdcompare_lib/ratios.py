@@ -1,4 +1,4 @@
-"""Yardsticks from measurement (issue 33, item 5): the ratio of sdcrack's error to the references'.
+"""Yardsticks from measurement: the ratio of sdcrack's error to the references'.
 
 The reference yardstick (yardsticks.py) bounds sdcrack's error by a fixed 3 × the references' own
 error on the same mesh. A load-vector scatter bug made sdcrack's distance to the references

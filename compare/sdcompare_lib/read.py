@@ -38,7 +38,7 @@ def finite_number(v):
 # without the key (an sdcrack older than the lumped p mass) is consistent.
 P_MASSES = ("consistent", "lumped")
 DEFAULT_P_MASS = "consistent"
-# The spaces of p (issue 32; summary.json: each case's `p_space`, the plan's `p_spaces`): the
+# The spaces of p (summary.json: each case's `p_space`, the plan's `p_spaces`): the
 # paper's continuous MINI p, or "broken-tangential", whose tangential component has one value per
 # crack face at the interior vertices of a straight crack (p·ν shared; kinks and tips shared). A
 # case without the key (an sdcrack older than the axis) is continuous. The broken-tangential p runs
@@ -244,7 +244,7 @@ class ExportLevel:
 
     @classmethod
     def one_crack(cls, level, points, tris, crack):
-        """A level of an export written before issue 16: the rows of crack.txt form one crack on a
+        """A level of an export written before polyline cracks: the rows of crack.txt form one crack on a
         structured grid."""
         return cls(int(level), points, tris, np.asarray(crack, dtype=np.int64), [(0, len(crack))])
 

@@ -11,7 +11,7 @@ ParaView, meshio and the compare tool read solver and references alike.
                 references' crack fields: `jump` = u⁺ − u⁻ (crack.txt's plus minus minus row) and
                 `contact_force` = the nodal multiplier λ_j ≥ 0 of the QP (0 off the active set and
                 at the tips), a name per quantity shared with the solver's files (README's field
-                table); files written before issue 34 call the contact force `multiplier`, which
+                table); older files call the contact force `multiplier`, which
                 crack_field() still reads
                 every dataset has the attributes "level" (int), "tool" (str) and, when the caller
                 gives it, "h" (float, the level's mesh size); the file has the attribute "tool"
@@ -30,7 +30,7 @@ as one grey square in ParaView and meshio.read could not read it.
 
 import numpy as np
 
-# Old names of crack fields, by current name: what files written before issue 34 call them (the
+# Old names of crack fields, by current name: what older files call them (the
 # references' contact force was `multiplier`, a name that sdcrack's files use for the multiplier
 # space M0 / M1 / M1star of a case).
 OLD_NAMES = {"contact_force": ("multiplier",)}

@@ -253,7 +253,7 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
     the coarse ones by the export's mesh kind), all exact on shared (sub)triangles. The distances
     to the finest level, the costliest (each on the finest mesh), are computed for the cases of
     δ = ref_delta only: the series, the yardsticks and the report's table read them there and
-    nowhere else (issue 26: they were computed for every δ)."""
+    nowhere else (they were once computed for every δ)."""
     out = []
     meshes = ref.get("mesh") or {}
     if not meshes:
@@ -383,7 +383,7 @@ def kkt_rows(scene, cases):
                      "multipliers": c.get("multipliers"),
                      "regularized_pivots": c.get("regularized_pivots"),
                      "condition_estimate": c.get("condition_estimate"),
-                     # the δ' whose ‖K⁻¹‖₁ estimate κ₁ uses (δ itself in summaries before issue 26)
+                     # the δ' whose ‖K⁻¹‖₁ estimate κ₁ uses (δ itself in older summaries)
                      "condition_estimate_delta": c.get("condition_estimate_delta", c["delta"])})
     rows.sort(key=lambda r: (r["converged"], r["level"], variant_order(variant_of(r)),
                              -r["delta"]))

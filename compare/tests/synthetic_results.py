@@ -1,6 +1,6 @@
 """A synthetic sdcrack results folder (OUT/<scene>/: scene.toml, summary.json, fields.h5) that the
 compare tool judges like a real one, without the sdcrack binary: the tests of the p-space axis
-(issue 32) and the byte-for-byte check that a continuous-p folder is reported as before.
+and the byte-for-byte check that a continuous-p folder is reported as before.
 
 The fields are built from the scene's exact solution on the structured SW–NE meshes of [-1, 1]²
 cut along the crack (-1/2, 1/2) × {0} (references/tests/fake_export.py), as a discretisation of
@@ -104,7 +104,7 @@ def fields_of(ex, u_space, p_space, mesh, side, stall):
 
 
 def grid_name(level, u_space, multiplier, p_mass, p_space, delta):
-    """The field name the solver writes: the p-mass suffix, then -ptangential (issue 32)."""
+    """The field name the solver writes: the p-mass suffix, then -ptangential."""
     return (f"level{level}-{u_space}-{multiplier}"
             + ("" if p_mass == "consistent" else f"-{p_mass}")
             + ("" if p_space == "continuous" else "-ptangential") + f"-delta{delta:g}")

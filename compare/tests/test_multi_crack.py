@@ -1,4 +1,4 @@
-"""The compare tool on the format of issue 16: several polyline cracks and uniformly refined meshes.
+"""The compare tool on the polyline-crack export format: several polyline cracks and uniformly refined meshes.
 
 Meshes come from references/tests/fake_export.py (a kinked crack and a straight one on a structured
 grid; a perturbed coarse triangulation refined uniformly, triangle 4t + c inside t). Checked here:

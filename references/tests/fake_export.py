@@ -1,10 +1,10 @@
 """A tiny stand-in for `sdcrack mesh SCENE --out DIR` (for the reference and compare tests only).
 
-write_fake_export: the export format before issue 16 (no cracks.txt, crack_normals.txt; one side
+write_fake_export: the export format before polyline cracks (no cracks.txt, crack_normals.txt; one side
 per triangle): structured mesh of [-1,1]² with n×n cells split by SW–NE diagonals, crack on y = 0 for
 -0.5 ≤ x ≤ 0.5 (normal (0, 1)), n = n0·2^level (n0 divisible by 4).
 
-kinked_export, two_cracks_export, refined_export: the format of issue 16 (polyline cracks, several
+kinked_export, two_cracks_export, refined_export: the polyline-crack format (polyline cracks, several
 cracks, uniformly refined meshes; see the section below and compare/sdcompare_lib/sdexport.py).
 Standard library and numpy only.
 """

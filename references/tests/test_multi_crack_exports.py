@@ -1,4 +1,4 @@
-"""The export format of issue 16 (several polyline cracks, uniformly refined meshes) in both references.
+"""The polyline-crack export format (several polyline cracks, uniformly refined meshes) in both references.
 
 Fake exports (tests/fake_export.py): a kinked crack on a structured grid (grid line, then a cell
 diagonal), two cracks (that kink and a straight one), two parallel cracks one cell apart, and a

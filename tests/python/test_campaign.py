@@ -337,7 +337,7 @@ def test_case_list_of_a_p_spaces_results_folder_is_the_reports_rerun_list(tmp_pa
     ("bad.toml", "tools/cases: bad.toml: not a scene file: "),
 ])
 def test_a_bad_argument_is_one_line_and_exit_2(tmp_path, arg, says):
-    """Issue 34: tools/cases exited 1 with Python's errno text; now one line and exit 2, as every
+    """tools/cases exited 1 with Python's errno text; now one line and exit 2, as every
     other tool of the repository on bad input."""
     (tmp_path / "folder").mkdir()
     (tmp_path / "bad.toml").write_text("name = \n")

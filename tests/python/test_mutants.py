@@ -1,4 +1,4 @@
-"""tools/mutants' catalogue and engine (issue 23), without running it (ci/nightly runs it: ~40 min).
+"""tools/mutants' catalogue and engine, without running it (ci/nightly runs it: ~40 min).
 
 The catalogue must hold at least 15 realistic bugs covering the solver, both references and the
 compare tool, each still applying to this checkout (its text found exactly once); the engine's

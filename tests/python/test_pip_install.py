@@ -1,4 +1,4 @@
-"""`pip install .` uses what is installed and leaves the checkout clean (issue 25, item 2).
+"""`pip install .` uses what is installed and leaves the checkout clean.
 
 In a venv made with --system-site-packages from Debian's /usr/bin/python3, whose h5py pip does not
 see (Debian names its distribution h5py._debian_h5py_serial), installing a copy of this checkout

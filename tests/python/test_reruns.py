@@ -1,4 +1,4 @@
-"""Reruns that prove themselves (issue 34 item 5).
+"""Reruns that prove themselves.
 
 One command per rerunnable unit, the same in a folder's report and in `tools/cases RESULTS` (the
 binary that wrote the folder, its scene copy, `--out sdcrack-rerun/<name>` relative to where it is

@@ -432,7 +432,7 @@ def test_critical_path_of_known_durations(tmp_path):
     assert cp["sum_s"] == 17.0 and cp["jobs"] == 5
     assert cp["per_rule_s"] == {"dolfinx": 5.0, "freefem": 3.0, "report": 8.0, "solver": 1.0}
     assert cp["per_scene"]["a"]["path_s"] == 7.0
-    # issue 26's goals: report 8 of 17 s = 47 % > 15 %; path 9 s = 1.8 × the longest shard (5 s)
+    # the critical path's goals: report 8 of 17 s = 47 % > 15 %; path 9 s = 1.8 × the longest shard (5 s)
     assert [g["met"] for g in cp["goals"]] == [False, False]
     assert cp["goals"][0]["goal"].startswith(
         "compare tool (report and check jobs) 47.1 % of the job-seconds")
@@ -560,7 +560,7 @@ def test_index_lines_say_what_converged_and_the_first_problem():
 
 
 
-# The p space axis (issue 32): the broken-tangential p runs with the broken u only, so a plan's
+# The p space axis: the broken-tangential p runs with the broken u only, so a plan's
 # solver units are levels × u spaces × multipliers × p masses × p spaces minus every (continuous u,
 # broken-tangential p); its shards and jobs carry "-ptangential" after the p mass, the continuous
 # p's keep the names of before the axis.

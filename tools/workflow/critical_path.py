@@ -16,7 +16,7 @@ a check job's chain being its longest shard plus itself,
 
 and the scene and jobs on that path are printed. Also printed: the sum of all job durations (the
 campaign's wall time on one core, without the engine's overhead), the totals per rule, and the two
-goals of issue 26 with MET or MISSED: the compare tool's jobs (report and check) take at most
+goals with MET or MISSED: the compare tool's jobs (report and check) take at most
 15 % of the job-seconds, and the critical path is at most 1.2 × the longest solver or reference
 job.
 Standard library only. Exit 2 (one line) when OUT has no measurements.
