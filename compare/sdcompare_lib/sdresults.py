@@ -94,6 +94,16 @@ def write_summary(folder, scene, tool, cases, tool_version):
     return summary
 
 
+def exit_status(cases, prefix):
+    """A reference run's exit status once its results are written: 3 when some case's `status` is
+    not "converged" (each such case named on stderr after `prefix`: its results are not
+    trustworthy), else 0."""
+    bad = [c for c in cases if c["status"] != "converged"]
+    for c in bad:
+        print(f"{prefix}level {c['level']}: {c['status']}", file=sys.stderr)
+    return 3 if bad else 0
+
+
 # ---- KKT residuals and case status ---------------------------------------------------------------
 
 KKT_KEYS = ("equations", "primal", "dual", "complementarity")

@@ -50,19 +50,6 @@ def need_paraview_and_x():
         pytest.skip(reason)
 
 
-@pytest.fixture(scope="module")
-def run_dir():
-    d = os.environ.get("SDCRACK_RUN_DIR")
-    if not d:
-        pytest.skip("SDCRACK_RUN_DIR is not set")
-    return pathlib.Path(d)
-
-
-@pytest.fixture(scope="module")
-def summary(run_dir):
-    return json.loads((run_dir / "summary.json").read_text())
-
-
 def render(*args, env=None):
     p = subprocess.run([str(RENDER), *map(str, args)], capture_output=True, text=True,
                        timeout=600, env=env)
