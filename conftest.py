@@ -5,7 +5,9 @@ once, in pyproject.toml's [tool.pytest.ini_options].
 
 Module-level uses (a skip condition, a path computed at import) import the plain functions:
 `from conftest import sdcrack_bin, run_env`."""
+import json
 import os
+import pathlib
 
 import pytest
 
@@ -40,6 +42,22 @@ def sdcrack():
     if not os.access(exe, os.X_OK):
         pytest.skip(f"no sdcrack binary at {exe} (cargo build --release, or set SDCRACK_BIN)")
     return exe
+
+
+@pytest.fixture(scope="module")
+def run_dir():
+    """The results folder of a real `sdcrack run` that ci/test provides ($SDCRACK_RUN_DIR), or the
+    test skips."""
+    d = os.environ.get("SDCRACK_RUN_DIR")
+    if not d:
+        pytest.skip("SDCRACK_RUN_DIR is not set")
+    return pathlib.Path(d)
+
+
+@pytest.fixture(scope="module")
+def summary(run_dir):
+    """run_dir's summary.json, parsed."""
+    return json.loads((run_dir / "summary.json").read_text())
 
 
 @pytest.fixture

@@ -43,7 +43,7 @@ pub enum BenchError {
     #[error("preconditioned CG on S: {0}")]
     Krylov(#[from] KrylovError),
     /// The scene is not meshed by the structured grid.
-    #[error("sdcrack bench scales a structured scene (discretization.cells); this scene is meshed by gmsh: bench its levels with ci/bench-unstructured")]
+    #[error("sdcrack bench scales a structured scene (discretization.cells); this scene is meshed by gmsh: bench its levels with tools/bench-unstructured")]
     NotStructured,
 }
 

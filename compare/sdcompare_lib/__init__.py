@@ -11,6 +11,9 @@ Where it is found, with nothing edited in sys.path:
 - the tests in a checkout: pyproject.toml's [tool.pytest.ini_options] `pythonpath` names compare/;
 - the reference solvers (references/<tool>/solve.py): the folder compare/ on PYTHONPATH, set by
   whoever launches them (sdcrack: src/references.rs; the tests: conftest.py's run_env), e.g.
-  `PYTHONPATH=compare /usr/bin/python3 references/dolfinx/solve.py MESH --out DIR`; ci/cases
-  sets it likewise for the script it runs.
+  `PYTHONPATH=compare /usr/bin/python3 references/dolfinx/solve.py MESH --out DIR`;
+- the tools (tools/campaign_index.py, tools/mutants.py, tools/workflow/prepare.py and the
+  Snakefile, the script of tools/cases): the same PYTHONPATH, set by their launchers
+  (tools/campaign, tools/mutants, tools/cases, ci/nightly, the GitHub nightly). The index runs
+  without numpy: it imports only modules that import no numpy at load (baseline, sdresults).
 """

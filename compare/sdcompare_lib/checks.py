@@ -15,7 +15,7 @@ from .render import fmt_delta
 from .settings import QUANTITIES, scene_lists, scene_p_masses, scene_p_spaces
 
 # The solver's errors against the compare tool's own (exact.py: another rule family, Duffy rules
-# at the tips), issue 33: two correct fixed-degree quadratures of a non-polynomial integrand differ
+# at the tips): two correct fixed-degree quadratures of a non-polynomial integrand differ
 # by their quadrature errors, which no fixed tolerance bounds (up to 1e-4 relative where the exact
 # solution's kinks cross the triangles). Each side estimates its own: the solver's
 # summary.json gives, per error, |e(rule) - e(higher rule)| (`errors_quadrature`, crates/sdcrack-core/src/norms.rs,
@@ -40,11 +40,11 @@ ROUNDOFF_RTOL = 1e-12
 # p_x on tests/data/scenes/open-smooth-inclined.toml, levels 0-4, kinks across the triangles;
 # <= 8.6e-10 on the repository's exact scenes).
 ESTIMATE_CAP = 1e-3
-# A summary.json without errors_quadrature (an sdcrack older than issue 33): the former bare
+# A summary.json without errors_quadrature (an sdcrack older than its quadrature estimates): the former bare
 # tolerance, 1e-8 relative (both quadratures were measured converged to < 1e-10 relative on the
 # repository's scenes of that time: a factor 100).
 SOLVER_ERRORS_RTOL = 1e-8
-# The references' reported errors against each other and against exact.py (issue 12: 1e-6).
+# The references' reported errors against each other and against exact.py (1e-6).
 REFERENCE_ERRORS_RTOL = 1e-6
 # Below this an error is zero to round-off (λ of a closed crack): compared absolutely.
 ERRORS_ATOL = 1e-13

@@ -1,4 +1,4 @@
-"""Theorem 2.1 quantitatively: the δ-constant must converge as h → 0 (issue 33, item 2).
+"""Theorem 2.1 quantitatively: the δ-constant must converge as h → 0.
 
 Theorem 2.1 bounds ‖x_δ − x_0‖ ≤ C δ with C independent of h, and the discrete δ-limit of the
 smooth-domain method commutes with h → 0: (x_δ − x_0)/δ tends, as h → 0, to a fixed function.

@@ -53,7 +53,7 @@ triangle, so data are never evaluated on the crack or on an edge.
 ``Quadrature().doubled()`` doubles n, m, n_line and η; compare/tests/test_exact.py checks that the errors
 of open-exact change by < 1e-10 relative under it.
 
-Quadrature-error estimate and self-check (issue 33)
+Quadrature-error estimate and self-check
 ---------------------------------------------------
 ``solver_case_errors_estimated`` computes every error with the rule above and with
 ``Quadrature().higher()`` (⌈3n/2⌉ points per direction for each n: Stroud 8 → 12, tip 16 → 24,
@@ -700,7 +700,7 @@ def solver_case_errors(points, triangles, u, p, p_bubble, crack_points, lam, exa
 
     points (N,2|3), triangles (T,3) of the case mesh (the cracked mesh for the broken u space, the
     plain mesh for the continuous one; u is P1 per triangle on it), u (N,), p (N,2|3) the values of
-    p_h's P1 part at the same vertices (a broken-tangential p, issue 32, has different values on
+    p_h's P1 part at the same vertices (a broken-tangential p has different values on
     the two copies of a crack vertex: each triangle reads its own copy through `triangles`, so p_h
     is integrated on each face with that face's value, never merged), p_bubble (T,2) its bubble
     coefficients (b_T = 27 λ0λ1λ2, triangle order of the mesh;

@@ -1,4 +1,4 @@
-"""The comparison at a glance (issue 34, item 2): sdcrack against dolfinx and FreeFEM, and the
+"""The comparison at a glance: sdcrack against dolfinx and FreeFEM, and the
 δ → 0 outcome, for the first screen of a report and the campaign index.
 
 What it measures, per variant (u space × multiplier × p mass × p space), is the u error at the
@@ -258,7 +258,7 @@ def reference_sentence(g):
 
 
 def index_line(g):
-    """The campaign index's line (ci/campaign_index.py shows it as written): the ratios per
+    """The campaign index's line (tools/campaign_index.py shows it as written): the ratios per
     group at the comparison level, the rates on both sides, and the δ → 0 outcome."""
     if g["level"] is None or not g["rows"]:
         head = "no references"

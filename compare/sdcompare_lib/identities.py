@@ -1,5 +1,5 @@
 """Identities between variants: where the method gives the same discrete solution two ways, the
-stored fields of the two cases must agree to round-off (issue 33, item 1).
+stored fields of the two cases must agree to round-off.
 
 The three multiplier spaces differ only in the contact rows of the LCP (paper (12)–(14)):
 * **Crack entirely closed** (no multiplier active, Λ = 0: the contact term vanishes). Every

@@ -1,4 +1,4 @@
-"""The meshes are what the scene says (issue 33, item 3): four checks of the meshes themselves,
+"""The meshes are what the scene says: four checks of the meshes themselves,
 which every other check takes on trust.
 
 * **mesh size h** — each case's `h` in summary.json is the largest triangle diameter (the longest

@@ -1,7 +1,7 @@
 """Independent errors recomputed per shard of a workflow campaign, kept beside it, read back by
 the scene's report.
 
-In a campaign (ci/workflow/Snakefile) a `check` job runs ``sdcompare --precompute SHARD --out
+In a campaign (tools/workflow/Snakefile) a `check` job runs ``sdcompare --precompute SHARD --out
 FILE`` on every solver and reference shard as soon as the shard is written, in parallel with the
 other jobs; the scene's report job then runs ``sdcompare RESULTS --precomputed FILE ...``. An
 entry is this tool's own recomputation (exact.py) of one case's errors against the exact
@@ -26,6 +26,7 @@ import os
 import numpy as np
 
 from . import exact
+from .sdresults import write_atomic
 
 FORMAT = "sdcompare-precomputed-1"
 
@@ -49,11 +50,9 @@ class Store:
         self.entries.update(data["entries"])
 
     def write(self, path):
-        """Writes every entry (written to a temporary name, then renamed)."""
-        tmp = f"{path}.tmp"
-        with open(tmp, "w", encoding="utf-8") as fh:
-            json.dump({"format": FORMAT, "entries": self.entries}, fh, indent=0, sort_keys=True)
-        os.replace(tmp, path)
+        """Writes every entry (sdresults.write_atomic: a temporary name, then renamed)."""
+        write_atomic(path, json.dumps({"format": FORMAT, "entries": self.entries}, indent=0,
+                                      sort_keys=True))
 
     def lookup(self, key, compute):
         """The entry under `key`, else compute() stored under it."""
@@ -176,7 +175,7 @@ def _exact_of(scene_file):
 
 
 def _precompute_solver(folder, read, ex, scene_file):
-    summary = read._load_json(os.path.join(folder, "summary.json"))
+    summary = read.load_json(os.path.join(folder, "summary.json"))
     path = next((os.path.join(folder, f) for f in (read.VERIFICATION_FILE, "fields.h5")
                  if os.path.exists(os.path.join(folder, f))), None)
     if path is None:

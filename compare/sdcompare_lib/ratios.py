@@ -1,4 +1,4 @@
-"""Yardsticks from measurement (issue 33, item 5): the ratio of sdcrack's error to the references'.
+"""Yardsticks from measurement: the ratio of sdcrack's error to the references'.
 
 The reference yardstick (yardsticks.py) bounds sdcrack's error by a fixed 3 × the references' own
 error on the same mesh. A load-vector scatter bug made sdcrack's distance to the references
@@ -22,7 +22,7 @@ two checks hold it:
       log ρ_L − log ρ_{L−1} ≤ RATE_MARGIN · ln(h_{L−1}/h_L)   (a factor 2^0.1 = 1.072 per halving),
 
   on each of the last two steps (as the series rule). Measured on the repository's exact scenes
-  (levels 2–4 of ci/campaign, 4–5 of ci/nightly) the largest growth is open-exact's lumped p_l2,
+  (levels 2–4 of tools/campaign, 4–5 of ci/nightly) the largest growth is open-exact's lumped p_l2,
   log change 0.0505 from level 2 to 3 (a rate lag of 0.073), against the bound 0.0693. It is
   one-sided: a falling ρ is sdcrack converging faster than P1 on the same mesh — the lumped p, a
   recovered gradient, superconverges on uniform meshes (p rate 1.74 on closed-exact, ρ 0.12 →
@@ -43,11 +43,11 @@ two checks hold it:
   references and no row says "not applicable: no recorded ratio".
 
 The band (RATIO_BAND = 1.25): run to run the ratio at one level is bit-identical (levels 0–4 of
-the exact scenes, ci/campaign against ci/nightly: relative difference 0), so the band is set by
+the exact scenes, tools/campaign against ci/nightly: relative difference 0), so the band is set by
 what it must catch and what it must let through, not by noise. It must fail the realistic bug,
 1.7 × (the load-vector scatter: 1.7–1.8 ×). It must let through what a change of the meshes'
 resolution by about one level does to a ratio, measured as the change of ρ from one level to the
-next on the repository's exact scenes (ci/campaign levels 2–4, ci/nightly 4–5), leaving out the
+next on the repository's exact scenes (tools/campaign levels 2–4, ci/nightly 4–5), leaving out the
 lumped p_l2 of the uniform smooth meshes (closed-exact, open-smooth), which superconverges and
 falls by 40 % a level: at most a factor 1.12 (open-graded, the lumped broken-tangential p_l2,
 0.875 → 0.780 over levels 4–5; 0.972 → 0.875 over 3–4), 1.052 on a rising ratio (open-exact, the
@@ -64,6 +64,7 @@ import re
 import tomllib
 
 from . import theory
+from .sdresults import write_atomic
 from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, InputError, finite_number, p_mass, p_space,
                    variant_label, variant_of, variant_order)
 
@@ -655,27 +656,25 @@ def record(a, res, path, out=print):
         new_text = text.rstrip("\n") + "\n\n" + block + "\n"
     # what changed, then the file written atomically and read back
     changes = _changes(old, rows)
-    tmp = path + ".record-partial"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(new_text)
     try:
-        load_expectations(tmp)
-        back = [r for r in load_rows(tmp) if r["scene"] == scene]
-        others = [r for r in load_rows(tmp) if r["scene"] != scene]
-    except (ValueError, OSError) as exc:
-        os.unlink(tmp)
-        raise InputError(f"not recorded: the new {path} would not load: {exc}")
-    strip = [{k: v for k, v in r.items() if k != "index"} for r in back]
-    same_others = [{k: v for k, v in r.items() if k != "index"} for r in others] == \
-        [{k: v for k, v in r.items() if k != "index"} for r in old_all if r["scene"] != scene]
-    if strip != rows or not same_others:
-        os.unlink(tmp)
-        raise InputError(f"not recorded: {path} would not read back as written")
-    try:
-        os.chmod(tmp, os.stat(path).st_mode & 0o7777)
+        mode = os.stat(path).st_mode & 0o7777
     except OSError:
-        pass
-    os.replace(tmp, path)
+        mode = None
+
+    def reads_back(tmp):
+        """The new file loads, holds `rows` for the scene and the other scenes' rows unchanged."""
+        try:
+            load_expectations(tmp)
+            back = [r for r in load_rows(tmp) if r["scene"] == scene]
+            others = [r for r in load_rows(tmp) if r["scene"] != scene]
+        except (ValueError, OSError) as exc:
+            raise InputError(f"not recorded: the new {path} would not load: {exc}")
+        strip = [{k: v for k, v in r.items() if k != "index"} for r in back]
+        same_others = [{k: v for k, v in r.items() if k != "index"} for r in others] == \
+            [{k: v for k, v in r.items() if k != "index"} for r in old_all if r["scene"] != scene]
+        if strip != rows or not same_others:
+            raise InputError(f"not recorded: {path} would not read back as written")
+    write_atomic(path, new_text, mode, reads_back)
     for line in changes:
         out(line)
     out(f"{scene}: {len(rows)} [[ratio]] row(s) recorded in {path} against {tool}, from "

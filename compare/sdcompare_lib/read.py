@@ -15,13 +15,17 @@ class InputError(Exception):
     """Missing or malformed input (exit code 2)."""
 
 
-def _load_json(path):
+def load_json(path):
+    """The JSON document of the file `path` (UTF-8); InputError (exit 2) naming the file when it
+    is missing, unreadable or not JSON. One home for the compare tools' JSON input."""
     try:
         with open(path, encoding="utf-8") as fh:
             return json.load(fh)
     except FileNotFoundError:
         raise InputError(f"missing file: {path}")
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except OSError as exc:
+        raise InputError(f"unreadable file: {path} ({exc.strerror})")
+    except ValueError as exc:  # json.JSONDecodeError and UnicodeDecodeError are ValueErrors
         raise InputError(f"malformed JSON in {path}: {exc}")
 
 
@@ -34,7 +38,7 @@ def finite_number(v):
 # without the key (an sdcrack older than the lumped p mass) is consistent.
 P_MASSES = ("consistent", "lumped")
 DEFAULT_P_MASS = "consistent"
-# The spaces of p (issue 32; summary.json: each case's `p_space`, the plan's `p_spaces`): the
+# The spaces of p (summary.json: each case's `p_space`, the plan's `p_spaces`): the
 # paper's continuous MINI p, or "broken-tangential", whose tangential component has one value per
 # crack face at the interior vertices of a straight crack (p·ν shared; kinks and tips shared). A
 # case without the key (an sdcrack older than the axis) is continuous. The broken-tangential p runs
@@ -208,7 +212,7 @@ class Fields:
 
 
 def load_reference(folder):
-    s = _load_json(os.path.join(folder, "summary.json"))
+    s = load_json(os.path.join(folder, "summary.json"))
     u = {}
     for c in s.get("cases", []):
         lvl = int(c["level"])
@@ -240,7 +244,7 @@ class ExportLevel:
 
     @classmethod
     def one_crack(cls, level, points, tris, crack):
-        """A level of an export written before issue 16: the rows of crack.txt form one crack on a
+        """A level of an export written before polyline cracks: the rows of crack.txt form one crack on a
         structured grid."""
         return cls(int(level), points, tris, np.asarray(crack, dtype=np.int64), [(0, len(crack))])
 
@@ -299,7 +303,7 @@ def _not_a_results_folder(folder):
 def load_results(folder):
     if not os.path.isfile(os.path.join(folder, "summary.json")):
         raise InputError(_not_a_results_folder(folder))
-    summary = _load_json(os.path.join(folder, "summary.json"))
+    summary = load_json(os.path.join(folder, "summary.json"))
     if "cases" not in summary or not isinstance(summary["cases"], list):
         raise InputError(f"{folder}/summary.json has no 'cases' list")
     for i, c in enumerate(summary["cases"]):
@@ -329,7 +333,7 @@ def load_results(folder):
     return {"folder": folder, "summary": summary, "scene": summary.get("scene", os.path.basename(
         os.path.normpath(folder))), "fields": fields, "data": data, "refs": refs, "plan": plan,
         "scene_text": scene_text, "scene_file": scene_file,
-        "mesh_scene": _load_json(mesh_scene) if os.path.exists(mesh_scene) else None}
+        "mesh_scene": load_json(mesh_scene) if os.path.exists(mesh_scene) else None}
 
 
 def close_results(res):

@@ -15,6 +15,7 @@ import shutil
 import struct
 import tempfile
 
+from .sdresults import replace_folder
 from .read import DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag
 
 # Tables longer than this are folded (<details>) outside the summary section.
@@ -252,21 +253,14 @@ def publish(tmp, results_dir, replace=False):
 
     Without replace: refuse (ReportExists) if report/ exists; the rename of a directory onto a
     missing name is atomic, so readers see either no report or a complete one.
-    With replace: the old report is first renamed to a hidden name, then the new one is renamed
-    into place, then the old one is deleted (two atomic renames; report/ is never half-written,
-    but it is absent for the instant between them)."""
+    With replace: sdresults.replace_folder (the old report renamed aside, the new one into place,
+    the old one deleted: report/ is never half-written, absent only for the instant between)."""
     final = os.path.join(results_dir, "report")
     make_readable(tmp)
-    if os.path.lexists(final):
-        if not replace:
-            shutil.rmtree(tmp, ignore_errors=True)
-            raise ReportExists(f"{final} exists (use --replace to replace it atomically)")
-        old = tempfile.mkdtemp(prefix=".report.old-", dir=results_dir)
-        os.rename(final, os.path.join(old, "report"))
-        os.rename(tmp, final)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.rename(tmp, final)
+    if os.path.lexists(final) and not replace:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise ReportExists(f"{final} exists (use --replace to replace it atomically)")
+    replace_folder(tmp, final)
     return final
 
 
@@ -337,7 +331,7 @@ def provenance(summary, refs):
 
 
 # A rerun writes where it is run from, never into the results tree: its --out is this folder,
-# relative, unless ci/cases --rerun-dir names another one.
+# relative, unless tools/cases --rerun-dir names another one.
 RERUN_FOLDER = "sdcrack-rerun"
 CHECKOUT_BINARY = ("target", "release", "sdcrack")
 
@@ -346,7 +340,7 @@ def rerun_executable(summary, checkout=None):
     """The binary a rerun command names. For a results folder (summary.json's dict): the binary
     that wrote it (provenance `executable`, when recorded and absolute), else `sdcrack` from PATH.
     For a scene file (`summary` None): the checkout's target/release/sdcrack under `checkout`.
-    One home for the reports (rerun_command) and ci/cases."""
+    One home for the reports (rerun_command) and tools/cases."""
     if summary is None:
         return os.path.join(checkout, *CHECKOUT_BINARY)
     prov = summary.get("provenance") if isinstance(summary, dict) else None
@@ -362,7 +356,7 @@ def rerun_command(results_dir, summary, scene_file, k, rerun_dir=None):
     warm-started from the previous one, as in the run, so the numbers come back exactly; `--delta`
     only when the run was restricted to one δ), into rerun_out(rerun_dir, ...): by default the
     relative folder sdcrack-rerun/<scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>] of the
-    directory it is run from. The command ci/cases prints for the same folder."""
+    directory it is run from. The command tools/cases prints for the same folder."""
     from .settings import scene_lists
 
     plan_deltas = sorted({float(d) for d in ((summary.get("plan") or {}).get("deltas") or [])})
@@ -386,7 +380,7 @@ def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir=None):
     multiplier, p mass, p space; absent p_mass / p_space: consistent / continuous): the whole δ
     sweep, or `--delta` alone when `only_delta` is given, into
     rerun_out(RERUN_DIR, <scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>]) (the suffixes of the
-    solver's field names). One home for the commands of the reports and of ci/cases."""
+    solver's field names). One home for the commands of the reports and of tools/cases."""
     import shlex
 
     args = [exe, "run", scene_path, "--level", str(k["level"]), "--u-space", str(k["u_space"]),

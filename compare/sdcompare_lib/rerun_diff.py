@@ -11,7 +11,6 @@ subset of the original's datasets and cases: that is the normal case. Exit codes
 stderr). See compare/README.md, "Rerun commands".
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -41,7 +40,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def parse_args(argv):
-    p = _Parser(prog=PROG, description="Compares a rerun (the output of a report's or ci/cases' "
+    p = _Parser(prog=PROG, description="Compares a rerun (the output of a report's or tools/cases' "
                 "rerun command) with the results folder it reruns: every dataset of the rerun's "
                 "fields.h5 / verification.h5 and the numbers of each rerun case in summary.json. "
                 "Exit 0 the same, 1 different, 2 bad input.")
@@ -91,14 +90,12 @@ def results_folder(path):
 
 
 def load_summary(folder):
+    """folder/summary.json (read.load_json), which must hold a `cases` list; BadInput otherwise."""
     path = os.path.join(folder, "summary.json")
     try:
-        with open(path, encoding="utf-8") as fh:
-            summary = json.load(fh)
-    except OSError as exc:
-        raise BadInput(f"{path}: unreadable ({exc.strerror})")
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise BadInput(f"{path}: malformed JSON ({exc})")
+        summary = read.load_json(path)
+    except read.InputError as exc:
+        raise BadInput(str(exc))
     if not isinstance(summary, dict) or not isinstance(summary.get("cases"), list):
         raise BadInput(f"{path}: no `cases` list: not an sdcrack summary.json")
     return summary

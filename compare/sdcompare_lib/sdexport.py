@@ -2,7 +2,7 @@
 and the compare tool: which rows of crack.txt form which crack, the tips, the segments, the nodal
 normals, the triangle sides and the kind of mesh (structured grid, or uniform refinement).
 
-Files of DIR/level{L}/ (0-based indices; absent files are those of an export written before issue 16,
+Files of DIR/level{L}/ (0-based indices; absent files are those of an export written before polyline cracks,
 which has one straight crack on a structured grid):
 
     crack.txt          plus minus        per crack node: the cracked-mesh vertex on the + face and the one

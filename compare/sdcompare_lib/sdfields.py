@@ -11,7 +11,7 @@ ParaView, meshio and the compare tool read solver and references alike.
                 references' crack fields: `jump` = u⁺ − u⁻ (crack.txt's plus minus minus row) and
                 `contact_force` = the nodal multiplier λ_j ≥ 0 of the QP (0 off the active set and
                 at the tips), a name per quantity shared with the solver's files (README's field
-                table); files written before issue 34 call the contact force `multiplier`, which
+                table); older files call the contact force `multiplier`, which
                 crack_field() still reads
                 every dataset has the attributes "level" (int), "tool" (str) and, when the caller
                 gives it, "h" (float, the level's mesh size); the file has the attribute "tool"
@@ -30,7 +30,7 @@ as one grey square in ParaView and meshio.read could not read it.
 
 import numpy as np
 
-# Old names of crack fields, by current name: what files written before issue 34 call them (the
+# Old names of crack fields, by current name: what older files call them (the
 # references' contact force was `multiplier`, a name that sdcrack's files use for the multiplier
 # space M0 / M1 / M1star of a case).
 OLD_NAMES = {"contact_force": ("multiplier",)}
@@ -79,15 +79,24 @@ def _attribute(h5name, name, n, path, values, center="Node"):
             f"{_item(h5name, dims, 'Float', path)}</Attribute>")
 
 
-def _mesh_grid(h5name, level, fs):
-    name, n, nt = f"level{level}", len(fs["xy"]), len(fs["tri"])
-    parts = [f'<Grid Name="{name}" GridType="Uniform">',
-             f'<Topology TopologyType="Triangle" NumberOfElements="{nt}" NodesPerElement="3">'
-             f"{_item(h5name, (nt, 3), 'Int', f'/meshes/{name}/triangles')}</Topology>",
-             f'<Geometry GeometryType="XYZ">{_item(h5name, (n, 3), "Float", f"/meshes/{name}/points")}</Geometry>']
-    for key, values in fs["point"].items():
-        parts.append(_attribute(h5name, key, n, f"/cases/{name}/{key}", np.asarray(values)))
+def _grid(h5name, grid, topology, cells, cells_path, n, points_path, fields, fields_path):
+    """One XDMF <Grid> named `grid`: `cells` (count, nodes per cell) of `topology` at the HDF5 path
+    cells_path, n points (3 coordinates) at points_path, and one node-centred attribute per
+    entry of `fields`, at fields_path/<key>."""
+    parts = [f'<Grid Name="{grid}" GridType="Uniform">',
+             f'<Topology TopologyType="{topology}" NumberOfElements="{cells[0]}" NodesPerElement="{cells[1]}">'
+             f"{_item(h5name, cells, 'Int', cells_path)}</Topology>",
+             f'<Geometry GeometryType="XYZ">{_item(h5name, (n, 3), "Float", points_path)}</Geometry>']
+    for key, values in fields.items():
+        parts.append(_attribute(h5name, key, n, f"{fields_path}/{key}", np.asarray(values)))
     return "\n".join(parts + ["</Grid>"])
+
+
+def _mesh_grid(h5name, level, fs):
+    """The grid of a level's mesh (triangles) with its point fields."""
+    name = f"level{level}"
+    return _grid(h5name, name, "Triangle", (len(fs["tri"]), 3), f"/meshes/{name}/triangles",
+                 len(fs["xy"]), f"/meshes/{name}/points", fs["point"], f"/cases/{name}")
 
 
 def _segments(fs):
@@ -99,14 +108,11 @@ def _segments(fs):
 
 
 def _crack_grid(h5name, level, fs):
-    name, m, s = f"level{level}", len(fs["crack"]), len(_segments(fs))
-    parts = [f'<Grid Name="{name}/crack" GridType="Uniform">',
-             f'<Topology TopologyType="Polyline" NumberOfElements="{s}" NodesPerElement="2">'
-             f"{_item(h5name, (s, 2), 'Int', f'/cases/{name}/crack/segments')}</Topology>",
-             f'<Geometry GeometryType="XYZ">{_item(h5name, (m, 3), "Float", f"/cases/{name}/crack/points")}</Geometry>']
-    for key, values in fs["crack_fields"].items():
-        parts.append(_attribute(h5name, key, m, f"/cases/{name}/crack/{key}", np.asarray(values)))
-    return "\n".join(parts + ["</Grid>"])
+    """The grid of a level's crack (segments) with its crack fields."""
+    name = f"level{level}"
+    return _grid(h5name, f"{name}/crack", "Polyline", (len(_segments(fs)), 2),
+                 f"/cases/{name}/crack/segments", len(fs["crack"]), f"/cases/{name}/crack/points",
+                 fs["crack_fields"], f"/cases/{name}/crack")
 
 
 def _pad3(a):

@@ -1,5 +1,7 @@
-"""Result folders of the reference solvers: written under a temporary name beside the final one
-and renamed only when complete, so an interrupted run leaves nothing under the final name; the
+"""Files and folders written under a temporary name beside the final one and renamed only when
+complete, so an interrupted writer leaves nothing half-written under the final name (write_atomic:
+one file, every Python writer of the project; staged_folder, replace_folder: the references'
+result folders and sdcompare's report/); the
 `provenance` of summary.json (tool and library versions, date, command line, cores); and the
 per-case `status` both references write (KKT residuals against the shared tolerance)."""
 
@@ -23,11 +25,51 @@ def staged_folder(out):
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
     try:
         yield tmp
-        if out.exists():
-            shutil.rmtree(out)
-        os.rename(tmp, out)
+        replace_folder(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def replace_folder(tmp, final):
+    """Renames the complete folder `tmp` to `final` (same filesystem). An existing `final` is first
+    renamed to a hidden folder beside it, then the new one into place, then the old one deleted:
+    two atomic renames, so `final` is never half-written (absent only for the instant between
+    them). The caller decides beforehand whether replacing is allowed."""
+    final = os.fspath(final)
+    if not os.path.lexists(final):
+        os.rename(tmp, final)
+        return
+    parent, name = os.path.split(os.path.abspath(final))
+    old = tempfile.mkdtemp(prefix=f".{name}.old-", dir=parent)
+    os.rename(final, os.path.join(old, name))
+    os.rename(tmp, final)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def write_atomic(path, data, mode=None, check=None):
+    """Writes `data` (str: as UTF-8 text; bytes: as they are) to `path` through the temporary file
+    .NAME.tmp-PID beside it, renamed over `path` once complete, so readers see the old file or the
+    new one, never half of one. mode: the new file's permission bits (None: the umask's).
+    check(tmp): called on the complete temporary file before the rename; whatever it raises
+    propagates, the temporary file removed and `path` left as it was."""
+    folder, name = os.path.split(os.fspath(path))
+    tmp = os.path.join(folder, f".{name}.tmp-{os.getpid()}")
+    try:
+        if isinstance(data, bytes):
+            with open(tmp, "wb") as fh:
+                fh.write(data)
+        else:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                fh.write(data)
+        if mode is not None:
+            os.chmod(tmp, mode)
+        if check is not None:
+            check(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.lexists(tmp):
+            os.unlink(tmp)
         raise
 
 
@@ -50,6 +92,16 @@ def write_summary(folder, scene, tool, cases, tool_version):
     summary = {"scene": scene, "tool": tool, "provenance": provenance(tool, tool_version), "cases": cases}
     (Path(folder) / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
+
+
+def exit_status(cases, prefix):
+    """A reference run's exit status once its results are written: 3 when some case's `status` is
+    not "converged" (each such case named on stderr after `prefix`: its results are not
+    trustworthy), else 0."""
+    bad = [c for c in cases if c["status"] != "converged"]
+    for c in bad:
+        print(f"{prefix}level {c['level']}: {c['status']}", file=sys.stderr)
+    return 3 if bad else 0
 
 
 # ---- KKT residuals and case status ---------------------------------------------------------------

@@ -1,5 +1,5 @@
 """Sentences of the report that describe measured data: each is computed from the numbers it
-describes and says the opposite where they do (issue 34: "the distance falls as δ decreases on
+describes and says the opposite where they do (a fixed "the distance falls as δ decreases on
 every level" was printed over a table where it rose)."""
 from .render import fmt_delta
 

@@ -8,6 +8,7 @@ from collections import defaultdict
 import numpy as np
 
 from . import norms, rates, theory
+from .baseline import error_change, rate_change
 from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, case_key, finite_number, p_mass, p_space,
                    total_time, variant_label, variant_of, variant_order)
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
@@ -15,8 +16,6 @@ from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-depe
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.
 PAPER_NORMS = ("u_l2", "p_x", "lambda_l2")
 PAPER_RATE = {"M0": 0.5, "M1": 0.5, "M1star": 0.75}
-BASELINE_ERROR_RTOL = 1e-6
-BASELINE_RATE_ATOL = 1e-4
 BASELINE_TIME_GROWTH = 0.30
 BASELINE_TIME_MIN_S = 0.01
 ROUNDOFF_REL = 1e-12
@@ -254,7 +253,7 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
     the coarse ones by the export's mesh kind), all exact on shared (sub)triangles. The distances
     to the finest level, the costliest (each on the finest mesh), are computed for the cases of
     δ = ref_delta only: the series, the yardsticks and the report's table read them there and
-    nowhere else (issue 26: they were computed for every δ)."""
+    nowhere else (they were once computed for every δ)."""
     out = []
     meshes = ref.get("mesh") or {}
     if not meshes:
@@ -384,7 +383,7 @@ def kkt_rows(scene, cases):
                      "multipliers": c.get("multipliers"),
                      "regularized_pivots": c.get("regularized_pivots"),
                      "condition_estimate": c.get("condition_estimate"),
-                     # the δ' whose ‖K⁻¹‖₁ estimate κ₁ uses (δ itself in summaries before issue 26)
+                     # the δ' whose ‖K⁻¹‖₁ estimate κ₁ uses (δ itself in older summaries)
                      "condition_estimate_delta": c.get("condition_estimate_delta", c["delta"])})
     rows.sort(key=lambda r: (r["converged"], r["level"], variant_order(variant_of(r)),
                              -r["delta"]))
@@ -555,12 +554,6 @@ def _match(pattern, value):
 
 
 # ---------------------------------------------------------------- baseline
-def _rel(a, b):
-    if a == b:
-        return 0.0
-    return abs(a - b) / max(abs(a), abs(b), 1e-300)
-
-
 def _case_list(k):
     """A case key as written in a baseline flag: [level, u, m, δ], then the p mass when it or the p
     space is not the default, then the p space when it is not continuous."""
@@ -584,8 +577,8 @@ def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
         for q in QUANTITIES:
             if ce.get(q) is None or oe.get(q) is None:
                 continue
-            rd = _rel(float(ce[q]), float(oe[q]))
-            if rd > BASELINE_ERROR_RTOL:
+            rd = error_change(float(oe[q]), float(ce[q]))
+            if rd is not None:
                 flags.append({"scene": scene, "kind": "error", "case": _case_list(k), "quantity": q,
                               "old": oe[q], "new": ce[q], "rel_change": rd})
         tn, to = total_time(c), total_time(o)
@@ -604,10 +597,11 @@ def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
         for lv, rn, ro in zip(r["levels"][1:], r["rates"], o["rates"]):
             if rn is None or ro is None:
                 continue
-            if abs(rn - ro) > BASELINE_RATE_ATOL:
+            d = rate_change(ro, rn)
+            if d is not None:
                 flags.append({"scene": scene, "kind": "rate", "variant": label,
                               "quantity": r["quantity"], "level": lv,
-                              "old": ro, "new": rn, "abs_change": abs(rn - ro)})
+                              "old": ro, "new": rn, "abs_change": d})
         # The baseline's series are computed without its reference comparisons (against None:
         # inconclusive), so only series measured against the exact solution compare statuses.
         if o["against"] == "exact" and o["status"] != r["status"]:

@@ -15,7 +15,7 @@ themselves are bounded by quantities computed independently of the solver.
 
 Both bound only the series whose expected order reaches P1's on the cracked mesh
 (theory.reaches_p1_order: u 2s, p s): otherwise the ratio grows as h → 0 and no constant bounds it.
-That holds on a closed crack, and on an open one for the broken-tangential p (issue 32), not for
+That holds on a closed crack, and on an open one for the broken-tangential p, not for
 the continuous p there (u and p of order 1/2: a constant-factor slip on an open crack with the
 continuous p is left to the rates, the recomputed errors, δ → 0 and the references' agreement).
 Where no series reaches it, the check does not apply and says so with the orders it compared.
@@ -39,7 +39,7 @@ from .verdict import PREFERRED_REFERENCE, ref_delta
 # constant), 3 leaves room for it. A factor 10 would already hide the measured load-quadrature slip
 # (×43 on the closed crack) only barely; these are 15–40 × tighter than such slips.
 INTERPOLATION_FACTOR = {"u_l2": 3.0, "p_l2": 2.0, "p_x": 3.0}
-# On graded meshes (issue 24) the interpolation rate classifies a tip-singular u as smooth, but of
+# On graded meshes the interpolation rate classifies a tip-singular u as smooth, but of
 # the bounds above only the energy-norm one carries over (Céa's lemma: constant 1 on any mesh): the
 # L² bound's Aubin–Nitsche constant and the X-norm's divergence term are not those of a smooth u on
 # a uniform mesh. Measured on open-graded, levels 1–4: the references' own ‖u − u_h‖ is 4.0–8.9 ×

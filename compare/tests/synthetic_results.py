@@ -1,6 +1,6 @@
 """A synthetic sdcrack results folder (OUT/<scene>/: scene.toml, summary.json, fields.h5) that the
 compare tool judges like a real one, without the sdcrack binary: the tests of the p-space axis
-(issue 32) and the byte-for-byte check that a continuous-p folder is reported as before.
+and the byte-for-byte check that a continuous-p folder is reported as before.
 
 The fields are built from the scene's exact solution on the structured SW–NE meshes of [-1, 1]²
 cut along the crack (-1/2, 1/2) × {0} (references/tests/fake_export.py), as a discretisation of
@@ -28,11 +28,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
 import fake_export as fe
-from sdcompare_lib import exact
+from sdcompare_lib import exact, read
 
 CRACK = [(-0.5, 0.0), (0.5, 0.0)]
 # smooth on each face, open on the crack ([u] = 2 m³ > 0), tangential ∂u/∂x jumps, ∂u/∂y = 0 on
-# both faces (ci/untuned-scenes/smooth-open.toml on [-1, 1]²)
+# both faces (tools/untuned-scenes/smooth-open.toml on [-1, 1]²)
 OPEN = {"u": "sign(y)*max(0.25-x^2,0)^3*cos(y)", "jump": "2*max(0.25-x^2,0)^3",
         "f": "sign(y)*cos(y)*(max(0.25-x^2,0)^3 + 6*max(0.25-x^2,0)^2 - 24*x^2*max(0.25-x^2,0))"}
 # smooth and closed everywhere (scenes/closed-exact.toml)
@@ -104,7 +104,7 @@ def fields_of(ex, u_space, p_space, mesh, side, stall):
 
 
 def grid_name(level, u_space, multiplier, p_mass, p_space, delta):
-    """The field name the solver writes: the p-mass suffix, then -ptangential (issue 32)."""
+    """The field name the solver writes: the p-mass suffix, then -ptangential."""
     return (f"level{level}-{u_space}-{multiplier}"
             + ("" if p_mass == "consistent" else f"-{p_mass}")
             + ("" if p_space == "continuous" else "-ptangential") + f"-delta{delta:g}")
@@ -193,8 +193,8 @@ def write_results(out, name="pspace", solution=OPEN, levels=(0, 1, 2),
 
 
 def load_summary(folder):
-    with open(os.path.join(folder, "summary.json"), encoding="utf-8") as fh:
-        return json.load(fh)
+    """folder/summary.json, read as the compare tool reads it."""
+    return read.load_json(os.path.join(folder, "summary.json"))
 
 
 def save_summary(folder, summary):

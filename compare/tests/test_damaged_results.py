@@ -1,4 +1,4 @@
-"""Catalogue of damaged results folders, each judged by the real compare/sdcompare (issue 12 §4),
+"""Catalogue of damaged results folders, each judged by the real compare/sdcompare,
 as tests/bad_input.rs is the solver's catalogue of bad inputs.
 
 Every damage must give FAIL (exit 1, the problem among report.json's `reasons`, the verdict line on
@@ -94,7 +94,7 @@ OPEN_NOREF = dict(levels="[2, 3, 4]", deltas="[0.0]", references=False)
 # name: (scene, scene options, extra `sdcrack run` arguments)
 BASES = {
     "open": ("open-exact", dict(levels="[2, 3, 4]", deltas="[0.0]"), []),
-    # issue 23: a δ sweep of an exact scene; fields not stored (verification.h5 only); the closed
+    # a δ sweep of an exact scene; fields not stored (verification.h5 only); the closed
     # crack (smooth u: the interpolation yardstick applies); mixed storing u only
     "open sweep": ("open-exact", dict(OPEN_NOREF, deltas="[1e-2, 1e-4, 1e-6, 0.0]"),
                    ["--multiplier", "M1"]),
@@ -110,7 +110,7 @@ BASES = {
     "two levels": ("open-exact", dict(levels="[0, 1]", deltas="[0.0]", references=False), []),
     "two levels smoke": ("open-exact", dict(levels="[0, 1]", deltas="[0.0]", references=False,
                                             smoke=True), []),
-    # both p masses (issue 14), multiplier M1: 12 cases
+    # both p masses, multiplier M1: 12 cases
     "lumped": ("open-exact", dict(OPEN_NOREF, p_mass='["consistent", "lumped"]'),
                ["--multiplier", "M1"]),
 }
@@ -272,7 +272,7 @@ def field_off_at_one_delta(factor, delta=1e-4, u_space="broken", multiplier="M1"
 
 def field_scaled(multiplier, name, factor, u_space="broken"):
     """One stored array (u, p, crack/lambda) of the finest δ = 0 case of `multiplier` multiplied
-    by `factor`: a bug in one multiplier variant only (issue 33: a wrong weight in M1star's rows)."""
+    by `factor`: a bug in one multiplier variant only (e.g. a wrong weight in M1star's rows)."""
     def damage(folder, others):
         import h5py
 
@@ -285,7 +285,7 @@ def field_scaled(multiplier, name, factor, u_space="broken"):
 
 def delta_scaled_with_mesh(folder, others):
     """Every field at δ > 0 replaced by x_0 + 2^-(level - coarsest) (x_δ − x_0): δ entering the
-    matrix as δ·h (issue 33: ‖u_δ − u_0‖ 22× too small at level 3 of the mixed crack, yet exactly
+    matrix as δ·h (a real bug: ‖u_δ − u_0‖ 22× too small at level 3 of the mixed crack, yet exactly
     linear in δ on each level)."""
     import h5py
 
@@ -519,7 +519,7 @@ CASES = {
                                               ()),
     "open sweep: reported errors of one δ × 0.9": ("open sweep", errors_scaled(0.9, 1e-4), "empty",
                                                     ()),
-    # issue 33: δ scaled with the mesh (exactly linear in δ per level); one multiplier variant
+    # δ scaled with the mesh (exactly linear in δ per level); one multiplier variant
     # off where the method gives the same solution with M1 and M1star (open) or all three (closed)
     "open sweep: δ scaled with the mesh": ("open sweep", delta_scaled_with_mesh, "empty", ()),
     "open: M1star's p off by 1e-6 on the entirely open crack":
@@ -710,7 +710,7 @@ DAMAGES = {
     # the verdict was PASS (checks.py fix).
     "open: mesh/ of mixed": (1, [
         "completeness: the mesh export mesh/ the references solved on lacks level(s) [4]"]),
-    # the p mass axis (issue 14)
+    # the p mass axis
     "lumped: errors of the lumped p mass grow": (1, [
         "series: broken/M1/lumped u_l2: does not converge: the error grows from level 3 to 4",
         "independent errors: sdcrack's reported errors of level 4 broken M1 lumped δ=0 differ from "
@@ -742,7 +742,7 @@ DAMAGES = {
         "expectations: broken/M1/lumped p_x (expectation 0): violated: error 4.0"]),
     "lumped: expectation of a misspelt p mass": (2, "expectation 0: p_mass 'lumpd' is not run by "
                                                     "scene 'open-exact'"),
-    # issue 23: wrong solvers that converge, and checks that could not run
+    # wrong solvers that converge, and checks that could not run
     "open sweep: the field of one δ 93× off": (1, [
         "δ → 0: δ → 0 point δ=1e-4 of level 4 broken M1 u_l2 lies a factor"]),
     "open sweep: the field of one δ 2× off": (1, [
@@ -881,7 +881,7 @@ def test_both_p_masses_pass_with_p_mass_expectations(judged, case):
     assert {x["bubble"] for x in solver if x["p_mass"] == "lumped"} == {"none (lumped)"}
 
 
-# ------------------------------------------------------------------ issue 23: the positive side
+# ------------------------------------------------------------------ the positive side
 @pytest.mark.parametrize("case", ["open sweep undamaged", "closed undamaged"], ids=_slug)
 def test_undamaged_exact_scenes_pass_every_new_check(judged, case):
     rep = assert_passes(result(judged, case))
@@ -949,7 +949,7 @@ def test_quantities_not_stored_are_still_judged(judged, case):
     assert {"u_l2", "p_l2", "lambda_l2"} <= judged_q
 
 
-# ------------------------------------------------------------------ issue 34: the first screen
+# ------------------------------------------------------------------ the first screen
 def report_md(r):
     with open(os.path.join(r["folder"], "report", "report.md"), encoding="utf-8") as fh:
         return fh.read()

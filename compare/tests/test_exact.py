@@ -348,7 +348,7 @@ def test_bubble_is_included_exactly():
 
 
 def test_p_mass_decides_the_bubble():
-    """The lumped p (issue 14) is P1 without bubble: its errors are those with bubble 0, and a stored
+    """The lumped p is P1 without bubble: its errors are those with bubble 0, and a stored
     p_bubble is inconsistent; the consistent p is MINI: without its stored p_bubble its errors cannot
     be recomputed (no silent recovery); p_mass None keeps the stored-else-recovered behaviour."""
     P, t, pairs, u, p, c, jump = _synthetic_fields(0)
@@ -520,7 +520,7 @@ def test_p1_field_errors_on_the_exported_cracked_mesh(solver_run):
 
 def test_cached_mesh_quadrature_gives_the_uncached_errors():
     """The exact solution's values at a mesh's quadrature points are kept for the next case on
-    the same mesh (issue 26: the compare tool's cost). A case computed from the cache equals, to
+    the same mesh (the compare tool's cost). A case computed from the cache equals, to
     the bit, the same case computed with an empty cache; a mesh with other coordinates (same
     shape) and another exact solution are not served from the cache."""
     ex = E.ExactSolution("x*x - y + sin(x*y)", crack=((-0.5, 0.0), (0.5, 0.0)))

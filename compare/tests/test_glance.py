@@ -1,4 +1,4 @@
-"""The first screen's sentences (sdcompare_lib/glance.py, issue 34 item 2) come from the data and
+"""The first screen's sentences (sdcompare_lib/glance.py) come from the data and
 come out the other way on data that make them false: a δ check with a problem turns the δ → 0
 line to FAIL; a forged error moves the ratio; a variant that stops converging leaves the
 "converging variants" group; no references says so."""

@@ -1,4 +1,4 @@
-"""Yardsticks from measurement (issue 33, item 5; compare/sdcompare_lib/ratios.py): the ratio
+"""Yardsticks from measurement (compare/sdcompare_lib/ratios.py): the ratio
 ρ = e_sdcrack / e_ref of sdcrack's error to the references' own on the same mesh must settle
 ("reference ratio settles") and stay within RATIO_BAND of the ratio recorded from a reviewed run
 ("recorded reference ratio", the [[ratio]] rows of an expectations file, written by

@@ -1,4 +1,4 @@
-"""The meshes are what the scene says (issue 33, item 3; compare/sdcompare_lib/meshcheck.py): the
+"""The meshes are what the scene says (compare/sdcompare_lib/meshcheck.py): the
 four mesh checks PASS on real results folders and FAIL, with their own problem line, on damaged
 copies — summary.json's h written as 2h, a mesh graded with another β than the scene's, references
 converging below P1's order on a graded mesh, field files whose triangles use the + copies of the

@@ -1,4 +1,4 @@
-"""The compare tool on the format of issue 16: several polyline cracks and uniformly refined meshes.
+"""The compare tool on the polyline-crack export format: several polyline cracks and uniformly refined meshes.
 
 Meshes come from references/tests/fake_export.py (a kinked crack and a straight one on a structured
 grid; a perturbed coarse triangulation refined uniformly, triangle 4t + c inside t). Checked here:
@@ -123,21 +123,13 @@ def test_crack_norms_use_only_segments_within_each_crack():
         norms.crack_l2_norm(pts, np.ones(4), TWO_SEGMENTS)  # neither per segment (3) nor per node (5)
 
 
-def _polyline_l2_sq(polyline, a0, ax, ay):
-    total = 0.0
-    for p, q in zip(polyline[:-1], polyline[1:]):
-        ga, gb = (a0 + ax * v[0] + ay * v[1] for v in (p, q))
-        total += math.dist(p, q) * (ga * ga + ga * gb + gb * gb) / 3
-    return total
-
-
 def test_p1_field_errors_integrate_each_crack(two_cracks):
     """A zero field on the two-crack mesh against [u] = 1 + x + 2y: lambda_l2 is its L² norm over
     the two cracks (cracks.txt's ranges); read as one crack (no ranges) it is not."""
     pts, tris = export_level(two_cracks, 1)
     m = read.load_export_meshes(str(two_cracks), [1])[1]
     ex = E.ExactSolution("0", jump="1 + x + 2*y", f="0")
-    expected = math.sqrt(sum(_polyline_l2_sq(p, 1, 1, 2) for p in (fe.KINK, fe.STRAIGHT)))
+    expected = math.sqrt(sum(fe.polyline_l2_sq(p, 1, 1, 2) for p in (fe.KINK, fe.STRAIGHT)))
     got = E.p1_field_errors(pts, tris, np.zeros(len(pts)), m.crack, ex, ranges=m.ranges)
     assert got["u_l2"] == 0 and got["lambda_l2"] == pytest.approx(expected, rel=1e-13)
     joined = E.p1_field_errors(pts, tris, np.zeros(len(pts)), m.crack, ex)

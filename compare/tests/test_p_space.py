@@ -1,4 +1,4 @@
-"""The p-space axis (issue 32): p "continuous" (the paper's MINI p) or "broken-tangential" (p's
+"""The p-space axis: p "continuous" (the paper's MINI p) or "broken-tangential" (p's
 tangential component one value per crack face at the interior vertices of a straight crack; broken
 u only). On synthetic results folders (synthetic_results.py, no sdcrack binary) and synthetic
 series: both p spaces are read as distinct series and reruns, the plan is the product minus

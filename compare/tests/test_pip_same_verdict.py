@@ -1,4 +1,4 @@
-"""The pip-installed sdcompare and the checkout's judge alike (issue 23, "nothing silently weaker").
+"""The pip-installed sdcompare and the checkout's judge alike ("nothing silently weaker").
 
 An installed sdcompare once found no expectations file and said PASS with "0 expectation row(s)
 evaluated" where the checkout's judged every row. Here both judge the same results folders — the

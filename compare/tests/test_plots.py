@@ -1,4 +1,4 @@
-"""The report's plots on synthetic entries (issue 34, item 3): slope guides over the panel's own
+"""The report's plots on synthetic entries: slope guides over the panel's own
 data, legends and notes inside the image, coinciding lines said, a δ tick at each δ of the data,
 the references' curves on the h → 0 plot, and the smallest text carried to the page."""
 import os

@@ -1,4 +1,4 @@
-"""The "independent errors" check's tolerance from estimated quadrature errors (issue 33 item 4).
+"""The "independent errors" check's tolerance from estimated quadrature errors.
 
 Two correct fixed-degree quadratures of a non-polynomial integrand differ by their quadrature
 errors, beyond the former bare 1e-8 relative where the exact solution has kinks across the
@@ -145,7 +145,7 @@ def test_a_correct_rule_on_kinks_across_triangles_passes(kinked):
 
 def test_without_errors_quadrature_the_bare_1e8_applies_and_says_so(kinked):
     """An older summary.json (no errors_quadrature) is still read: the former bare 1e-8, named in
-    the row, under which this correct computation fails (why issue 33 added the estimates)."""
+    the row, under which this correct computation fails (why the estimates exist)."""
     folder, _ = kinked
     drop_estimates(folder)
     rows, problems, text = independent(folder)
@@ -413,7 +413,7 @@ def wavy(tmp_path_factory):
 
 def test_sdcrack_on_a_smooth_non_polynomial_solution_passes_and_a_1e6_forgery_of_u_fails(
         wavy, tmp_path, monkeypatch):
-    """Issue 33's acceptance: a correct solver whose two correct quadratures of a smooth
+    """The quadrature estimates' acceptance: a correct solver whose two correct quadratures of a smooth
     non-polynomial solution differ by more than 1e-8 relative at the coarsest level passes the
     check, and the same folder with u's error forged by a relative 1e-6 fails it, blaming sdcrack."""
     fresh_caches(monkeypatch)

@@ -1,9 +1,9 @@
-"""What a reader sees first, measured in headless Chromium (issue 25, items 3 and 5): the report
+"""What a reader sees first, measured in headless Chromium: the report
 opens with the verdict, then the h → 0 plot, then the δ → 0 plot, then the short variant table;
 at 1280 and 800 px the page never scrolls sideways (wide tables scroll in their own box) and no
 text cell is squeezed to a word per line; provenance is folded. Every plot's text is legible at
 both widths and the plot links to its PNG; at 1280 px the whole h → 0 plot, its legend included,
-is on the first screen (issue 34, item 3). The campaign index says, one line per scene, what
+is on the first screen. The campaign index says, one line per scene, what
 converged at which rates and the first problem.
 
 Chromium (Debian: chromium) runs the page with a script appended that measures the layout and
@@ -20,6 +20,7 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
+from conftest import run_env
 from scene_text import set_key
 
 MEASURE = """<script>
@@ -32,7 +33,7 @@ window.addEventListener('load', function () {
     verdict: posY(Array.from(document.querySelectorAll('p')).find(function (p) {
       return p.textContent.indexOf('Verdict:') === 0; })),
     rates: posY(document.querySelector('img[id^="rates-"]')),
-    // the first screen's δ → 0 line and reference sentence (issue 34 item 2): their bottoms
+    // the first screen's δ → 0 line and reference sentence: their bottoms
     delta_line: bottomY(Array.from(document.querySelectorAll('p')).find(function (p) {
       return p.textContent.indexOf('δ → 0 (Theorem 2.1)') === 0; })),
     reference_line: bottomY(Array.from(document.querySelectorAll('p')).find(function (p) {
@@ -122,7 +123,7 @@ def test_report_never_scrolls_sideways(layouts, width):
     assert got["text_cells"] and min(got["text_cells"]) >= 120, sorted(got["text_cells"])[:5]
 
 
-# The smallest text of a plot as shown, in CSS px (issue 34, item 3: 6 px at 800 px before).
+# The smallest text of a plot as shown, in CSS px (6 px at 800 px before this bound).
 MIN_TEXT_CSS_PX = 9
 # The first screen at 1280 px: the verdict and the whole h → 0 plot, its legend included.
 FIRST_SCREEN_PX = 900
@@ -152,11 +153,11 @@ INDEX_MEASURE = MEASURE.replace(
 
 @pytest.mark.parametrize("width", [1280, 800])
 def test_campaign_index_says_per_scene_what_converged(report, width, tmp_path):
-    """ci/campaign_index.py on the report's results root: one row per scene with what converged,
+    """tools/campaign_index.py on the report's results root: one row per scene with what converged,
     the last rates and the first problem (none here), and no sideways scrolling."""
     root = report.parent.parent.parent
-    subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "ci", "campaign_index.py"), str(root)],
-                   check=True, capture_output=True, timeout=120)
+    subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "campaign_index.py"), str(root)],
+                   env=run_env(), check=True, capture_output=True, timeout=120)
     page = root / "index.html"
     probe = tmp_path / "index.html"
     probe.write_text(page.read_text().replace("</body>", INDEX_MEASURE + "</body>"))

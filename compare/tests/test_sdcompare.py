@@ -523,7 +523,7 @@ def test_bad_usage_exit_2(tmp_path):
 
 
 def test_a_path_that_is_not_a_results_folder_says_what_it_is(tmp_path):
-    """Issue 34: a missing path, a plain folder and a campaign root each get their own line; the
+    """A missing path, a plain folder and a campaign root each get their own line; the
     campaign root names one of its scenes' folders."""
     rc, _, err = run_cli(str(tmp_path / "nope"))
     assert rc == 2 and err == f"sdcompare: error: no such folder: {tmp_path / 'nope'}\n"
@@ -538,7 +538,7 @@ def test_a_path_that_is_not_a_results_folder_says_what_it_is(tmp_path):
                                f"{tmp_path / 'campaign' / 'mixed'}\n")
 
 
-# ------------------------------------------------------------------ report rules (issue 13)
+# ------------------------------------------------------------------ report rules
 # Words a report must never show: Python's None and nan/inf, δ written as 0e0, 1.0e-02 or 0.0.
 FORBIDDEN = re.compile(r"\bNone\b|\bnan\b|\binf\b|δ ?=? ?(?:0e0|0\.0\b|\d\.\de-0\d|0\.0*1\b)")
 
@@ -789,7 +789,7 @@ def test_report_without_provenance_says_not_recorded(open_run, empty_exps):
     assert_clean_report(open_run)
 
 
-# ------------------------------------------------------------------ the p mass axis (issue 14)
+# ------------------------------------------------------------------ the p mass axis
 def test_rerun_command_of_a_lumped_case():
     """A lumped case reruns with `--p-mass lumped` into its own folder; the consistent command is the
     one of a run without p masses."""
@@ -990,7 +990,7 @@ def test_a_consistent_only_run_shows_no_p_mass(open_run, empty_exps):
 
 
 def test_plots_are_readable(figs):
-    """Issue 25, item 4, on the h → 0 and δ → 0 plots of a run with both p masses and both u
+    """On the h → 0 and δ → 0 plots of a run with both p masses and both u
     spaces: one legend for the figure and none over a panel's data; consistent and lumped differ
     in colour, not only dashing; the slope-guide labels lie below every data point; λ is never
     spelled "lambda"; every title fits inside the figure."""
@@ -1035,7 +1035,7 @@ def test_plots_are_readable(figs):
 def test_work_precision_leaves_start_up_apart(figs):
     """dolfinx's form compilation (its summary's timings_s.forms, cached between runs) is not
     plotted as work on the level: the points are total − forms, and the range is written under the
-    plot (issue 25, item 4: it drew a zigzag of cache hits and misses)."""
+    plot (it once drew a zigzag of cache hits and misses)."""
     from sdcompare_lib import plots
 
     from sdcompare_lib import verdict

@@ -1,4 +1,4 @@
-"""The report's generated sentences are checks that can come out false (issue 34): each is
+"""The report's generated sentences are checks that can come out false: each is
 computed from the numbers it describes, here on the numbers of the report that once printed "the
 distance falls as δ decreases on every level" over a table where it rose."""
 import os
@@ -7,7 +7,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 from sdcompare_lib import sentences
 
-# mixed's report (issue 34): broken/M1star, distance to dolfinx per level and δ
+# mixed's report: broken/M1star, distance to dolfinx per level and δ
 MIXED = {
     0: [(1.0, 0.1142), (1e-2, 0.1198), (1e-4, 0.1246), (0.0, 0.1247)],
     1: [(1.0, 0.0610), (1e-2, 0.0410), (1e-4, 0.0390), (0.0, 0.0389)],

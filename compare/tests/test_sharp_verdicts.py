@@ -1,4 +1,4 @@
-"""The sharp verdict (issue 23) on synthetic inputs: expected orders from the theory, the rule at
+"""The sharp verdict on synthetic inputs: expected orders from the theory, the rule at
 expected − 0.2 (FAIL) and expected − 0.05 (PASS), the absolute yardsticks, the δ-point residuals and
 the regularity measured from the exact solution. Fast: no sdcrack run (the damaged real folders are
 in test_damaged_results.py)."""

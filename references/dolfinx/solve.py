@@ -687,10 +687,7 @@ def main(argv=None):
         extra = "".join(f" {k}={v:.3e}" for k, v in err.items() if v is not None)
         print(f"level {c['level']}: unknowns={c['unknowns']} iterations={c['iterations']} "
               f"active={c['active']}{extra} total={c['timings_s']['total']:.2f}s status={c['status']}")
-    bad = [c for c in summary["cases"] if c["status"] != "converged"]
-    for c in bad:  # results are written; the exit status says that some case is not trustworthy
-        print(f"warning: level {c['level']}: {c['status']}", file=sys.stderr)
-    return 3 if bad else 0
+    return sdresults.exit_status(summary["cases"], "warning: ")
 
 
 if __name__ == "__main__":

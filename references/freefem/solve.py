@@ -542,10 +542,7 @@ def main(argv=None):
         err = c.get("errors", {})
         print(f"level {c['level']}: h={c['h']:.4g} unknowns={c['unknowns']} iterations={c['iterations']} "
               + " ".join(f"{k}={v:.3e}" for k, v in err.items()) + f" status={c['status']}")
-    bad = [c for c in s["cases"] if c["status"] != "converged"]
-    for c in bad:  # results are written; the exit status says that some case is not trustworthy
-        print(f"solve.py: level {c['level']}: {c['status']}", file=sys.stderr)
-    return 3 if bad else 0
+    return sdresults.exit_status(s["cases"], "solve.py: ")
 
 
 if __name__ == "__main__":

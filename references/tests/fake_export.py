@@ -1,15 +1,17 @@
 """A tiny stand-in for `sdcrack mesh SCENE --out DIR` (for the reference and compare tests only).
 
-write_fake_export: the export format before issue 16 (no cracks.txt, crack_normals.txt; one side
+write_fake_export: the export format before polyline cracks (no cracks.txt, crack_normals.txt; one side
 per triangle): structured mesh of [-1,1]² with n×n cells split by SW–NE diagonals, crack on y = 0 for
 -0.5 ≤ x ≤ 0.5 (normal (0, 1)), n = n0·2^level (n0 divisible by 4).
 
-kinked_export, two_cracks_export, refined_export: the format of issue 16 (polyline cracks, several
+kinked_export, two_cracks_export, refined_export: the polyline-crack format (polyline cracks, several
 cracks, uniformly refined meshes; see the section below and compare/sdcompare_lib/sdexport.py).
+polyline_l2_sq: the exact crack L² norm of a linear function on such a polyline.
 Standard library and numpy only.
 """
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -275,3 +277,13 @@ def refined_export(out, name, f, g, exact=None, levels=(0, 1, 2), n=4, seed=7):
     meshes = refined_levels(perturbed_coarse_mesh(n, REFINED_CRACK, seed), levels)
     return write_export(out, name, f, g, exact, [REFINED_CRACK], meshes.__getitem__, "refined", levels,
                         mesh_size=2.0 / n)
+
+
+def polyline_l2_sq(polyline, a0, ax, ay):
+    """∫ (a0 + ax x + ay y)² over a polyline, a list of (x, y) vertices (exact: the integrand is
+    quadratic along each segment); what the tests expect of the crack norms."""
+    total = 0.0
+    for p, q in zip(polyline[:-1], polyline[1:]):
+        ga, gb = (a0 + ax * v[0] + ay * v[1] for v in (p, q))
+        total += math.dist(p, q) * (ga * ga + ga * gb + gb * gb) / 3
+    return total

@@ -1,6 +1,6 @@
 """The references' crack fields are named as in every solver's files (README's field table):
-`jump` (u⁺ − u⁻) and `contact_force` (the nodal multiplier λ_j of the QP); a file written before
-issue 34, whose contact force is `multiplier`, is still read by sdfields.crack_field, through h5py
+`jump` (u⁺ − u⁻) and `contact_force` (the nodal multiplier λ_j of the QP); an older file,
+whose contact force is `multiplier`, is still read by sdfields.crack_field, through h5py
 and meshio alike."""
 
 

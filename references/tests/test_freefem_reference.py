@@ -237,7 +237,7 @@ def test_fields_written(tmp_path):
         u = f["cases/level1/u"][:]
         assert np.array_equal(u, np.loadtxt(tmp_path / "o" / "u_level1.txt"))
         lam = crack_field(f["cases/level1/crack"], "contact_force")
-        assert "multiplier" not in f["cases/level1/crack"]  # the old name of files before issue 34
+        assert "multiplier" not in f["cases/level1/crack"]  # the old name, in older files
         assert lam[0] == 0 and lam[-1] == 0 and lam.min() >= 0 and lam.max() > 0
         jump = f["cases/level1/crack/jump"][:]
         assert jump.min() >= -1e-12 and np.all(np.abs(jump * lam) < 1e-10)

@@ -1,4 +1,4 @@
-"""The export format of issue 16 (several polyline cracks, uniformly refined meshes) in both references.
+"""The polyline-crack export format (several polyline cracks, uniformly refined meshes) in both references.
 
 Fake exports (tests/fake_export.py): a kinked crack on a structured grid (grid line, then a cell
 diagonal), two cracks (that kink and a straight one), two parallel cracks one cell apart, and a
@@ -283,15 +283,6 @@ def test_closed_exact_solution_converges_on_the_refined_export(tmp_path):
             assert abs(d["errors"][key] - f["errors"][key]) <= 1e-6 * f["errors"][key], (d["level"], key)
 
 
-def _polyline_l2_sq(polyline, a0, ax, ay):
-    """∫ (a0 + ax x + ay y)² over a polyline (exact: the integrand is quadratic along each segment)."""
-    total = 0.0
-    for p, q in zip(polyline[:-1], polyline[1:]):
-        ga, gb = (a0 + ax * v[0] + ay * v[1] for v in (p, q))
-        total += math.dist(p, q) * (ga * ga + ga * gb + gb * gb) / 3
-    return total
-
-
 @needs_both
 def test_jump_norm_runs_over_the_segments_within_each_crack(tmp_path):
     """A closed crack ([u_h] = 0) against a given jump 1 + x + 2y: lambda_l2 is that function's L²
@@ -299,8 +290,8 @@ def test_jump_norm_runs_over_the_segments_within_each_crack(tmp_path):
     not with a segment from the first crack's last tip to the second's first."""
     exact = {"u": CLOSED_U, "jump": "1 + x + 2*y"}
     export = EXPORTS["two-cracks"](tmp_path / "e", CLOSED_F, CLOSED_U, exact, (0, 1))
-    expected = math.sqrt(sum(_polyline_l2_sq(p, 1, 1, 2) for p in (fe.KINK, fe.STRAIGHT)))
-    joined = math.sqrt(_polyline_l2_sq(fe.KINK + fe.STRAIGHT, 1, 1, 2))
+    expected = math.sqrt(sum(fe.polyline_l2_sq(p, 1, 1, 2) for p in (fe.KINK, fe.STRAIGHT)))
+    joined = math.sqrt(fe.polyline_l2_sq(fe.KINK + fe.STRAIGHT, 1, 1, 2))
     assert abs(joined - expected) > 0.1
     s = solve_both(export, tmp_path)
     for tool, summary in s.items():

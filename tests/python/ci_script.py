@@ -1,5 +1,5 @@
-"""Loads one of the checkout's ci/ scripts (files, not an importable package) as a module, for
-the tests of its functions: one home for the loader the tests of ci/ share."""
+"""Loads one of the checkout's tool scripts (tools/, files, not an importable package) as a module,
+for the tests of its functions: one home for the loader those tests share."""
 
 import importlib.util
 import pathlib
@@ -8,7 +8,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def load(relative_path, name=None):
-    """The module of ROOT/relative_path (e.g. "ci/bench_norms.py"), executed once per call."""
+    """The module of ROOT/relative_path (e.g. "tools/bench_norms.py"), executed once per call."""
     path = ROOT / relative_path
     spec = importlib.util.spec_from_file_location(name or path.stem, path)
     module = importlib.util.module_from_spec(spec)

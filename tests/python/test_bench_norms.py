@@ -1,9 +1,9 @@
-"""ci/bench_norms.py's goal: the norms cost ≤ 0.25 × the solve phases at every measured level;
+"""tools/bench_norms.py's goal: the norms cost ≤ 0.25 × the solve phases at every measured level;
 one level over it, a missing ratio or nothing measured fails."""
 
 import ci_script
 
-bench = ci_script.load("ci/bench_norms.py")
+bench = ci_script.load("tools/bench_norms.py")
 
 
 def test_the_bound_is_the_issues():

@@ -1,5 +1,5 @@
-"""ci/bench_references.py: equal-error speed-ups of both p masses and both p spaces, the report,
-the goals of issues 24 and 32, load control.
+"""tools/bench_references.py: equal-error speed-ups of both p masses and both p spaces, the report,
+the graded and broken-tangential goals, load control.
 
 The arithmetic is checked on hand-made rows whose expected ratios are worked out by hand below;
 two end-to-end runs time the real binary on levels 0–1 of scenes/open-exact.toml and
@@ -18,11 +18,11 @@ import pytest
 import ci_script
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-SCRIPT = ROOT / "ci" / "bench_references.py"
+SCRIPT = ROOT / "tools" / "bench_references.py"
 EXE = ROOT / "target" / "release" / "sdcrack"
 
 
-br = ci_script.load("ci/bench_references.py")
+br = ci_script.load("tools/bench_references.py")
 
 
 def entry(u_l2, solver_s, wall_s, norms_s=None):
@@ -137,7 +137,7 @@ def test_plot_draws_both_variants_in_both_panels(tmp_path):
     fig = br.plot(hand_rows(), tmp_path / "wp.png", "hand")
     wall, solve = ([(x.get_label(), x.get_marker(), x.get_linestyle(), x.get_color())
                     for x in ax.get_lines()] for ax in fig.axes)
-    # one colour per tool and p mass (issue 25: consistent and lumped differ by more than dashing)
+    # one colour per tool and p mass (consistent and lumped differ by more than dashing)
     assert wall[:2] == [("sdcrack", "o", "--", "C0"), ("sdcrack (lumped p)", "D", "--", "C1")]
     assert solve == wall
     assert [x[0] for x in solve[2:]] == ["dolfinx", "freefem"]

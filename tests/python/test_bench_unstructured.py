@@ -1,9 +1,9 @@
-"""ci/bench_unstructured.py's verdict: the issue's bound of 1.5 × holds for every measured level,
+"""tools/bench_unstructured.py's verdict: the issue's bound of 1.5 × holds for every measured level,
 and a ratio above it, a missing ratio or no measurement at all fails."""
 
 import ci_script
 
-bench = ci_script.load("ci/bench_unstructured.py")
+bench = ci_script.load("tools/bench_unstructured.py")
 
 
 def test_the_bound_is_the_issues():

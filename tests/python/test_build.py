@@ -1,7 +1,7 @@
-"""A no-op `cargo build --release` does not rebuild the crate (issue 25, item 10).
+"""A no-op `cargo build --release` does not rebuild the crate.
 
 build.rs once watched .git/packed-refs, which a checkout may lack; cargo reruns a build script whose
-watched path is missing, so every build recompiled sdcrack (~40 s) and a no-op ci/campaign took
+watched path is missing, so every build recompiled sdcrack (~40 s) and a no-op tools/campaign took
 33-54 s instead of 2 s. Runs where this file is in a git checkout with a release build (ci/test);
 skipped elsewhere (ci/test-pip's copy has no .git, and a first build would take minutes)."""
 import glob
@@ -25,7 +25,7 @@ def test_a_second_build_finds_the_crate_fresh():
     assert first.returncode == 0, first.stderr[-2000:]
     second = subprocess.run(build, cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert second.returncode == 0, second.stderr[-2000:]
-    # the workspace's three crates (issue 35), each found fresh
+    # the workspace's three crates, each found fresh
     for crate in ("sdcrack-core", "sdcrack-io", "sdcrack"):
         assert f"Fresh {crate} v" in second.stderr, second.stderr[-2000:]
 
@@ -43,7 +43,7 @@ def _build_script():
                          and shutil.which("git")),
                     reason="needs the git checkout with its release build and git")
 def test_the_build_script_leaves_a_fresh_clones_index_alone(tmp_path):
-    """Issue 34: the build script's `git status` rewrote .git/index of a fresh clone (whose files'
+    """The build script's `git status` rewrote .git/index of a fresh clone (whose files'
     stat data is racy), a path it watches, so the clone's second build recompiled the crate (74 s).
     Run in a fresh clone, the build script reports the clone clean and leaves its index as it
     was."""

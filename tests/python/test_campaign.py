@@ -1,6 +1,6 @@
-"""ci/cases lists the campaign, and its commands rerun single cases reproducibly (both p masses).
+"""tools/cases lists the campaign, and its commands rerun single cases reproducibly (both p masses).
 
-A rerun command of ci/cases (the case's level, u space and multiplier with its δ sweep, warm-started
+A rerun command of tools/cases (the case's level, u space and multiplier with its δ sweep, warm-started
 δ after δ as in the full run) gives bitwise the same u, p, λ and exactly the same KKT residuals,
 active set, unknowns and LCP iterations as the same case inside a full run.
 """
@@ -17,7 +17,7 @@ from scene_text import add_key, set_key
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack"))
 h5py = pytest.importorskip("h5py")
-# ci/cases is a checkout tool (it writes δ with the compare tool's fmt_delta); ci/test-pip's copy
+# tools/cases is a checkout tool (it writes δ with the compare tool's fmt_delta); ci/test-pip's copy
 # of the tree has no compare/sdcompare_lib, and ci/test runs these tests on the checkout
 pytestmark = pytest.mark.skipif(not (ROOT / "compare" / "sdcompare_lib").is_dir(),
                                 reason="no compare/sdcompare_lib (ci/test-pip's copy of the tree)")
@@ -27,7 +27,7 @@ def cases_with_targets(*args, cwd=ROOT):
     """(row, target): the row's seven columns (scene, level, u space, multiplier, p mass, δ sweep,
     command), and the campaign job folder of its trailing `# target: ...` comment (None without
     one)."""
-    out = subprocess.run([str(ROOT / "ci" / "cases"), *map(str, args)], cwd=cwd, check=True,
+    out = subprocess.run([str(ROOT / "tools" / "cases"), *map(str, args)], cwd=cwd, check=True,
                          capture_output=True, text=True).stdout
     rows = []
     for line in out.splitlines():
@@ -67,7 +67,7 @@ def test_case_list_has_one_line_per_rerunnable_unit(tmp_path):
 
 def test_case_list_names_the_campaign_jobs(tmp_path):
     """Each line of a scene file ends in a shell comment naming the campaign's solver shard that
-    computes the unit (ci/workflow/Snakefile), under --out (default results/campaign of the
+    computes the unit (tools/workflow/Snakefile), under --out (default results/campaign of the
     checkout); `cut -d' ' -f7- | sh` runs the command alone."""
     rows = cases_with_targets(ROOT / "scenes" / "mixed.toml")
     assert len(rows) == 5 * 2 * 3 * 2
@@ -79,7 +79,7 @@ def test_case_list_names_the_campaign_jobs(tmp_path):
     assert rows[0][1] == str(tmp_path / "camp" / "shards" / "closed-exact" / "solver"
                              / "l0-continuous-M0-consistent")
     # the comment is a shell comment: the command part of the line runs without it
-    out = subprocess.run(["bash", "-c", "ci/cases scenes/closed-exact.toml | head -1 | cut -d' ' -f7- "
+    out = subprocess.run(["bash", "-c", "tools/cases scenes/closed-exact.toml | head -1 | cut -d' ' -f7- "
                           "| sed 's/^[^ ]*/echo/' | sh"], cwd=ROOT, check=True,
                          capture_output=True, text=True).stdout
     assert out.strip().endswith("--out sdcrack-rerun/closed-exact-l0-continuous-M0")
@@ -112,7 +112,7 @@ def test_case_list_of_a_results_folder(tmp_path):
 
 
 def test_case_list_of_a_results_folder_is_the_reports_rerun_list(tmp_path):
-    """For a results folder, ci/cases prints exactly the commands the folder's report lists
+    """For a results folder, tools/cases prints exactly the commands the folder's report lists
     (compare's render.rerun_command), a run restricted to one δ and a lumped p mass included, with
     the folder's recorded binary (a campaign's pinned copy, not this checkout's), `sdcrack` from
     PATH when none is recorded, and --rerun-dir (tests/python/test_reruns.py compares with a real
@@ -279,7 +279,7 @@ def test_case_list_of_both_p_spaces(tmp_path):
     if EXE.is_file():  # and they are exactly the workflow's solver jobs of the scene's plan
         import ci_script
 
-        prepare = ci_script.load("ci/workflow/prepare.py")
+        prepare = ci_script.load("tools/workflow/prepare.py")
         plan = json.loads(subprocess.run([str(EXE), "check", str(scene), "--json"], check=True,
                                          capture_output=True, text=True).stdout)
         solver = prepare.jobs_of(dict(plan, exact=True))[0]
@@ -287,7 +287,7 @@ def test_case_list_of_both_p_spaces(tmp_path):
 
 
 def test_case_list_of_a_p_spaces_results_folder_is_the_reports_rerun_list(tmp_path):
-    """For a results folder with both p spaces in its plan, ci/cases prints exactly the commands
+    """For a results folder with both p spaces in its plan, tools/cases prints exactly the commands
     the folder's report lists (render.rerun_command with the case's p_space), for the served
     units only; a folder of a `--p-space broken-tangential` run lists its own units."""
     import tomllib
@@ -330,18 +330,18 @@ def test_case_list_of_a_p_spaces_results_folder_is_the_reports_rerun_list(tmp_pa
 
 
 @pytest.mark.parametrize("arg, says", [
-    ("nope.toml", "ci/cases: nope.toml: no such file or directory: give a scene file or a results "
+    ("nope.toml", "tools/cases: nope.toml: no such file or directory: give a scene file or a results "
                   "folder OUT/<scene>/"),
-    ("folder", "ci/cases: folder: a results folder without scene.toml: give a scene file or a "
+    ("folder", "tools/cases: folder: a results folder without scene.toml: give a scene file or a "
                "results folder OUT/<scene>/"),
-    ("bad.toml", "ci/cases: bad.toml: not a scene file: "),
+    ("bad.toml", "tools/cases: bad.toml: not a scene file: "),
 ])
 def test_a_bad_argument_is_one_line_and_exit_2(tmp_path, arg, says):
-    """Issue 34: ci/cases exited 1 with Python's errno text; now one line and exit 2, as every
+    """tools/cases exited 1 with Python's errno text; now one line and exit 2, as every
     other tool of the repository on bad input."""
     (tmp_path / "folder").mkdir()
     (tmp_path / "bad.toml").write_text("name = \n")
-    p = subprocess.run([str(ROOT / "ci" / "cases"), arg], cwd=tmp_path, capture_output=True,
+    p = subprocess.run([str(ROOT / "tools" / "cases"), arg], cwd=tmp_path, capture_output=True,
                        text=True)
     assert p.returncode == 2 and p.stdout == "", p
     assert p.stderr.startswith(says) and p.stderr.count("\n") == 1, p.stderr

@@ -1,6 +1,6 @@
-"""ci/campaign_index.py --baseline: what changed per scene since an earlier campaign folder
-(verdicts, scenes new or gone, series' last rates and finest errors beyond sdcompare's
-verdict.BASELINE_* tolerances), on small hand-made campaign folders; and the GitHub nightly that
+"""tools/campaign_index.py --baseline: what changed per scene since an earlier campaign folder
+(verdicts, scenes new or gone, series' last rates and finest errors beyond the tolerances of
+sdcompare_lib/baseline.py, which sdcompare's baseline flags use too), on small hand-made campaign folders; and the GitHub nightly that
 hands it the last successful night (.github/workflows/nightly.yml)."""
 
 import json
@@ -12,12 +12,13 @@ import pytest
 import yaml  # python3-yaml, installed by ci/setup
 
 import ci_script
+from conftest import run_env
+from sdcompare_lib.baseline import BASELINE_ERROR_RTOL as ERROR_RTOL
+from sdcompare_lib.baseline import BASELINE_RATE_ATOL as RATE_ATOL
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-INDEX = ROOT / "ci" / "campaign_index.py"
-ci = ci_script.load("ci/campaign_index.py")
-TOL = ci.baseline_tolerances()
-RATE_ATOL, ERROR_RTOL = TOL["BASELINE_RATE_ATOL"], TOL["BASELINE_ERROR_RTOL"]
+INDEX = ROOT / "tools" / "campaign_index.py"
+ci = ci_script.load("tools/campaign_index.py")
 
 
 def series(u="broken", m="M1", q="u_l2", status="converges", errors=(4e-2, 1e-2, 2.5e-3),
@@ -59,7 +60,7 @@ def index(tmp_path, tonight, before, *extra):
     now = campaign(tmp_path / "now", tonight)
     base = campaign(tmp_path / "base", before)
     r = subprocess.run([sys.executable, str(INDEX), str(now), "--baseline", str(base), *extra],
-                       capture_output=True, text=True, timeout=60)
+                       env=run_env(), capture_output=True, text=True, timeout=60)
     assert r.returncode in (0, 1), r.stderr
     got = json.loads((now / "index.json").read_text())
     return r, got, {s["name"]: s for s in got["scenes"]}
@@ -69,13 +70,12 @@ def kinds(row):
     return [c["kind"] for c in row["changes"]]
 
 
-def test_tolerances_are_sdcompares():
-    """The index reads verdict.BASELINE_* from compare/sdcompare_lib/verdict.py's source (one
-    home; the module itself imports numpy): the values are the module's."""
-    from sdcompare_lib import verdict
+def test_the_index_and_sdcompare_share_the_baseline_rule():
+    """The index's changes and sdcompare's baseline flags come from one numpy-free module."""
+    from sdcompare_lib import baseline, verdict
 
-    assert TOL == {"BASELINE_RATE_ATOL": verdict.BASELINE_RATE_ATOL,
-                   "BASELINE_ERROR_RTOL": verdict.BASELINE_ERROR_RTOL}
+    assert ci.error_change is baseline.error_change is verdict.error_change
+    assert ci.rate_change is baseline.rate_change is verdict.rate_change
 
 
 def test_changes_within_tolerance_are_not_listed(tmp_path):
@@ -161,7 +161,8 @@ def test_header_names_the_baseline(tmp_path):
 def test_missing_baseline_folder_is_one_line_exit_2(tmp_path):
     now = campaign(tmp_path / "now", {"a": report()})
     r = subprocess.run([sys.executable, str(INDEX), str(now), "--baseline",
-                        str(tmp_path / "nowhere")], capture_output=True, text=True, timeout=60)
+                        str(tmp_path / "nowhere")], env=run_env(), capture_output=True, text=True,
+                       timeout=60)
     assert r.returncode == 2 and r.stdout == ""
     assert r.stderr == f"campaign_index: --baseline {tmp_path / 'nowhere'}: no such folder\n"
 
@@ -169,26 +170,12 @@ def test_missing_baseline_folder_is_one_line_exit_2(tmp_path):
 def test_no_baseline_says_why(tmp_path):
     now = campaign(tmp_path / "now", {"a": report()})
     r = subprocess.run([sys.executable, str(INDEX), str(now), "--no-baseline", "first night"],
-                       capture_output=True, text=True, timeout=60)
+                       env=run_env(), capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     assert "no baseline: first night" in r.stdout.splitlines()
     assert json.loads((now / "index.json").read_text())["baseline"] == {"none": "first night"}
     page = (now / "index.html").read_text()
     assert "no baseline: first night" in page and "changed since baseline" not in page
-
-
-def test_tolerances_come_from_the_verdict_file(tmp_path, monkeypatch):
-    """Another verdict.py (a tighter rate tolerance) lists a change the real one does not; one
-    without the constants is an exit-2 line."""
-    fake = tmp_path / "verdict.py"
-    fake.write_text("BASELINE_RATE_ATOL = 1e-9\nBASELINE_ERROR_RTOL = 1e-6\n")
-    monkeypatch.setattr(ci, "VERDICT_PY", str(fake))
-    near = report(**{"broken/M1 u_l2": {"rates": [2.0, 2.0 + RATE_ATOL / 2]}})
-    now, base = campaign(tmp_path / "now", {"a": report()}), campaign(tmp_path / "b", {"a": near})
-    ci.build(str(now), None, str(base))
-    assert kinds(json.loads((now / "index.json").read_text())["scenes"][0]) == ["rate"]
-    fake.write_text("BASELINE_RATE_ATOL = 1e-9\n")
-    assert ci.main([str(now), "--baseline", str(base)]) == 2
 
 
 def nightly_jobs():

@@ -1,4 +1,4 @@
-"""ci/campaign_index.py's line per scene on sdcrack's errors against the references' (the
+"""tools/campaign_index.py's line per scene on sdcrack's errors against the references' (the
 report's `glance`, written by sdcompare_lib/glance.py, whose tests make the line's numbers
 false: compare/tests/test_glance.py): the index shows the report's line as written, and says
 why when a report has none; from hand-made report.json files."""
@@ -9,9 +9,10 @@ import subprocess
 import sys
 
 import ci_script
+from conftest import run_env
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-ci = ci_script.load("ci/campaign_index.py")
+ci = ci_script.load("tools/campaign_index.py")
 LINE = ("u at level 4 ÷ dolfinx, FreeFEM: converging variants 0.98–2.4× either reference "
         "(rates 0.77–2.20 vs 2.12); declared expected failures 95× either reference; δ → 0: PASS")
 
@@ -46,8 +47,8 @@ def test_index_shows_the_line(tmp_path):
     for name, rep in (("a", glance_report()), ("b", {"verdict": "PASS", "series": []})):
         (tmp_path / name / "report").mkdir(parents=True)
         (tmp_path / name / "report" / "report.json").write_text(json.dumps(rep))
-    r = subprocess.run([sys.executable, str(ROOT / "ci" / "campaign_index.py"), str(tmp_path)],
-                       capture_output=True, text=True, timeout=60)
+    r = subprocess.run([sys.executable, str(ROOT / "tools" / "campaign_index.py"), str(tmp_path)],
+                       env=run_env(), capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     rows = {s["name"]: s for s in json.loads((tmp_path / "index.json").read_text())["scenes"]}
     assert rows["a"]["glance"]["line"] == LINE and rows["b"]["glance"]["line"] == "no references"

@@ -1,4 +1,4 @@
-"""The layering is the crate graph (issue 35): the maths and the study (problem, expr, fe, mesh,
+"""The layering is the crate graph: the maths and the study (problem, expr, fe, mesh,
 geometry, assembly, linalg, ordering, contact, multiplier, krylov, norms, the validated scene
 struct, study) are the crate sdcrack-core, which depends on no TOML, CLI, HDF5 or JSON crate; the
 scene's TOML format and the results formats are sdcrack-io, on top of it; the binary (command

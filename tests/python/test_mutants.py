@@ -1,4 +1,4 @@
-"""ci/mutants' catalogue and engine (issue 23), without running it (ci/nightly runs it: ~40 min).
+"""tools/mutants' catalogue and engine, without running it (ci/nightly runs it: ~40 min).
 
 The catalogue must hold at least 15 realistic bugs covering the solver, both references and the
 compare tool, each still applying to this checkout (its text found exactly once); the engine's
@@ -12,9 +12,10 @@ import sys
 import pytest
 
 import ci_script
+from conftest import run_env
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-mutants = ci_script.load("ci/mutants.py")
+mutants = ci_script.load("tools/mutants.py")
 
 CATALOGUE = mutants.load_catalogue()
 
@@ -96,6 +97,6 @@ def test_docs_record_a_run_of_the_whole_catalogue():
 
 
 def test_bad_usage_exits_2_with_one_line():
-    p = subprocess.run([sys.executable, os.path.join(ROOT, "ci", "mutants.py"), "--only", "nope"],
-                       capture_output=True, text=True)
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "mutants.py"), "--only", "nope"],
+                       env=run_env(), capture_output=True, text=True)
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "no mutant named nope" in p.stderr

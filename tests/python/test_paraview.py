@@ -1,9 +1,9 @@
-"""ci/render-field: ParaView's default reader walks δ, and the picture is drawn (pvpython).
+"""tools/render-field: ParaView's default reader walks δ, and the picture is drawn (pvpython).
 
 The rendering tests need ParaView (`pvpython`, Debian: paraview python3-paraview xvfb), an X
 server (a DISPLAY, or Xvfb, which `ci/setup --tests` installs where pvpython is) and a results
 folder in SDCRACK_RUN_DIR (ci/test runs the `mixed` scene at level 1 into one); they skip
-otherwise, saying which is missing. They run ci/render-field on that folder and check: the PNG
+otherwise, saying which is missing. They run tools/render-field on that folder and check: the PNG
 exists, has the requested
 size and is not one flat colour; the script's self-check passed, and what it saw agrees with
 summary.json and fields.h5 read here with h5py: one time step per δ of the series, at every step
@@ -22,17 +22,17 @@ import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-RENDER = ROOT / "ci" / "render-field"
+RENDER = ROOT / "tools" / "render-field"
 
 
 def pvpython():
-    """The pvpython ci/render-field would use (PVPYTHON, else PATH), or None."""
+    """The pvpython tools/render-field would use (PVPYTHON, else PATH), or None."""
     p = os.environ.get("PVPYTHON") or shutil.which("pvpython")
     return p if p and os.access(p, os.X_OK) else None
 
 
 def no_x_server(env=None):
-    """Why ci/render-field has no X server to render on (no DISPLAY, and no Xvfb on PATH to
+    """Why tools/render-field has no X server to render on (no DISPLAY, and no Xvfb on PATH to
     start one), or None. Debian's ParaView renders through GLX only."""
     env = os.environ if env is None else env
     if env.get("DISPLAY") or shutil.which("Xvfb", path=env.get("PATH", "")):
@@ -48,19 +48,6 @@ def need_paraview_and_x():
     reason = no_x_server()
     if reason:
         pytest.skip(reason)
-
-
-@pytest.fixture(scope="module")
-def run_dir():
-    d = os.environ.get("SDCRACK_RUN_DIR")
-    if not d:
-        pytest.skip("SDCRACK_RUN_DIR is not set")
-    return pathlib.Path(d)
-
-
-@pytest.fixture(scope="module")
-def summary(run_dir):
-    return json.loads((run_dir / "summary.json").read_text())
 
 
 def render(*args, env=None):
@@ -82,7 +69,7 @@ def read_png(path):
 
 
 def default_series(summary):
-    """The series ci/render-field picks: broken-M1 at the finest level that has one."""
+    """The series tools/render-field picks: broken-M1 at the finest level that has one."""
     names = {pathlib.Path(c["fields_series"]).name.removesuffix(".series.xdmf")
              for c in summary["cases"] if c.get("fields_series")}
     m1 = [n for n in names if n.endswith("-broken-M1")]
@@ -175,7 +162,7 @@ def tool_path(tmp_path, *tools):
 
 
 def fake_results(tmp_path):
-    """A results folder that passes ci/render-field's input check: fields.h5 (empty) and one
+    """A results folder that passes tools/render-field's input check: fields.h5 (empty) and one
     series of one step with u."""
     d = tmp_path / "scene"
     (d / "fields").mkdir(parents=True)

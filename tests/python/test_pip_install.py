@@ -1,10 +1,10 @@
-"""`pip install .` uses what is installed and leaves the checkout clean (issue 25, item 2).
+"""`pip install .` uses what is installed and leaves the checkout clean.
 
 In a venv made with --system-site-packages from Debian's /usr/bin/python3, whose h5py pip does not
 see (Debian names its distribution h5py._debian_h5py_serial), installing a copy of this checkout
 installs sdcrack-tools alone: no second h5py from the index (the run is offline: --no-index, so
 any missing requirement would fail it), and the copy holds the same files afterwards, apart from
-target/ (where ci/pybuild/sdcrack_build.py builds)."""
+target/ (where tools/pybuild/sdcrack_build.py builds)."""
 import importlib.util
 import os
 import pathlib
@@ -19,7 +19,7 @@ DEBIAN_PYTHON = "/usr/bin/python3"
 
 def backend():
     spec = importlib.util.spec_from_file_location(
-        "sdcrack_build_check", ROOT / "ci" / "pybuild" / "sdcrack_build.py")
+        "sdcrack_build_check", ROOT / "tools" / "pybuild" / "sdcrack_build.py")
     mod = importlib.util.module_from_spec(spec)
     # importing it writes target/pip-build/requirements.txt of this checkout: harmless (ignored)
     spec.loader.exec_module(mod)

@@ -12,8 +12,8 @@ SPDX_FIRST_LINE = {"MIT": "MIT License"}  # the licence texts this check knows
 
 
 def cargo_package():
-    """The root package's table, keys inherited from the workspace (`license.workspace = true`,
-    issue 35) resolved from [workspace.package]."""
+    """The root package's table, keys inherited from the workspace (`license.workspace = true`)
+    resolved from [workspace.package]."""
     cargo = tomllib.loads((ROOT / "Cargo.toml").read_text())
     inherited = cargo.get("workspace", {}).get("package", {})
     return {k: inherited[k] if v == {"workspace": True} else v for k, v in cargo["package"].items()}

@@ -1,4 +1,4 @@
-"""ci/rates_table.py, the docs' rate tables: rates per halving of h or of N^{-1/2} from a
+"""tools/rates_table.py, the docs' rate tables: rates per halving of h or of N^{-1/2} from a
 summary.json, one row per variant (the p space included), and one line with exit 2 for a results
 folder it cannot tabulate."""
 
@@ -6,7 +6,7 @@ import json
 
 from ci_script import load
 
-rates_table = load("ci/rates_table.py")
+rates_table = load("tools/rates_table.py")
 
 
 def case(level, p_space, e_u, e_p, e_l, unknowns):

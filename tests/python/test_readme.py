@@ -1,4 +1,4 @@
-"""The README reads in the order a new user needs it (issue 25, item 9): what sdcrack is, the
+"""The README reads in the order a new user needs it: what sdcrack is, the
 quick start, then "your own problem" before any long command list, then the results folder as a
 list rather than one long block; and every file or folder it names in the results folder exists
 in a real results folder's listing (checked where ci/test provides one, SDCRACK_RUN_DIR)."""

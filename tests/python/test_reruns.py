@@ -1,6 +1,6 @@
-"""Reruns that prove themselves (issue 34 item 5).
+"""Reruns that prove themselves.
 
-One command per rerunnable unit, the same in a folder's report and in `ci/cases RESULTS` (the
+One command per rerunnable unit, the same in a folder's report and in `tools/cases RESULTS` (the
 binary that wrote the folder, its scene copy, `--out sdcrack-rerun/<name>` relative to where it is
 run); the rerun lands outside the results tree; `compare/sdcompare-rerun ORIGINAL RERUN` says
 "identical" for an untouched rerun, exits 1 naming the first differing dataset or case number, and
@@ -43,8 +43,8 @@ def tiny_scene(folder, fields=None):
 
 
 def cases_commands(*args, cwd):
-    """Field 7 on of each line of ci/cases, the trailing target comment left out."""
-    out = subprocess.run([str(ROOT / "ci" / "cases"), *map(str, args)], cwd=cwd, check=True,
+    """Field 7 on of each line of tools/cases, the trailing target comment left out."""
+    out = subprocess.run([str(ROOT / "tools" / "cases"), *map(str, args)], cwd=cwd, check=True,
                          capture_output=True, text=True).stdout
     return [line.partition(" # target: ")[0].split(" ", 6)[6] for line in out.splitlines()]
 
@@ -79,7 +79,7 @@ def original(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def rerun(original, tmp_path_factory):
-    """One unit's rerun from `ci/cases RESULTS`, run from an unrelated directory: (its --out
+    """One unit's rerun from `tools/cases RESULTS`, run from an unrelated directory: (its --out
     folder, the results tree's files before and after)."""
     before = files_under(original.parent)
     command = next(c for c in cases_commands(original, cwd=ROOT) if c.endswith("/" + UNIT))
@@ -94,7 +94,7 @@ def forged(rerun, tmp_path):
 
 
 def test_ci_cases_prints_the_reports_commands(original, tmp_path):
-    """`ci/cases RESULTS` prints, field 7 on, exactly the commands of the folder's report
+    """`tools/cases RESULTS` prints, field 7 on, exactly the commands of the folder's report
     (report.json's `rerun` of each KKT row, report.md's Rerun commands table), character for
     character: the binary that wrote the folder, its scene copy, a relative --out."""
     folder = pathlib.Path(shutil.copytree(original, tmp_path / "open-exact"))

@@ -30,19 +30,6 @@ h5py = pytest.importorskip("h5py")
 from meshio.xdmf import TimeSeriesReader  # noqa: E402
 
 
-@pytest.fixture(scope="module")
-def run_dir():
-    d = os.environ.get("SDCRACK_RUN_DIR")
-    if not d:
-        pytest.skip("SDCRACK_RUN_DIR is not set")
-    return pathlib.Path(d)
-
-
-@pytest.fixture(scope="module")
-def summary(run_dir):
-    return json.loads((run_dir / "summary.json").read_text())
-
-
 def series_steps(run_dir, summary):
     """{series file: [cases in step order]} from summary.json (cases are listed in sweep order)."""
     out = {}

@@ -1,4 +1,4 @@
-"""ci/campaign as a Snakemake workflow (ci/workflow/Snakefile): job list, same numbers as one
+"""tools/campaign as a Snakemake workflow (tools/workflow/Snakefile): job list, same numbers as one
 process, incremental reruns, resuming a killed campaign, failing jobs in the index.
 
 Runs on two small scenes derived from the repository's (closed-exact and mixed at levels 0-2,
@@ -21,12 +21,13 @@ import time
 
 import numpy as np
 import pytest
+from conftest import run_env
 from scene_text import add_key, set_key
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack")).resolve()
 SNAKEMAKE = ROOT / ".venv-workflow" / "bin" / "snakemake"
-CAMPAIGN = ROOT / "ci" / "campaign"
+CAMPAIGN = ROOT / "tools" / "campaign"
 h5py = pytest.importorskip("h5py")
 
 LEVELS = [0, 1, 2]
@@ -294,20 +295,21 @@ def test_dry_run_after_changes_lists_what_depends_on_them(full_run, scenes, tmp_
 
 
 def test_index_of_downloaded_scene_folders(full_run, tmp_path):
-    """ci/campaign_index.py DIR on scene folders put together (the GitHub nightly's last job)."""
+    """tools/campaign_index.py DIR on scene folders put together (the GitHub nightly's last job)."""
     out, _ = full_run
     for name in ("closed-exact", "mixed"):
         shutil.copytree(out / name / "report", tmp_path / name / "report")
     shutil.copytree(out / "logs" / "mixed", tmp_path / "logs" / "mixed")
-    r = subprocess.run(["/usr/bin/python3", str(ROOT / "ci" / "campaign_index.py"), str(tmp_path)],
-                       capture_output=True, text=True)
+    r = subprocess.run(["/usr/bin/python3", str(ROOT / "tools" / "campaign_index.py"), str(tmp_path)],
+                       env=run_env(), capture_output=True, text=True)
     index = json.loads((tmp_path / "index.json").read_text())
     want = {s["name"]: s["verdict"] for s in json.loads((out / "index.json").read_text())["scenes"]}
     assert {s["name"]: s["verdict"] for s in index["scenes"]} == want
     assert r.returncode == (0 if set(want.values()) == {"PASS"} else 1)
     # an expected scene without a folder is FAIL
-    r = subprocess.run(["/usr/bin/python3", str(ROOT / "ci" / "campaign_index.py"), str(tmp_path),
-                        "--scene", "mixed", "--scene", "absent"], capture_output=True, text=True)
+    r = subprocess.run(["/usr/bin/python3", str(ROOT / "tools" / "campaign_index.py"), str(tmp_path),
+                        "--scene", "mixed", "--scene", "absent"], env=run_env(),
+                       capture_output=True, text=True)
     assert r.returncode == 1
     assert "  FAIL  absent: no report" in r.stdout
 
@@ -410,7 +412,7 @@ def test_failed_job_shows_in_the_index(scenes, tmp_path):
 
 
 def critical_path(out, *extra):
-    return subprocess.run(["/usr/bin/python3", str(ROOT / "ci" / "workflow" / "critical_path.py"),
+    return subprocess.run(["/usr/bin/python3", str(ROOT / "tools" / "workflow" / "critical_path.py"),
                            str(out), *extra], capture_output=True, text=True)
 
 
@@ -430,7 +432,7 @@ def test_critical_path_of_known_durations(tmp_path):
     assert cp["sum_s"] == 17.0 and cp["jobs"] == 5
     assert cp["per_rule_s"] == {"dolfinx": 5.0, "freefem": 3.0, "report": 8.0, "solver": 1.0}
     assert cp["per_scene"]["a"]["path_s"] == 7.0
-    # issue 26's goals: report 8 of 17 s = 47 % > 15 %; path 9 s = 1.8 × the longest shard (5 s)
+    # the critical path's goals: report 8 of 17 s = 47 % > 15 %; path 9 s = 1.8 × the longest shard (5 s)
     assert [g["met"] for g in cp["goals"]] == [False, False]
     assert cp["goals"][0]["goal"].startswith(
         "compare tool (report and check jobs) 47.1 % of the job-seconds")
@@ -506,7 +508,7 @@ def test_the_pinned_engine_is_installed():
                         "print(m.version('snakemake-executor-plugin-slurm'))"],
                        capture_output=True, text=True)
     assert r.stdout.strip() == pins["SLURM_PLUGIN_VERSION"], r.stderr
-    constraints = (ROOT / "ci" / "workflow" / "constraints.txt").read_text()
+    constraints = (ROOT / "tools" / "workflow" / "constraints.txt").read_text()
     assert f"snakemake=={pins['SNAKEMAKE_VERSION']}" in constraints
 
 
@@ -538,7 +540,7 @@ def test_index_lines_say_what_converged_and_the_first_problem():
     report's first reason."""
     import ci_script
 
-    ci = ci_script.load("ci/campaign_index.py")
+    ci = ci_script.load("tools/campaign_index.py")
 
     def s(u, m, q, status, rate, pm="consistent"):
         return {"u_space": u, "multiplier": m, "p_mass": pm, "quantity": q, "status": status,
@@ -558,7 +560,7 @@ def test_index_lines_say_what_converged_and_the_first_problem():
 
 
 
-# The p space axis (issue 32): the broken-tangential p runs with the broken u only, so a plan's
+# The p space axis: the broken-tangential p runs with the broken u only, so a plan's
 # solver units are levels × u spaces × multipliers × p masses × p spaces minus every (continuous u,
 # broken-tangential p); its shards and jobs carry "-ptangential" after the p mass, the continuous
 # p's keep the names of before the axis.
@@ -582,13 +584,13 @@ def served_solver_shards(name, levels, u_spaces=("continuous", "broken"),
 
 
 def test_jobs_of_a_plan_with_and_without_p_spaces():
-    """ci/workflow/prepare.py's list of a plan's jobs (which the Snakefile, the job count and
-    ci/cases share): a plan without p spaces (or with the continuous p alone) has exactly the
+    """tools/workflow/prepare.py's list of a plan's jobs (which the Snakefile, the job count and
+    tools/cases share): a plan without p spaces (or with the continuous p alone) has exactly the
     shard names of before the axis, in the same order; with both p spaces the broken u gets a
     -ptangential shard per multiplier and p mass, the continuous u none."""
     import ci_script
 
-    prepare = ci_script.load("ci/workflow/prepare.py")
+    prepare = ci_script.load("tools/workflow/prepare.py")
     plan = {"name": "s", "levels": [0, 1], "u_spaces": ["continuous", "broken"],
             "multipliers": ["M0", "M1", "M1star"], "p_masses": ["consistent", "lumped"],
             "references": ["dolfinx"], "exact": True}
@@ -657,10 +659,11 @@ def test_dry_run_of_both_p_spaces(scenes, tmp_path):
             f"reference {REFERENCE_JOBS}, check {checks}, report 1)") in r.stdout
     assert sum(o.endswith("-ptangential") for _, o in jobs) == len(LEVELS) * MULTIPLIERS * P_MASSES
     # the jobs' commands: Snakemake's own dry run of the same config, with the shell commands
-    sm = subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "ci" / "workflow" / "Snakefile"),
+    sm = subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "tools" / "workflow" / "Snakefile"),
                          "--directory", str(out), "--configfile",
                          str(out / "inputs" / "config.dry-run.json"), "--cores", "1",
-                         "--dry-run", "--printshellcmds"], capture_output=True, text=True)
+                         "--dry-run", "--printshellcmds"], env=run_env(), capture_output=True,
+                        text=True)
     assert sm.returncode == 0, sm.stdout[-3000:] + sm.stderr[-3000:]
     blocks = dry_run_blocks(sm.stdout)
     solver = {b["output"]: b["shell"] for b in blocks if b["rule"] == "solver"}
@@ -694,7 +697,7 @@ def test_index_labels_of_the_p_spaces():
     report.json writes its p_space (a run with both p spaces) or not (a run without the axis)."""
     import ci_script
 
-    ci = ci_script.load("ci/campaign_index.py")
+    ci = ci_script.load("tools/campaign_index.py")
 
     def s(u, m, q, status, rate, pm="consistent", ps=None):
         row = {"u_space": u, "multiplier": m, "p_mass": pm, "quantity": q, "status": status,

@@ -107,51 +107,53 @@ def test_only_series_and_state_files_no_spatial_collection(folder):
     assert sorted(p.name for p in (folder / STEM).iterdir()) == want
 
 
+def read_series(path, names, points, cell_type, cells):
+    """The steps of the time series `path` as meshio reads them, once its mesh is checked (the
+    expected points to 1e-15, one block of `cell_type` cells equal to `cells`, one step per name):
+    (the expected case, point_data, cell_data) per case of `names`, in order, step k at time k."""
+    with TimeSeriesReader(path) as r:
+        got_points, got_cells = r.read_points_cells()
+        np.testing.assert_allclose(got_points, points, rtol=0, atol=1e-15)
+        assert [c.type for c in got_cells] == [cell_type]
+        np.testing.assert_array_equal(got_cells[0].data, cells)
+        assert r.num_steps == len(names)
+        for k, name in enumerate(names):
+            t, point_data, cell_data = r.read_data(k)
+            assert t == k, "the time of step k is k: the slider walks the sweep in order"
+            yield expected(name), point_data, cell_data
+
+
 @pytest.mark.parametrize("series", sorted(SERIES))
 def test_meshio_time_series_reads_mesh_series(folder, series):
     names = SERIES[series]
     first = expected(names[0])
-    with TimeSeriesReader(folder / STEM / f"{series}.series.xdmf") as r:
-        points, cells = r.read_points_cells()
-        np.testing.assert_allclose(points, first["pts"], rtol=0, atol=1e-15)
-        assert [c.type for c in cells] == ["triangle"]
-        np.testing.assert_array_equal(cells[0].data, first["tris"])
-        assert r.num_steps == len(names)
-        for k, name in enumerate(names):
-            e = expected(name)
-            t, point_data, cell_data = r.read_data(k)
-            assert t == k, "the time of step k is k: the slider walks the sweep in order"
-            assert sorted(point_data) == sorted(e["point_data"])
-            for key, v in e["point_data"].items():
-                np.testing.assert_allclose(point_data[key], v, rtol=1e-15, atol=1e-15)
-            assert not cell_data
+    for e, point_data, cell_data in read_series(folder / STEM / f"{series}.series.xdmf", names,
+                                                first["pts"], "triangle", first["tris"]):
+        assert sorted(point_data) == sorted(e["point_data"])
+        for key, v in e["point_data"].items():
+            np.testing.assert_allclose(point_data[key], v, rtol=1e-15, atol=1e-15)
+        assert not cell_data
 
 
 @pytest.mark.parametrize("series", sorted(SERIES))
 def test_meshio_time_series_reads_crack_series(folder, series):
     names = SERIES[series]
     first = expected(names[0])
-    with TimeSeriesReader(folder / STEM / f"{series}.crack.series.xdmf") as r:
-        points, cells = r.read_points_cells()
-        np.testing.assert_allclose(points, first["crack"], rtol=0, atol=1e-15)
-        assert [c.type for c in cells] == ["line"]
-        np.testing.assert_array_equal(cells[0].data, first["segs"])
-        for k, name in enumerate(names):
-            e = expected(name)
-            t, point_data, cell_data = r.read_data(k)
-            assert t == k
-            # δ as a constant point field on the crack too (ParaView shows no Information)
-            np.testing.assert_array_equal(point_data.pop("delta"), np.full(len(points), e["delta"]))
-            check_jump(point_data, e)
-            if e["centering"] == "Node":
-                np.testing.assert_allclose(point_data["lambda"], e["lam"], rtol=1e-15)
-                assert not cell_data
-            elif e["centering"] == "Cell":
-                assert len(cell_data["lambda"]) == 1
-                np.testing.assert_allclose(cell_data["lambda"][0], e["lam"], rtol=1e-15)
-                assert not point_data
-            else:
-                assert not point_data and not cell_data
+    for e, point_data, cell_data in read_series(folder / STEM / f"{series}.crack.series.xdmf",
+                                                names, first["crack"], "line", first["segs"]):
+        # δ as a constant point field on the crack too (ParaView shows no Information)
+        np.testing.assert_array_equal(point_data.pop("delta"),
+                                      np.full(len(first["crack"]), e["delta"]))
+        check_jump(point_data, e)
+        if e["centering"] == "Node":
+            np.testing.assert_allclose(point_data["lambda"], e["lam"], rtol=1e-15)
+            assert not cell_data
+        elif e["centering"] == "Cell":
+            assert len(cell_data["lambda"]) == 1
+            np.testing.assert_allclose(cell_data["lambda"][0], e["lam"], rtol=1e-15)
+            assert not point_data
+        else:
+            assert not point_data and not cell_data
 
 
 @pytest.mark.parametrize("series", sorted(SERIES))

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Prepares a campaign folder's inputs/ for ci/workflow/Snakefile (called by ci/campaign).
+"""Prepares a campaign folder's inputs/ for tools/workflow/Snakefile (called by tools/campaign).
 
     prepare.py --out DIR --bin SDCRACK --repo ROOT [--levels A-B] [--threads N]
                [--baseline OLD_DIR] [--expectations FILE] [--dry-run] SCENE.toml...
@@ -31,6 +31,8 @@ import shutil
 import subprocess
 import sys
 import tomllib
+
+from sdcompare_lib.sdresults import write_atomic
 
 RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks", "index.html", "index.json"}
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")
@@ -72,15 +74,6 @@ def read_bytes(path):
             return fh.read()
     except FileNotFoundError:
         return None
-
-
-def write_atomic(path, data, mode=None):
-    tmp = f"{os.path.dirname(path)}/.{os.path.basename(path)}.tmp-{os.getpid()}"
-    with open(tmp, "wb") as fh:
-        fh.write(data)
-    if mode is not None:
-        os.chmod(tmp, mode)
-    os.replace(tmp, path)
 
 
 def parse_levels(text):
@@ -184,10 +177,7 @@ def prepare(args):
         if args.dry_run and have is not None:
             binary_changed = True  # left alone: the dry run forces everything instead
         else:
-            tmp = os.path.join(inputs, f".sdcrack.tmp-{os.getpid()}")
-            shutil.copyfile(args.bin, tmp)
-            os.chmod(tmp, 0o755)
-            os.replace(tmp, exe)
+            write_atomic(exe, read_bytes(args.bin), 0o755)
             write_atomic(sha_file, f"{digest}  sdcrack\n".encode())
     check_exe = exe if os.path.isfile(exe) and not binary_changed else os.path.abspath(args.bin)
 

@@ -6,7 +6,7 @@ of e_u, e_p, e_p_x and e_λ between consecutive levels, per halving of h or (`--
 N^{-1/2} with N the case's unknowns, and the errors at the finest level. Reads what sdcrack
 reported; the compare tool recomputes the same errors independently in every campaign.
 
-    ci/rates_table.py RESULTS/<scene> [--by h|unknowns] [--delta D] [--u-space broken]
+    tools/rates_table.py RESULTS/<scene> [--by h|unknowns] [--delta D] [--u-space broken]
 """
 
 import argparse

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The cost of the error norms against the case they measure (issue 26, item 2).
+"""The cost of the error norms against the case they measure.
 
 One case per level (broken u, M1, consistent p mass, δ = 0, no fields) of each scene with an
 exact solution, by `sdcrack run --solver-only`, `--repeat` times in separate processes. From the
@@ -7,7 +7,7 @@ summary's `timings_s`: `norms` (the quadrature against the exact solution) and t
 phases (every other timer: assembly, symbolic, factorization, crack reduction, condition,
 contact), each the fastest of the repeats. The goal: norms ≤ 0.25 × the solve phases at every
 level. Prints a table and one goal line (MET/MISSED), writes OUT/norms.{json,md}; exit 1 when the
-goal is missed. `--sdcrack BIN` measures another build (the rule before issue 26, for instance).
+goal is missed. `--sdcrack BIN` measures another build (an older rule, for instance).
 """
 
 import argparse
@@ -20,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-# Issue 26: the norms cost at most this × the case they measure, at every level.
+# The norms cost at most this × the case they measure, at every level.
 BOUND = 0.25
 
 

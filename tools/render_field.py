@@ -1,6 +1,6 @@
-"""Render u of one field series of an sdcrack results folder to a PNG (run by ci/render-field).
+"""Render u of one field series of an sdcrack results folder to a PNG (run by tools/render-field).
 
-    pvpython ci/render_field.py RESULTS_DIR [--series NAME] [--out PNG] [--check-json FILE]
+    pvpython tools/render_field.py RESULTS_DIR [--series NAME] [--out PNG] [--check-json FILE]
 
 RESULTS_DIR is one scene's results folder (`sdcrack run ... --out OUT` writes OUT/SCENE/), holding
 `fields.h5` and `fields/SERIES.series.xdmf` (+ `fields/SERIES.crack.series.xdmf`), one XDMF

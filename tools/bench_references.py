@@ -117,7 +117,7 @@ IDLE_LOAD = 1.0  # 1-min load average below which the machine counts as idle
 IDLE_FOREIGN = 0.1  # cores used by other processes below which the machine counts as idle
 REJECT_FOREIGN = 0.2  # cores used by other processes during a measurement that reject it
 LOAD_HEADER = """\
-# Load during each measurement (ci/bench_references.py). One line per try:
+# Load during each measurement (tools/bench_references.py). One line per try:
 #   time tool level try n: wall (s of the try) own cpu (s of CPU used by this script and its
 #   children) foreign (cores used by other processes: /proc/stat busy time minus own cpu, over
 #   wall) steal (cores stolen by the hypervisor) load (1-min load average before->after) verdict

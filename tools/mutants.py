@@ -1,6 +1,6 @@
-"""Mutation tests of the verification (issue 23): ci/mutants' engine.
+"""Mutation tests of the verification: tools/mutants' engine.
 
-Each mutant of ci/mutants.toml is one realistic bug (a wrong factor, a swapped pair, a sign) in the
+Each mutant of tools/mutants.toml is one realistic bug (a wrong factor, a swapped pair, a sign) in the
 solver (Rust: src/, crates/), a reference (references/) or the compare tool (compare/). It is
 applied alone to a scratch copy of this checkout; the copy is rebuilt when the bug is in Rust; the scenes are run as a
 user runs them (`sdcrack run`, with the references the scene names) and judged by the copy's
@@ -14,8 +14,8 @@ every scene. The first scene that FAILs kills a mutant: the later ones are not r
 
 Output: one line per mutant on stdout (KILLED/SURVIVED/BROKEN, name, the scene and the first
 reason); progress on stderr; WORK/mutants.json with every verdict and the checks that caught it;
-with --record FILE, the table between the markers `<!-- ci/mutants: begin -->` and
-`<!-- ci/mutants: end -->` of FILE is replaced by this run's. Exit 0 when every mutant is killed,
+with --record FILE, the table between the markers `<!-- tools/mutants: begin -->` and
+`<!-- tools/mutants: end -->` of FILE is replaced by this run's. Exit 0 when every mutant is killed,
 1 when one survives or no longer applies (BROKEN: its text is not found exactly once, or the
 mutated code does not build), 2 on bad usage or when the unmutated copy does not PASS.
 """
@@ -30,12 +30,14 @@ import sys
 import time
 import tomllib
 
+from sdcompare_lib.sdresults import write_atomic
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-CATALOGUE = os.path.join(ROOT, "ci", "mutants.toml")
+CATALOGUE = os.path.join(ROOT, "tools", "mutants.toml")
 DEFAULT_SCENES = ["scenes/closed-exact.toml", "scenes/open-exact.toml", "scenes/mixed.toml",
                   "scenes/open-smooth.toml", "scenes/open-graded.toml"]
 MUTANT_KEYS = {"name", "file", "find", "replace", "bug", "catches"}
-BEGIN, END = "<!-- ci/mutants: begin -->", "<!-- ci/mutants: end -->"
+BEGIN, END = "<!-- tools/mutants: begin -->", "<!-- tools/mutants: end -->"
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
 
 
@@ -281,14 +283,11 @@ def record(path, table):
     _, sep2, tail = rest.partition(END)
     if not (sep1 and sep2):
         raise UsageError(f"{path} lacks the markers {BEGIN} … {END}")
-    tmp = path + ".tmp"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(f"{head}{BEGIN}\n{table}\n{END}{tail}")
-    os.replace(tmp, path)
+    write_atomic(path, f"{head}{BEGIN}\n{table}\n{END}{tail}")
 
 
 def parse_args(argv):
-    p = argparse.ArgumentParser(prog="ci/mutants", description=__doc__.split("\n\n")[0])
+    p = argparse.ArgumentParser(prog="tools/mutants", description=__doc__.split("\n\n")[0])
     p.add_argument("scenes", nargs="*", help=f"scene files (default: {' '.join(DEFAULT_SCENES)})")
     p.add_argument("--only", action="append", default=[], metavar="NAME",
                    help="run this mutant only (repeatable)")

@@ -1,10 +1,10 @@
 #!/usr/bin/python3
 """The index of a campaign folder: DIR/index.html and DIR/index.json, one row per scene.
 
-    ci/campaign_index.py DIR [--scene NAME ...] [--baseline BASEDIR [--baseline-label TEXT]
+    tools/campaign_index.py DIR [--scene NAME ...] [--baseline BASEDIR [--baseline-label TEXT]
                                                  | --no-baseline REASON]
 
-DIR is a campaign folder of ci/campaign or ci/nightly (DIR/<name>/report/report.json per scene,
+DIR is a campaign folder of tools/campaign or ci/nightly (DIR/<name>/report/report.json per scene,
 the jobs' logs under DIR/logs/<name>/), or a folder of such scene folders put together, e.g. the
 GitHub nightly's downloaded artifacts. The scenes are the --scene names, else those of
 DIR/inputs/config.json (the last campaign run there), else every DIR/<name>/ holding a report,
@@ -21,35 +21,35 @@ have and the δ → 0 outcome.
 artifacts; its scenes found as above, without --scene). Each scene's row then lists what changed
 since: its verdict, the scene new (or gone: a line of its own), and per series (matched by
 variant and quantity) its status, its finest level, its last rate by more than
-verdict.BASELINE_RATE_ATOL and its error at the finest common level by more than
-verdict.BASELINE_ERROR_RTOL relative (compare/sdcompare_lib/verdict.py, read, not imported), or
+BASELINE_RATE_ATOL and its error at the finest common level by more than BASELINE_ERROR_RTOL
+relative (sdcompare_lib/baseline.py, the tolerances sdcompare's baseline flags use), or
 "no change beyond tolerance". --baseline-label names the baseline in the header (default: the
 folder). --no-baseline REASON: the header says "no baseline: REASON" instead (the nightly's
 first night). Neither changes the verdict or the exit status.
 
 Prints one verdict line per scene, the baseline's line and the index's path; exit 0 when every
-scene PASSes, 1 otherwise, 2 on bad usage (one line). Standard library only.
+scene PASSes, 1 otherwise, 2 on bad usage (one line). Standard library and the numpy-free
+modules of the package sdcompare_lib, found on PYTHONPATH: its launchers (tools/campaign,
+ci/nightly, the GitHub nightly's index job) run it as
+`PYTHONPATH=compare /usr/bin/python3 tools/campaign_index.py DIR`, as sdcrack runs the reference
+scripts; a pip install of the checkout (pyproject.toml) makes it importable too.
 """
 
 import argparse
-import ast
 import datetime
 import html
-import importlib.util
 import json
 import math
 import os
 import re
 import sys
 
+from sdcompare_lib.baseline import (BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL, error_change,
+                                    rate_change)
+from sdcompare_lib.sdresults import write_atomic
+
 TAIL = 40
 RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks"}
-# The baseline's tolerances have one home, sdcompare's verdict module; it imports numpy and the
-# references' modules (absent where the GitHub index job runs), so their values are read from its
-# source.
-VERDICT_PY = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
-                          "compare", "sdcompare_lib", "verdict.py")
-TOLERANCES = ("BASELINE_RATE_ATOL", "BASELINE_ERROR_RTOL")
 MAX_LISTED = 10  # changes per scene listed in index.html (index.json has them all)
 NO_CHANGE = "no change beyond tolerance"
 
@@ -273,43 +273,6 @@ def glance(report):
 
 # --------------------------------------------------------------------------- the baseline
 
-def verdict_source():
-    """The verdict module's source file: the checkout's (VERDICT_PY), else the installed
-    sdcompare_lib's (a pip install, whose checkout copy has no compare/sdcompare_lib; found
-    without importing the package)."""
-    if os.path.isfile(VERDICT_PY):
-        return VERDICT_PY
-    spec = importlib.util.find_spec("sdcompare_lib")
-    if spec is not None and spec.origin:
-        installed = os.path.join(os.path.dirname(spec.origin), "verdict.py")
-        if os.path.isfile(installed):
-            return installed
-    return VERDICT_PY
-
-
-def baseline_tolerances(path=None):
-    """{"BASELINE_RATE_ATOL": .., "BASELINE_ERROR_RTOL": ..}, read from the source of sdcompare's
-    verdict module (their one home; verdict_source()) or of path."""
-    path = path or verdict_source()
-    try:
-        with open(path, encoding="utf-8") as fh:
-            tree = ast.parse(fh.read(), path)
-    except (OSError, SyntaxError, ValueError) as e:
-        raise UsageError(f"cannot read the baseline tolerances from {path}: {e}")
-    found = {}
-    for node in tree.body:
-        if (isinstance(node, ast.Assign) and len(node.targets) == 1
-                and isinstance(node.targets[0], ast.Name) and node.targets[0].id in TOLERANCES):
-            try:
-                found[node.targets[0].id] = float(ast.literal_eval(node.value))
-            except (ValueError, TypeError):
-                pass
-    missing = [n for n in TOLERANCES if n not in found]
-    if missing:
-        raise UsageError(f"{path}: no literal {', '.join(missing)}")
-    return found
-
-
 def series_map(report):
     """{"variant quantity": series} of a report (variant_key, the same on both sides)."""
     return {f"{variant_key(s)} {s.get('quantity')}": s
@@ -326,37 +289,33 @@ def by_level(s, key):
     return {lv: number(v) for lv, v in zip(levels, values)}
 
 
-def rel_change(old, new):
-    """|new − old| relative to the larger, as verdict.compare_baseline measures it."""
-    return 0.0 if old == new else abs(new - old) / max(abs(old), abs(new), 1e-300)
-
-
 def change(kind, text, old=None, new=None, **more):
     """One change since the baseline, as index.json lists it."""
     return dict({"kind": kind, "text": text, "old": old, "new": new}, **more)
 
 
-def value_change(key, what, level, old, new, tol):
+def value_change(key, what, level, old, new):
     """The change of one error ("error", relative tolerance) or rate ("rate", absolute), or
-    None within tolerance."""
+    None within tolerance (sdcompare_lib/baseline.py)."""
     if old is None or new is None:
         if old is new:
             return None
         return change(what, f"{key}: {what} at level {level} {old} → {new}", old, new,
                       level=level)
     if what == "rate":
-        if abs(new - old) <= tol["BASELINE_RATE_ATOL"]:
+        d = rate_change(old, new)
+        if d is None:
             return None
         return change("rate", f"{key}: last rate (to level {level}) {old:.4f} → {new:.4f} "
-                      f"({new - old:+.2g})", old, new, level=level, abs_change=abs(new - old))
-    rc = rel_change(old, new)
-    if rc <= tol["BASELINE_ERROR_RTOL"]:
+                      f"({new - old:+.2g})", old, new, level=level, abs_change=d)
+    rc = error_change(old, new)
+    if rc is None:
         return None
     return change("error", f"{key}: error at level {level} {old:.6g} → {new:.6g} "
                   f"({rc:.2g} relative)", old, new, level=level, rel_change=rc)
 
 
-def series_changes(key, old, new, tol):
+def series_changes(key, old, new):
     """What changed in one series (same variant and quantity) beyond tolerance: its status, its
     finest level, its error at the finest level both have, its rate of the last step both
     have."""
@@ -371,7 +330,7 @@ def series_changes(key, old, new, tol):
                               max(o), max(n)))
         common = sorted(set(o) & set(n))
         if common:
-            c = value_change(key, what, common[-1], o[common[-1]], n[common[-1]], tol)
+            c = value_change(key, what, common[-1], o[common[-1]], n[common[-1]])
             out += [c] if c else []
     for c in out:
         c["series"] = key
@@ -383,7 +342,7 @@ def listed(names):
     return ", ".join(names[:4]) + (f" (+{len(names) - 4} more)" if len(names) > 4 else "")
 
 
-def report_changes(old, new, tol):
+def report_changes(old, new):
     """The changes between two reports of one scene: series new, gone, and changed."""
     o, n = series_map(old), series_map(new)
     out = []
@@ -391,7 +350,7 @@ def report_changes(old, new, tol):
                         ("series gone", [k for k in o if k not in n])):
         if names:
             out.append(change(kind, f"{len(names)} {kind} ({listed(names)})", names=names))
-    changed = [c for key in n if key in o for c in series_changes(key, o[key], n[key], tol)]
+    changed = [c for key in n if key in o for c in series_changes(key, o[key], n[key])]
     return out + merge_levels(changed, sum(1 for key in n if key in o))
 
 
@@ -409,7 +368,7 @@ def merge_levels(changes, compared):
     return merged + [c for c in changes if c["kind"] != "levels"]
 
 
-def scene_changes(row, report, base_row, base_report, tol):
+def scene_changes(row, report, base_row, base_report):
     """What changed in one scene since the baseline (its row and report there; None: the
     baseline has no such scene)."""
     if base_row is None:
@@ -419,14 +378,14 @@ def scene_changes(row, report, base_row, base_report, tol):
         out.append(change("verdict", f"verdict {base_row['verdict']} → {row['verdict']}",
                           base_row["verdict"], row["verdict"]))
     if report and base_report:
-        out += report_changes(base_report, report, tol)
+        out += report_changes(base_report, report)
     elif report or base_report:
         where = "the baseline" if report else "tonight's folder"
         out.append(change("report", f"no report in {where}: series not compared"))
     return out
 
 
-def load_baseline(base, label, names, tol):
+def load_baseline(base, label, names):
     """The baseline's scenes ({name: (row, report)}) and its header facts."""
     scenes = {}
     for name in scenes_of(base, None):
@@ -435,8 +394,8 @@ def load_baseline(base, label, names, tol):
     index = load_json(os.path.join(base, "index.json"))
     index = index if isinstance(index, dict) else {}
     head = {"folder": base, "label": label or base, "created": index.get("created"),
-            "verdict": index.get("verdict"), "rate_atol": tol["BASELINE_RATE_ATOL"],
-            "error_rtol": tol["BASELINE_ERROR_RTOL"],
+            "verdict": index.get("verdict"), "rate_atol": BASELINE_RATE_ATOL,
+            "error_rtol": BASELINE_ERROR_RTOL,
             "gone": [n for n in scenes if n not in names]}
     return scenes, head
 
@@ -444,11 +403,10 @@ def load_baseline(base, label, names, tol):
 def apply_baseline(rows, reports, base, label):
     """Adds each row's "changes" (a list) and "changes_line" against the baseline folder;
     returns the index's "baseline" entry."""
-    tol = baseline_tolerances()
-    scenes, head = load_baseline(base, label, [r["name"] for r in rows], tol)
+    scenes, head = load_baseline(base, label, [r["name"] for r in rows])
     for r in rows:
         base_row, base_report = scenes.get(r["name"], (None, None))
-        r["changes"] = scene_changes(r, reports[r["name"]], base_row, base_report, tol)
+        r["changes"] = scene_changes(r, reports[r["name"]], base_row, base_report)
         r["changes_line"] = "; ".join(c["text"] for c in r["changes"]) or NO_CHANGE
     head["changed"] = [r["name"] for r in rows if r["changes"]]
     return head
@@ -467,13 +425,6 @@ def baseline_line(head):
     gone = f"; {len(head['gone'])} gone ({listed(head['gone'])})" if head["gone"] else ""
     return (f"baseline: {head['label']} ({when}): {changed}{gone}; tolerances: last rates "
             f"{head['rate_atol']:g} absolute, errors {head['error_rtol']:g} relative")
-
-
-def write_atomic(path, text):
-    tmp = f"{path}.tmp-{os.getpid()}"
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
 
 
 STYLE = ("<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Prints the jobs of a `snakemake --dry-run` output (ci/campaign --dry-run), one line each:
+"""Prints the jobs of a `snakemake --dry-run` output (tools/campaign --dry-run), one line each:
 
     RULE  OUTPUT  (REASON)
 

@@ -1,10 +1,10 @@
 #!/usr/bin/python3
 """The campaign's wall time on a cluster with one node per job, from measured job durations.
 
-    ci/workflow/critical_path.py OUT [--json]
+    tools/workflow/critical_path.py OUT [--json]
 
 Reads Snakemake's measurement of every job of the campaign folder OUT (the `benchmark:` files
-OUT/benchmarks/<scene>/<job>.tsv of ci/workflow/Snakefile: column `s`, wall seconds). In the
+OUT/benchmarks/<scene>/<job>.tsv of tools/workflow/Snakefile: column `s`, wall seconds). In the
 workflow a `check` job waits for its shards (one level's solver shards of one u space, or its
 reference shards), a scene's `report` job for all its shards and checks and nothing else, and
 scenes are independent, so with one node per job (and no queueing) the campaign takes
@@ -16,7 +16,7 @@ a check job's chain being its longest shard plus itself,
 
 and the scene and jobs on that path are printed. Also printed: the sum of all job durations (the
 campaign's wall time on one core, without the engine's overhead), the totals per rule, and the two
-goals of issue 26 with MET or MISSED: the compare tool's jobs (report and check) take at most
+goals with MET or MISSED: the compare tool's jobs (report and check) take at most
 15 % of the job-seconds, and the critical path is at most 1.2 × the longest solver or reference
 job.
 Standard library only. Exit 2 (one line) when OUT has no measurements.
@@ -133,7 +133,7 @@ def goals(cp):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("out", help="campaign folder (ci/campaign --out)")
+    ap.add_argument("out", help="campaign folder (tools/campaign --out)")
     ap.add_argument("--json", action="store_true", help="print one JSON object")
     args = ap.parse_args(argv)
     scenes = measure(args.out)

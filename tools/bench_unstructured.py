@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Structured vs unstructured levels (issue 16): one case of the same problem on the structured
+"""Structured vs unstructured levels: one case of the same problem on the structured
 grid and on gmsh's mesh refined uniformly, at matched vertex counts.
 
 The problem is scenes/closed-exact.toml (Ω = [−1, 1]², crack (−0.5, 0)–(0.5, 0)), solved as one
@@ -32,7 +32,7 @@ ROOT = Path(__file__).resolve().parent.parent
 SDCRACK = ROOT / "target" / "release" / "sdcrack"
 BASE = (ROOT / "scenes" / "closed-exact.toml").read_text()
 PHASES = ["assembly", "symbolic", "factorization", "crack_reduction", "contact", "norms"]
-# Issue 16: a level of an unstructured scene costs no more than this × a structured scene with the
+# A level of an unstructured scene costs no more than this × a structured scene with the
 # same number of vertices.
 BOUND = 1.5
 
