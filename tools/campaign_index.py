@@ -46,6 +46,7 @@ import sys
 
 from sdcompare_lib.baseline import (BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL, error_change,
                                     rate_change)
+from sdcompare_lib.page import cell_class, page, scroll_table
 from sdcompare_lib.sdresults import write_atomic
 
 TAIL = 40
@@ -427,12 +428,6 @@ def baseline_line(head):
             f"{head['rate_atol']:g} absolute, errors {head['error_rtol']:g} relative")
 
 
-STYLE = ("<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
-         "div.scroll{overflow-x:auto;max-width:100%}td.t{min-width:14em}"
-         "td,th{border:1px solid #ccc;padding:.3em .6em;text-align:left;vertical-align:top}"
-         "td ul{margin:0;padding-left:1.2em}"
-         ".PASS{color:#060;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
-         "pre{background:#f6f6f6;padding:.5em;overflow-x:auto;max-width:100em}</style>")
 AGAINST = {"exact": "errors against the exact solution",
            "reference finest level": "distances to each reference's finest level"}
 
@@ -459,7 +454,8 @@ def table_row(r, with_baseline):
     note = "; ".join(x for x in (AGAINST.get(g.get("against")),
                                  (g.get("delta") or {}).get("text")) if x)
     title = f' title="{e(note)}"' if note else ""
-    return (f'<tr><td>{e(r["name"])}</td><td class="{e(r["verdict"])}">{e(r["verdict"])}'
+    return (f'<tr><td class="{cell_class(r["name"])}">{e(r["name"])}</td>'
+            f'<td class="{e(r["verdict"])}">{e(r["verdict"])}'
             f'</td><td class="t">{e(r.get("converged") or "–")}</td>'
             f'<td class="t"{title}>{e(g.get("line") or "–")}</td>'
             f'<td class="t">{e(problem)}</td>'
@@ -482,27 +478,20 @@ def failed_jobs_html(rows):
 
 
 def render_html(rows, verdict, created, baseline=None):
-    """index.html: the verdict, the baseline's line, one row per scene, the failed jobs."""
+    """index.html (sdcompare_lib/page.py's page, the report's): the verdict, the baseline's
+    line, one row per scene, the failed jobs."""
     e = html.escape
     with_baseline = baseline is not None and "none" not in baseline
-    out = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
-           "<title>sdcrack campaign: " + e(verdict) + "</title>",
-           '<meta name="viewport" content="width=device-width, initial-scale=1">', STYLE,
-           "</head><body>",
-           f'<h1>sdcrack campaign: <span class="{e(verdict)}">{e(verdict)}</span></h1>',
-           f"<p>{len(rows)} scene(s), index written {e(created)}.</p>"]
+    body = [f"<p>{len(rows)} scene(s), index written {e(created)}.</p>"]
     if baseline is not None:
-        out.append(f'<p id="baseline">{e(baseline_line(baseline))}</p>')
-    out.append("<div class='scroll'><table><tr><th>scene</th><th>verdict</th>"
-               "<th>what converged, at which rates</th>"
-               "<th>sdcrack's errors / the references'</th><th>first problem</th>"
-               + ("<th>changed since baseline</th>" if with_baseline else "")
-               + "<th>report</th></tr>")
-    out += [table_row(r, with_baseline) for r in rows]
-    out.append("</table></div>")
-    out += failed_jobs_html(rows)
-    out.append("</body></html>")
-    return "\n".join(out) + "\n"
+        body.append(f'<p id="baseline">{e(baseline_line(baseline))}</p>')
+    headers = (["scene", "verdict", "what converged, at which rates",
+                "sdcrack's errors / the references'", "first problem"]
+               + (["changed since baseline"] if with_baseline else []) + ["report"])
+    body += scroll_table([e(h) for h in headers], [table_row(r, with_baseline) for r in rows])
+    body += failed_jobs_html(rows)
+    return page(f"sdcrack campaign: {verdict}", body,
+                f'sdcrack campaign: <span class="{e(verdict)}">{e(verdict)}</span>')
 
 
 def build(root, names=None, baseline=None, label=None, no_baseline=None):

@@ -4,6 +4,8 @@ A report is a list of sections: dict(title, paras=[str], tables=[(headers, rows)
 caption)], images=[png], paras_after=[str], fold=bool). Tables of more than FOLD_ROWS rows are
 folded in <details> (caption: what the table holds) unless the section says fold=False (the
 summary). A cell that is None or a float that is not finite is written "–" (never "None", "nan").
+Markdown and HTML walk the sections in one order (_walk); the HTML page's skeleton and stylesheet
+are page.py's, shared with the campaign index.
 """
 import base64
 import decimal
@@ -15,6 +17,7 @@ import shutil
 import struct
 import tempfile
 
+from .page import cell_class, page, scroll_table
 from .sdresults import replace_folder
 from .read import DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag
 
@@ -84,36 +87,64 @@ def _folded(section, rows):
     return fold == "always" or (bool(fold) and len(rows) > FOLD_ROWS)
 
 
-def markdown(title, sections):
-    out = [f"# {title}", ""]
+def _walk(sections, blocks):
+    """The lines of the sections, in the report's order (a section's title, its paras, its lead
+    images, its tables (the empty ones left out), its images, its paras after), each written by
+    `blocks` (_MarkdownBlocks or _HtmlBlocks): one walk for both formats."""
+    out = []
     for s in sections:
-        out += [f"## {s['title']}", ""]
+        out += blocks.heading(s["title"])
         for p in s.get("paras", []):
-            out += [p, ""]
+            out += blocks.para(p)
         for img in s.get("lead_images", []):
-            out += [f"![{img}]({img})", ""]
+            out += blocks.image(img)
         for t in s.get("tables", []):
             headers, rows, caption = _table_parts(t)
-            if not rows:
-                continue
-            fold = _folded(s, rows)
-            if fold:
-                out += [f"<details><summary>{html.escape(_fold_summary(headers, rows, caption))}"
-                        "</summary>", ""]
-            elif caption:
-                out += [f"*{caption}*", ""]
-            out.append("| " + " | ".join(headers) + " |")
-            out.append("|" + "---|" * len(headers))
-            for r in rows:
-                out.append("| " + " | ".join(cell(c) for c in r) + " |")
-            out.append("")
-            if fold:
-                out += ["</details>", ""]
+            if rows:
+                out += blocks.table(headers, rows, caption, _folded(s, rows))
         for img in s.get("images", []):
-            out += [f"![{img}]({img})", ""]
+            out += blocks.image(img)
         for p in s.get("paras_after", []):
-            out += [p, ""]
-    return "\n".join(out)
+            out += blocks.para(p)
+    return out
+
+
+class _MarkdownBlocks:
+    """report.md's blocks, each followed by an empty line; a folded table inside <details>."""
+
+    @staticmethod
+    def heading(title):
+        return [f"## {title}", ""]
+
+    @staticmethod
+    def para(p):
+        return [p, ""]
+
+    @staticmethod
+    def image(img):
+        return [f"![{img}]({img})", ""]
+
+    @staticmethod
+    def table(headers, rows, caption, fold):
+        out = []
+        if fold:
+            out += [f"<details><summary>{html.escape(_fold_summary(headers, rows, caption))}"
+                    "</summary>", ""]
+        elif caption:
+            out += [f"*{caption}*", ""]
+        out.append("| " + " | ".join(headers) + " |")
+        out.append("|" + "---|" * len(headers))
+        for r in rows:
+            out.append("| " + " | ".join(cell(c) for c in r) + " |")
+        out.append("")
+        if fold:
+            out += ["</details>", ""]
+        return out
+
+
+def markdown(title, sections):
+    """report.md: the title, then the sections (_walk)."""
+    return "\n".join([f"# {title}", ""] + _walk(sections, _MarkdownBlocks))
 
 
 def _inline_md(text):
@@ -124,13 +155,8 @@ def _inline_md(text):
     return "".join(f"<code>{p}</code>" if i % 2 else p for i, p in enumerate(parts))
 
 
-# Cells up to this many characters do not wrap; longer ones (reasons, notes, commands) wrap and are
-# left-aligned.
-SHORT_CELL = 28
-
-
 def _td(text):
-    return f"<td class='{'s' if len(text) <= SHORT_CELL else 't'}'>{_inline_md(text)}</td>"
+    return f"<td class='{cell_class(text)}'>{_inline_md(text)}</td>"
 
 
 # The PNG text chunk in which plots.py writes a plot's smallest text, in the PNG's pixels.
@@ -166,57 +192,43 @@ def _img(folder, img):
             f"alt='{name}'{font_attr} src='data:image/png;base64,{b64}'></a></p>")
 
 
-# The page's style: at most 1200 px wide, never wider than the window (tables scroll in their
-# own box, long text cells wrap but keep a readable width, images shrink; plots.py sizes its
-# text so that it stays readable at the width of an 800 px window).
-CSS = ("body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}"
-       "table{border-collapse:collapse;margin:0.5em 0;font-size:13px}"
-       "div.scroll{overflow-x:auto;max-width:100%}"
-       "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
-       "th{background:#eee;text-align:center}"
-       ".PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
-       "img{max-width:100%;height:auto}p.plot{margin:0.5em 0}p.plot img{display:block}"
-       "code{font-size:11px;text-align:left;overflow-wrap:anywhere}"
-       "td.s{white-space:nowrap}td.t{text-align:left;min-width:14em}"
-       "details{margin:0.4em 0}summary{cursor:pointer;color:#035;font-size:14px}"
-       "p{overflow-wrap:anywhere}p.caption{margin:0.6em 0 0;font-style:italic}"
-       "@media (max-width:900px){body{padding:0.4em}td.t{min-width:11em}}")
+class _HtmlBlocks:
+    """index.html's blocks (page.py's conventions), one line each; the images inlined from
+    `folder`; a folded table inside <details>."""
+
+    def __init__(self, folder):
+        self.folder = folder
+
+    @staticmethod
+    def heading(title):
+        return [f"<h2>{html.escape(title)}</h2>"]
+
+    @staticmethod
+    def para(p):
+        return [f"<p>{_inline_md(p)}</p>"]
+
+    def image(self, img):
+        return [_img(self.folder, img)]
+
+    @staticmethod
+    def table(headers, rows, caption, fold):
+        out = []
+        if fold:
+            out.append(f"<details><summary>{_inline_md(_fold_summary(headers, rows, caption))}"
+                       "</summary>")
+        elif caption:
+            out.append(f"<p class='caption'>{_inline_md(caption)}</p>")
+        # a wide table scrolls inside its box; the page itself never scrolls sideways
+        out += scroll_table([html.escape(h) for h in headers],
+                            ["<tr>" + "".join(_td(cell(c)) for c in r) + "</tr>" for r in rows])
+        if fold:
+            out.append("</details>")
+        return out
 
 
 def html_page(title, sections, folder):
-    css = CSS
-    out = ["<!DOCTYPE html>", "<html><head><meta charset='utf-8'>",
-           "<meta name='viewport' content='width=device-width, initial-scale=1'>",
-           f"<title>{html.escape(title)}</title><style>{css}</style></head><body>",
-           f"<h1>{html.escape(title)}</h1>"]
-    for s in sections:
-        out.append(f"<h2>{html.escape(s['title'])}</h2>")
-        for p in s.get("paras", []):
-            out.append(f"<p>{_inline_md(p)}</p>")
-        out += [_img(folder, img) for img in s.get("lead_images", [])]
-        for t in s.get("tables", []):
-            headers, rows, caption = _table_parts(t)
-            if not rows:
-                continue
-            fold = _folded(s, rows)
-            if fold:
-                out.append(f"<details><summary>{_inline_md(_fold_summary(headers, rows, caption))}"
-                           "</summary>")
-            elif caption:
-                out.append(f"<p class='caption'>{_inline_md(caption)}</p>")
-            # a wide table scrolls inside its box; the page itself never scrolls sideways
-            out.append("<div class='scroll'><table><tr>"
-                       + "".join(f"<th>{html.escape(h)}</th>" for h in headers) + "</tr>")
-            for r in rows:
-                out.append("<tr>" + "".join(_td(cell(c)) for c in r) + "</tr>")
-            out.append("</table></div>")
-            if fold:
-                out.append("</details>")
-        out += [_img(folder, img) for img in s.get("images", [])]
-        for p in s.get("paras_after", []):
-            out.append(f"<p>{_inline_md(p)}</p>")
-    out.append("</body></html>")
-    return "\n".join(out)
+    """index.html: page.py's page of the sections."""
+    return page(title, _walk(sections, _HtmlBlocks(folder)))
 
 
 def write_text(folder, name, text):

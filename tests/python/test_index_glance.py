@@ -55,3 +55,17 @@ def test_index_shows_the_line(tmp_path):
     page = (tmp_path / "index.html").read_text()
     assert ('title="errors against the exact solution; every δ-sweep tends to δ = 0">'
             + LINE.replace("×", "×") + "</td>") in page
+
+
+def test_the_index_and_the_report_share_one_page():
+    """One skeleton and one stylesheet (sdcompare_lib/page.py) for the index and the report, and
+    the index finds them without numpy."""
+    from sdcompare_lib import page, render
+
+    assert ci.page is page.page is render.page and ci.scroll_table is render.scroll_table
+    style = f"<style>{page.CSS}</style>"
+    assert style in ci.render_html([], "FAIL", "now") and style in render.html_page("x", [], "/")
+    probe = "import sys, sdcompare_lib.page; sys.exit('numpy' in sys.modules)"
+    r = subprocess.run([sys.executable, "-c", probe], env=run_env(), capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 0, "sdcompare_lib.page imports numpy" + r.stderr
