@@ -449,7 +449,7 @@ def _tolerance(row, c, ours, self_check, what):
                        "+ round-off")
         elif tol is not None and not has_estimates:
             detail += (f", the bare {SOLVER_ERRORS_RTOL:g} relative: summary.json has no "
-                       "errors_quadrature (an sdcrack older than issue 33)")
+                       "errors_quadrature (written by an sdcrack that did not record it yet)")
         problems.append(f"sdcrack's reported errors of {what} differ from the independent "
                         f"computation by {_num(rel)} relative ({detail}): "
                         f"{_suspect(row, q, self_check)}")
@@ -517,7 +517,7 @@ def independent_text(rows, has_exact):
             out.append(f"sdcrack's errors of {len(bare)} cases to ≤ {SOLVER_ERRORS_RTOL:g} "
                        f"relative (largest {_largest([r['worst'] for r in bare])}): their "
                        "summary.json has no quadrature estimate (errors_quadrature, an sdcrack "
-                       "older than issue 33), so the former bare tolerance applies")
+                       "that did not record it yet), so the former bare tolerance applies")
         checked = [r["self_check"] for r in solver if r.get("self_check")]
         if checked:
             dev = max(x["worst"] for sc in checked for x in sc)
