@@ -12,7 +12,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::output::summary::{delta_text, Provenance};
@@ -57,6 +57,45 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// The options of `run` that restrict the study to some cases: one [`CaseFilter`].
+#[derive(Args, Debug)]
+pub struct CaseSelection {
+    /// Only this refinement level (need not be listed in the scene).
+    #[arg(long, value_parser = parse_level, allow_hyphen_values = true)]
+    pub level: Option<u32>,
+    /// Only this u space: continuous or broken.
+    #[arg(long, value_parser = parse_u_space, value_name = "continuous|broken")]
+    pub u_space: Option<USpace>,
+    /// Only this multiplier space: M0, M1 or M1star.
+    #[arg(long, value_parser = parse_multiplier, value_name = "M0|M1|M1star")]
+    pub multiplier: Option<MultiplierSpace>,
+    /// Only this p mass: consistent (the paper's) or lumped (p eliminated; need not be
+    /// listed in the scene).
+    #[arg(long, value_parser = parse_p_mass, value_name = "consistent|lumped")]
+    pub p_mass: Option<PMass>,
+    /// Only this p space: continuous (the paper's) or broken-tangential (p·τ one value per
+    /// crack face; broken u only; need not be listed in the scene).
+    #[arg(long, value_parser = parse_p_space, value_name = "continuous|broken-tangential")]
+    pub p_space: Option<PSpace>,
+    /// Only this δ (≥ 0).
+    #[arg(long, value_parser = parse_delta, allow_hyphen_values = true)]
+    pub delta: Option<f64>,
+}
+
+impl CaseSelection {
+    /// The study's filter: each option given replaces the scene's list by its one value.
+    pub fn filter(&self) -> CaseFilter {
+        CaseFilter {
+            level: self.level,
+            u_space: self.u_space,
+            multiplier: self.multiplier,
+            p_mass: self.p_mass,
+            p_space: self.p_space,
+            delta: self.delta,
+        }
+    }
+}
+
 /// Sub-commands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
@@ -67,26 +106,8 @@ pub enum Command {
         /// Folder under which the results folder `<scene name>/` is created.
         #[arg(long, default_value = "results")]
         out: PathBuf,
-        /// Only this refinement level (need not be listed in the scene).
-        #[arg(long, value_parser = parse_level, allow_hyphen_values = true)]
-        level: Option<u32>,
-        /// Only this u space: continuous or broken.
-        #[arg(long, value_parser = parse_u_space, value_name = "continuous|broken")]
-        u_space: Option<USpace>,
-        /// Only this multiplier space: M0, M1 or M1star.
-        #[arg(long, value_parser = parse_multiplier, value_name = "M0|M1|M1star")]
-        multiplier: Option<MultiplierSpace>,
-        /// Only this p mass: consistent (the paper's) or lumped (p eliminated; need not be
-        /// listed in the scene).
-        #[arg(long, value_parser = parse_p_mass, value_name = "consistent|lumped")]
-        p_mass: Option<PMass>,
-        /// Only this p space: continuous (the paper's) or broken-tangential (p·τ one value per
-        /// crack face; broken u only; need not be listed in the scene).
-        #[arg(long, value_parser = parse_p_space, value_name = "continuous|broken-tangential")]
-        p_space: Option<PSpace>,
-        /// Only this δ (≥ 0).
-        #[arg(long, value_parser = parse_delta, allow_hyphen_values = true)]
-        delta: Option<f64>,
+        #[command(flatten)]
+        cases: CaseSelection,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -364,25 +385,13 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
         Command::Run {
             scene,
             out,
-            level,
-            u_space,
-            multiplier,
-            p_mass,
-            p_space,
-            delta,
+            cases,
             quiet,
             solver_only,
         } => {
             let (scene, origin) = load_checked(scene)?;
-            check_level_option(&scene, level)?;
-            let filter = CaseFilter {
-                level,
-                u_space,
-                multiplier,
-                p_mass,
-                p_space,
-                delta,
-            };
+            let filter = cases.filter();
+            check_level_option(&scene, filter.level)?;
             check_space_pairs(&scene, &filter)?;
             run(&scene, &origin, &filter, &out, quiet, solver_only)
         }

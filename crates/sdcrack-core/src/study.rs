@@ -690,26 +690,19 @@ impl LevelContext<'_> {
         estimated: Option<(ErrorNorms, ErrorNorms)>,
         plan: &CasePlan,
     ) -> CaseResult {
-        let Solved {
-            multiplier,
-            sol,
-            kkt,
-            lambda,
-            p_dof,
-            bubbles,
-            mut timings,
-        } = solved;
+        let (multiplier, sol, kkt) = (solved.multiplier, solved.sol, solved.kkt);
+        let mut timings = solved.timings;
         let u = &x[self.system.n_p..];
         let (errors, errors_quadrature) = (estimated.map(|e| e.0), estimated.map(|e| e.1));
         let t2 = Instant::now();
         let fields = plan.keep_fields.then(|| CaseFieldData {
             u: u.to_vec(),
-            p: p_dof,
+            p: solved.p_dof,
             p_bubble: match self.p_mass {
-                PMass::Consistent => bubbles,
+                PMass::Consistent => solved.bubbles,
                 PMass::Lumped => Vec::new(),
             },
-            lambda: lambda.clone(),
+            lambda: solved.lambda,
         });
         timings.fields = t2.elapsed().as_secs_f64();
         let converged = sol.status.converged() && kkt.max() <= KKT_TOLERANCE;
