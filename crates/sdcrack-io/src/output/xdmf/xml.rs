@@ -121,6 +121,43 @@ fn topology_geometry(indent: &str, h5: &str, cells: &Cells, points: &str, n: usi
     s
 }
 
+/// Where one grid of a case stands in the file: its name, its step `k` of a series or (None) a
+/// one-state grid, its cells, the HDF5 path of its `n` points, and the group holding its constant
+/// attributes.
+struct GridSpec<'a> {
+    name: &'a str,
+    k: Option<usize>,
+    cells: Cells,
+    points: String,
+    n: usize,
+    constants: &'a str,
+}
+
+/// One grid of `case` opened at `indent`: head, topology and geometry, the field attributes
+/// `fields` writes (given the attribute indent and the data-item indent), the constant
+/// attributes, and the closing tag.
+fn grid_xml(
+    h5: &str,
+    case: &CaseFields,
+    spec: GridSpec,
+    indent: &str,
+    fields: impl FnOnce(&str, &str) -> String,
+) -> String {
+    let (i2, i3) = (format!("{indent}  "), format!("{indent}    "));
+    let mut s = step_head(spec.name, spec.k, &case.metadata, indent);
+    s.push_str(&topology_geometry(
+        indent,
+        h5,
+        &spec.cells,
+        &spec.points,
+        spec.n,
+    ));
+    s.push_str(&fields(&i2, &i3));
+    s.push_str(&constant_attributes(&i2, h5, spec.constants, spec.n, case));
+    s.push_str(&format!("{indent}</Grid>\n"));
+    s
+}
+
 /// The triangle grid of `case`, step `k` of its series or (None) a one-state grid.
 pub(super) fn mesh_grid_xml(
     h5: &str,
@@ -129,36 +166,34 @@ pub(super) fn mesh_grid_xml(
     k: Option<usize>,
     indent: &str,
 ) -> String {
-    let i2 = format!("{indent}  ");
-    let i3 = format!("{indent}    ");
     let mp = format!("/meshes/{}", mesh.key);
     let cp = format!("/cases/{}", case.name);
-    let (n, t) = (mesh.points.len(), mesh.triangles.len());
-    let mut s = step_head(&case.name, k, &case.metadata, indent);
-    let cells = Cells {
-        topology: "Triangle",
-        count: t,
-        nodes_per_cell: 3,
-        connectivity: format!("{mp}/triangles"),
-    };
-    s.push_str(&topology_geometry(
-        indent,
-        h5,
-        &cells,
-        &format!("{mp}/points"),
+    let n = mesh.points.len();
+    let spec = GridSpec {
+        name: &case.name,
+        k,
+        cells: Cells {
+            topology: "Triangle",
+            count: mesh.triangles.len(),
+            nodes_per_cell: 3,
+            connectivity: format!("{mp}/triangles"),
+        },
+        points: format!("{mp}/points"),
         n,
-    ));
-    if case.u.is_some() {
-        let item = data_item(&i3, h5, &format!("{cp}/u"), &[n], false);
-        s.push_str(&attribute(&i2, "u", "Scalar", "Node", item));
-    }
-    if case.p.is_some() {
-        let item = data_item(&i3, h5, &format!("{cp}/p"), &[n, 3], false);
-        s.push_str(&attribute(&i2, "p", "Vector", "Node", item));
-    }
-    s.push_str(&constant_attributes(&i2, h5, &cp, n, case));
-    s.push_str(&format!("{indent}</Grid>\n"));
-    s
+        constants: &cp,
+    };
+    grid_xml(h5, case, spec, indent, |i2, i3| {
+        let mut s = String::new();
+        if case.u.is_some() {
+            let item = data_item(i3, h5, &format!("{cp}/u"), &[n], false);
+            s.push_str(&attribute(i2, "u", "Scalar", "Node", item));
+        }
+        if case.p.is_some() {
+            let item = data_item(i3, h5, &format!("{cp}/p"), &[n, 3], false);
+            s.push_str(&attribute(i2, "p", "Vector", "Node", item));
+        }
+        s
+    })
 }
 
 /// The crack polylines of `case`, step `k` of its series or (None) a one-state grid.
@@ -168,38 +203,36 @@ pub(super) fn crack_grid_xml(
     k: Option<usize>,
     indent: &str,
 ) -> String {
-    let i2 = format!("{indent}  ");
-    let i3 = format!("{indent}    ");
     let kp = format!("/cases/{}/crack", case.name);
     let n = case.crack_points.len();
-    let ns = case.crack_segments.len();
-    let mut s = step_head(&format!("{}/crack", case.name), k, &case.metadata, indent);
-    let cells = Cells {
-        topology: "Polyline",
-        count: ns,
-        nodes_per_cell: 2,
-        connectivity: format!("{kp}/segments"),
-    };
-    s.push_str(&topology_geometry(
-        indent,
-        h5,
-        &cells,
-        &format!("{kp}/points"),
+    let name = format!("{}/crack", case.name);
+    let spec = GridSpec {
+        name: &name,
+        k,
+        cells: Cells {
+            topology: "Polyline",
+            count: case.crack_segments.len(),
+            nodes_per_cell: 2,
+            connectivity: format!("{kp}/segments"),
+        },
+        points: format!("{kp}/points"),
         n,
-    ));
-    if let Some((centering, lambda)) = &case.lambda {
-        let center = match centering {
-            Centering::Node => "Node",
-            Centering::Cell => "Cell",
-        };
-        let item = data_item(&i3, h5, &format!("{kp}/lambda"), &[lambda.len()], false);
-        s.push_str(&attribute(&i2, "lambda", "Scalar", center, item));
-    }
-    if case.jump.is_some() {
-        let item = data_item(&i3, h5, &format!("{kp}/jump"), &[n], false);
-        s.push_str(&attribute(&i2, "jump", "Scalar", "Node", item));
-    }
-    s.push_str(&constant_attributes(&i2, h5, &kp, n, case));
-    s.push_str(&format!("{indent}</Grid>\n"));
-    s
+        constants: &kp,
+    };
+    grid_xml(h5, case, spec, indent, |i2, i3| {
+        let mut s = String::new();
+        if let Some((centering, lambda)) = &case.lambda {
+            let center = match centering {
+                Centering::Node => "Node",
+                Centering::Cell => "Cell",
+            };
+            let item = data_item(i3, h5, &format!("{kp}/lambda"), &[lambda.len()], false);
+            s.push_str(&attribute(i2, "lambda", "Scalar", center, item));
+        }
+        if case.jump.is_some() {
+            let item = data_item(i3, h5, &format!("{kp}/jump"), &[n], false);
+            s.push_str(&attribute(i2, "jump", "Scalar", "Node", item));
+        }
+        s
+    })
 }
