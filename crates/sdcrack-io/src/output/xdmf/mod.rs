@@ -335,36 +335,27 @@ fn write_series(
         let first = &cases[series.cases[0]];
         let mesh = &meshes[plan.case_mesh[series.cases[0]]];
         let steps: Vec<&CaseFields> = series.cases.iter().map(|&c| &cases[c]).collect();
-        let grids = |grid: &dyn Fn(&CaseFields, Option<usize>) -> String| -> String {
-            steps
-                .iter()
-                .enumerate()
-                .map(|(k, c)| grid(c, Some(k)))
-                .collect()
-        };
-        let body = grids(&|c, k| mesh_grid_xml(&h5, mesh, c, k, "      "));
-        write_synced(
-            &folder.join(series_file(&first.series, "")),
-            &document(&temporal(&first.series, &body)),
-        )?;
-        for c in &steps {
+        // One part (`part`: "" triangle grid, ".crack" crack grid): the series file, then each
+        // case's one-state file.
+        let write_part = |part: &str, grid: &dyn Fn(&CaseFields, Option<usize>, &str) -> String| {
+            let body: String = (steps.iter().enumerate())
+                .map(|(k, c)| grid(c, Some(k), "      "))
+                .collect();
             write_synced(
-                &folder.join(state_file(&c.name, "")),
-                &document(&mesh_grid_xml(&h5, mesh, c, None, "    ")),
-            )?;
-        }
-        if has_crack(first) {
-            let body = grids(&|c, k| crack_grid_xml(&h5, c, k, "      "));
-            write_synced(
-                &folder.join(series_file(&first.series, ".crack")),
+                &folder.join(series_file(&first.series, part)),
                 &document(&temporal(&first.series, &body)),
             )?;
             for c in &steps {
                 write_synced(
-                    &folder.join(state_file(&c.name, ".crack")),
-                    &document(&crack_grid_xml(&h5, c, None, "    ")),
+                    &folder.join(state_file(&c.name, part)),
+                    &document(&grid(c, None, "    ")),
                 )?;
             }
+            Ok::<(), OutputError>(())
+        };
+        write_part("", &|c, k, indent| mesh_grid_xml(&h5, mesh, c, k, indent))?;
+        if has_crack(first) {
+            write_part(".crack", &|c, k, indent| crack_grid_xml(&h5, c, k, indent))?;
         }
     }
     sync_path(folder)
