@@ -71,16 +71,13 @@ def main(argv=None):
     ap.add_argument("--u-space", default=None)
     args = ap.parse_args(argv)
     path = args.results / "summary.json"
-    try:
-        summary = json.loads(path.read_text(encoding="utf-8"))
+    try:  # an unreadable or malformed summary.json, or one the table cannot be made of
+        lines = table(json.loads(path.read_text(encoding="utf-8")), args.by, args.delta,
+                      args.u_space)
     except (OSError, ValueError) as exc:
-        print(f"rates_table: cannot read {path}: {exc}", file=sys.stderr)
-        return 2
-    try:
-        print("\n".join(table(summary, args.by, args.delta, args.u_space)))
-    except ValueError as exc:
         print(f"rates_table: {path}: {exc}", file=sys.stderr)
         return 2
+    print("\n".join(lines))
     return 0
 
 
