@@ -156,7 +156,7 @@ def test_campaign_index_says_per_scene_what_converged(report, width, tmp_path):
     """tools/campaign_index.py on the report's results root: one row per scene with what converged,
     the last rates and the first problem (none here), and no sideways scrolling."""
     root = report.parent.parent.parent
-    subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "campaign_index.py"), str(root)],
+    subprocess.run([sys.executable, os.path.join(ROOT, "tools", "campaign_index.py"), str(root)],
                    env=run_env(), check=True, capture_output=True, timeout=120)
     page = root / "index.html"
     probe = tmp_path / "index.html"

@@ -300,14 +300,14 @@ def test_index_of_downloaded_scene_folders(full_run, tmp_path):
     for name in ("closed-exact", "mixed"):
         shutil.copytree(out / name / "report", tmp_path / name / "report")
     shutil.copytree(out / "logs" / "mixed", tmp_path / "logs" / "mixed")
-    r = subprocess.run(["/usr/bin/python3", str(ROOT / "tools" / "campaign_index.py"), str(tmp_path)],
+    r = subprocess.run([sys.executable, str(ROOT / "tools" / "campaign_index.py"), str(tmp_path)],
                        env=run_env(), capture_output=True, text=True)
     index = json.loads((tmp_path / "index.json").read_text())
     want = {s["name"]: s["verdict"] for s in json.loads((out / "index.json").read_text())["scenes"]}
     assert {s["name"]: s["verdict"] for s in index["scenes"]} == want
     assert r.returncode == (0 if set(want.values()) == {"PASS"} else 1)
     # an expected scene without a folder is FAIL
-    r = subprocess.run(["/usr/bin/python3", str(ROOT / "tools" / "campaign_index.py"), str(tmp_path),
+    r = subprocess.run([sys.executable, str(ROOT / "tools" / "campaign_index.py"), str(tmp_path),
                         "--scene", "mixed", "--scene", "absent"], env=run_env(),
                        capture_output=True, text=True)
     assert r.returncode == 1
