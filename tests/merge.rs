@@ -285,13 +285,12 @@ fn shards_that_do_not_make_up_the_scene_are_refused() {
     // two shards that disagree on a mesh they share (level 0, continuous u)
     let damaged = dir.path().join("damaged");
     copy_dir(&shards[1], &damaged);
-    {
-        let file = hdf5::File::open_rw(damaged.join("fields.h5")).unwrap();
+    common::with_h5_rw(&damaged.join("fields.h5"), |file| {
         let points = file.dataset("meshes/level0-continuous/points").unwrap();
         let mut values = points.read_raw::<f64>().unwrap();
         values[0] += 1e-12;
         points.write_raw(&values).unwrap();
-    }
+    });
     let mut with_damaged = shards.clone();
     with_damaged[1] = damaged;
     refused(
@@ -391,19 +390,19 @@ fn shards_of_a_mesh_file_scene_merge_from_another_folder() {
     std::fs::write(folder.join("user-mesh.toml"), &text).unwrap();
     let shards = tmp.path().join("shards");
     for level in ["0", "1"] {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_sdcrack"))
-            .current_dir(&folder)
-            .args([
-                "run",
-                "user-mesh.toml",
-                "--solver-only",
-                "--quiet",
-                "--level",
-                level,
-            ])
-            .args(["--out", shards.join(level).to_str().unwrap()])
-            .output()
-            .unwrap();
+        let o = common::output(
+            std::process::Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+                .current_dir(&folder)
+                .args([
+                    "run",
+                    "user-mesh.toml",
+                    "--solver-only",
+                    "--quiet",
+                    "--level",
+                    level,
+                ])
+                .args(["--out", shards.join(level).to_str().unwrap()]),
+        );
         assert!(o.status.success(), "{}", stderr(&o));
     }
     let out = tmp.path().join("merged");

@@ -30,10 +30,35 @@ references = []
 
 /// Runs this build's `sdcrack` binary with `args` and waits for it.
 pub fn sdcrack(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_sdcrack"))
-        .args(args)
-        .output()
-        .expect("binary runs")
+    output(std::process::Command::new(env!("CARGO_BIN_EXE_sdcrack")).args(args))
+}
+
+/// Held for reading while a test starts a process, for writing while a test holds an HDF5 file
+/// open for writing ([`with_h5_rw`]). libhdf5 opens files without close-on-exec and takes an
+/// `flock` on them: a child started by another test thread meanwhile would inherit the locked
+/// descriptor and keep the lock for its whole life, so that the `sdcrack` run reading the file
+/// next fails with "unable to lock file" (CI saw this once in `tests/merge.rs`).
+static SPAWNING: std::sync::RwLock<()> = std::sync::RwLock::new(());
+
+/// Starts `cmd` (no other test thread holds an HDF5 file open for writing meanwhile) and waits
+/// for it; its stdout and stderr are captured.
+pub fn output(cmd: &mut std::process::Command) -> std::process::Output {
+    let child = {
+        let _guard = SPAWNING.read().unwrap_or_else(|e| e.into_inner());
+        cmd.stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("binary runs")
+    };
+    child.wait_with_output().expect("binary runs")
+}
+
+/// Calls `edit` on the HDF5 file `path` opened for writing, while no test thread starts a
+/// process (see [`SPAWNING`]); the file is closed before this returns.
+pub fn with_h5_rw<T>(path: &std::path::Path, edit: impl FnOnce(&hdf5::File) -> T) -> T {
+    let _guard = SPAWNING.write().unwrap_or_else(|e| e.into_inner());
+    let file = hdf5::File::open_rw(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    edit(&file)
 }
 
 /// Runs `sdcrack run SCENE --out OUT` with the further `args` (filters, `--quiet`) and waits
