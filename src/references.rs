@@ -81,9 +81,37 @@ fn python(script: &Path) -> Command {
     let inherited = std::env::split_paths(&inherited).filter(|p| !p.as_os_str().is_empty());
     let path =
         std::env::join_paths(std::iter::once(package_dir).chain(inherited)).unwrap_or_default();
-    let mut cmd = Command::new(PYTHON);
+    let mut cmd = serial_python();
     cmd.arg(script).env("PYTHONPATH", path);
     cmd
+}
+
+/// Prefixes of the variables a Slurm job step sets for its tasks (`SLURM_*`) and for the MPI
+/// library's process-management interface (`PMI_*`, `PMIX_*`).
+const JOB_STEP_VARIABLES: [&str; 3] = ["SLURM_", "PMI_", "PMIX_"];
+
+/// `/usr/bin/python3` without the variables of [`JOB_STEP_VARIABLES`]. A reference is one serial
+/// process, but dolfinx initialises MPI on import, and Debian's Open MPI, finding itself in a
+/// Slurm step (the campaign's jobs under `--profile slurm` run in `srun`), takes itself for a
+/// rank launched by `srun` and aborts where Slurm has no PMI plugin configured ("OMPI was not
+/// built with SLURM's PMI support"). Without them it starts as the singleton it is.
+fn serial_python() -> Command {
+    let mut cmd = Command::new(PYTHON);
+    remove_job_step_variables(&mut cmd, std::env::vars_os().map(|(key, _)| key));
+    cmd
+}
+
+/// Removes from `cmd`'s environment those of the variables `names` that [`JOB_STEP_VARIABLES`]
+/// names.
+fn remove_job_step_variables(cmd: &mut Command, names: impl Iterator<Item = std::ffi::OsString>) {
+    for name in names {
+        let is_step_variable = name
+            .to_str()
+            .is_some_and(|n| JOB_STEP_VARIABLES.iter().any(|p| n.starts_with(p)));
+        if is_step_variable {
+            cmd.env_remove(name);
+        }
+    }
 }
 
 /// The last non-empty line of a program's stderr (its one-line error), or `no message`.
@@ -119,7 +147,7 @@ pub fn check_available(tool: &str) -> Result<(), ReferenceError> {
         install,
     };
     let python_ok =
-        |module: &str| succeeds(Command::new(PYTHON).args(["-c", &format!("import {module}")]));
+        |module: &str| succeeds(serial_python().args(["-c", &format!("import {module}")]));
     if tool == "dolfinx" && !python_ok("dolfinx") {
         return Err(missing(
             "python module dolfinx under /usr/bin/python3",
@@ -211,4 +239,32 @@ pub fn run_reference(
         seconds: start.elapsed().as_secs_f64(),
         all_converged: !not_converged,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_reference_leaves_the_slurm_step_and_its_pmi_behind_and_keeps_the_rest() {
+        let mut cmd = Command::new(PYTHON);
+        let names = [
+            "SLURM_JOB_ID",
+            "SLURM_STEP_ID",
+            "PMIX_RANK",
+            "PMI_FD",
+            "PATH",
+            "OMPI_MCA_x",
+        ];
+        remove_job_step_variables(&mut cmd, names.iter().map(std::ffi::OsString::from));
+        let removed: Vec<_> = cmd
+            .get_envs()
+            .filter(|(_, value)| value.is_none())
+            .map(|(name, _)| name.to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            removed,
+            ["PMIX_RANK", "PMI_FD", "SLURM_JOB_ID", "SLURM_STEP_ID"]
+        );
+    }
 }
