@@ -473,3 +473,41 @@ fn bench_json_reports_the_lumped_case_beside_the_consistent_one() {
         assert_eq!(g["met"].as_bool(), Some(measured <= bound), "{g}");
     }
 }
+
+/// `check --json`'s `memory_mb` of a graded scene counts the graded meshes, which have more cells
+/// than the level-0 grid times 4^level (open-graded's level 5: 1.8 times; l-shape-graded's 2.5):
+/// each level's estimate is above the peak memory Snakemake measured for the heaviest solver job
+/// of that level in the nightly campaign of 2026-11-26 (results/nightly/benchmarks, max_rss in
+/// MB; levels 4 and 5, the only ones long enough to be sampled), where the grid's estimate of
+/// before was below two of them (728 MB against open-graded's 835, 926 against l-shape-graded's
+/// 1572).
+#[test]
+fn memory_estimates_of_graded_scenes_count_the_graded_meshes() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (name, measured) in [
+        ("open-graded", [(4, 199.2), (5, 835.0)]),
+        ("l-shape-graded", [(4, 354.2), (5, 1572.5)]),
+        ("open-exact", [(4, 109.0), (5, 393.0)]),
+    ] {
+        let text = std::fs::read_to_string(root.join(format!("scenes/{name}.toml"))).unwrap();
+        let start = text.find("\nlevels = ").unwrap() + 1;
+        let end = start + text[start..].find('\n').unwrap();
+        let text = format!(
+            "{}levels = [0, 1, 2, 3, 4, 5]{}",
+            &text[..start],
+            &text[end..]
+        );
+        let scene = write_scene(dir.path(), &format!("{name}.toml"), &text);
+        let o = sdcrack(&["check", &scene, "--json"]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let plan: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        for (level, peak_mb) in measured {
+            let estimate = plan["memory_mb"][level.to_string()].as_f64().unwrap();
+            assert!(
+                estimate > peak_mb,
+                "{name} level {level}: estimate {estimate} MB below the measured {peak_mb} MB"
+            );
+        }
+    }
+}

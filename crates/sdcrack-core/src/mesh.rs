@@ -580,6 +580,22 @@ impl MeshSource {
         }
     }
 
+    /// The number of triangles of each of the levels 0..=`level`. A graded level's count depends
+    /// on the grading, so graded levels are built (once, nested); ungraded ones are counted
+    /// without being built where the count is known (every refinement splits a triangle in four).
+    pub fn triangle_counts(&self, level: u32) -> Result<Vec<usize>, MeshError> {
+        match self.grading {
+            None => {
+                let coarse = self.ungraded(0)?.triangles.len();
+                Ok((0..=level).map(|l| coarse << (2 * l)).collect())
+            }
+            Some(g) => Ok(bisect::graded_levels(&self.ungraded(0)?, g, level)?
+                .iter()
+                .map(|m| m.triangles.len())
+                .collect()),
+        }
+    }
+
     fn ungraded(&self, level: u32) -> Result<Mesh, MeshError> {
         match &self.kind {
             SourceKind::Structured {

@@ -181,7 +181,12 @@ impl Level0Size {
 /// sparse LDLᵀ of a 2D grid under nested dissection grows like n log n). Measured peaks are in
 /// docs/design.md; the estimate is above each of them.
 pub fn estimated_memory_bytes(size: Level0Size, level: u32) -> u64 {
-    let n = size.cells_at(level);
+    estimated_memory_bytes_of_cells(size.cells_at(level))
+}
+
+/// [`estimated_memory_bytes`] of a mesh of `n` cells (half its triangle count), known once the
+/// mesh is made (a graded mesh: more cells than its level-0 grid times 4^level).
+pub fn estimated_memory_bytes_of_cells(n: f64) -> u64 {
     let bytes = (128u64 << 20) as f64 + MEMORY_BYTES_PER_CELL * n * n.max(2.0).log2();
     if bytes >= u64::MAX as f64 {
         u64::MAX
