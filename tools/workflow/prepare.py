@@ -2,7 +2,8 @@
 """Prepares a campaign folder's inputs/ for tools/workflow/Snakefile (called by tools/campaign).
 
     prepare.py --out DIR --bin SDCRACK --repo ROOT [--levels A-B] [--threads N]
-               [--baseline OLD_DIR] [--expectations FILE] [--dry-run] SCENE.toml...
+               [--memory-scale F] [--baseline OLD_DIR] [--expectations FILE] [--dry-run]
+               SCENE.toml...
 
 Writes, under DIR/inputs/:
   sdcrack, sdcrack.sha256  a copy of the binary and its sha256, replaced only when the sha256
@@ -10,7 +11,8 @@ Writes, under DIR/inputs/:
   <name>.toml              each scene file, its `levels = [...]` line replaced when --levels is
                            given; rewritten only when its bytes change (mtimes move on real change)
   config.json              the workflow's config: repo, scenes, each scene's plan (`sdcrack check
-                           --json`), expectations, baselines, solver threads
+                           --json`), expectations, baselines, solver threads, the factor
+                           on every job's memory request (--memory-scale, default 1)
 and removes leftovers of killed merges (DIR/.<name>.partial-<pid>/; the caller holds the lock).
 
 --dry-run writes only what is missing (so that a dry run does not move the mtimes a later run
@@ -249,6 +251,7 @@ def prepare(args):
         "expectations": expectations,
         "baselines": baselines,
         "threads": args.threads,
+        "memory_scale": args.memory_scale,
         "jobs": total,
         "forcerun": forcerun,
     }
@@ -263,6 +266,17 @@ def prepare(args):
     return total
 
 
+def positive_float(text):
+    """argparse's type of --memory-scale: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and value != float("inf")):
+        raise argparse.ArgumentTypeError(f"{text}: expected a number > 0")
+    return value
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("scenes", nargs="+")
@@ -271,6 +285,7 @@ def main():
     p.add_argument("--repo", required=True)
     p.add_argument("--levels")
     p.add_argument("--threads", type=int, default=1)
+    p.add_argument("--memory-scale", type=positive_float, default=1.0)
     p.add_argument("--baseline")
     p.add_argument("--expectations")
     p.add_argument("--dry-run", action="store_true")
