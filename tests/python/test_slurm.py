@@ -1,0 +1,234 @@
+"""tools/campaign --profile slurm on a real one-node Slurm cluster (ci/slurm-local): the same
+results as the local campaign, one Slurm job per Snakemake job, memory requests within
+[peak, 2 × peak] of what sacct measured (and FAIL with the estimates halved), a cancelled job
+resumed, a drained node stopping the campaign with a message, and nothing left running after.
+
+The cluster is started once for the module and stopped at its end. Runs on a small scene derived
+from closed-exact (levels 0-2, the broken u, M1, the consistent p mass, both references: 16
+jobs; three levels, so that its verdict is conclusive), about six minutes on 2 cores. Needs root and apt-get (ci/slurm-local installs Debian's Slurm, munge
+and MariaDB), the workflow venv of ci/setup and an sdcrack binary; skipped with the reason where
+these are missing (SDCRACK_SLURM_TESTS=0 also skips: a machine that must not run daemons).
+"""
+
+import json
+import os
+import pathlib
+import shutil
+import signal
+import subprocess
+import time
+
+import pytest
+from scene_text import set_key
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+EXE = pathlib.Path(os.environ.get("SDCRACK_BIN", ROOT / "target" / "release" / "sdcrack")).resolve()
+CAMPAIGN = ROOT / "tools" / "campaign"
+SLURM_LOCAL = ROOT / "ci" / "slurm-local"
+ACCOUNTING = ROOT / "tools" / "workflow" / "slurm_accounting.py"
+RERUN = ROOT / "compare" / "sdcompare-rerun"
+DAEMONS = ("slurmctld", "slurmd", "slurmdbd", "munged", "mariadbd")
+NODE = "sdcrack-node"
+
+
+def _skip_reason():
+    if os.environ.get("SDCRACK_SLURM_TESTS") == "0":
+        return "SDCRACK_SLURM_TESTS=0"
+    if os.geteuid() != 0:
+        return "not root: slurmd must run as root, and ci/slurm-local installs packages"
+    if shutil.which("apt-get") is None and shutil.which("slurmctld") is None:
+        return "no apt-get to install Slurm, and no Slurm installed"
+    if not (ROOT / ".venv-workflow" / "bin" / "snakemake").is_file():
+        return "no workflow venv: run ci/setup"
+    if not EXE.is_file():
+        return f"no sdcrack binary at {EXE}"
+    return None
+
+
+pytestmark = pytest.mark.skipif(_skip_reason() is not None, reason=str(_skip_reason()))
+
+
+def running_daemons():
+    out = subprocess.run(["ps", "-eo", "comm="], capture_output=True, text=True).stdout.split()
+    return sorted(d for d in DAEMONS if d in out)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """The local cluster, up for the module; afterwards stopped, with no daemon left running."""
+    before = running_daemons()
+    r = subprocess.run([str(SLURM_LOCAL), "start"], capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "slurm-local: up" in r.stdout
+    env = dict(os.environ, SLURM_CONF=r.stdout.rsplit("export SLURM_CONF=", 1)[1].split()[0])
+    try:
+        yield env
+    finally:
+        r = subprocess.run([str(SLURM_LOCAL), "stop"], capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0, r.stdout + r.stderr
+        # the machine's own munged (if it ran before) is left alone
+        assert running_daemons() == sorted(d for d in before if d == "munged"), running_daemons()
+        assert subprocess.run([str(SLURM_LOCAL), "status"], capture_output=True).returncode == 1
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """closed-exact at levels 0-2, broken u, M1, consistent p mass, and an expectations file
+    without bounds (the repository's are at level 4)."""
+    d = tmp_path_factory.mktemp("slurm-scene")
+    text = (ROOT / "scenes" / "closed-exact.toml").read_text()
+    for key, value in (("levels", "[0, 1, 2]"), ("u_spaces", '["broken"]'),
+                       ("multipliers", '["M1"]'), ("p_mass", '["consistent"]')):
+        text = set_key(text, key, value)
+    (d / "closed-exact.toml").write_text(text)
+    (d / "none.toml").write_text("# no regression bounds at levels 0-2\n")
+    return d / "closed-exact.toml", d / "none.toml"
+
+
+def campaign(scene, out, env, *extra, timeout=900):
+    files, expectations = scene
+    cmd = [str(CAMPAIGN), str(files), "--out", str(out), "--expectations", str(expectations),
+           *map(str, extra)]
+    return subprocess.run(cmd, env=dict(env, SDCRACK_BIN=str(EXE)), capture_output=True,
+                          text=True, timeout=timeout)
+
+
+def accounting(out, env, *extra):
+    return subprocess.run(["/usr/bin/python3", str(ACCOUNTING), str(out), *extra], env=env,
+                          capture_output=True, text=True)
+
+
+def same_results(a, b):
+    r = subprocess.run(["/usr/bin/python3", str(RERUN), str(a), str(b), "--references"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert r.stdout.startswith("identical:"), r.stdout
+    verdict = [json.loads((p / "report" / "report.json").read_text())["verdict"] for p in (a, b)]
+    assert verdict[0] == verdict[1], verdict
+
+
+@pytest.fixture(scope="module")
+def local_run(scene, cluster, tmp_path_factory):
+    out = tmp_path_factory.mktemp("local") / "out"
+    env = {k: v for k, v in cluster.items() if k != "SLURM_CONF"}
+    r = campaign(scene, out, env, "--cores", 2)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    return out
+
+
+@pytest.fixture(scope="module")
+def slurm_run(scene, cluster, tmp_path_factory):
+    out = tmp_path_factory.mktemp("slurm") / "out"
+    r = campaign(scene, out, cluster, "--profile", "slurm")
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    return out
+
+
+def test_slurm_campaign_equals_the_local_one(local_run, slurm_run):
+    same_results(local_run / "closed-exact", slurm_run / "closed-exact")
+    verdicts = [json.loads((o / "index.json").read_text())["verdict"] for o in (local_run, slurm_run)]
+    assert verdicts == ["PASS", "PASS"], verdicts
+
+
+def test_one_slurm_job_per_snakemake_job_and_honest_memory(slurm_run, cluster, tmp_path):
+    jobs = json.loads((slurm_run / "inputs" / "config.json").read_text())["jobs"]
+    assert jobs == 16
+    r = accounting(slurm_run, cluster, "--json", tmp_path / "acc.json")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert f"{jobs} Slurm jobs for {jobs} Snakemake jobs\n" in r.stdout
+    assert "memory requests: PASS" in r.stdout
+    record = json.loads((tmp_path / "acc.json").read_text())
+    assert {j["rule"] for j in record["jobs"]} == {"solver", "reference", "check_solver",
+                                                   "check_references", "report"}
+    # sacct itself, not the plugin's logs: the Slurm jobs run in this campaign's folder
+    ids = ",".join(str(j["slurm_job"]) for j in record["jobs"])
+    sacct = subprocess.run(["sacct", "-X", "-n", "-P", "-j", ids, "-o", "JobID,WorkDir,State"],
+                           env=cluster, capture_output=True, text=True, check=True).stdout
+    rows = [line.split("|") for line in sacct.splitlines()]
+    assert len(rows) == jobs
+    assert {(w, s) for _, w, s in rows} == {(str(slurm_run), "COMPLETED")}
+
+
+def test_halved_memory_estimates_fail_the_check(scene, cluster, slurm_run, tmp_path):
+    out = tmp_path / "halved"
+    r = campaign(scene, out, cluster, "--profile", "slurm", "--memory-scale", 0.5)
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    r = accounting(out, cluster)
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "memory requests: FAIL" in r.stdout
+    assert "the estimate is too low" in r.stdout
+    # every job's request is halved, and every one is below its peak
+    assert "(16 problem(s) in 16 jobs" in r.stdout, r.stdout
+    same_results(slurm_run / "closed-exact", out / "closed-exact")
+
+
+def slurm_job_of(out, rule, env):
+    """The Slurm id of a RUNNING job of `rule` of the campaign in `out`, or None."""
+    logs = out / ".snakemake" / "slurm_logs" / f"rule_{rule}"
+    ids = [p.stem for p in logs.glob("*/*.log")] if logs.is_dir() else []
+    if not ids:
+        return None
+    q = subprocess.run(["squeue", "-h", "-t", "RUNNING", "-o", "%i", "-j", ",".join(ids)],
+                       env=env, capture_output=True, text=True).stdout.split()
+    return q[0] if q else None
+
+
+def test_a_cancelled_solver_job_is_redone_alone(scene, cluster, slurm_run, tmp_path):
+    out = tmp_path / "cancelled"
+    files, expectations = scene
+    cmd = [str(CAMPAIGN), str(files), "--out", str(out), "--expectations", str(expectations),
+           "--profile", "slurm"]
+    proc = subprocess.Popen(cmd, env=dict(cluster, SDCRACK_BIN=str(EXE)), text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    deadline = time.monotonic() + 300
+    job = None
+    while job is None:
+        assert proc.poll() is None, "the campaign ended before a solver job ran"
+        assert time.monotonic() < deadline
+        job = slurm_job_of(out, "solver", cluster)
+        time.sleep(0.2)
+    subprocess.run(["scancel", job], env=cluster, check=True)
+    log, _ = proc.communicate(timeout=600)
+    assert proc.returncode == 1, log[-3000:]
+    assert "campaign: some job failed" in log
+    cancelled = list((out / ".snakemake" / "slurm_logs" / "rule_solver").glob(f"*/{job}.log"))
+    assert len(cancelled) == 1
+    shard = "l" + "-".join(cancelled[0].parent.name.split("_")[1:]).rstrip("-")
+    assert not (out / "shards" / "closed-exact" / "solver" / shard).exists(), shard
+    # the rerun: the cancelled job, its level's check and the report; nothing else
+    r = campaign(scene, out, cluster, "--profile", "slurm")
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "3 of 3 steps (100%) done" in r.stdout, r.stdout[-3000:]
+    same_results(slurm_run / "closed-exact", out / "closed-exact")
+
+
+def test_a_drained_node_stops_the_campaign_with_a_message(scene, cluster, tmp_path):
+    out = tmp_path / "drained"
+    files, expectations = scene
+    cmd = [str(CAMPAIGN), str(files), "--out", str(out), "--expectations", str(expectations),
+           "--profile", "slurm"]
+    proc = subprocess.Popen(cmd, env=dict(cluster, SDCRACK_BIN=str(EXE)), text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        deadline = time.monotonic() + 300
+        while slurm_job_of(out, "solver", cluster) is None:
+            assert proc.poll() is None, "the campaign ended before a solver job ran"
+            assert time.monotonic() < deadline
+            time.sleep(0.2)
+        subprocess.run(["scontrol", "update", f"nodename={NODE}", "state=drain",
+                        "reason=sdcrack-test"], env=cluster, check=True)
+        stdout, stderr = proc.communicate(timeout=300)
+    finally:
+        subprocess.run(["scontrol", "update", f"nodename={NODE}", "state=resume"], env=cluster)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+            proc.wait(timeout=120)
+    assert proc.returncode == 1, stdout[-3000:] + stderr[-3000:]
+    message = stderr.strip().splitlines()[-1]
+    assert message.startswith("campaign: stopped: "), stderr[-3000:]
+    assert f"no node of partition local can run them: {NODE} drained (reason: sdcrack-test)" \
+        in message, message
+    assert (out / "logs" / "slurm-stopped.txt").read_text().strip() == message
+    # Snakemake cancelled what it had submitted: nothing of the campaign is left in the queue
+    q = subprocess.run(["squeue", "-h", "-o", "%Z"], env=cluster, capture_output=True, text=True)
+    assert str(out) not in q.stdout
