@@ -180,7 +180,8 @@ pub enum Command {
         scene: PathBuf,
         /// Print the scene's plan as one JSON object (name, cases, levels, u_spaces,
         /// multipliers, p_masses, deltas, references, fields, memory_mb per level: sdcrack's
-        /// peak-memory estimate in MiB), for workflow engines.
+        /// peak-memory estimate in MiB, and mesh_memory_mb: its part that grows with the mesh),
+        /// for workflow engines.
         #[arg(long)]
         json: bool,
     },
@@ -414,16 +415,24 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
 }
 
 /// The JSON object of `sdcrack check --json`; `triangles[ℓ]`: level ℓ's triangle count, from
-/// which each level's `memory_mb` is estimated (a graded level has more than 4^ℓ times level 0's:
+/// which each level's `memory_mb` (and its part that grows with the mesh, `mesh_memory_mb`) is
+/// estimated (a graded level has more than 4^ℓ times level 0's:
 /// open-graded's level 5 1.8 times).
 fn plan_json(scene: &Scene, triangles: &[usize]) -> String {
-    let memory: serde_json::Map<String, serde_json::Value> = (scene.axes.levels.iter())
-        .map(|&l| {
-            let cells = triangles[l as usize] as f64 / 2.0;
-            let mib = crate::scene::estimated_memory_bytes_of_cells(cells).div_ceil(1 << 20);
-            (l.to_string(), serde_json::Value::from(mib))
-        })
-        .collect();
+    let per_level = |mib: &dyn Fn(f64) -> u64| -> serde_json::Map<String, serde_json::Value> {
+        (scene.axes.levels.iter())
+            .map(|&l| {
+                let cells = triangles[l as usize] as f64 / 2.0;
+                (l.to_string(), serde_json::Value::from(mib(cells)))
+            })
+            .collect()
+    };
+    let memory =
+        per_level(&|cells| crate::scene::estimated_memory_bytes_of_cells(cells).div_ceil(1 << 20));
+    // the part of it that grows with the mesh, in whole MiB
+    let mesh_memory = per_level(&|cells| {
+        (crate::scene::estimated_mesh_memory_bytes(cells) / (1u64 << 20) as f64).ceil() as u64
+    });
     let value = serde_json::json!({
         "name": scene.name,
         "cases": scene.axes.case_count(),
@@ -436,6 +445,7 @@ fn plan_json(scene: &Scene, triangles: &[usize]) -> String {
         "references": scene.references,
         "fields": !scene.fields.is_empty(),
         "memory_mb": memory,
+        "mesh_memory_mb": mesh_memory,
     });
     value.to_string()
 }

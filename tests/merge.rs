@@ -362,6 +362,9 @@ fn reference_needs_a_listed_tool_and_check_json_gives_the_plan() {
         |cells: f64| ((128u64 << 20) as f64 + 600.0 * cells * cells.log2()) / (1u64 << 20) as f64;
     assert_eq!(plan["memory_mb"]["0"], mib(16.0).ceil() as u64);
     assert_eq!(plan["memory_mb"]["1"], mib(64.0).ceil() as u64);
+    let mesh_mib = |cells: f64| 600.0 * cells * cells.log2() / (1u64 << 20) as f64;
+    assert_eq!(plan["mesh_memory_mb"]["0"], mesh_mib(16.0).ceil() as u64);
+    assert_eq!(plan["mesh_memory_mb"]["1"], mesh_mib(64.0).ceil() as u64);
 }
 
 /// A scene on a mesh file names it relative to the scene file; its shards, run from the scene's

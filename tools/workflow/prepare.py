@@ -139,6 +139,38 @@ def jobs_of(plan):
     return solver, refs, checks, name
 
 
+# The memory a job asks for (`mem_mb`, Slurm's --mem under --profile slurm; docs/workflow.md,
+# "Memory"), MB: its own estimate plus what Snakemake itself takes in a cluster job. A solver job's
+# own is sdcrack's estimate of its level (`sdcrack check --json`'s memory_mb); a Python job's, its
+# interpreter and libraries (PYTHON_JOB_MB) plus the part of that estimate that grows with the
+# mesh (mesh_memory_mb; the report: of the scene's finest level). The bases, from the peaks
+# measured by Snakemake in the nightly of 2026-11-26 (levels 0-5, tests/data/nightly-peaks.tsv)
+# and by sacct at levels 0-2: dolfinx 208 (Python, dolfinx and MPI: up to 199.5 MB), FreeFEM 96
+# (Python and FreeFem++), a check 128 (numpy, h5py), the report 256 (sdcrack merge, then the
+# compare tool with matplotlib: 253 MB at the least). In a Slurm job the plugin runs Snakemake
+# twice, in the batch step and, through srun, around the command: ~130 MB each (sacct on
+# ci/slurm-local: 135 and 123 MB, Snakemake 9.27.1), SNAKEMAKE_JOB_MB together.
+SNAKEMAKE_JOB_MB = 300
+PYTHON_JOB_MB = {"dolfinx": 208, "freefem": 96, "check": 128, "report": 256}
+
+
+def own_memory_mb(job, plan, level=None):
+    """A job's own memory estimate, MB: `job` is solver, dolfinx, freefem, check or report (no
+    level: the scene's finest); `plan` the scene's `sdcrack check --json`."""
+    if job == "report":
+        mesh = max(int(v) for v in plan["mesh_memory_mb"].values())
+    else:
+        mesh = int(plan["mesh_memory_mb"][str(level)])
+    if job == "solver":
+        return int(plan["memory_mb"][str(level)])
+    return PYTHON_JOB_MB[job] + mesh
+
+
+def memory_request_mb(own_mb):
+    """What a job with the own estimate `own_mb` asks for, MB (before --memory-scale)."""
+    return own_mb + SNAKEMAKE_JOB_MB
+
+
 def check_scene(exe, path):
     r = subprocess.run([exe, "check", path, "--json"], capture_output=True, text=True)
     if r.returncode != 0:
@@ -149,7 +181,7 @@ def check_scene(exe, path):
     except ValueError as exc:
         raise Refused(f"sdcrack check --json printed no JSON object: {exc}") from None
     for key in ("name", "levels", "u_spaces", "multipliers", "p_masses", "p_spaces", "references",
-                "memory_mb"):
+                "memory_mb", "mesh_memory_mb"):
         if key not in plan:
             raise Refused(f"sdcrack check --json lacks `{key}` (binary too old?)")
     unknown = [ps for ps in plan["p_spaces"] if ps not in P_SPACE_SUFFIX]

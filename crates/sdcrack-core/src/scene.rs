@@ -177,9 +177,9 @@ impl Level0Size {
 }
 
 /// Estimated peak memory, in bytes, of solving level `level` of a grid of `cells` level-0 cells:
-/// 128 MiB plus [`MEMORY_BYTES_PER_CELL`] per cell times log2 of the cell count (the fill of the
-/// sparse LDLᵀ of a 2D grid under nested dissection grows like n log n). Measured peaks are in
-/// docs/design.md; the estimate is above each of them.
+/// [`MEMORY_BASE_BYTES`] plus [`estimated_mesh_memory_bytes`] (the fill of the sparse LDLᵀ of a
+/// 2D grid under nested dissection grows like n log n). Measured peaks are in docs/design.md; the
+/// estimate is above each of them.
 pub fn estimated_memory_bytes(size: Level0Size, level: u32) -> u64 {
     estimated_memory_bytes_of_cells(size.cells_at(level))
 }
@@ -187,12 +187,23 @@ pub fn estimated_memory_bytes(size: Level0Size, level: u32) -> u64 {
 /// [`estimated_memory_bytes`] of a mesh of `n` cells (half its triangle count), known once the
 /// mesh is made (a graded mesh: more cells than its level-0 grid times 4^level).
 pub fn estimated_memory_bytes_of_cells(n: f64) -> u64 {
-    let bytes = (128u64 << 20) as f64 + MEMORY_BYTES_PER_CELL * n * n.max(2.0).log2();
+    let bytes = MEMORY_BASE_BYTES as f64 + estimated_mesh_memory_bytes(n);
     if bytes >= u64::MAX as f64 {
         u64::MAX
     } else {
         bytes as u64
     }
+}
+
+/// The part of [`estimated_memory_bytes`] that does not grow with the mesh: 128 MiB (the
+/// process, its libraries, fixed buffers).
+pub const MEMORY_BASE_BYTES: u64 = 128 << 20;
+
+/// The part of [`estimated_memory_bytes`] that grows with the mesh, for `n` cells:
+/// [`MEMORY_BYTES_PER_CELL`] · n · log₂ n. The campaign workflow sizes the Python jobs of a level
+/// (references, checks, the report) by it too (`sdcrack check --json`'s `mesh_memory_mb`).
+pub fn estimated_mesh_memory_bytes(n: f64) -> f64 {
+    MEMORY_BYTES_PER_CELL * n * n.max(2.0).log2()
 }
 
 /// Bytes per cell per log2(cells) in [`estimated_memory_bytes`].

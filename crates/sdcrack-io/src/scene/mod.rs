@@ -34,9 +34,9 @@ pub use crate::problem::{
 // The validated scene and its limits are sdcrack-core's (the study runs them without this
 // parser); re-exported so that a scene's users find them here too.
 pub use sdcrack_core::scene::{
-    check_level, estimated_memory_bytes, estimated_memory_bytes_of_cells, CaseAxes,
-    ExpectedFailure, FieldSet, Level0Size, Scene, Verification, MAX_LEVEL, MAX_MEMORY_BYTES,
-    MEMORY_BYTES_PER_CELL,
+    check_level, estimated_memory_bytes, estimated_memory_bytes_of_cells,
+    estimated_mesh_memory_bytes, CaseAxes, ExpectedFailure, FieldSet, Level0Size, Scene,
+    Verification, MAX_LEVEL, MAX_MEMORY_BYTES, MEMORY_BYTES_PER_CELL,
 };
 
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
