@@ -13,6 +13,7 @@ these are missing (SDCRACK_SLURM_TESTS=0 also skips: a machine that must not run
 import json
 import os
 import pathlib
+import re
 import shutil
 import signal
 import subprocess
@@ -195,10 +196,13 @@ def test_a_cancelled_solver_job_is_redone_alone(scene, cluster, slurm_run, tmp_p
     assert len(cancelled) == 1
     shard = "l" + "-".join(cancelled[0].parent.name.split("_")[1:]).rstrip("-")
     assert not (out / "shards" / "closed-exact" / "solver" / shard).exists(), shard
-    # the rerun: the cancelled job, its level's check and the report; nothing else
+    # the rerun: the cancelled job, its level's check and the report (and Snakemake's target
+    # rule `all`); nothing else
     r = campaign(scene, out, cluster, "--profile", "slurm")
     assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
-    assert "3 of 3 steps (100%) done" in r.stdout, r.stdout[-3000:]
+    assert "4 of 4 steps (100%) done" in r.stdout, r.stdout[-3000:]
+    rules = sorted(re.findall(r"Finished jobid: \d+ \(Rule: (\w+)\)", r.stdout))
+    assert rules == ["all", "check_solver", "report", "solver"], rules
     same_results(slurm_run / "closed-exact", out / "closed-exact")
 
 

@@ -111,3 +111,17 @@ def test_the_watcher_stops_only_a_campaign_no_node_can_serve(tmp_path, monkeypat
     fake(tmp_path, monkeypatch, squeue="11|PENDING|Resources|local|/elsewhere",
          sinfo="n1|drained|maintenance")
     assert slurm_watch.stranded(out) is None
+
+
+def test_the_sacct_shim_names_a_cancelled_job_as_the_plugin_knows_it(tmp_path, monkeypatch):
+    """Snakemake's Slurm plugin 2.8.0 waited forever for a job sacct calls "CANCELLED by 0"."""
+    fake(tmp_path, monkeypatch, sacct="39|CANCELLED by 0\n40|COMPLETED\n41|CANCELLED by 1001")
+    shims = ROOT / "tools" / "workflow" / "slurm-shims"
+    env = dict(os.environ, PATH=f"{shims}:{os.environ['PATH']}")
+    r = subprocess.run(["sacct", "-X", "--parsable2"], env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["39|CANCELLED", "40|COMPLETED", "41|CANCELLED"]
+    # sacct's failure is the shim's
+    (tmp_path / "bin" / "sacct").write_text("#!/bin/sh\necho 'sacct: error: down' >&2\nexit 1\n")
+    r = subprocess.run(["sacct"], env=env, capture_output=True, text=True)
+    assert r.returncode == 1 and "down" in r.stderr

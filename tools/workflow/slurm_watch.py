@@ -8,7 +8,8 @@ Run by tools/campaign beside Snakemake under a Slurm profile. Every S seconds (d
 the nodes of their partitions. When jobs are pending, none is running, and no node of their
 partitions can take a job (every one drained, draining, down, failed or in maintenance) in N
 checks in a row (default 3: a node resumed within seconds is no reason to stop), it writes the
-message to CAMPAIGN_DIR/logs/slurm-stopped.txt and to stderr and interrupts Snakemake (SIGINT),
+message to CAMPAIGN_DIR/logs/slurm-stopped.txt (tools/campaign ends with it), says on stderr that
+it stops the campaign, and interrupts Snakemake (SIGINT),
 which cancels the campaign's Slurm jobs and exits; the outputs done so far stay, and the same
 command resumes the campaign once a node is back. Snakemake alone would wait for the pending jobs
 forever. Exits when Snakemake does. Standard library only.
@@ -99,7 +100,8 @@ def main(argv=None):
             os.makedirs(os.path.join(campaign, "logs"), exist_ok=True)
             with open(os.path.join(campaign, "logs", "slurm-stopped.txt"), "w") as f:
                 f.write(message + "\n")
-            print(message, file=sys.stderr)
+            print("campaign: no node can run the pending jobs; stopping (cancelling the "
+                  "campaign's Slurm jobs)", file=sys.stderr)
             os.kill(args.pid, signal.SIGINT)
             return 0
 
