@@ -86,12 +86,29 @@ def scene(tmp_path_factory):
     return d / "closed-exact.toml", d / "none.toml"
 
 
-def campaign(scene, out, env, *extra, timeout=900):
+def campaign_command(scene, out, *extra):
     files, expectations = scene
-    cmd = [str(CAMPAIGN), str(files), "--out", str(out), "--expectations", str(expectations),
-           *map(str, extra)]
-    return subprocess.run(cmd, env=dict(env, SDCRACK_BIN=str(EXE)), capture_output=True,
-                          text=True, timeout=timeout)
+    return [str(CAMPAIGN), str(files), "--out", str(out), "--expectations", str(expectations),
+            *map(str, extra)]
+
+
+def campaign(scene, out, env, *extra, timeout=900):
+    return subprocess.run(campaign_command(scene, out, *extra), env=dict(env, SDCRACK_BIN=str(EXE)),
+                          capture_output=True, text=True, timeout=timeout)
+
+
+def start_slurm_campaign(scene, out, env, stderr):
+    """The Slurm campaign started in the background, once one of its solver jobs runs: (the
+    process, that job's Slurm id)."""
+    proc = subprocess.Popen(campaign_command(scene, out, "--profile", "slurm"),
+                            env=dict(env, SDCRACK_BIN=str(EXE)), text=True,
+                            stdout=subprocess.PIPE, stderr=stderr)
+    deadline = time.monotonic() + 300
+    while (job := slurm_job_of(out, "solver", env)) is None:
+        assert proc.poll() is None, "the campaign ended before a solver job ran"
+        assert time.monotonic() < deadline
+        time.sleep(0.2)
+    return proc, job
 
 
 def accounting(out, env, *extra):
@@ -176,18 +193,7 @@ def slurm_job_of(out, rule, env):
 
 def test_a_cancelled_solver_job_is_redone_alone(scene, cluster, slurm_run, tmp_path):
     out = tmp_path / "cancelled"
-    files, expectations = scene
-    cmd = [str(CAMPAIGN), str(files), "--out", str(out), "--expectations", str(expectations),
-           "--profile", "slurm"]
-    proc = subprocess.Popen(cmd, env=dict(cluster, SDCRACK_BIN=str(EXE)), text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + 300
-    job = None
-    while job is None:
-        assert proc.poll() is None, "the campaign ended before a solver job ran"
-        assert time.monotonic() < deadline
-        job = slurm_job_of(out, "solver", cluster)
-        time.sleep(0.2)
+    proc, job = start_slurm_campaign(scene, out, cluster, subprocess.STDOUT)
     subprocess.run(["scancel", job], env=cluster, check=True)
     log, _ = proc.communicate(timeout=600)
     assert proc.returncode == 1, log[-3000:]
@@ -208,17 +214,8 @@ def test_a_cancelled_solver_job_is_redone_alone(scene, cluster, slurm_run, tmp_p
 
 def test_a_drained_node_stops_the_campaign_with_a_message(scene, cluster, tmp_path):
     out = tmp_path / "drained"
-    files, expectations = scene
-    cmd = [str(CAMPAIGN), str(files), "--out", str(out), "--expectations", str(expectations),
-           "--profile", "slurm"]
-    proc = subprocess.Popen(cmd, env=dict(cluster, SDCRACK_BIN=str(EXE)), text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc, _ = start_slurm_campaign(scene, out, cluster, subprocess.PIPE)
     try:
-        deadline = time.monotonic() + 300
-        while slurm_job_of(out, "solver", cluster) is None:
-            assert proc.poll() is None, "the campaign ended before a solver job ran"
-            assert time.monotonic() < deadline
-            time.sleep(0.2)
         subprocess.run(["scontrol", "update", f"nodename={NODE}", "state=drain",
                         "reason=sdcrack-test"], env=cluster, check=True)
         stdout, stderr = proc.communicate(timeout=300)
