@@ -20,6 +20,7 @@ import subprocess
 import time
 
 import pytest
+import slurm_accounting
 from scene_text import set_key
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -182,8 +183,11 @@ def test_halved_memory_estimates_fail_the_check(scene, cluster, slurm_run, tmp_p
 
 def slurm_job_of(out, rule, env):
     """The Slurm id of a RUNNING job of `rule` of the campaign in `out`, or None."""
-    logs = out / ".snakemake" / "slurm_logs" / f"rule_{rule}"
-    ids = [p.stem for p in logs.glob("*/*.log")] if logs.is_dir() else []
+    try:
+        jobs = slurm_accounting.slurm_jobs(str(out))
+    except slurm_accounting.Refused:  # no job submitted yet
+        return None
+    ids = [job for job, (r, _) in jobs.items() if r == rule]
     if not ids:
         return None
     q = subprocess.run(["squeue", "-h", "-t", "RUNNING", "-o", "%i", "-j", ",".join(ids)],
@@ -198,9 +202,9 @@ def test_a_cancelled_solver_job_is_redone_alone(scene, cluster, slurm_run, tmp_p
     log, _ = proc.communicate(timeout=600)
     assert proc.returncode == 1, log[-3000:]
     assert "campaign: some job failed" in log
-    cancelled = list((out / ".snakemake" / "slurm_logs" / "rule_solver").glob(f"*/{job}.log"))
-    assert len(cancelled) == 1
-    shard = "l" + "-".join(cancelled[0].parent.name.split("_")[1:]).rstrip("-")
+    rule, wildcards = slurm_accounting.slurm_jobs(str(out))[job]
+    assert rule == "solver"
+    shard = "l" + "-".join(wildcards.split("_")[1:]).rstrip("-")
     assert not (out / "shards" / "closed-exact" / "solver" / shard).exists(), shard
     # the rerun: the cancelled job, its level's check and the report (and Snakemake's target
     # rule `all`); nothing else

@@ -157,13 +157,11 @@ PYTHON_JOB_MB = {"dolfinx": 208, "freefem": 96, "check": 128, "report": 256}
 def own_memory_mb(job, plan, level=None):
     """A job's own memory estimate, MB: `job` is solver, dolfinx, freefem, check or report (no
     level: the scene's finest); `plan` the scene's `sdcrack check --json`."""
-    if job == "report":
-        mesh = max(int(v) for v in plan["mesh_memory_mb"].values())
-    else:
-        mesh = int(plan["mesh_memory_mb"][str(level)])
     if job == "solver":
         return int(plan["memory_mb"][str(level)])
-    return PYTHON_JOB_MB[job] + mesh
+    if job == "report":
+        return PYTHON_JOB_MB[job] + max(int(v) for v in plan["mesh_memory_mb"].values())
+    return PYTHON_JOB_MB[job] + int(plan["mesh_memory_mb"][str(level)])
 
 
 def memory_request_mb(own_mb):
