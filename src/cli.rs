@@ -368,6 +368,9 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                     s.name
                 );
             }
+            if let Some(line) = too_few_levels(&s.name, &s.axes.levels) {
+                eprintln!("sdcrack: warning: {line}");
+            }
             Ok(0)
         }
         Command::Bench {
@@ -412,6 +415,24 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
         }
         Command::Merge { shards, out } => merge(&shards, &out),
     }
+}
+
+/// How many levels the compare tool's convergence rule needs to judge a series: two observed
+/// rates (scenes/orders.toml `[rule] levels`; tests/orders_table.rs holds the two equal).
+pub const RATE_LEVELS: usize = 3;
+
+/// The warning of `sdcrack check` for a scene whose levels cannot give a rate verdict (fewer than
+/// [`RATE_LEVELS`]): the compare tool can only say INCONCLUSIVE of its series. None otherwise.
+pub fn too_few_levels(name: &str, levels: &[u32]) -> Option<String> {
+    if levels.len() >= RATE_LEVELS {
+        return None;
+    }
+    let first = levels.iter().copied().min().unwrap_or(0);
+    let up_to = first as usize + RATE_LEVELS - 1;
+    Some(format!(
+        "scene '{name}' lists {} level(s) {levels:?}: a rate needs {RATE_LEVELS} levels, so the compare tool can only call its series INCONCLUSIVE (cannot judge yet); list levels {first} to {up_to} at least (or set [verification] smoke = true for a run that only checks that everything runs)",
+        levels.len()
+    ))
 }
 
 /// The JSON object of `sdcrack check --json`; `triangles[ℓ]`: level ℓ's triangle count, from

@@ -248,6 +248,32 @@ fn check_warns_when_a_scene_has_nothing_to_judge_against() {
     }
 }
 
+/// `check` warns of a scene whose levels cannot give a rate verdict (fewer than the compare
+/// tool's three), naming the levels to list, and not of one with three.
+#[test]
+fn check_warns_when_the_levels_cannot_give_a_rate_verdict() {
+    let dir = tempfile::tempdir().unwrap();
+    let mixed = std::fs::read_to_string(common::scene_path("mixed")).unwrap();
+    let listed = "levels = [0, 1, 2, 3, 4]";
+    assert!(mixed.contains(listed), "scenes/mixed.toml lists levels 0-4");
+    for (levels, warned) in [
+        ("[1, 2]", Some("list levels 1 to 3 at least")),
+        ("[3]", Some("list levels 3 to 5 at least")),
+        ("[0, 1, 2]", None),
+    ] {
+        let text = mixed.replace(listed, &format!("levels = {levels}"));
+        let scene = write_scene(dir.path(), "s.toml", &text);
+        let o = sdcrack(&["check", &scene]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert_eq!(err.contains("a rate needs 3 levels"), warned.is_some(), "{err}");
+        if let Some(advice) = warned {
+            assert!(err.contains(advice), "{err}");
+            assert_eq!(err.lines().count(), 1, "one line: {err}");
+        }
+    }
+}
+
 #[test]
 fn closed_stdout_is_not_a_panic() {
     use std::process::{Command, Stdio};

@@ -48,6 +48,11 @@ fn the_tests_thresholds_are_the_tables_numbers() {
     }
     assert_eq!(o.regularity.smooth_s, number("regularity", "smooth_s"));
     assert_eq!(o.regularity.singular_s, number("regularity", "singular_s"));
+    assert_eq!(
+        sdcrack::cli::RATE_LEVELS,
+        o.rule.levels,
+        "sdcrack check warns below the compare tool's number of levels"
+    );
 }
 
 #[test]

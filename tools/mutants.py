@@ -5,7 +5,8 @@ solver (Rust: src/, crates/), a reference (references/) or the compare tool (com
 applied alone to a scratch copy of this checkout; the copy is rebuilt when the bug is in Rust; the scenes are run as a
 user runs them (`sdcrack run`, with the references the scene names) and judged by the copy's
 compare/sdcompare. A mutant is KILLED when some scene's verdict is FAIL (exit 1), sdcompare refuses
-the folder (exit 2) or `sdcrack run` fails; it SURVIVES when every scene PASSes. The unmutated copy
+the folder (exit 2) or `sdcrack run` fails; it SURVIVES when every scene PASSes or is INCONCLUSIVE
+(exit 3: cannot judge yet is no catch). The unmutated copy
 must PASS every scene first, or nothing is judged (exit 2).
 
 Mutants in compare/ judge the unmutated run's results (the solver and references are unchanged);
@@ -167,7 +168,7 @@ class Workbench:
                            cwd=self.tree, env=self.env, capture_output=True, text=True)
         reasons = []
         report = os.path.join(copy, "report", "report.json")
-        if p.returncode in (0, 1) and os.path.exists(report):
+        if p.returncode in (0, 1, 3) and os.path.exists(report):
             with open(report, encoding="utf-8") as fh:
                 reasons = json.load(fh)["reasons"]
         elif p.returncode != 0:
@@ -239,7 +240,9 @@ def _judge_applied(bench, mutant, folders):
             return {"status": "KILLED", "scene": name, "reasons": [failure],
                     "caught_by": ["sdcrack run"]}
         rc, reasons = bench.judge(folder)
-        if rc != 0:
+        # killed by a FAIL (1) or a refused folder (2); INCONCLUSIVE (3, cannot judge yet) is no
+        # catch: a wrong order must not hide behind a series too short to judge
+        if rc in (1, 2):
             return {"status": "KILLED", "scene": name, "reasons": reasons,
                     "caught_by": caught_by(reasons)}
     return {"status": "SURVIVED", "scene": None, "reasons": [], "caught_by": []}

@@ -98,7 +98,7 @@ def orders_file():
 
 # The (section, key) of every number theory.py reads from the table; `lambda.paper` is a table of
 # multiplier → order.
-ORDER_KEYS = (("rule", "margin"), ("regularity", "smooth_s"), ("regularity", "singular_s"),
+ORDER_KEYS = (("rule", "margin"), ("rule", "levels"), ("rule", "bug_gap"), ("rule", "extra_levels"), ("regularity", "smooth_s"), ("regularity", "singular_s"),
               ("regularity", "smooth_interpolation_rate"), ("p1", "u_l2"), ("p1", "p_l2"),
               ("p1", "p_x"), ("open_crack", "order"), ("lambda", "p0_jump"))
 MULTIPLIERS = ("M0", "M1", "M1star")
@@ -124,6 +124,12 @@ ORDERS = load_orders(orders_file())
 # The observed rate may fall short of the expected order by this much on each of the last two
 # steps (an observed rate is an estimate from two levels).
 RATE_MARGIN = float(ORDERS["rule"]["margin"])
+# The smallest defect of order the verdict must tell from a correct solver, and how many more
+# levels a series rising toward its order may ask for before it is held to fail (rates.py).
+BUG_GAP = float(ORDERS["rule"]["bug_gap"])
+# A series is judged on its last RULE_LEVELS levels: two observed rates.
+RULE_LEVELS = int(ORDERS["rule"]["levels"])
+EXTRA_LEVELS = int(ORDERS["rule"]["extra_levels"])
 # s of a smooth u, and at a crack tip's r^{1/2} singularity (the worst case, and the s assumed
 # without an exact solution).
 SMOOTH_S = float(ORDERS["regularity"]["smooth_s"])

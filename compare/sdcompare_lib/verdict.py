@@ -48,8 +48,12 @@ def series_by_variant(cases, delta):
 # solution: ‖u_h − u_ref‖, ‖p_h − ∇u_ref‖ (p_h with its bubble), ‖λ_h − [u_ref]‖ (compute_agreement).
 REFERENCE_QUANTITIES = {"u_l2": "e_u", "p_l2": "e_p", "lambda_l2": "e_lambda"}
 PREFERRED_REFERENCE = ("dolfinx", "freefem")
-# Series statuses that fail the run (inconclusive fails unless the scene is a smoke run).
+# Series statuses that fail the run; "inconclusive" (cannot judge yet) makes the verdict
+# INCONCLUSIVE instead, unless the scene is a smoke run, which only checks that everything runs.
 FAILING = ("does not converge", "unexpected pass", "incomplete")
+UNDECIDED = "inconclusive"
+# The three verdicts, and compare/sdcompare's exit code for each (2: the input could not be read).
+VERDICTS = {"PASS": 0, "FAIL": 1, "INCONCLUSIVE": 3}
 
 
 def mesh_parameter(case, graded=False):
@@ -130,8 +134,9 @@ def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGUL
         expected, why = expected_order(settings, u, m, pm, q, s, crack_closed, ps)
         floor = theory.threshold(expected, settings["min_rate"] if settings.get(
             "min_rate_declared") else None)
+        run_up_to = None
         if against is not None and not bad:
-            status, reason = rates.series_status(h, e, levels, floor)
+            status, reason, run_up_to = rates.series_judgement(h, e, levels, floor)
         measured_status = status
         xfail = expected_failure(settings, u, m, q)
         if xfail is not None and status == "converges":
@@ -139,6 +144,11 @@ def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGUL
                                                  f"converges: {reason}")
         elif xfail is not None and status == "does not converge":
             status, reason = "expected failure", f"declared in the scene; measured: {reason}"
+        elif xfail is not None and status == UNDECIDED and against is not None:
+            # a declared failure is checked for an unexpected pass; a series that cannot be
+            # judged yet has not passed
+            status, reason = "expected failure", (f"declared in the scene; measured: cannot "
+                                                  f"judge yet ({reason})")
         ok_e = [v if finite_number(v) else None for v in e]
         out.append({"scene": scene, "u_space": u, "multiplier": m, "p_mass": pm, "p_space": ps,
                     "quantity": q, "against": against, "reference": tool, "delta": delta,
@@ -151,12 +161,19 @@ def compute_series(scene, cases, agreement, has_exact, settings, s=theory.SINGUL
                     "paper_rate": PAPER_RATE.get(m) if q in PAPER_NORMS else None,
                     "expected_rate": expected, "expected_rate_reason": why,
                     "rate_threshold": floor, "regularity": s, "regularity_reason": s_reason,
+                    "run_levels_up_to": run_up_to if status == UNDECIDED else None,
                     "mesh_parameter": "N^-1/2" if graded else "h"})
     return out
 
 
 def series_fails(s, settings):
-    return s["status"] in FAILING or (s["status"] == "inconclusive" and not settings["smoke"])
+    return s["status"] in FAILING
+
+
+def series_undecided(s, settings):
+    """A series that cannot be judged yet (too few levels, a rate still approaching its order, no
+    exact solution and no reference): the verdict cannot be PASS, and is not FAIL for it."""
+    return s["status"] == UNDECIDED and not settings["smoke"]
 
 
 # ---------------------------------------------------------------- δ -> 0 (Theorem 2.1)
@@ -611,11 +628,16 @@ def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):
     return flags
 
 
-def decide(groups):
-    """PASS iff no check has a problem. groups: [(label, [problem, ...])]; returns the verdict and
-    the reasons, one line per problem prefixed by its check's label."""
+def decide(groups, undecided=()):
+    """FAIL iff some check has a problem; else INCONCLUSIVE iff some check cannot judge yet
+    (undecided: [(label, [what cannot be judged, ...])]); else PASS. groups: [(label,
+    [problem, ...])]; returns the verdict and the reasons, one line per problem (or, for
+    INCONCLUSIVE, per undecided item) prefixed by its check's label."""
     reasons = [f"{label}: {p}" for label, problems in groups for p in problems]
-    return ("FAIL" if reasons else "PASS"), reasons
+    if reasons:
+        return "FAIL", reasons
+    pending = [f"{label}: {p}" for label, items in undecided for p in items]
+    return ("INCONCLUSIVE" if pending else "PASS"), pending
 
 
 def clean(obj):

@@ -132,21 +132,28 @@ def test_convergence_rule():
     # decreasing toward a non-zero floor (continuous u, open crack, X-norm of p, levels 1-5)
     assert status([2.541, 1.837, 1.377, 1.079, 0.8947]) == "does not converge"
     # the stalled series that the former Richardson test called converging (continuous u, open
-    # crack, X-norm of p, levels 1-3; 1.826, 1.374, 1.079 before the √2 fix of the norms)
-    assert status([2.582, 1.944, 1.526]) == "does not converge"
-    assert status([3.3, 2.582, 1.944, 1.526]) == "does not converge"
-    assert status([1.826, 1.374, 1.079]) == "does not converge"
+    # crack, X-norm of p, levels 1-3; 1.826, 1.374, 1.079 before the √2 fix of the norms): its
+    # rates 0.41, 0.35 against p* = 0.5 (min_rate 0.4) are one fall within BUG_GAP/2 of p*, which a
+    # dip of a correct series shows too: cannot judge yet at 3 or 4 levels; its fifth level (the
+    # series above, rates 0.42, 0.35, 0.27: two falls in a row) fails it
+    assert status([2.582, 1.944, 1.526]) == "inconclusive"
+    assert status([3.3, 2.582, 1.944, 1.526]) == "inconclusive"
+    assert status([1.826, 1.374, 1.079]) == "inconclusive"
     # the measured converging series of the broken u space still pass, at any number of levels
     for series in ([3.354, 2.503, 1.836, 1.341, 0.9772],
                    [3.133e-2, 1.218e-2, 4.702e-3, 1.793e-3, 7.043e-4]):
         for n in (3, 4, 5):
             assert status(series[-n:], hh=h[-n:], levels=lv[-n:]) == "converges"
-    # one slow step among the last two is enough to fail; a scene may ask for more
-    assert status([1.0, 0.5, 0.25, 0.19]) == "does not converge"
+    # one slow step below p* − BUG_GAP/2 is enough to fail (rate 0.18 < 0.25, p* = 0.5); one just
+    # below t after steps at twice the order (rates 1, 1, 0.40) is a dip: cannot judge yet
+    assert status([1.0, 0.5, 0.25, 0.22]) == "does not converge"
+    assert status([1.0, 0.5, 0.25, 0.19]) == "inconclusive"
+    # a scene may ask for more
     assert status([x ** 0.5 for x in h], min_rate=0.6) == "does not converge"
     # fewer than 3 levels: inconclusive, whatever the rate
     assert status([0.3]) == "inconclusive"
     assert status([0.4, 0.1]) == "inconclusive"
+    assert "run levels up to 2" in rates.series_status(h[:2], [0.4, 0.1], lv[:2], 0.4)[1]
     st, reason = rates.series_status(h[:3], [1.0, 0.5, 0.45], [2, 3, 4], 0.4)
     assert st == "does not converge" and "from level 3 to 4" in reason
 

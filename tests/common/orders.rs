@@ -33,6 +33,13 @@ pub struct Orders {
 pub struct Rule {
     /// The margin (dimensionless, a difference of orders).
     pub margin: f64,
+    /// How many levels a series needs to be judged (two observed rates).
+    pub levels: usize,
+    /// The smallest defect of order the verdict must tell from a correct solver (the compare
+    /// tool's rule: a falling rate below order − bug_gap/2 fails at any length).
+    pub bug_gap: f64,
+    /// How many more levels a rate rising toward its order may ask for (compare tool only).
+    pub extra_levels: u32,
 }
 
 /// `[regularity]`: s of a smooth u and at an r^{1/2} tip, and the interpolation rate that tells
