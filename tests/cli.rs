@@ -266,7 +266,11 @@ fn check_warns_when_the_levels_cannot_give_a_rate_verdict() {
         let o = sdcrack(&["check", &scene]);
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
         let err = stderr(&o);
-        assert_eq!(err.contains("a rate needs 3 levels"), warned.is_some(), "{err}");
+        assert_eq!(
+            err.contains("a rate needs 3 levels"),
+            warned.is_some(),
+            "{err}"
+        );
         if let Some(advice) = warned {
             assert!(err.contains(advice), "{err}");
             assert_eq!(err.lines().count(), 1, "one line: {err}");
