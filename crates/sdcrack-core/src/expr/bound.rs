@@ -30,7 +30,8 @@ pub(super) fn run_bounded(code: &[Op], x: f64, y: f64) -> (f64, f64) {
     let mut st: Vec<(f64, f64)> = Vec::with_capacity(16);
     for op in code {
         match *op {
-            Op::Num(v) => st.push((v, U * v.abs())),
+            // an integer literal is exact; others (0.1, pi) are rounded
+            Op::Num(v) => st.push((v, if v.fract() == 0.0 { 0.0 } else { U * v.abs() })),
             Op::X => st.push((x, 0.0)),
             Op::Y => st.push((y, 0.0)),
             Op::Neg => {
@@ -100,7 +101,7 @@ fn binary_bounded(op: &Op, (a, ea): (f64, f64), (b, eb): (f64, f64)) -> (f64, f6
         Op::Pow => {
             let v = a.powf(b);
             let da = b * a.powf(b - 1.0);
-            let db = v * a.abs().ln();
+            let db = if v == 0.0 { 0.0 } else { v * a.abs().ln() }; // 0^b: flat in b > 0
             (v, scaled(da, ea) + scaled(db, eb) + 2.0 * U * v.abs())
         }
         Op::F2(Fn2::Atan2) => {
