@@ -363,3 +363,126 @@ fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), String> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::check;
+    use crate::scene::testing::scene;
+
+    const W: &str = "max(0.25 - x^2, 0)^3";
+    /// W'' for W = max(1/4 − x², 0)³: −6·max(…)² + 24x²·max(…).
+    const W_XX: &str = "(-6*max(0.25 - x^2, 0)^2 + 24*x^2*max(0.25 - x^2, 0))";
+
+    /// Each contact condition of the problem fails on an exact solution that breaks it, with the
+    /// other data consistent: the message names that condition.
+    #[test]
+    fn each_contact_condition_fails_alone() {
+        let negative = format!("-sign(y)*{W}");
+        let loaded = format!("sign(y)*{W} - y");
+        let cases = [
+            (
+                scene(
+                    "negative-jump",
+                    &format!("sign(y)*{W_XX}"),
+                    &negative,
+                    Some((&negative, &format!("-2*{W}"))),
+                ),
+                "breaks [u] ≥ 0",
+            ),
+            (
+                scene("pushing", "0", "y", Some(("y", "0"))),
+                "breaks ∂u/∂ν ≤ 0",
+            ),
+            (
+                scene(
+                    "open-loaded",
+                    &format!("-sign(y)*{W_XX}"),
+                    &loaded,
+                    Some((&loaded, &format!("2*{W}"))),
+                ),
+                "breaks [u]·∂u/∂ν = 0",
+            ),
+            (
+                scene("kink", "0", "-abs(y)", Some(("-abs(y)", "0"))),
+                "breaks [∂u/∂ν] = 0",
+            ),
+        ];
+        for (s, words) in cases {
+            let e = check(&s).expect_err(&s.name);
+            assert!(e.contains(words), "{}: {e}", s.name);
+            assert!(!e.contains(" is not "), "{}: {e}", s.name);
+        }
+    }
+
+    /// The repository's exact solutions built by the test support pass; each datum changed by a
+    /// sign or a term fails, naming its key.
+    #[test]
+    fn consistent_data_pass_and_each_changed_datum_fails() {
+        let u = "sin(pi*x)*cos(pi*y) - y";
+        let f = "2*pi^2*sin(pi*x)*cos(pi*y)";
+        check(&scene("closed", f, u, Some((u, "0")))).unwrap();
+        let cases = [
+            (
+                scene("f", "pi^2*sin(pi*x)*cos(pi*y)", u, Some((u, "0"))),
+                "data.f is not −Δu",
+            ),
+            (
+                scene("g", f, "sin(pi*x)*cos(pi*y) + y", Some((u, "0"))),
+                "data.g is not exact.u",
+            ),
+            (
+                scene("jump", f, u, Some((u, "0.1"))),
+                "exact.jump is not u⁺ − u⁻",
+            ),
+        ];
+        for (s, words) in cases {
+            let e = check(&s).expect_err(&s.name);
+            assert!(
+                e.starts_with(&words[..6]) && e.contains(words),
+                "{}: {e}",
+                s.name
+            );
+            assert!(e.contains(" at ("), "{e}");
+        }
+        let mut s = scene("px", f, u, Some((u, "0")));
+        s.exact.as_mut().unwrap().px = crate::expr::Expr::parse("-pi*cos(pi*x)*cos(pi*y)").unwrap();
+        let e = check(&s).unwrap_err();
+        assert!(e.starts_with("exact.px is not ∂u/∂x"), "{e}");
+    }
+
+    /// The round-off bound holds: the Laplacian of a harmonic u (open-exact's, with r^{1/2} tips)
+    /// is evaluated to within its bound at points near the tips too, and the bound is not loose
+    /// beyond 10⁴ (median).
+    #[test]
+    fn the_round_off_bound_covers_the_laplacian_of_a_harmonic_u() {
+        use crate::expr::{Expr, Var};
+        let u = Expr::parse(
+            "sqrt(sqrt(((x-0.5)^2+y^2)*((x+0.5)^2+y^2)))*sin((atan2(y,x-0.5)+atan2(y,x+0.5))/2)",
+        )
+        .unwrap();
+        let uxx = u.derivative(Var::X).derivative(Var::X);
+        let uyy = u.derivative(Var::Y).derivative(Var::Y);
+        let mut ratios = Vec::new();
+        for i in 0..40 {
+            for j in 0..40 {
+                let (x, y) = (-0.99 + 0.0497 * i as f64, -0.9871 + 0.0493 * j as f64);
+                let ((a, ea), (b, eb)) = (uxx.eval_bounded(x, y), uyy.eval_bounded(x, y));
+                assert!(
+                    (a + b).abs() <= ea + eb,
+                    "({x}, {y}): {} > {}",
+                    a + b,
+                    ea + eb
+                );
+                if a + b != 0.0 {
+                    ratios.push((ea + eb) / (a + b).abs());
+                }
+            }
+        }
+        ratios.sort_by(f64::total_cmp);
+        assert!(
+            ratios[ratios.len() / 2] < 1e4,
+            "{}",
+            ratios[ratios.len() / 2]
+        );
+    }
+}
