@@ -403,7 +403,7 @@ mod tests {
                 "breaks [u]·∂u/∂ν = 0",
             ),
             (
-                scene("kink", "0", "-abs(y)", Some(("-abs(y)", "0"))),
+                scene("kink", "0", "-y - abs(y)/2", Some(("-y - abs(y)/2", "0"))),
                 "breaks [∂u/∂ν] = 0",
             ),
         ];
