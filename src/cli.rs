@@ -349,6 +349,9 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             let s = Scene::from_file(&scene).map_err(usage)?;
             let origin = scene.display().to_string();
             let meshes = check_meshes(&s, &origin)?;
+            // the exact data against what the scene implies (∂u, −Δu, u on ∂Ω, the faces, the
+            // contact conditions): a scene whose exact solution is not one is refused, no solve
+            crate::scene::exact_data::check(&s).map_err(|m| invalid_scene(&s, &origin, m))?;
             if json {
                 let max_level = s.axes.levels.iter().copied().max().unwrap_or(0);
                 let triangles = (meshes.triangle_counts(max_level))

@@ -133,6 +133,36 @@ fn point_in(message: &str) -> (f64, f64) {
     (it.next().unwrap(), it.next().unwrap())
 }
 
+/// `sdcrack check` of tests/data/scenes/bad-exact/`file`.toml: refused naming the key, both
+/// values and a point of Ω ([`point_of_exact_data`]).
+fn bad_exact(what: &'static str, file: &str, needle: &str) -> Case {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/scenes/bad-exact")
+        .join(format!("{file}.toml"));
+    Case {
+        args: vec!["check", "{scene}"],
+        check: Some(point_of_exact_data),
+        ..scene(what, &std::fs::read_to_string(path).unwrap(), needle)
+    }
+}
+
+/// The point an exact-data message names ("… at (x, y)") lies in Ω = [−1, 1]² (closed).
+fn point_of_exact_data(message: &str) {
+    let rest = message
+        .split(" at (")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no point in: {message}"));
+    let inner = rest.split(')').next().unwrap();
+    let v: Vec<f64> = inner
+        .split(',')
+        .map(|t| t.trim().parse::<f64>().unwrap())
+        .collect();
+    assert!(
+        v.len() == 2 && v.iter().all(|c| c.abs() <= 1.0),
+        "point in Ω: {message}"
+    );
+}
+
 fn catalogue() -> Vec<Case> {
     let huge = format!("{SMALL}# {}\n", "x".repeat(1 << 20));
     let mut non_utf8 = SMALL.as_bytes().to_vec();
@@ -878,6 +908,11 @@ fn catalogue() -> Vec<Case> {
                 "the following required arguments were not provided: <SCENE>",
             )
         },
+        // --- exact data that are not those of an exact solution (issue 42): `check` refuses ---
+        bad_exact("exact px of the wrong sign", "px-sign", "exact.px is not ∂u/∂x of exact.u: px = "),
+        bad_exact("f wrong in one term", "f-term", "data.f is not −Δu of exact.u"),
+        bad_exact("jump of the wrong sign", "jump-sign", "exact.jump is not u⁺ − u⁻ on Γc"),
+        bad_exact("g not u on one side", "g-side", "data.g is not exact.u on ∂Ω"),
         Case {
             args: vec!["mesh", "{scene}"],
             ..scene(

@@ -541,3 +541,34 @@ fn memory_estimates_of_graded_scenes_count_the_graded_meshes() {
         }
     }
 }
+
+/// Every scene of the repository (scenes/, tools/untuned-scenes/, the template) and of the tests
+/// (tests/data/scenes/) passes the exact-data check of `sdcrack check` (issue 42): it refuses only
+/// real inconsistencies. (The bad ones, tests/data/scenes/bad-exact/, are refused in
+/// tests/bad_input.rs; the compare tool's synthetic fixtures pass compare/tests/test_exact_data.py.)
+#[test]
+fn every_scene_of_the_repository_and_the_tests_passes_the_exact_data_check() {
+    use sdcrack::scene::{exact_data, Scene, TomlScene};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("docs/scene-template.toml")];
+    for dir in ["scenes", "tools/untuned-scenes", "tests/data/scenes"] {
+        for e in std::fs::read_dir(root.join(dir)).unwrap() {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_str().unwrap().to_string();
+            if name.ends_with(".toml") && name != "expectations.toml" && name != "orders.toml" {
+                files.push(p);
+            }
+        }
+    }
+    let mut exact = 0;
+    for f in &files {
+        let s = Scene::from_file(f).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        exact += usize::from(s.exact.is_some());
+        exact_data::check(&s).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+    }
+    assert!(
+        exact >= 9,
+        "{exact} scenes with [exact] among {}",
+        files.len()
+    );
+}

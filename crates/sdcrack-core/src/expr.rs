@@ -43,6 +43,7 @@
 use std::sync::Arc;
 
 mod batch;
+mod bound;
 pub use batch::{BatchScratch, ExprBatch};
 mod derivative;
 mod lexer;
@@ -144,6 +145,13 @@ impl Expr {
             let mut st = vec![0.0f64; inner.max_stack];
             run(&inner.code, &mut st, x, y)
         }
+    }
+
+    /// The value at `(x, y)` (as [`Expr::eval`]) and a first-order bound of its round-off error,
+    /// the coordinates taken as exact (running error analysis, see `expr/bound.rs`); an infinite
+    /// or NaN bound where the value is too sensitive to be bounded (e.g. `sqrt` at 0).
+    pub fn eval_bounded(&self, x: f64, y: f64) -> (f64, f64) {
+        bound::run_bounded(&self.inner.code, x, y)
     }
 
     /// The exact symbolic derivative by `var`, simplified (`0*a -> 0`, `1*a -> a`,

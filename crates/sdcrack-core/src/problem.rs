@@ -289,11 +289,18 @@ pub struct Exact {
 /// − face. Branch cuts along other lines are not resolved by this rule; scenes with an exact
 /// solution should then give `[exact] jump` explicitly.
 pub fn eval_on_face(e: &Expr, p: [f64; 2], normal: [f64; 2], side: f64) -> f64 {
+    let q = face_point(p, normal, side);
+    e.eval(q[0], q[1])
+}
+
+/// The crack point `p` as seen from the face `side` ([`eval_on_face`]'s rule): each coordinate
+/// that is exactly zero, in a direction where ν has a component, gets the sign of `side·ν`.
+pub fn face_point(p: [f64; 2], normal: [f64; 2], side: f64) -> [f64; 2] {
     let mut q = p;
     for d in 0..2 {
         if q[d] == 0.0 && normal[d] != 0.0 {
             q[d] = 0.0f64.copysign(side * normal[d]);
         }
     }
-    e.eval(q[0], q[1])
+    q
 }

@@ -2,6 +2,7 @@
 //! format and its validation live in sdcrack-io's `scene`, which builds this struct and
 //! re-exports it; the study ([`crate::study`]) runs it.
 
+pub mod exact_data;
 #[cfg(test)]
 pub(crate) mod testing;
 pub mod verification;
