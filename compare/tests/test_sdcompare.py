@@ -503,12 +503,77 @@ def test_expectation_violation_and_baseline(open_run, tmp_path, empty_exps):
     assert "error" in kinds and "status" not in kinds
 
 
-def test_default_expectations_naming_a_level_the_scene_lacks_are_exit_2(open_run):
-    """scenes/expectations.toml bounds open-exact at level 4; this run's scene file lists levels
-    1-3, so the expectation cannot be evaluated: exit 2, one line naming it."""
-    rc, out, err = run_cli(str(open_run))
-    assert rc == 2 and err.count("\n") == 1
-    assert "level 4 is not a level of scene 'open-exact'" in err
+def expectations_row(report):
+    """report.json's check row of the expectations."""
+    return next(c for c in report["checks"] if c["check"] == "expectations")
+
+
+def test_default_expectations_at_a_level_the_run_lacks_are_skipped_and_said(open_run, empty_exps):
+    """scenes/expectations.toml bounds open-exact at level 4; this run has levels 1-3 (as a
+    campaign at --levels 1-3 would): every row is skipped, the check does not apply and says why,
+    the report's Expectations table lists each row as skipped, and the verdict is the one without
+    expectations (issue 42: `tools/campaign SCENE --levels 0-1` failed its report job here)."""
+    rc, out, err = run_cli(str(open_run), "--quiet")
+    assert rc in (0, 1), out + err
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert r["expectations"] and {e["status"] for e in r["expectations"]} == {"skipped"}
+    assert {e["reason"] for e in r["expectations"]} == {
+        "this run has no level 4 (its levels: 1, 2, 3)"}
+    row = expectations_row(r)
+    assert row["problems"] == [] and row["status"] == (
+        "not applicable: every expectation of this scene is at a level this run has not got: "
+        "this run has no level 4 (its levels: 1, 2, 3)")
+    assert row["requires"].startswith(f"0 expectation row(s) evaluated; "
+                                      f"{len(r['expectations'])} skipped (expectation ")
+    md = (open_run / "report" / "report.md").read_text()
+    section = md.split("\n## Expectations\n")[1].split("\n## ")[0]
+    assert section.count("| skipped | this run has no level 4 (its levels: 1, 2, 3) |") == len(
+        r["expectations"])
+    verdict, reasons = r["verdict"], r["reasons"]
+    assert run_cli(str(open_run), "--quiet", "--replace", "--expectations", empty_exps)[0] == rc
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert (r["verdict"], r["reasons"]) == (verdict, reasons)
+
+
+def test_expectations_of_levels_run_are_judged_the_others_skipped(open_run, tmp_path):
+    """One file, three rows: level 3 is judged (and a violated bound there still FAILs), level 4
+    is skipped, and a min_rate at level 1 is skipped because its rate needs level 0."""
+    exps = tmp_path / "e.toml"
+    row = ('[[expectation]]\nscene = "open-exact"\nu_space = "broken"\nmultiplier = "M1"\n'
+           'quantity = "u_l2"\n')
+    exps.write_text(row + "level = 3\nmax_error = 1e-5\n\n" + row + "level = 4\nmax_error = 1\n\n"
+                    + row + "level = 1\nmin_rate = 1.0\n")
+    rc, out, _ = run_cli(str(open_run), "--expectations", str(exps))
+    assert rc == 1 and "> 1.000e-05 at level 3" in out
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert [(e["index"], e["status"]) for e in r["expectations"]] == [
+        (0, "violated"), (1, "skipped"), (2, "skipped")]
+    assert r["expectations"][2]["reason"] == (
+        "this run has no level 0 (its levels: 1, 2, 3): min_rate at level 1 is the rate from "
+        "level 0")
+    row = expectations_row(r)
+    assert row["status"] == "FAIL" and len(row["problems"]) == 1
+    assert row["requires"] == (
+        "1 expectation row(s) evaluated; 2 skipped (expectation 1, 2: this run has no level 0 "
+        "(its levels: 1, 2, 3): min_rate at level 1 is the rate from level 0; this run has no "
+        "level 4 (its levels: 1, 2, 3))")
+
+
+@pytest.mark.parametrize("level, says", [
+    ('"4"', "expectation 0: level must be a level (an integer ≥ 0), not '4'"),
+    ("-1", "expectation 0: level must be a level (an integer ≥ 0), not -1"),
+    ("true", "expectation 0: level must be a level (an integer ≥ 0), not True"),
+])
+def test_a_malformed_expectation_level_is_refused_in_one_line(open_run, tmp_path, level, says):
+    """A level that is no level at all is a malformed file, not a level this run lacks: exit 2,
+    one line, no report."""
+    exps = tmp_path / "e.toml"
+    exps.write_text('[[expectation]]\nscene = "open-exact"\nu_space = "*"\nmultiplier = "*"\n'
+                    f'quantity = "u_l2"\nlevel = {level}\nmax_error = 1\n')
+    rc, out, err = run_cli(str(open_run), "--expectations", str(exps))
+    assert (rc, out) == (2, "") and err.count("\n") == 1, err
+    assert err == f"sdcompare: error: bad expectations file {exps}: {says}\n"
+    assert not (open_run / "report").exists()
 
 
 def test_bad_usage_exit_2(tmp_path):
