@@ -518,7 +518,9 @@ def _skipped_level(e, run):
     missing = [lv for lv in need if lv not in run]
     if not missing:
         return {}
-    what = " and ".join(f"level {lv}" for lv in sorted(missing))
+    missing = sorted(missing)
+    what = (f"level {missing[0]}" if len(missing) == 1
+            else f"levels {missing[0]} and {missing[1]}")
     return {"skipped": f"this run has no {what} (its levels: {', '.join(map(str, run)) or 'none'})"
             + (f": min_rate at level {e['level']} is the rate from level {e['level'] - 1}"
                if e["level"] in run else "")}

@@ -508,12 +508,18 @@ def expectations_row(report):
     return next(c for c in report["checks"] if c["check"] == "expectations")
 
 
-def test_default_expectations_at_a_level_the_run_lacks_are_skipped_and_said(open_run, empty_exps):
-    """scenes/expectations.toml bounds open-exact at level 4; this run has levels 1-3 (as a
+def test_expectations_at_a_level_the_run_lacks_are_skipped_and_said(open_run, empty_exps,
+                                                                     tmp_path):
+    """Bounds at level 4, as scenes/expectations.toml has them; this run has levels 1-3 (as a
     campaign at --levels 1-3 would): every row is skipped, the check does not apply and says why,
     the report's Expectations table lists each row as skipped, and the verdict is the one without
     expectations (issue 42: `tools/campaign SCENE --levels 0-1` failed its report job here)."""
-    rc, out, err = run_cli(str(open_run), "--quiet")
+    exps = tmp_path / "e.toml"
+    exps.write_text("".join(
+        f'[[expectation]]\nscene = "open-exact"\nu_space = "*"\nmultiplier = "*"\n'
+        f'quantity = "{q}"\nlevel = 4\nmin_rate = 0.9\nmax_error = 1.0\n\n'
+        for q in ("u_l2", "p_l2")))
+    rc, out, err = run_cli(str(open_run), "--quiet", "--expectations", str(exps))
     assert rc in (0, 1), out + err
     r = json.load(open(open_run / "report" / "report.json"))
     assert r["expectations"] and {e["status"] for e in r["expectations"]} == {"skipped"}
@@ -692,6 +698,31 @@ def test_provenance_rows():
     assert "None" not in str(rows) and "not recorded" in rows[0][2] and "not recorded" in rows[1][1]
 
 
+def test_the_references_threads_are_said_as_recorded():
+    """A reference's provenance `threads` (the BLAS/OpenMP variables it ran with): "pinned to 1"
+    only when every variable of PINNED_THREADS is 1; else which are not, and that its pinned rerun
+    may differ; not recorded before issue 42."""
+    from sdcompare_lib import render
+    from sdcompare_lib.sdresults import PINNED_THREADS
+
+    def cores_cell(threads):
+        prov = {"tool": "freefem", "cores": 2} | ({} if threads is None else {"threads": threads})
+        _, _, rows = render.provenance({}, {"freefem": {"summary": {"provenance": prov}}})
+        return rows[1][3]
+
+    pinned = {name: value for name, value in PINNED_THREADS}
+    assert cores_cell(pinned) == "2; BLAS/OpenMP threads pinned to 1"
+    assert cores_cell(dict(pinned, OPENBLAS_NUM_THREADS=None, OMP_NUM_THREADS="4")) == (
+        "2; BLAS/OpenMP threads not pinned (OMP_NUM_THREADS=4, OPENBLAS_NUM_THREADS unset): its "
+        "rerun, pinned to 1, may differ from it in the last digits")
+    assert cores_cell(None) == "2; BLAS/OpenMP threads not recorded"
+
+
+# the prefix of every rerun command: the campaign's BLAS/OpenMP threads (sdresults.PINNED_THREADS)
+PIN = ("env OMP_NUM_THREADS=1 GOTO_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 "
+       "VECLIB_MAXIMUM_THREADS=1 NUMEXPR_NUM_THREADS=1 ")
+
+
 def test_rerun_command_is_absolute():
     """Absolute binary and scene; the --out is relative (sdcrack-rerun/<name> under the directory
     the command runs from, never inside the results tree), absolute with a rerun folder."""
@@ -702,13 +733,17 @@ def test_rerun_command_is_absolute():
     summary = {"scene": "s", "plan": {"deltas": [1e-2, 0.0]},
                "provenance": {"executable": "/opt/my sdcrack/bin/sdcrack"}}
     cmd = render.rerun_command("/data/run 1/s", summary, scene, k)
-    assert cmd == ("'/opt/my sdcrack/bin/sdcrack' run '/data/run 1/s/scene.toml' --level 1 "
+    assert cmd == (PIN + "'/opt/my sdcrack/bin/sdcrack' run '/data/run 1/s/scene.toml' --level 1 "
                    "--u-space broken --multiplier M1 --out sdcrack-rerun/s-l1-broken-M1")
+    # a scene with references: the case alone, its references kept (asked for: the flag dropped)
+    with_refs = dict(scene, outputs={"references": ["dolfinx", "freefem"]})
+    assert render.rerun_command("/data/run 1/s", summary, with_refs, k) == cmd.replace(
+        " --level ", " --solver-only --level ")
     cmd = render.rerun_command("/data/run 1/s", summary, scene, k, rerun_dir="/tmp/my reruns")
     assert cmd.endswith(" --out '/tmp/my reruns/s-l1-broken-M1'")
     # a run restricted to one δ (--delta) is rerun so; no provenance: sdcrack from PATH
     cmd = render.rerun_command("/r/s", {"scene": "s", "plan": {"deltas": [0.01]}}, scene, k)
-    assert cmd == ("sdcrack run /r/s/scene.toml --level 1 --u-space broken --multiplier M1 "
+    assert cmd == (PIN + "sdcrack run /r/s/scene.toml --level 1 --u-space broken --multiplier M1 "
                    "--delta 1e-2 --out sdcrack-rerun/s-l1-broken-M1-d1e-2")
 
 
@@ -799,8 +834,8 @@ def test_report_provenance_and_rerun_from_another_directory(open_run, empty_exps
 
     k = next(k for k in r["kkt"] if (k["level"], k["u_space"], k["multiplier"]) == (1, "broken", "M1"))
     cmd = k["rerun"]
-    assert cmd.startswith(shlex.quote(summary["provenance"]["executable"]) + " run "
-                          + shlex.quote(str(open_run / "scene.toml")) + " --level 1 ")
+    assert cmd.startswith(PIN + shlex.quote(summary["provenance"]["executable"]) + " run "
+                          + shlex.quote(str(open_run / "scene.toml")) + " --solver-only --level 1 ")
     assert f"`{cmd}`" in md
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
@@ -848,8 +883,8 @@ def test_report_without_provenance_says_not_recorded(open_run, empty_exps):
     md = open(open_run / "report" / "report.md").read()
     prov = md.split("\n## Provenance\n")[1].split("\n## ")[0]
     assert prov.count("not recorded") >= 6
-    assert all(k["rerun"].startswith("sdcrack run " + shlex.quote(str(open_run / "scene.toml")))
-               for k in r["kkt"])
+    assert all(k["rerun"].split(" sdcrack run ")[1].startswith(
+        shlex.quote(str(open_run / "scene.toml"))) for k in r["kkt"])
     assert "`sdcrack` is taken from PATH" in md
     assert_clean_report(open_run)
 
@@ -865,10 +900,10 @@ def test_rerun_command_of_a_lumped_case():
     k = {"level": 2, "u_space": "broken", "multiplier": "M1", "delta": 0.0}
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="consistent")) == \
         render.rerun_command("/r/s", summary, scene, k) == \
-        ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
+        (PIN + "/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
          "--out sdcrack-rerun/s-l2-broken-M1")
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="lumped")) == \
-        ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
+        (PIN + "/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
          "--p-mass lumped --out sdcrack-rerun/s-l2-broken-M1-lumped")
 
 
