@@ -533,8 +533,10 @@ def check_expectations(series, exps):
     status "skipped" with its reason, and fails nothing."""
     results = []
     for e in exps:
-        if e.get("skipped"):
-            results.append({**e, "variant": None, "status": "skipped", "reason": e["skipped"]})
+        if e.get("skipped"):  # its variant: the expectation's pattern ("*" every value)
+            pattern = "/".join([e["u_space"], e["multiplier"]]
+                               + [e[k] for k in ("p_mass", "p_space") if k in e])
+            results.append({**e, "variant": pattern, "status": "skipped", "reason": e["skipped"]})
             continue
         matched = [s for s in series if _match(e["u_space"], s["u_space"])
                    and _match(e["multiplier"], s["multiplier"]) and _match(e["quantity"], s["quantity"])

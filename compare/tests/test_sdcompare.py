@@ -554,6 +554,7 @@ def test_expectations_of_levels_run_are_judged_the_others_skipped(open_run, tmp_
     r = json.load(open(open_run / "report" / "report.json"))
     assert [(e["index"], e["status"]) for e in r["expectations"]] == [
         (0, "violated"), (1, "skipped"), (2, "skipped")]
+    assert r["expectations"][1]["variant"] == "broken/M1"  # a skipped row names its pattern
     assert r["expectations"][2]["reason"] == (
         "this run has no level 0 (its levels: 1, 2, 3): min_rate at level 1 is the rate from "
         "level 0")
