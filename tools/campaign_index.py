@@ -10,7 +10,8 @@ GitHub nightly's downloaded artifacts. The scenes are the --scene names, else th
 DIR/inputs/config.json (the last campaign run there), else every DIR/<name>/ holding a report,
 summary.json or scene.toml and every DIR/logs/<name>/.
 
-A scene's verdict is its report's (PASS or FAIL). A scene without a report, or one of whose jobs
+A scene's verdict is its report's (PASS, FAIL, INCONCLUSIVE: "cannot judge yet", or whatever
+word report.json's `verdict` holds, read as it is). A scene without a report, or one of whose jobs
 failed since (its output missing and its log without a `campaign: ... done` line: a failed or
 killed job), or whose report is older than its shards or inputs, is FAIL; the index shows the
 failing jobs' logs (their last 40 lines, and a link). Each row also says what converged, and, from
@@ -27,8 +28,11 @@ relative (sdcompare_lib/baseline.py, the tolerances sdcompare's baseline flags u
 folder). --no-baseline REASON: the header says "no baseline: REASON" instead (the nightly's
 first night). Neither changes the verdict or the exit status.
 
-Prints one verdict line per scene, the baseline's line and the index's path; exit 0 when every
-scene PASSes, 1 otherwise, 2 on bad usage (one line). Standard library and the numpy-free
+Prints one verdict line per scene (and for a scene whose report does not PASS, the report's first
+reason on the next line), the baseline's line and the index's path. The campaign's verdict is FAIL
+when a scene's is neither PASS nor INCONCLUSIVE, else INCONCLUSIVE when one scene's is, else PASS;
+exit 0 when it is PASS or INCONCLUSIVE (NOT_FAILING), 1 otherwise, 2 on bad usage (one line).
+Standard library and the numpy-free
 modules of the package sdcompare_lib, found on PYTHONPATH: its launchers (tools/campaign,
 ci/nightly, the GitHub nightly's index job) run it as
 `PYTHONPATH=compare /usr/bin/python3 tools/campaign_index.py DIR`, as sdcrack runs the reference
@@ -53,6 +57,13 @@ TAIL = 40
 RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks"}
 MAX_LISTED = 10  # changes per scene listed in index.html (index.json has them all)
 NO_CHANGE = "no change beyond tolerance"
+# The verdicts that do not fail a campaign: PASS, and INCONCLUSIVE (compare/sdcompare's exit 3: the
+# series cannot be judged yet, e.g. "run levels up to N"). Any other word fails it, FAIL and a word
+# this index does not know alike.
+NOT_FAILING = ("PASS", "INCONCLUSIVE")
+# A report's verdict is shown as it is (it is also the cell's CSS class: page.py colours PASS, FAIL
+# and INCONCLUSIVE) when it is one upper-case word; anything else is a malformed report: FAIL.
+VERDICT_WORD = re.compile(r"[A-Z][A-Z_]*")
 
 
 class UsageError(Exception):
@@ -191,8 +202,19 @@ def scene_row(root, name, report):
     elif verdict == "PASS":
         row["verdict"] = "PASS"
     else:
+        if isinstance(verdict, str) and VERDICT_WORD.fullmatch(verdict):
+            row["verdict"] = verdict
         row["reason"] = "the report's verdict"
     return row
+
+
+def campaign_verdict(rows):
+    """FAIL when there is no scene or a scene's verdict is not NOT_FAILING, else INCONCLUSIVE
+    when a scene's is, else PASS."""
+    verdicts = {r["verdict"] for r in rows}
+    if not rows or verdicts - set(NOT_FAILING):
+        return "FAIL"
+    return "PASS" if verdicts == {"PASS"} else "INCONCLUSIVE"
 
 
 # one symbol per quantity, as the report's plots write them
@@ -504,7 +526,7 @@ def build(root, names=None, baseline=None, label=None, no_baseline=None):
         head = apply_baseline(rows, reports, baseline, label)
     elif no_baseline is not None:
         head = {"none": no_baseline}
-    verdict = "PASS" if rows and all(r["verdict"] == "PASS" for r in rows) else "FAIL"
+    verdict = campaign_verdict(rows)
     created = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     index = {"verdict": verdict, "created": created, "baseline": head, "scenes": rows}
     write_atomic(os.path.join(root, "index.json"), json.dumps(index, indent=1) + "\n")
@@ -543,6 +565,8 @@ def print_rows(root, rows):
     for r in rows:
         if r["report"] and r["verdict"] == r["report_verdict"]:
             print(f"  {r['verdict']}  {os.path.join(root, r['report'])}")
+            if r["verdict"] != "PASS" and r.get("first_problem"):
+                print(f"      {r['first_problem']}")
         else:
             jobs = ", ".join(os.path.join(root, j["log"]) for j in r["failed_jobs"][:3])
             more = len(r["failed_jobs"]) - 3
@@ -566,7 +590,7 @@ def main(argv=None):
     if head is not None:
         print(baseline_line(head))
     print(f"index: {os.path.join(root, 'index.html')}")
-    return 0 if verdict == "PASS" else 1
+    return 0 if verdict in NOT_FAILING else 1
 
 
 if __name__ == "__main__":

@@ -6,7 +6,8 @@ Standard library only (no numpy): the campaign index imports it from a plain /us
 Conventions both pages follow: a table scrolls sideways inside its own box (`scroll_table`), the
 page never does; a cell of at most SHORT_CELL characters has class "s" (does not wrap, aligned
 right: numbers), a longer one class "t" (wraps, aligned left, keeps a readable width); a verdict
-has class "PASS" or "FAIL" (green or red, bold). Page sizes are in CSS px.
+has class "PASS", "FAIL" or "INCONCLUSIVE" (green, red or a neutral grey, bold). Page sizes are
+in CSS px.
 """
 import html
 
@@ -24,6 +25,7 @@ CSS = ("body{font-family:sans-serif;max-width:1200px;margin:auto;padding:1em}"
        "td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}"
        "th{background:#eee;text-align:center}"
        ".PASS{color:#070;font-weight:bold}.FAIL{color:#b00;font-weight:bold}"
+       ".INCONCLUSIVE{color:#555;font-weight:bold}"
        "img{max-width:100%;height:auto}p.plot{margin:0.5em 0}p.plot img{display:block}"
        "code{font-size:11px;text-align:left;overflow-wrap:anywhere}"
        "td.s{white-space:nowrap}td.t{text-align:left;min-width:14em}"

@@ -337,14 +337,35 @@ def provenance(summary, refs):
             continue
         rows.append([name, f"{_text(p.get('tool') or tool)} {_text(p.get('tool_version'))} · "
                      f"Python {_text(p.get('python'))} · numpy {_text(p.get('numpy'))}",
-                     _text(p.get("date_utc")), _text(p.get("cores")),
+                     _text(p.get("date_utc")), f"{_text(p.get('cores'))}; {threads_text(p)}",
                      _command(p.get("command_line"))])
     return {"sdcrack": prov, "references": ref_prov}, headers, rows
+
+
+def threads_text(p):
+    """What a reference's provenance `p` says of its BLAS/OpenMP threads (sdresults.PINNED_THREADS):
+    pinned to 1, not pinned (which, and that a rerun, pinned, may then differ in the last digits),
+    or not recorded."""
+    from .sdresults import PINNED_THREADS, threads_pinned
+
+    threads = p.get("threads")
+    pinned = threads_pinned(threads)
+    if pinned is None:
+        return "BLAS/OpenMP threads " + NOT_RECORDED
+    if pinned:
+        return "BLAS/OpenMP threads pinned to 1"
+    off = [f"{name}={threads[name]}" if threads.get(name) is not None else f"{name} unset"
+           for name, value in PINNED_THREADS if threads.get(name) != value]
+    return (f"BLAS/OpenMP threads not pinned ({', '.join(off)}): its rerun, pinned to 1, may "
+            "differ from it in the last digits")
 
 
 # A rerun writes where it is run from, never into the results tree: its --out is this folder,
 # relative, unless tools/cases --rerun-dir names another one.
 RERUN_FOLDER = "sdcrack-rerun"
+# The flag of `sdcrack run` that solves without exporting meshes or running the references: a rerun
+# of one case keeps the original's references unless asked to rerun them (the flag dropped).
+SOLVER_ONLY = "--solver-only"
 CHECKOUT_BINARY = ("target", "release", "sdcrack")
 
 
@@ -376,7 +397,14 @@ def rerun_command(results_dir, summary, scene_file, k, rerun_dir=None):
     return rerun_args(rerun_executable(summary),
                       os.path.join(os.path.abspath(results_dir), "scene.toml"),
                       summary.get("scene", "scene"), k, k["delta"] if restricted else None,
-                      rerun_dir)
+                      rerun_dir, scene_references(scene_file))
+
+
+def scene_references(scene_file):
+    """The reference tools a scene file (parsed) lists, [outputs] references."""
+    refs = (scene_file.get("outputs") or {}).get("references") if isinstance(scene_file, dict) \
+        else None
+    return [str(t) for t in refs] if isinstance(refs, list) else []
 
 
 def rerun_out(rerun_dir, name):
@@ -387,16 +415,23 @@ def rerun_out(rerun_dir, name):
     return os.path.join(os.path.abspath(rerun_dir), name)
 
 
-def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir=None):
-    """The shell command `exe run SCENE_PATH` of one rerunnable unit `k` (level, u space,
-    multiplier, p mass, p space; absent p_mass / p_space: consistent / continuous): the whole δ
-    sweep, or `--delta` alone when `only_delta` is given, into
+def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir=None, references=()):
+    """The shell command `env THREADS... exe run SCENE_PATH` of one rerunnable unit `k` (level,
+    u space, multiplier, p mass, p space; absent p_mass / p_space: consistent / continuous): the
+    whole δ sweep, or `--delta` alone when `only_delta` is given, into
     rerun_out(RERUN_DIR, <scene>-l<L>-<u>-<m>[-lumped][-ptangential][-d<δ>]) (the suffixes of the
-    solver's field names). One home for the commands of the reports and of tools/cases."""
+    solver's field names), with the BLAS/OpenMP threads the campaign's jobs run with
+    (sdresults.PINNED_THREADS). A scene with `references` gets `--solver-only`: the unit alone is
+    rerun, the original's references are not (a rerun of them is asked for by dropping the flag:
+    then the level's references run too, pinned alike). One home for the commands of the reports
+    and of tools/cases."""
     import shlex
 
-    args = [exe, "run", scene_path, "--level", str(k["level"]), "--u-space", str(k["u_space"]),
-            "--multiplier", str(k["multiplier"])]
+    from .sdresults import pinned_env_args
+
+    args = pinned_env_args() + [exe, "run", scene_path] + ([SOLVER_ONLY] if references else []) \
+        + ["--level", str(k["level"]), "--u-space", str(k["u_space"]),
+           "--multiplier", str(k["multiplier"])]
     name = f"{scene_name}-l{k['level']}-{k['u_space']}-{k['multiplier']}"
     pm, ps = p_mass(k), p_space(k)
     if pm != DEFAULT_P_MASS:  # the consistent command is the one of a run without p masses

@@ -313,8 +313,28 @@ def report(field_diffs, n_fields, case_diffs, n_cases, rtol):
     return lines, DIFFERENT
 
 
+def references_line(rerun_dir, original_dir, references):
+    """What the rerun did with the original's references (its REFERENCE_TOOLS folders), or None
+    when it has none: which it reran (compared with --references, else not), and which it did not
+    rerun (a rerun command's --solver-only) and so reuses from the original."""
+    tools = [t for t in REFERENCE_TOOLS if os.path.isdir(os.path.join(original_dir, t))]
+    if not tools:
+        return None
+    rerun = [t for t in tools if os.path.isdir(os.path.join(rerun_dir, t))]
+    reused = [t for t in tools if t not in rerun]
+    parts = []
+    if rerun:
+        parts.append(f"{', '.join(rerun)} rerun, "
+                     + ("compared" if references else "not compared (--references compares them)"))
+    if reused:
+        parts.append(f"{', '.join(reused)} not rerun (--solver-only): the original's "
+                     f"{', '.join(os.path.join(original_dir, t) for t in reused)} reused")
+    return "references: " + "; ".join(parts)
+
+
 def compare(original, rerun, rtol=None, references=False):
-    """(lines, exit code) of comparing the rerun folder with the original; BadInput on bad input."""
+    """(lines, exit code) of comparing the rerun folder with the original; BadInput on bad input.
+    The lines end with references_line when the original has references."""
     try:
         import h5py
     except ImportError as exc:
@@ -325,7 +345,9 @@ def compare(original, rerun, rtol=None, references=False):
     case_diffs, n_cases = compare_cases(load_summary(rerun_dir), load_summary(original_dir),
                                         rerun_dir, original_dir, rtol)
     field_diffs, n_fields = compare_fields(h5py, rerun_dir, original_dir, rtol, references)
-    return report(field_diffs, n_fields, case_diffs, n_cases, rtol)
+    lines, code = report(field_diffs, n_fields, case_diffs, n_cases, rtol)
+    said = references_line(rerun_dir, original_dir, references)
+    return lines + ([said] if said else []), code
 
 
 def main(argv):

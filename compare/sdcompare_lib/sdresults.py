@@ -2,7 +2,8 @@
 complete, so an interrupted writer leaves nothing half-written under the final name (write_atomic:
 one file, every Python writer of the project; staged_folder, replace_folder: the references'
 result folders and sdcompare's report/); the
-`provenance` of summary.json (tool and library versions, date, command line, cores); and the
+`provenance` of summary.json (tool and library versions, date, command line, cores, the BLAS/OpenMP
+threads, PINNED_THREADS: what the campaign and the rerun commands pin); and the
 per-case `status` both references write (KKT residuals against the shared tolerance)."""
 
 import json
@@ -73,17 +74,53 @@ def write_atomic(path, data, mode=None, check=None):
         raise
 
 
-PROVENANCE_KEYS = ("tool", "tool_version", "python", "numpy", "date_utc", "command_line", "cores")
+# The thread counts of the BLAS and OpenMP libraries under the references (numpy, scipy, PETSc
+# for dolfinx; FreeFem++'s solvers), pinned to 1 wherever the campaign runs a job: the variables
+# Snakemake's shell sets to a job's `threads` (1 for a reference job), which the campaign's
+# Snakefile also sets itself, and every rerun command of a report and of tools/cases
+# (render.rerun_args). A reduction split over another number of threads adds in another order:
+# a FreeFEM field rerun unpinned on this machine differed by 1.78e-15 (issue 42), pinned it is
+# identical. sdcrack itself calls no BLAS (its linear algebra is faer, its threads rayon's, whose
+# count leaves its results bit-identical: docs/workflow.md, "Thread count"). One home: the
+# Snakefile, render.py and the provenance below read it from here.
+PINNED_THREADS = (("OMP_NUM_THREADS", "1"), ("GOTO_NUM_THREADS", "1"),
+                  ("OPENBLAS_NUM_THREADS", "1"), ("MKL_NUM_THREADS", "1"),
+                  ("VECLIB_MAXIMUM_THREADS", "1"), ("NUMEXPR_NUM_THREADS", "1"))
+
+
+def pinned_env_args():
+    """["env", "OMP_NUM_THREADS=1", ...]: the prefix that runs a command with PINNED_THREADS."""
+    return ["env"] + [f"{name}={value}" for name, value in PINNED_THREADS]
+
+
+def threads_of(environ):
+    """{variable of PINNED_THREADS: its value in `environ`, None where unset}: the threads a
+    process ran with (provenance `threads`)."""
+    return {name: environ.get(name) for name, _ in PINNED_THREADS}
+
+
+def threads_pinned(threads):
+    """Whether a provenance's `threads` (threads_of) are PINNED_THREADS: True, False, or None when
+    not recorded (a folder written before issue 42)."""
+    if not isinstance(threads, dict):
+        return None
+    return all(threads.get(name) == value for name, value in PINNED_THREADS)
+
+
+PROVENANCE_KEYS = ("tool", "tool_version", "python", "numpy", "date_utc", "command_line", "cores",
+                   "threads")
 
 
 def provenance(tool, tool_version):
     """{"tool", "tool_version", "python", "numpy", "date_utc" (now, "YYYY-MM-DDTHH:MM:SSZ"),
-    "command_line" (sys.argv), "cores" (os.cpu_count())}: what produced a result folder."""
+    "command_line" (sys.argv), "cores" (os.cpu_count()), "threads" (threads_of the process's
+    environment: the BLAS/OpenMP thread counts it ran with)}: what produced a result folder."""
     import numpy
 
     return {"tool": tool, "tool_version": str(tool_version), "python": platform.python_version(),
             "numpy": numpy.__version__, "date_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-            "command_line": list(sys.argv), "cores": os.cpu_count()}
+            "command_line": list(sys.argv), "cores": os.cpu_count(),
+            "threads": threads_of(os.environ)}
 
 
 def write_summary(folder, scene, tool, cases, tool_version):

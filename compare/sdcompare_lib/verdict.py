@@ -494,12 +494,17 @@ def load_expectations(path):
     return exps
 
 
-def validate_expectations(exps, path, scene, scene_file):
-    """The expectations that apply to `scene`; a name that matches nothing is a ValueError."""
+def validate_expectations(exps, path, scene, scene_file, run_levels=None):
+    """The expectations that apply to `scene`; a name that matches nothing, or a level that is no
+    level at all (not an integer ≥ 0), is a ValueError. One whose level (or, for min_rate, the
+    level before it) this run has not got (`run_levels`, the plan's; default: the scene file's)
+    applies but is skipped: it carries `skipped`, the reason, and check_expectations reports it so
+    (a campaign at --levels 0-1 is judged by the bounds of its levels, and says which it left)."""
     from .settings import scene_lists, scene_p_masses, scene_p_spaces
 
     known_scenes = _scene_names_beside(path) | {scene}
     levels, u_spaces, multipliers, _ = scene_lists(scene_file)
+    run = sorted(int(lv) for lv in (levels if run_levels is None else run_levels))
     mine = []
     for i, e in enumerate(exps):
         if e["scene"] != "*" and e["scene"] not in known_scenes:
@@ -515,21 +520,41 @@ def validate_expectations(exps, path, scene, scene_file):
             if e[key] != "*" and e[key] not in values:
                 raise ValueError(f"expectation {i}: {key} {e[key]!r} is not run by scene "
                                  f"{scene!r} (its scene file lists {values})")
-        if not isinstance(e["level"], int) or e["level"] not in levels:
-            raise ValueError(f"expectation {i}: level {e['level']!r} is not a level of scene "
-                             f"{scene!r} (its scene file lists {levels})")
-        if "min_rate" in e and e["level"] - 1 not in levels:
-            raise ValueError(f"expectation {i}: min_rate at level {e['level']} needs level "
-                             f"{e['level'] - 1}, which scene {scene!r} does not run")
-        mine.append({**e, "index": i})
+        level = e["level"]
+        if not isinstance(level, int) or isinstance(level, bool) or level < 0:
+            raise ValueError(f"expectation {i}: level must be a level (an integer ≥ 0), not "
+                             f"{level!r}")
+        mine.append({**e, "index": i, **_skipped_level(e, run)})
     return mine
+
+
+def _skipped_level(e, run):
+    """{"skipped": why} when the run has not got the level(s) the expectation `e` bounds (its
+    level; for min_rate also the level before it), else {}."""
+    need = [e["level"]] + ([e["level"] - 1] if "min_rate" in e else [])
+    missing = [lv for lv in need if lv not in run]
+    if not missing:
+        return {}
+    missing = sorted(missing)
+    what = (f"level {missing[0]}" if len(missing) == 1
+            else f"levels {missing[0]} and {missing[1]}")
+    return {"skipped": f"this run has no {what} (its levels: {', '.join(map(str, run)) or 'none'})"
+            + (f": min_rate at level {e['level']} is the rate from level {e['level'] - 1}"
+               if e["level"] in run else "")}
 
 
 def check_expectations(series, exps):
     """Evaluates each applicable expectation on every series it matches: status "ok", "violated"
-    or "not evaluated" (the level is missing from this run's results); the last two fail."""
+    or "not evaluated" (the level is missing from this run's results); the last two fail. One
+    that validate_expectations marked `skipped` (a level this run has not got) is one row of
+    status "skipped" with its reason, and fails nothing."""
     results = []
     for e in exps:
+        if e.get("skipped"):  # its variant: the expectation's pattern ("*" every value)
+            pattern = "/".join([e["u_space"], e["multiplier"]]
+                               + [e[k] for k in ("p_mass", "p_space") if k in e])
+            results.append({**e, "variant": pattern, "status": "skipped", "reason": e["skipped"]})
+            continue
         matched = [s for s in series if _match(e["u_space"], s["u_space"])
                    and _match(e["multiplier"], s["multiplier"]) and _match(e["quantity"], s["quantity"])
                    and _match(e.get("p_mass", DEFAULT_P_MASS), p_mass(s))
@@ -564,6 +589,26 @@ def check_expectations(series, exps):
                        reason="; ".join(missing + problems))
             results.append(res)
     return results
+
+
+def expectations_check(results):
+    """The report's check row of the expectations: (label, requirement, problems, why it does not
+    apply or None). A violated or not evaluated row is a problem; skipped rows (levels this run
+    has not got) are counted and their reasons said; with nothing but skipped rows the check does
+    not apply, and says why."""
+    judged = [e for e in results if e["status"] != "skipped"]
+    skipped = [e for e in results if e["status"] == "skipped"]
+    problems = [f"{e['variant']} {e['quantity']} (expectation {e['index']}): {e['status']}: "
+                f"{e['reason']}" for e in judged if e["status"] != "ok"]
+    why = "; ".join(sorted({e["reason"] for e in skipped}))
+    what = f"{len(judged)} expectation row(s) evaluated"
+    if skipped:
+        what += (f"; {len(skipped)} skipped (expectation"
+                 f" {', '.join(str(e['index']) for e in skipped)}: {why})")
+    na = None
+    if skipped and not judged:
+        na = f"every expectation of this scene is at a level this run has not got: {why}"
+    return "expectations", what, problems, na
 
 
 def _match(pattern, value):

@@ -124,7 +124,9 @@ def test_rerun_command_of_a_broken_tangential_case():
         render.rerun_command("/r/s", summary, scene, k)
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="lumped",
                                                              p_space=TANGENTIAL)) == \
-        ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 --p-mass "
+        ("env OMP_NUM_THREADS=1 GOTO_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 "
+         "VECLIB_MAXIMUM_THREADS=1 NUMEXPR_NUM_THREADS=1 "
+         "/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 --p-mass "
          "lumped --p-space broken-tangential --out sdcrack-rerun/s-l2-broken-M1-lumped-ptangential")
 
 

@@ -510,12 +510,84 @@ def test_expectation_violation_and_baseline(open_run, tmp_path, empty_exps):
     assert "error" in kinds and "status" not in kinds
 
 
-def test_default_expectations_naming_a_level_the_scene_lacks_are_exit_2(open_run):
-    """scenes/expectations.toml bounds open-exact at level 4; this run's scene file lists levels
-    1-3, so the expectation cannot be evaluated: exit 2, one line naming it."""
-    rc, out, err = run_cli(str(open_run))
-    assert rc == 2 and err.count("\n") == 1
-    assert "level 4 is not a level of scene 'open-exact'" in err
+def expectations_row(report):
+    """report.json's check row of the expectations."""
+    return next(c for c in report["checks"] if c["check"] == "expectations")
+
+
+def test_expectations_at_a_level_the_run_lacks_are_skipped_and_said(open_run, empty_exps,
+                                                                     tmp_path):
+    """Bounds at level 4, as scenes/expectations.toml has them; this run has levels 1-3 (as a
+    campaign at --levels 1-3 would): every row is skipped, the check does not apply and says why,
+    the report's Expectations table lists each row as skipped, and the verdict is the one without
+    expectations (issue 42: `tools/campaign SCENE --levels 0-1` failed its report job here)."""
+    exps = tmp_path / "e.toml"
+    exps.write_text("".join(
+        f'[[expectation]]\nscene = "open-exact"\nu_space = "*"\nmultiplier = "*"\n'
+        f'quantity = "{q}"\nlevel = 4\nmin_rate = 0.9\nmax_error = 1.0\n\n'
+        for q in ("u_l2", "p_l2")))
+    rc, out, err = run_cli(str(open_run), "--quiet", "--expectations", str(exps))
+    assert rc in (0, 1), out + err
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert r["expectations"] and {e["status"] for e in r["expectations"]} == {"skipped"}
+    assert {e["reason"] for e in r["expectations"]} == {
+        "this run has no level 4 (its levels: 1, 2, 3)"}
+    row = expectations_row(r)
+    assert row["problems"] == [] and row["status"] == (
+        "not applicable: every expectation of this scene is at a level this run has not got: "
+        "this run has no level 4 (its levels: 1, 2, 3)")
+    assert row["requires"].startswith(f"0 expectation row(s) evaluated; "
+                                      f"{len(r['expectations'])} skipped (expectation ")
+    md = (open_run / "report" / "report.md").read_text()
+    section = md.split("\n## Expectations\n")[1].split("\n## ")[0]
+    assert section.count("| skipped | this run has no level 4 (its levels: 1, 2, 3) |") == len(
+        r["expectations"])
+    verdict, reasons = r["verdict"], r["reasons"]
+    assert run_cli(str(open_run), "--quiet", "--replace", "--expectations", empty_exps)[0] == rc
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert (r["verdict"], r["reasons"]) == (verdict, reasons)
+
+
+def test_expectations_of_levels_run_are_judged_the_others_skipped(open_run, tmp_path):
+    """One file, three rows: level 3 is judged (and a violated bound there still FAILs), level 4
+    is skipped, and a min_rate at level 1 is skipped because its rate needs level 0."""
+    exps = tmp_path / "e.toml"
+    row = ('[[expectation]]\nscene = "open-exact"\nu_space = "broken"\nmultiplier = "M1"\n'
+           'quantity = "u_l2"\n')
+    exps.write_text(row + "level = 3\nmax_error = 1e-5\n\n" + row + "level = 4\nmax_error = 1\n\n"
+                    + row + "level = 1\nmin_rate = 1.0\n")
+    rc, out, _ = run_cli(str(open_run), "--expectations", str(exps))
+    assert rc == 1 and "> 1.000e-05 at level 3" in out
+    r = json.load(open(open_run / "report" / "report.json"))
+    assert [(e["index"], e["status"]) for e in r["expectations"]] == [
+        (0, "violated"), (1, "skipped"), (2, "skipped")]
+    assert r["expectations"][1]["variant"] == "broken/M1"  # a skipped row names its pattern
+    assert r["expectations"][2]["reason"] == (
+        "this run has no level 0 (its levels: 1, 2, 3): min_rate at level 1 is the rate from "
+        "level 0")
+    row = expectations_row(r)
+    assert row["status"] == "FAIL" and len(row["problems"]) == 1
+    assert row["requires"] == (
+        "1 expectation row(s) evaluated; 2 skipped (expectation 1, 2: this run has no level 0 "
+        "(its levels: 1, 2, 3): min_rate at level 1 is the rate from level 0; this run has no "
+        "level 4 (its levels: 1, 2, 3))")
+
+
+@pytest.mark.parametrize("level, says", [
+    ('"4"', "expectation 0: level must be a level (an integer ≥ 0), not '4'"),
+    ("-1", "expectation 0: level must be a level (an integer ≥ 0), not -1"),
+    ("true", "expectation 0: level must be a level (an integer ≥ 0), not True"),
+])
+def test_a_malformed_expectation_level_is_refused_in_one_line(open_run, tmp_path, level, says):
+    """A level that is no level at all is a malformed file, not a level this run lacks: exit 2,
+    one line, no report."""
+    exps = tmp_path / "e.toml"
+    exps.write_text('[[expectation]]\nscene = "open-exact"\nu_space = "*"\nmultiplier = "*"\n'
+                    f'quantity = "u_l2"\nlevel = {level}\nmax_error = 1\n')
+    rc, out, err = run_cli(str(open_run), "--expectations", str(exps))
+    assert (rc, out) == (2, "") and err.count("\n") == 1, err
+    assert err == f"sdcompare: error: bad expectations file {exps}: {says}\n"
+    assert not (open_run / "report").exists()
 
 
 def test_bad_usage_exit_2(tmp_path):
@@ -634,6 +706,31 @@ def test_provenance_rows():
     assert "None" not in str(rows) and "not recorded" in rows[0][2] and "not recorded" in rows[1][1]
 
 
+def test_the_references_threads_are_said_as_recorded():
+    """A reference's provenance `threads` (the BLAS/OpenMP variables it ran with): "pinned to 1"
+    only when every variable of PINNED_THREADS is 1; else which are not, and that its pinned rerun
+    may differ; not recorded before issue 42."""
+    from sdcompare_lib import render
+    from sdcompare_lib.sdresults import PINNED_THREADS
+
+    def cores_cell(threads):
+        prov = {"tool": "freefem", "cores": 2} | ({} if threads is None else {"threads": threads})
+        _, _, rows = render.provenance({}, {"freefem": {"summary": {"provenance": prov}}})
+        return rows[1][3]
+
+    pinned = {name: value for name, value in PINNED_THREADS}
+    assert cores_cell(pinned) == "2; BLAS/OpenMP threads pinned to 1"
+    assert cores_cell(dict(pinned, OPENBLAS_NUM_THREADS=None, OMP_NUM_THREADS="4")) == (
+        "2; BLAS/OpenMP threads not pinned (OMP_NUM_THREADS=4, OPENBLAS_NUM_THREADS unset): its "
+        "rerun, pinned to 1, may differ from it in the last digits")
+    assert cores_cell(None) == "2; BLAS/OpenMP threads not recorded"
+
+
+# the prefix of every rerun command: the campaign's BLAS/OpenMP threads (sdresults.PINNED_THREADS)
+PIN = ("env OMP_NUM_THREADS=1 GOTO_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 "
+       "VECLIB_MAXIMUM_THREADS=1 NUMEXPR_NUM_THREADS=1 ")
+
+
 def test_rerun_command_is_absolute():
     """Absolute binary and scene; the --out is relative (sdcrack-rerun/<name> under the directory
     the command runs from, never inside the results tree), absolute with a rerun folder."""
@@ -644,13 +741,17 @@ def test_rerun_command_is_absolute():
     summary = {"scene": "s", "plan": {"deltas": [1e-2, 0.0]},
                "provenance": {"executable": "/opt/my sdcrack/bin/sdcrack"}}
     cmd = render.rerun_command("/data/run 1/s", summary, scene, k)
-    assert cmd == ("'/opt/my sdcrack/bin/sdcrack' run '/data/run 1/s/scene.toml' --level 1 "
+    assert cmd == (PIN + "'/opt/my sdcrack/bin/sdcrack' run '/data/run 1/s/scene.toml' --level 1 "
                    "--u-space broken --multiplier M1 --out sdcrack-rerun/s-l1-broken-M1")
+    # a scene with references: the case alone, its references kept (asked for: the flag dropped)
+    with_refs = dict(scene, outputs={"references": ["dolfinx", "freefem"]})
+    assert render.rerun_command("/data/run 1/s", summary, with_refs, k) == cmd.replace(
+        " --level ", " --solver-only --level ")
     cmd = render.rerun_command("/data/run 1/s", summary, scene, k, rerun_dir="/tmp/my reruns")
     assert cmd.endswith(" --out '/tmp/my reruns/s-l1-broken-M1'")
     # a run restricted to one δ (--delta) is rerun so; no provenance: sdcrack from PATH
     cmd = render.rerun_command("/r/s", {"scene": "s", "plan": {"deltas": [0.01]}}, scene, k)
-    assert cmd == ("sdcrack run /r/s/scene.toml --level 1 --u-space broken --multiplier M1 "
+    assert cmd == (PIN + "sdcrack run /r/s/scene.toml --level 1 --u-space broken --multiplier M1 "
                    "--delta 1e-2 --out sdcrack-rerun/s-l1-broken-M1-d1e-2")
 
 
@@ -741,8 +842,8 @@ def test_report_provenance_and_rerun_from_another_directory(open_run, empty_exps
 
     k = next(k for k in r["kkt"] if (k["level"], k["u_space"], k["multiplier"]) == (1, "broken", "M1"))
     cmd = k["rerun"]
-    assert cmd.startswith(shlex.quote(summary["provenance"]["executable"]) + " run "
-                          + shlex.quote(str(open_run / "scene.toml")) + " --level 1 ")
+    assert cmd.startswith(PIN + shlex.quote(summary["provenance"]["executable"]) + " run "
+                          + shlex.quote(str(open_run / "scene.toml")) + " --solver-only --level 1 ")
     assert f"`{cmd}`" in md
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
@@ -790,8 +891,8 @@ def test_report_without_provenance_says_not_recorded(open_run, empty_exps):
     md = open(open_run / "report" / "report.md").read()
     prov = md.split("\n## Provenance\n")[1].split("\n## ")[0]
     assert prov.count("not recorded") >= 6
-    assert all(k["rerun"].startswith("sdcrack run " + shlex.quote(str(open_run / "scene.toml")))
-               for k in r["kkt"])
+    assert all(k["rerun"].split(" sdcrack run ")[1].startswith(
+        shlex.quote(str(open_run / "scene.toml"))) for k in r["kkt"])
     assert "`sdcrack` is taken from PATH" in md
     assert_clean_report(open_run)
 
@@ -807,10 +908,10 @@ def test_rerun_command_of_a_lumped_case():
     k = {"level": 2, "u_space": "broken", "multiplier": "M1", "delta": 0.0}
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="consistent")) == \
         render.rerun_command("/r/s", summary, scene, k) == \
-        ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
+        (PIN + "/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
          "--out sdcrack-rerun/s-l2-broken-M1")
     assert render.rerun_command("/r/s", summary, scene, dict(k, p_mass="lumped")) == \
-        ("/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
+        (PIN + "/x/sdcrack run /r/s/scene.toml --level 2 --u-space broken --multiplier M1 "
          "--p-mass lumped --out sdcrack-rerun/s-l2-broken-M1-lumped")
 
 

@@ -38,7 +38,8 @@ Writes OUT/summary.json ({"scene", "tool": "dolfinx", "provenance", "cases": [{"
 "timings_s": {"assembly", "solve", "forms" (the UFL forms' JIT compilation, cached between
 processes: a start-up cost, not part of assembly), "total"}, "errors" (exact scenes only)}]}):
   provenance: {"tool": "dolfinx", "tool_version" (dolfinx.__version__), "python", "numpy", "date_utc",
-    "command_line" (sys.argv), "cores"} (compare/sdcompare_lib/sdresults.py: provenance);
+    "command_line" (sys.argv), "cores",
+    "threads" (the BLAS/OpenMP thread variables it ran with, null where unset)} (compare/sdcompare_lib/sdresults.py: provenance);
   kkt: relative KKT residuals of the QP in the cracked unknowns (kkt_residuals; the definitions of
     crack_qp.edp, modelled on docs/design.md), with λ_j = (K u − F) at the + copy on the active set,
     0 off it, w = u⁺ − u⁻, B the jump operator (‖B‖∞ = 2):

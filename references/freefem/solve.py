@@ -20,7 +20,8 @@ cells [4, 4] at level 0; now by round-off (references/freefem/README.md).
 summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h", "unknowns", "iterations",
 "active", "kkt", "status", "errors" (exact scenes only), "timings_s": {"freefem", "total"}}]}:
   provenance: {"tool": "freefem", "tool_version" (from FreeFem++'s banner, freefem_version; "unknown"
-    with a warning if unreadable), "python", "numpy", "date_utc", "command_line" (sys.argv), "cores"}
+    with a warning if unreadable), "python", "numpy", "date_utc", "command_line" (sys.argv), "cores",
+    "threads" (the BLAS/OpenMP thread variables it ran with, null where unset)}
     (compare/sdcompare_lib/sdresults.py: provenance);
   kkt: {"equations", "primal", "dual", "complementarity"}, relative, computed by crack_qp.edp:
     the componentwise backward error max_i |K u − F − Bᵀλ|_i / (|K||u| + |Bᵀλ| + |F|)_i over the free

@@ -42,6 +42,9 @@ def assert_provenance(summary, tool, script=None):
     assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", prov["date_utc"]), prov
     assert isinstance(prov["command_line"], list) and all(isinstance(a, str) for a in prov["command_line"])
     assert isinstance(prov["cores"], int) and prov["cores"] >= 1
+    # the BLAS/OpenMP threads it ran with: each variable's value, null where unset
+    assert set(prov["threads"]) == {name for name, _ in sdresults.PINNED_THREADS}, prov
+    assert all(v is None or isinstance(v, str) for v in prov["threads"].values()), prov
     if script is not None:
         assert Path(prov["command_line"][0]).resolve() == Path(script).resolve(), prov["command_line"]
     return prov

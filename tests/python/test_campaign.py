@@ -40,6 +40,16 @@ def cases(*scenes, cwd=ROOT):
     return [row for row, _ in cases_with_targets(*scenes, cwd=cwd)]
 
 
+def command_words(cmd):
+    """The words of a rerun command after its prefix `env OMP_NUM_THREADS=1 ...` (the campaign's
+    BLAS/OpenMP threads, sdresults.PINNED_THREADS), which it must start with."""
+    from sdcompare_lib.sdresults import pinned_env_args
+
+    words, pin = cmd.split(), pinned_env_args()
+    assert words[:len(pin)] == pin, cmd
+    return words[len(pin):]
+
+
 def out_of(cmd):
     args = cmd.split()
     return args[args.index("--out") + 1]
@@ -57,9 +67,11 @@ def test_case_list_has_one_line_per_rerunnable_unit(tmp_path):
     assert len(set(outs)) == len(outs), "one folder per unit"
     # absolute binary and scene: the same command from any working directory, writing into
     # sdcrack-rerun/ under it (relative), or into --rerun-dir (absolute)
-    cmd = rows[0][6].split()
+    cmd = command_words(rows[0][6])
     assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack")
     assert cmd[2] == str(ROOT / "scenes" / "closed-exact.toml")
+    # the scene has references: the unit alone, not its level's references
+    assert all(command_words(r[6])[3] == "--solver-only" for r in rows)
     assert outs[0] == "sdcrack-rerun/closed-exact-l0-continuous-M0"
     rows = cases("--rerun-dir", "mine", ROOT / "scenes" / "closed-exact.toml", cwd=tmp_path)
     assert out_of(rows[0][6]) == str(tmp_path / "mine" / "closed-exact-l0-continuous-M0")
@@ -101,7 +113,7 @@ def test_case_list_of_a_results_folder(tmp_path):
     assert [r[:6] for r, _ in rows] == [["closed-exact", "2", "broken", m, "consistent", "0"]
                                         for m in ("M0", "M1")]
     assert [t for _, t in rows] == [None, None]
-    cmd = rows[0][0][6].split()
+    cmd = command_words(rows[0][0][6])
     assert cmd[:3] == ["sdcrack", "run", str(folder / "scene.toml")]  # no provenance recorded
     assert "--delta" not in cmd  # the scene's only δ: the run's δ sweep
     assert out_of(rows[0][0][6]) == "sdcrack-rerun/closed-exact-l2-broken-M0"
@@ -139,7 +151,7 @@ def test_case_list_of_a_results_folder_is_the_reports_rerun_list(tmp_path):
         want = [render.rerun_command(str(folder), summary, scene, k) for k in units]
         got = [r[6] for r in cases(folder, cwd=tmp_path)]
         assert got == want
-        assert {c.split()[0] for c in got} == {pinned if prov else "sdcrack"}
+        assert {command_words(c)[0] for c in got} == {pinned if prov else "sdcrack"}
         mine = tmp_path / "mine"
         want = [render.rerun_command(str(folder), summary, scene, k, rerun_dir=str(mine))
                 for k in units]
@@ -163,7 +175,7 @@ def test_rerun_reproduces_the_row(tmp_path):
     rows = [r for r in cases(scene, cwd=tmp_path) if tuple(r[1:4]) in picked]
     assert len(rows) == 2
     for r in rows:
-        cmd = r[6].split() + ["--quiet"]
+        cmd = command_words(r[6]) + ["--quiet"]
         assert cmd[0] == str(ROOT / "target" / "release" / "sdcrack") and cmd[2] == str(scene)
         cmd[0] = str(EXE)  # SDCRACK_BIN may name another build
         elsewhere = tmp_path / "elsewhere"  # any directory: the rerun lands under it

@@ -9,6 +9,7 @@ import subprocess
 import sys
 
 import ci_script
+import pytest
 from conftest import run_env
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -69,3 +70,49 @@ def test_the_index_and_the_report_share_one_page():
     r = subprocess.run([sys.executable, "-c", probe], env=run_env(), capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 0, "sdcompare_lib.page imports numpy" + r.stderr
+
+
+def index_of(tmp_path, verdicts):
+    """tools/campaign_index.py on hand-made reports with these {scene: verdict}: (exit status,
+    stdout, index.json)."""
+    for name, verdict in verdicts.items():
+        (tmp_path / name / "report").mkdir(parents=True)
+        rep = {"verdict": verdict, "series": [],
+               "reasons": [] if verdict == "PASS" else [f"{name}: why {verdict}"]}
+        (tmp_path / name / "report" / "report.json").write_text(json.dumps(rep))
+        (tmp_path / name / "report" / "index.html").write_text("report")
+    r = subprocess.run([sys.executable, str(ROOT / "tools" / "campaign_index.py"), str(tmp_path)],
+                       env=run_env(), capture_output=True, text=True, timeout=60)
+    return r.returncode, r.stdout, json.loads((tmp_path / "index.json").read_text())
+
+
+def test_an_inconclusive_scene_is_listed_with_its_reason_and_fails_nothing(tmp_path):
+    """INCONCLUSIVE (compare/sdcompare's exit 3: "cannot judge yet") is a verdict of its own: the
+    index shows it as the report wrote it, in its own neutral class, the scene's line is followed
+    by the report's reason, and the campaign exits 0 (its verdict INCONCLUSIVE)."""
+    rc, out, index = index_of(tmp_path, {"a": "PASS", "b": "INCONCLUSIVE"})
+    assert rc == 0, out
+    assert index["verdict"] == "INCONCLUSIVE"
+    assert [(s["name"], s["verdict"]) for s in index["scenes"]] == [("a", "PASS"),
+                                                                    ("b", "INCONCLUSIVE")]
+    assert f"  INCONCLUSIVE  {tmp_path}/b/report/index.html\n      b: why INCONCLUSIVE\n" in out
+    assert f"  PASS  {tmp_path}/a/report/index.html\n  INCONCLUSIVE" in out  # no line under PASS
+    page = (tmp_path / "index.html").read_text()
+    assert '<td class="INCONCLUSIVE">INCONCLUSIVE</td>' in page
+    from sdcompare_lib.page import CSS
+
+    assert ".INCONCLUSIVE{color:#555;" in CSS  # grey: neither PASS's green nor FAIL's red
+
+
+@pytest.mark.parametrize("verdicts, campaign, rc", [
+    ({"a": "PASS", "b": "PASS"}, "PASS", 0),
+    ({"a": "INCONCLUSIVE", "b": "FAIL"}, "FAIL", 1),
+    ({"a": "PASS", "b": "NEWWORD"}, "FAIL", 1),  # a word the index does not know fails
+    ({"a": "PASS", "b": "<b>x</b>"}, "FAIL", 1),  # not a verdict word: the scene FAILs
+])
+def test_the_campaigns_verdict_and_exit_status(tmp_path, verdicts, campaign, rc):
+    got_rc, out, index = index_of(tmp_path, verdicts)
+    assert (got_rc, index["verdict"]) == (rc, campaign), out
+    shown = {s["name"]: s["verdict"] for s in index["scenes"]}
+    want = verdicts["b"] if verdicts["b"].isalpha() else "FAIL"
+    assert shown["b"] == want and f"  {want}  " in out

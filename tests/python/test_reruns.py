@@ -16,6 +16,7 @@ import subprocess
 
 import numpy as np
 import pytest
+from conftest import run_env
 from scene_text import set_key
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -28,12 +29,15 @@ pytestmark = [
     pytest.mark.skipif(not EXE.is_file(), reason="sdcrack binary not built"),
 ]
 UNIT = "open-exact-l1-broken-M1"  # the unit rerun below: level 1, broken u, M1, its δ sweep
+# the prefix of every rerun command: the BLAS/OpenMP threads the campaign's jobs run with
+PIN = ["env", "OMP_NUM_THREADS=1", "GOTO_NUM_THREADS=1", "OPENBLAS_NUM_THREADS=1",
+       "MKL_NUM_THREADS=1", "VECLIB_MAXIMUM_THREADS=1", "NUMEXPR_NUM_THREADS=1"]
 
 
-def tiny_scene(folder, fields=None):
+def tiny_scene(folder, fields=None, references="[]"):
     text = (ROOT / "scenes" / "open-exact.toml").read_text()
-    for key, value in (("levels", "[0, 1]"), ("references", "[]"), ("p_mass", '["consistent"]'),
-                       ("deltas", "[1e-2, 0.0]")):
+    for key, value in (("levels", "[0, 1]"), ("references", references),
+                       ("p_mass", '["consistent"]'), ("deltas", "[1e-2, 0.0]")):
         text = set_key(text, key, value)
     if fields is not None:
         text = set_key(text, "fields", fields)
@@ -110,9 +114,12 @@ def test_ci_cases_prints_the_reports_commands(original, tmp_path):
     got = cases_commands(folder, cwd=tmp_path)
     assert len(got) == 2 * 2 * 3
     assert sorted(got) == from_json == from_md
-    # the binary that wrote the folder
-    assert {os.path.realpath(shlex.split(c)[0]) for c in got} == {os.path.realpath(EXE)}
+    # the campaign's BLAS/OpenMP threads, then the binary that wrote the folder
+    assert {tuple(shlex.split(c)[:len(PIN)]) for c in got} == {tuple(PIN)}
+    assert {os.path.realpath(shlex.split(c)[len(PIN)]) for c in got} == {os.path.realpath(EXE)}
     assert all(shlex.split(c)[-1].startswith("sdcrack-rerun/open-exact-l") for c in got)
+    # no references in this scene: nothing to leave out
+    assert not any("--solver-only" in c for c in got)
     # and the paragraph says where they write and how to compare
     assert f"compare/sdcompare-rerun {shlex.quote(str(folder))} sdcrack-rerun/<name>" in section
 
@@ -235,3 +242,103 @@ def test_a_verification_h5_rerun_is_compared(tmp_path):
     out = run_rerun(command, tmp_path / "elsewhere")
     rc, stdout, _ = compare_rerun(folder, out)
     assert rc == 0 and stdout.startswith("identical: ") and stdout.endswith(" datasets, 2 cases\n")
+
+
+# ---------------------------------------------------------------- with the references (issue 42)
+def reference_env():
+    """The environment of a run with references: this checkout's reference scripts (whatever
+    checkout built EXE), FreeFEM's plugins, compare/ on PYTHONPATH."""
+    return dict(run_env(), SDCRACK_REFERENCES=str(ROOT / "references"))
+
+
+def h5_datasets(path):
+    with h5py.File(path) as f:
+        n = []
+        f.visititems(lambda name, o: n.append(name) if isinstance(o, h5py.Dataset) else None)
+    return len(n)
+
+
+@pytest.fixture(scope="module")
+def original_with_references(tmp_path_factory):
+    """The tiny scene with both references (M1 only), run as the campaign's jobs run,
+    with the BLAS/OpenMP threads pinned (PIN), and its report (whose rerun commands are tested)."""
+    tmp = tmp_path_factory.mktemp("orig-refs")
+    text = tiny_scene(tmp, references='["dolfinx", "freefem"]').read_text()
+    text = set_key(text, "multipliers", '["M1"]')
+    scene = tmp / "open-refs.toml"
+    scene.write_text(text)
+    p = subprocess.run(PIN + [str(EXE), "run", str(scene), "--out", str(tmp / "results"),
+                              "--quiet"], env=reference_env(), capture_output=True, text=True)
+    if p.returncode == 2 and "is not available" in p.stderr:
+        pytest.skip(p.stderr.strip())
+    assert p.returncode == 0, p.stderr
+    folder = tmp / "results" / "open-exact"
+    p = subprocess.run([PY, str(ROOT / "compare" / "sdcompare"), str(folder), "--quiet",
+                        "--expectations", os.devnull], capture_output=True, text=True,
+                       env=run_env())
+    assert p.returncode in (0, 1), p.stderr  # two levels: the rates are inconclusive (FAIL)
+    return folder
+
+
+def test_a_reports_rerun_command_reruns_the_case_alone_and_says_which_references_it_reused(
+        original_with_references, tmp_path):
+    """The report's command for one case, run as printed (a shell, from an unrelated directory):
+    the BLAS/OpenMP threads pinned, the case rerun with `--solver-only`, the references not;
+    `sdcompare-rerun ORIGINAL RERUN --references` says identical and names the references it
+    reused."""
+    folder = original_with_references
+    report = json.loads((folder / "report" / "report.json").read_text())
+    command = next(k["rerun"] for k in report["kkt"]
+                   if (k["level"], k["u_space"]) == (1, "broken"))
+    words = shlex.split(command)
+    assert words[:len(PIN)] == PIN and words[len(PIN) + 3] == "--solver-only", command
+    assert words[-2:] == ["--out", "sdcrack-rerun/open-exact-l1-broken-M1"], command
+    assert command in (folder / "report" / "report.md").read_text()
+    # the report's provenance: the references ran pinned
+    provenance = (folder / "report" / "report.md").read_text().split("## Provenance")[1]
+    assert provenance.count("BLAS/OpenMP threads pinned to 1") == 2, provenance
+    cwd = tmp_path / "elsewhere"
+    cwd.mkdir()
+    p = subprocess.run(["bash", "-c", command + " --quiet"], cwd=cwd, env=reference_env(),
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    rerun = cwd / "sdcrack-rerun" / "open-exact-l1-broken-M1"
+    assert not (rerun / "open-exact" / "dolfinx").exists()
+    rc, out, err = compare_rerun(folder, rerun, "--references")
+    n = h5_datasets(rerun / "open-exact" / "fields.h5")
+    assert (rc, err) == (0, ""), out + err
+    assert out == (f"identical: {n} datasets, 2 cases\n"
+                   f"references: dolfinx, freefem not rerun (--solver-only): the original's "
+                   f"{folder}/dolfinx, {folder}/freefem reused\n")
+
+
+def test_a_rerun_asked_to_rerun_the_references_gives_them_back_bit_for_bit(
+        original_with_references, tmp_path):
+    """The same command without `--solver-only` (the references asked for) reruns the level's
+    references too, pinned alike, and every dataset of theirs is identical to the original's."""
+    folder = original_with_references
+    report = json.loads((folder / "report" / "report.json").read_text())
+    command = next(k["rerun"] for k in report["kkt"]
+                   if (k["level"], k["u_space"]) == (1, "broken"))
+    asked = command.replace(" --solver-only", "")
+    assert asked != command
+    p = subprocess.run(["bash", "-c", asked + " --quiet"], cwd=tmp_path, env=reference_env(),
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    rerun = tmp_path / "sdcrack-rerun" / "open-exact-l1-broken-M1" / "open-exact"
+    n = {f: h5_datasets(rerun / f) for f in ("fields.h5", "dolfinx/fields.h5", "freefem/fields.h5")}
+    assert n["dolfinx/fields.h5"] > 0 and n["freefem/fields.h5"] > 0, n
+    rc, out, err = compare_rerun(folder, rerun, "--references")
+    assert (rc, err) == (0, ""), out + err
+    assert out == (f"identical: {sum(n.values())} datasets, 2 cases\n"
+                   "references: dolfinx, freefem rerun, compared\n")
+    # their provenance records the pinned threads
+    from sdcompare_lib.sdresults import threads_pinned
+
+    for tool in ("dolfinx", "freefem"):
+        prov = json.loads((rerun / tool / "summary.json").read_text())["provenance"]
+        assert threads_pinned(prov["threads"]) is True, prov
+    # without --references the references are said rerun, not compared
+    rc, out, _ = compare_rerun(folder, rerun)
+    assert rc == 0 and out.splitlines()[-1] == (
+        "references: dolfinx, freefem rerun, not compared (--references compares them)")
