@@ -24,6 +24,7 @@ twice: the verdict does not read this module.
 """
 
 from . import rates, verdict, yardsticks
+from .checks import NOT_RUN
 from .read import REFERENCE_TOOLS as REFERENCES
 from .read import finite_number, variant_label, variant_of, variant_order
 from .render import REFERENCE_NAMES
@@ -138,7 +139,7 @@ def rows(res, a, level):
 
 
 def delta_outcome(a):
-    """{"status": PASS | FAIL | not applicable, "text"} from the δ check rows."""
+    """{"status": PASS | FAIL | not run | not applicable, "text"} from the δ check rows."""
     found = [(label, probs, na) for label, _, probs, na in a["checks"] if label in DELTA_CHECKS]
     failed = [(label, probs) for label, probs, _ in found if probs]
     applied = [label for label, probs, na in found if na is None]
@@ -155,9 +156,11 @@ def delta_outcome(a):
         return {"status": "PASS", "text": "δ → 0 (Theorem 2.1): PASS — " + "; ".join(
             t for t in (fits, "checks " + ", ".join(applied) + " hold") if t)}
     reasons = [na for _, _, na in found if na]
-    return {"status": "not applicable",
-            "text": "δ → 0 (Theorem 2.1): not applicable — " + (reasons[0] if reasons else
-                                                                "no δ check ran")}
+    why = reasons[0] if reasons else "no δ check ran"
+    if why.startswith(NOT_RUN):  # it had nothing to check (checks.not_run): said as such
+        return {"status": "not run", "text": "δ → 0 (Theorem 2.1): not run — "
+                + why[len(NOT_RUN):]}
+    return {"status": "not applicable", "text": "δ → 0 (Theorem 2.1): not applicable — " + why}
 
 
 def summary(res, a):
