@@ -45,7 +45,7 @@ PARTS = ("u space", "multiplier", "p mass", "p space")
 # a panel as a note under the figure names it (a no-break space: never wrapped inside)
 PANEL_NAME = {"u_l2": "u", "p_l2": "p\u00a0(L²)", "p_x": "p\u00a0(X)", "lambda_l2": "λ"}
 # the mesh parameter of the series (read.py's "h" or "N^-1/2") as the axes write it
-MESH_NAME = {"h": "h", "N^-1/2": "$N^{-1/2}$"}
+MESH_NAME = {"h": "h", "N^-1/2": "$N^{-1/2}$", "N_V^-1/2": "$N_V^{-1/2}$"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
 # colour per (u space, p mass, p space): each combination its own hue, so consistent and lumped,
 # continuous and broken-tangential p differ by more than dashing; the line style repeats the p mass
@@ -448,18 +448,19 @@ def _reference_line(ax, r):
 
 
 @matplotlib.rc_context(RC)
-def rate_plot(folder, scene, rate_entries, ref_series=None):
+def rate_plot(folder, scene, rate_entries, ref_series=None, axis_note=None):
     """Errors against h per quantity (u = the exact or the reference solution, per the series'
     `against`); a series that does not converge is pale. `ref_series` (dicts of tool, quantity,
     h, errors, label): the references' own curves, drawn over the series of their quantity. A
-    note names the lines that lie on top of each other."""
+    note names the lines that lie on top of each other; `axis_note` says what x is (the x of
+    the series' mesh_parameter, MESH_NAME)."""
     ents = [r for r in rate_entries if any(_positive(e) for e in r["errors"])]
     if not ents:
         return None
     qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
     fig, axes = _panels(len(qs))
-    graded = any(r.get("mesh_parameter") == "N^-1/2" for r in ents)
-    hname = MESH_NAME["N^-1/2" if graded else "h"]
+    params = [r.get("mesh_parameter") for r in ents if r.get("mesh_parameter") in MESH_NAME]
+    hname = MESH_NAME[params[0] if params else "h"]
     pale, variants, names = False, {}, {}
     for ax, q in zip(axes, qs):
         for r in (r for r in ents if r["quantity"] == q):
@@ -483,8 +484,8 @@ def rate_plot(folder, scene, rate_entries, ref_series=None):
     against = sorted({r["against"] for r in ents if r["against"]})
     fig.suptitle(f"{scene}: errors against {hname}"
                  + (f" (u = {' / '.join(against)})" if against else ""))
-    _finish(fig, axes, ["Pale: a series that does not converge (see the tables)." if pale
-                        else None, note], merged)
+    _finish(fig, axes, [axis_note, "Pale: a series that does not converge (see the tables)."
+                        if pale else None, note], merged)
     return _save(fig, folder, f"rates-{scene}.png")
 
 
