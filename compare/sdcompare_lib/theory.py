@@ -173,7 +173,7 @@ def regularity(interpolation_rate, has_exact=True, growth=None, graded=False):
     if smooth_rate:
         verdict = f"{measured}: P1's orders apply (s = 1)"
         if singular:
-            return SMOOTH_S, f"singular exact u ({where}), resolved by {meshes}: {verdict}"
+            return SMOOTH_S, f"singular exact u ({where}), resolved: {verdict}"
         return SMOOTH_S, ("smooth exact u" + (f" ({where})" if where else "") + f": {verdict}"
                           if growth is not None else verdict[0].upper() + verdict[1:])
     verdict = f"{measured}: s = 1/2"
