@@ -26,7 +26,7 @@ twice: the verdict does not read this module.
 from . import rates, verdict, yardsticks
 from .checks import NOT_RUN
 from .read import REFERENCE_TOOLS as REFERENCES
-from .read import finite_number, variant_label, variant_of, variant_order
+from .read import finite_number, p_space_tag, variant_label, variant_of, variant_order
 from .render import REFERENCE_NAMES
 
 # The check rows that judge the δ → 0 limit (Theorem 2.1).
@@ -315,9 +315,38 @@ def tools_of(g):
     return [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
 
 
+# The discretisation choices that change sdcrack's ratio to the references (open-graded at level
+# 3: the broken-tangential p at 0.41–0.45× the references' u error, the continuous p at
+# 0.95–1.04×, which one range "0.41–1.04×" hid): a group's ratios and rates are given per u space,
+# p mass and p space wherever its rows have more than one of them.
+CHOICE_AXES = ("u space", "p mass", "p space")
+
+
+def _choice(row):
+    """(u space, p mass, p space tag) of a glance row, the tags as the plots write them."""
+    u, _, pm, ps = variant_of(row)
+    return u, pm, p_space_tag(ps) or "pcontinuous"
+
+
+def _choices(rows):
+    """[(label or None, rows)]: the rows per discretisation choice (CHOICE_AXES) where they have
+    more than one, labelled by the parts that vary ("broken/ptangential"); one (None, rows)
+    otherwise."""
+    keys = [_choice(r) for r in rows]
+    varying = [i for i in range(len(CHOICE_AXES)) if len({k[i] for k in keys}) > 1]
+    if not varying:
+        return [(None, rows)]
+    out = {}
+    for r, k in sorted(zip(rows, keys), key=lambda rk: variant_order(variant_of(rk[0]))):
+        out.setdefault("/".join(k[i] for i in varying), []).append(r)
+    return list(out.items())
+
+
 def groups(g):
-    """[(group name, rows, ratio text per tool (merged into one "… either reference" when the
-    tools read the same), rates span)] of the glance's rows, non-empty groups only."""
+    """[(group name, rows, [(choice label or None, ratio text per tool, rates span)], merged)]
+    of the glance's rows, non-empty groups only, per discretisation choice (_choices); `merged`:
+    whether the tools read the same for every choice (the ratio text is then one span, "… either
+    reference" said once by the caller), else "a× / b×"."""
     tools, taken, out = tools_of(g), set(), []
     for name, statuses in GROUPS:
         chosen = [r for r in g["rows"] if (r["status"] in statuses if statuses
@@ -325,11 +354,51 @@ def groups(g):
         taken.update(statuses or ())
         if not chosen:
             continue
-        spans = [_span([r["refs"].get(t, {}).get("ratio") for r in chosen], _g3) for t in tools]
-        per_tool = (f"{spans[0]}× either reference" if len(set(spans)) == 1 and len(spans) > 1
-                    else " / ".join(f"{sp}×" for sp in spans))
-        out.append((name, chosen, per_tool, _span([r["rate"] for r in chosen], _f2)))
+        parts = []
+        for label, rows in _choices(chosen):
+            spans = [_span([r["refs"].get(t, {}).get("ratio") for r in rows], _g3)
+                     for t in tools]
+            parts.append((label, spans, _span([r["rate"] for r in rows], _f2)))
+        merged = len(tools) > 1 and all(len(set(sp)) == 1 for _, sp, _ in parts)
+        parts = [(label, f"{sp[0]}×" if merged else " / ".join(f"{x}×" for x in sp), rates)
+                 for label, sp, rates in parts]
+        out.append((name, chosen, parts, merged))
     return out
+
+
+def _varying_axes(rows):
+    """The CHOICE_AXES the rows differ in, as words: "p mass × p space"."""
+    keys = [_choice(r) for r in rows]
+    return " × ".join(a for i, a in enumerate(CHOICE_AXES) if len({k[i] for k in keys}) > 1)
+
+
+def _group_sentence(name, rows, parts, merged):
+    """One group in the first screen's sentence: "converging variants (2): 1–2× either
+    reference, rates 2.00", or per choice "converging variants (12), per p space, ÷ either
+    reference: pcontinuous 0.95–1.04× (rates 0.56–0.59), ptangential 0.41–0.45× (rates
+    2.01–2.21)"."""
+    if parts[0][0] is None:
+        (_, ratio, rates), = parts
+        return f"{name} ({len(rows)}): {ratio}{' either reference' if merged else ''}, rates {rates}"
+    return (f"{name} ({len(rows)}), per {_varying_axes(rows)}"
+            + (", ÷ either reference" if merged else "") + ": "
+            + ", ".join(f"{label} {ratio} (rates {rates})" for label, ratio, rates in parts))
+
+
+def _group_index(name, rows, parts, merged, ref_rates):
+    """One group in the index's line: "converging variants 1–2× either reference (rates 2.00
+    vs 2.00)", or per choice "converging variants per p space, ÷ either reference: pcontinuous
+    0.95–1.04× (rates 0.56–0.59), ptangential 0.41–0.45× (rates 2.01–2.21); the references'
+    rates 2.12"; the rates for the converging group only."""
+    rated = name == "converging variants"
+    if parts[0][0] is None:
+        (_, ratio, rates), = parts
+        return (f"{name} {ratio}{' either reference' if merged else ''}"
+                + (f" (rates {rates} vs {ref_rates})" if rated else ""))
+    return (f"{name} per {_varying_axes(rows)}" + (", ÷ either reference" if merged else "")
+            + ": " + ", ".join(f"{label} {ratio}" + (f" (rates {rates})" if rated else "")
+                               for label, ratio, rates in parts)
+            + (f", the references' rates {ref_rates}" if rated else ""))
 
 
 def _own(g, t):
@@ -354,8 +423,7 @@ def reference_sentence(g):
     ref_part = (f"{own[tools[0]]}, {_names(tools, ' and ')} alike"
                 if len(set(own.values())) == 1 and len(tools) > 1 else
                 "; ".join(f"{REFERENCE_NAMES[t]} {own[t]}" for t in tools))
-    parts = [f"{name} ({len(rows)}): {per_tool}, rates {rates}"
-             for name, rows, per_tool, rates in groups(g)]
+    parts = [_group_sentence(*group) for group in groups(g)]
     return (f"**sdcrack against {_names(tools, ' and ')}** (u at level {g['level']}, {against}; "
             f"ratio = sdcrack's ÷ {_names(tools, ' / ')}'s): " + "; ".join(parts)
             + f". The references' own: {ref_part}." + ("" if g["against"] == "exact" else
@@ -371,9 +439,7 @@ def index_line(g):
         tools = tools_of(g)
         own = {t: _own(g, t) for t in tools}
         ref_rates = " / ".join(sorted({own[t].split("(rate ")[1].rstrip(")") for t in tools}))
-        parts = [f"{name} {per_tool}" + (f" (rates {rates} vs {ref_rates})"
-                                         if name == "converging variants" else "")
-                 for name, _, per_tool, rates in groups(g)]
+        parts = [_group_index(*group, ref_rates) for group in groups(g)]
         what = "" if g["against"] == "exact" else " (distances to their finest level)"
         head = f"u at level {g['level']} ÷ {_names(tools, ', ')}{what}: " + "; ".join(parts)
     return f"{head}; δ → 0: {g['delta']['status']}"
