@@ -254,3 +254,30 @@ def test_the_index_gives_the_ratios_per_p_space():
     assert glance.index_line(g).startswith("u at level 3 ÷ dolfinx, FreeFEM: converging variants "
                                            "0.894–0.899× either reference (rates 0.58–0.59 vs "
                                            "2.12)")
+
+
+# ------------------------------------------------------------------ the verdict's sentence
+def sdcompare_module():
+    """compare/sdcompare (a script without .py) as a module."""
+    import importlib.machinery
+    import importlib.util
+
+    loader = importlib.machinery.SourceFileLoader("sdcompare_script", SCRIPT)
+    module = importlib.util.module_from_spec(importlib.util.spec_from_loader(loader.name, loader))
+    loader.exec_module(module)
+    return module
+
+
+def test_the_verdict_without_a_problem_counts_what_it_says():
+    """"Every series converges … and every check below holds" was printed over a smoke run's
+    inconclusive series and over checks of 0 cases."""
+    sentence = sdcompare_module().no_problem_sentence
+    a = {"series": [{"status": "converges"}] * 3 + [{"status": "expected failure"}],
+         "checks": [("a", "", [], None), ("b", "", [], None)]}
+    assert sentence(a) == ("No problem: of 4 series, 3 converge, 1 are declared expected "
+                           "failures; of 2 checks, 2 hold (the table below).")
+    a["series"] = [{"status": "inconclusive"}] * 2 + [{"status": "converges"}]
+    a["checks"] += [("c", "", [], checks.not_run(0, "no case")), ("d", "", [], "no [exact]")]
+    assert sentence(a) == ("No problem: of 3 series, 2 are inconclusive (a smoke run), 1 "
+                           "converge; of 4 checks, 2 hold, 1 do not apply, 1 had nothing to "
+                           "check (the table below).")
