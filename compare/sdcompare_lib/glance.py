@@ -23,10 +23,10 @@ Everything here is derived from the analysis dict `a` of compare/sdcompare; noth
 twice: the verdict does not read this module.
 """
 
-from . import rates, verdict, yardsticks
+from . import choices, rates, verdict, yardsticks
 from .checks import NOT_RUN
 from .read import REFERENCE_TOOLS as REFERENCES
-from .read import finite_number, p_space_tag, variant_label, variant_of, variant_order
+from .read import finite_number, variant_label, variant_of, variant_order
 from .render import REFERENCE_NAMES
 
 # The check rows that judge the δ → 0 limit (Theorem 2.1).
@@ -315,36 +315,10 @@ def tools_of(g):
     return [t for t in REFERENCES if any(t in r["refs"] for r in g["rows"])]
 
 
-# The discretisation choices that change sdcrack's ratio to the references (open-graded at level
-# 3: the broken-tangential p at 0.41–0.45× the references' u error, the continuous p at
-# 0.95–1.04×, which one range "0.41–1.04×" hid): a group's ratios and rates are given per u space,
-# p mass and p space wherever its rows have more than one of them.
-CHOICE_AXES = ("u space", "p mass", "p space")
-
-
-def _choice(row):
-    """(u space, p mass, p space tag) of a glance row, the tags as the plots write them."""
-    u, _, pm, ps = variant_of(row)
-    return u, pm, p_space_tag(ps) or "pcontinuous"
-
-
-def _choices(rows):
-    """[(label or None, rows)]: the rows per discretisation choice (CHOICE_AXES) where they have
-    more than one, labelled by the parts that vary ("broken/ptangential"); one (None, rows)
-    otherwise."""
-    keys = [_choice(r) for r in rows]
-    varying = [i for i in range(len(CHOICE_AXES)) if len({k[i] for k in keys}) > 1]
-    if not varying:
-        return [(None, rows)]
-    out = {}
-    for r, k in sorted(zip(rows, keys), key=lambda rk: variant_order(variant_of(rk[0]))):
-        out.setdefault("/".join(k[i] for i in varying), []).append(r)
-    return list(out.items())
-
-
 def groups(g):
     """[(group name, rows, [(choice label or None, ratio text per tool, rates span)], merged)]
-    of the glance's rows, non-empty groups only, per discretisation choice (_choices); `merged`:
+    of the glance's rows, non-empty groups only, per discretisation choice (choices.split: u
+    space, p mass, p space wherever a group has more than one); `merged`:
     whether the tools read the same for every choice (the ratio text is then one span, "… either
     reference" said once by the caller), else "a× / b×"."""
     tools, taken, out = tools_of(g), set(), []
@@ -355,7 +329,8 @@ def groups(g):
         if not chosen:
             continue
         parts = []
-        for label, rows in _choices(chosen):
+        ordered = sorted(chosen, key=lambda r: variant_order(variant_of(r)))
+        for label, rows in choices.split(ordered):
             spans = [_span([r["refs"].get(t, {}).get("ratio") for r in rows], _g3)
                      for t in tools]
             parts.append((label, spans, _span([r["rate"] for r in rows], _f2)))
@@ -366,12 +341,6 @@ def groups(g):
     return out
 
 
-def _varying_axes(rows):
-    """The CHOICE_AXES the rows differ in, as words: "p mass × p space"."""
-    keys = [_choice(r) for r in rows]
-    return " × ".join(a for i, a in enumerate(CHOICE_AXES) if len({k[i] for k in keys}) > 1)
-
-
 def _group_sentence(name, rows, parts, merged):
     """One group in the first screen's sentence: "converging variants (2): 1–2× either
     reference, rates 2.00", or per choice "converging variants (12), per p space, ÷ either
@@ -380,7 +349,7 @@ def _group_sentence(name, rows, parts, merged):
     if parts[0][0] is None:
         (_, ratio, rates), = parts
         return f"{name} ({len(rows)}): {ratio}{' either reference' if merged else ''}, rates {rates}"
-    return (f"{name} ({len(rows)}), per {_varying_axes(rows)}"
+    return (f"{name} ({len(rows)}), per {choices.varying_axes(rows)}"
             + (", ÷ either reference" if merged else "") + ": "
             + ", ".join(f"{label} {ratio} (rates {rates})" for label, ratio, rates in parts))
 
@@ -395,7 +364,7 @@ def _group_index(name, rows, parts, merged, ref_rates):
         (_, ratio, rates), = parts
         return (f"{name} {ratio}{' either reference' if merged else ''}"
                 + (f" (rates {rates} vs {ref_rates})" if rated else ""))
-    return (f"{name} per {_varying_axes(rows)}" + (", ÷ either reference" if merged else "")
+    return (f"{name} per {choices.varying_axes(rows)}" + (", ÷ either reference" if merged else "")
             + ": " + ", ".join(f"{label} {ratio}" + (f" (rates {rates})" if rated else "")
                                for label, ratio, rates in parts)
             + (f", the references' rates {ref_rates}" if rated else ""))
