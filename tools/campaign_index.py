@@ -48,6 +48,7 @@ import os
 import re
 import sys
 
+from sdcompare_lib import choices
 from sdcompare_lib.baseline import (BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL, error_change,
                                     rate_change)
 from sdcompare_lib.page import cell_class, page, scroll_table
@@ -236,7 +237,8 @@ def variant_key(s):
 def converged_line(report):
     """What converged and at which rates, in one line, from report.json's series: the variants
     (variant_key: u space/multiplier[/lumped][/ptangential]) whose every quantity converges, the
-    range of their last rates per quantity, and the declared expected failures."""
+    range of their last rates per quantity (per u space, p mass and p space wherever they have
+    more than one: sdcompare_lib/choices.py), and the declared expected failures."""
     variants = {}
     for s in report.get("series") or []:
         variants.setdefault(variant_key(s), []).append(s)
@@ -245,23 +247,33 @@ def converged_line(report):
                    if all(s.get("status") == "expected failure" for s in ss))
     if not variants:
         return "no series measured"
-    rates = {}
-    for ss in ok.values():
-        for s in ss:
-            last = (s.get("rates") or [None])[-1]
-            if isinstance(last, (int, float)):
-                rates.setdefault(s["quantity"], []).append(float(last))
     parts = [f"{len(ok)} of {len(variants)} variants converge"
              + (f" ({', '.join(sorted(ok))})" if ok and len(ok) <= 4 else "")]
-    if rates:
-        parts.append("last rates " + ", ".join(
-            f"{SYMBOL.get(q, q)} {min(v):.2f}"
-            + (f"–{max(v):.2f}" if max(v) > min(v) + 5e-3 else "")
-            for q, v in sorted(rates.items(), key=lambda kv: list(SYMBOL).index(kv[0])
-                               if kv[0] in SYMBOL else 9)))
+    converging = [s for ss in ok.values() for s in ss]
+    per_choice = [(label, last_rates(ss)) for label, ss in choices.split(converging)]
+    per_choice = [(label, text) for label, text in per_choice if text]
+    if per_choice and per_choice[0][0] is None:
+        parts.append(f"last rates {per_choice[0][1]}")
+    elif per_choice:  # the orders differ in kind between p spaces: never one range across them
+        parts.append(f"last rates per {choices.varying_axes(converging)}: "
+                     + "; ".join(f"{label} {text}" for label, text in per_choice))
     if xfail:
         parts.append(f"{len(xfail)} declared expected failure(s)")
     return "; ".join(parts)
+
+
+def last_rates(series):
+    """"u 0.58–0.59, p 0.88, λ 1.43–2.02": the range of the series' last rates per quantity ("" when
+    none has one)."""
+    rates = {}
+    for s in series:
+        last = (s.get("rates") or [None])[-1]
+        if isinstance(last, (int, float)):
+            rates.setdefault(s["quantity"], []).append(float(last))
+    return ", ".join(f"{SYMBOL.get(q, q)} {min(v):.2f}"
+                     + (f"–{max(v):.2f}" if f"{max(v):.2f}" != f"{min(v):.2f}" else "")
+                     for q, v in sorted(rates.items(), key=lambda kv: list(SYMBOL).index(kv[0])
+                                        if kv[0] in SYMBOL else 9))
 
 
 def first_problem(report):

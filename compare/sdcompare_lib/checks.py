@@ -86,6 +86,37 @@ def _fields_asked(scene_file):
     return ["u", "p", "lambda"] if out is None else list(out.get("fields", []))
 
 
+# A check that had nothing to check says so: "not run: why", never "ok" (an "ok" over 0 cases is
+# a sentence that cannot come out false). The check's fourth element (its not-applicable reason)
+# carries it, so it fails nothing by itself: where the scene asked for what is missing,
+# completeness (or the check itself) has the problem.
+NOT_RUN = "not run: "
+
+
+def not_run(count, why):
+    """The not-applicable reason of a check over `count` items: "not run: why" when there were
+    none, else None (the check ran)."""
+    return None if count else NOT_RUN + why
+
+
+def status_text(problems, not_applicable):
+    """"ok", "FAIL", "not run: why" or "not applicable: why" of one check (report.json's
+    `status`)."""
+    if problems:
+        return "FAIL"
+    if not_applicable is None:
+        return "ok"
+    return not_applicable if not_applicable.startswith(NOT_RUN) else \
+        f"not applicable: {not_applicable}"
+
+
+def delta_points_checked(delta_limit):
+    """How many slopes and points the δ → 0 check (delta_slopes) could hold to its rule: the
+    fitted slopes and the points with a residual from their fit."""
+    return sum((e["points_fitted"] >= 2 and e["slope"] is not None)
+               + sum(r is not None for r in e.get("residuals") or []) for e in delta_limit)
+
+
 def _references_asked(scene_file):
     return list((scene_file.get("outputs") or {}).get("references", []))
 
@@ -648,4 +679,9 @@ def delta_check(res, delta_limit, st):
     if not delta_limit:
         return [f"the run sweeps {len(deltas)} δ but no δ-limit could be measured (no stored "
                 "fields for them)"], None
-    return delta_slopes(delta_limit, st["delta_slope_tolerance"]), None
+    positive = sorted({d for e in delta_limit for d in e["deltas"] if d > 0}, reverse=True)
+    return delta_slopes(delta_limit, st["delta_slope_tolerance"]), not_run(
+        delta_points_checked(delta_limit),
+        "no variant has two δ > 0 with a difference above round-off (δ > 0: "
+        + ", ".join(fmt_delta(d) for d in positive) + "): no slope to fit, no point to check "
+        "against one")

@@ -23,7 +23,8 @@ Everything here is derived from the analysis dict `a` of compare/sdcompare; noth
 twice: the verdict does not read this module.
 """
 
-from . import rates, verdict, yardsticks
+from . import choices, rates, verdict, yardsticks
+from .checks import NOT_RUN
 from .read import REFERENCE_TOOLS as REFERENCES
 from .read import finite_number, variant_label, variant_of, variant_order
 from .render import REFERENCE_NAMES
@@ -85,6 +86,108 @@ def reference_series(res, a):
     return out
 
 
+# The h → 0 plot's abscissa on graded meshes: N_V^{-1/2}, N_V the vertices of the level's cracked
+# mesh (each crack vertex with its copy), one number per mesh whatever solves on it, and the
+# references' own unknowns (P1 u on the cracked mesh), so their rates are the ones drawn. Each
+# solver's own unknowns (the verdict's N^{-1/2}, verdict.mesh_parameter) put the same mesh at x a
+# factor √3 apart (open-graded level 0: sdcrack 247–254 unknowns, the references 84), which read
+# as different meshes. (The triangles, another shared count, grow by 5× from graded level 0 to 1
+# and the unknowns by 4.3×: slopes drawn against them were up to 0.22 off the tables' rates.)
+SHARED_PARAMETER = "N_V^-1/2"
+
+
+def level_vertices(res):
+    """{level: vertices of its cracked mesh}: from a reference's mesh export, else from a stored
+    solver case of the level with broken u (the continuous u's mesh is not cut)."""
+    out, data = {}, res.get("data")
+    for tool in _tools(res):
+        for lv, m in (res["refs"][tool].get("mesh") or {}).items():
+            out.setdefault(int(lv), len(m.points))
+    for c in res["summary"]["cases"]:
+        lv = int(c["level"])
+        if (lv not in out and c.get("u_space") == "broken" and data is not None
+                and data.has_case(c.get("fields_grid"))):
+            out[lv] = len(data.case(c["fields_grid"])["points"])
+    return out
+
+
+def shared_axis(res, a):
+    """(name, {level: x}) of the h → 0 plot, one x per level for every solver: the solver cases'
+    h on uniform levels (the mesh size check holds the references' h to it), N_V^{-1/2} on
+    graded ones (SHARED_PARAMETER); None where a graded level's cracked mesh is not known."""
+    levels = sorted({int(c["level"]) for c in res["summary"]["cases"]})
+    if not a.get("graded"):
+        h = {}
+        for c in res["summary"]["cases"]:
+            h.setdefault(int(c["level"]), float(c["h"]))
+        return "h", h
+    vertices = level_vertices(res)
+    if not all(vertices.get(lv) for lv in levels):
+        return None
+    return SHARED_PARAMETER, {lv: vertices[lv] ** -0.5 for lv in levels}
+
+
+def _slopes(levels, xs, errors):
+    """{level: the slope from the level before it} of errors plotted at xs ({level: x})."""
+    out = {}
+    for (l0, e0), (l1, e1) in zip(zip(levels, errors), list(zip(levels, errors))[1:]):
+        if l1 == l0 + 1 and finite_number(e0) and finite_number(e1) and l0 in xs and l1 in xs:
+            out[l1] = rates.rate(xs[l0], e0, xs[l1], e1)
+    return out
+
+
+def _unknowns_text(res, level):
+    """"sdcrack 247–254 (by variant), dolfinx 84, FreeFEM 84" at `level`."""
+    mine = [c["unknowns"] for c in res["summary"]["cases"] if int(c["level"]) == level
+            and finite_number(c.get("unknowns"))]
+    parts = [f"sdcrack {_span(mine, lambda v: f'{v:.0f}')}" + (" (by variant)"
+                                                              if len(set(mine)) > 1 else "")]
+    for tool in _tools(res):
+        n = [c["unknowns"] for c in res["refs"][tool]["summary"].get("cases", [])
+             if int(c.get("level", -1)) == level and finite_number(c.get("unknowns"))]
+        if n:
+            parts.append(f"{REFERENCE_NAMES[tool]} {_span(n, lambda v: f'{v:.0f}')}")
+    return ", ".join(parts)
+
+
+def plot_curves(res, a):
+    """(series, reference curves, note) of the h → 0 plot on one axis for every solver
+    (shared_axis): the series and the references' curves with "h" the shared x of their levels,
+    and the note under the plot saying what x is, each solver's unknowns, and how far the slopes
+    drawn are from the rates the tables print (the verdict's, in each series' own mesh parameter)
+    — or, where no shared axis is known, the curves as measured and a note saying so."""
+    curves = a["reference_curves"] if "reference_curves" in a else reference_series(res, a)
+    axis = shared_axis(res, a)
+    if axis is None:
+        return a["series"], curves, ("x: each solver's own mesh parameter (a graded level's "
+                                     "cracked mesh is not stored): one mesh may stand at "
+                                     "different x for different solvers.")
+    name, xs = axis
+    series = [dict(s, h=[xs[lv] for lv in s["levels"]], mesh_parameter=name) for s in a["series"]]
+    moved = [dict(r, h=[xs[lv] for lv in r["levels"]]) for r in curves if all(
+        lv in xs for lv in r["levels"])]
+    if name == "h":
+        return series, moved, None
+    gaps = []
+    for s in a["series"]:
+        drawn = _slopes(s["levels"], xs, s["errors"])
+        gaps += [abs(drawn[lv] - r) for lv, r in zip(s["levels"][1:], s["rates"])
+                 if drawn.get(lv) is not None and finite_number(r)]
+    for r in curves:
+        own, drawn = (_slopes(r["levels"], dict(zip(r["levels"], x)), r["errors"])
+                      for x in (r["h"], [xs[lv] for lv in r["levels"]]))
+        gaps += [abs(drawn[lv] - own[lv]) for lv in own
+                 if own[lv] is not None and drawn.get(lv) is not None]
+    finest = max(xs)
+    note = (f"x = N_V^-1/2, N_V the vertices of the level's cracked mesh: the same x for the same "
+            f"mesh for every solver (unknowns at level {finest}: {_unknowns_text(res, finest)}).")
+    if gaps:
+        note += (" The tables' rates are per halving of each solver's own N^-1/2 (N its "
+                 "unknowns), as the verdict judges them: they differ from the slopes drawn here "
+                 f"by at most {max(gaps):.2f}.")
+    return series, moved, note
+
+
 def _u_series(res, a, tool):
     """(yardstick {(level, q): e_ref}, the solver's u series against the same solution)."""
     yard, series = yardsticks.reference_inputs(res, a, tool)
@@ -138,7 +241,7 @@ def rows(res, a, level):
 
 
 def delta_outcome(a):
-    """{"status": PASS | FAIL | not applicable, "text"} from the δ check rows."""
+    """{"status": PASS | FAIL | not run | not applicable, "text"} from the δ check rows."""
     found = [(label, probs, na) for label, _, probs, na in a["checks"] if label in DELTA_CHECKS]
     failed = [(label, probs) for label, probs, _ in found if probs]
     applied = [label for label, probs, na in found if na is None]
@@ -155,9 +258,11 @@ def delta_outcome(a):
         return {"status": "PASS", "text": "δ → 0 (Theorem 2.1): PASS — " + "; ".join(
             t for t in (fits, "checks " + ", ".join(applied) + " hold") if t)}
     reasons = [na for _, _, na in found if na]
-    return {"status": "not applicable",
-            "text": "δ → 0 (Theorem 2.1): not applicable — " + (reasons[0] if reasons else
-                                                                "no δ check ran")}
+    why = reasons[0] if reasons else "no δ check ran"
+    if why.startswith(NOT_RUN):  # it had nothing to check (checks.not_run): said as such
+        return {"status": "not run", "text": "δ → 0 (Theorem 2.1): not run — "
+                + why[len(NOT_RUN):]}
+    return {"status": "not applicable", "text": "δ → 0 (Theorem 2.1): not applicable — " + why}
 
 
 def summary(res, a):
@@ -211,8 +316,11 @@ def tools_of(g):
 
 
 def groups(g):
-    """[(group name, rows, ratio text per tool (merged into one "… either reference" when the
-    tools read the same), rates span)] of the glance's rows, non-empty groups only."""
+    """[(group name, rows, [(choice label or None, ratio text per tool, rates span)], merged)]
+    of the glance's rows, non-empty groups only, per discretisation choice (choices.split: u
+    space, p mass, p space wherever a group has more than one); `merged`:
+    whether the tools read the same for every choice (the ratio text is then one span, "… either
+    reference" said once by the caller), else "a× / b×"."""
     tools, taken, out = tools_of(g), set(), []
     for name, statuses in GROUPS:
         chosen = [r for r in g["rows"] if (r["status"] in statuses if statuses
@@ -220,11 +328,46 @@ def groups(g):
         taken.update(statuses or ())
         if not chosen:
             continue
-        spans = [_span([r["refs"].get(t, {}).get("ratio") for r in chosen], _g3) for t in tools]
-        per_tool = (f"{spans[0]}× either reference" if len(set(spans)) == 1 and len(spans) > 1
-                    else " / ".join(f"{sp}×" for sp in spans))
-        out.append((name, chosen, per_tool, _span([r["rate"] for r in chosen], _f2)))
+        parts = []
+        ordered = sorted(chosen, key=lambda r: variant_order(variant_of(r)))
+        for label, rows in choices.split(ordered):
+            spans = [_span([r["refs"].get(t, {}).get("ratio") for r in rows], _g3)
+                     for t in tools]
+            parts.append((label, spans, _span([r["rate"] for r in rows], _f2)))
+        merged = len(tools) > 1 and all(len(set(sp)) == 1 for _, sp, _ in parts)
+        parts = [(label, f"{sp[0]}×" if merged else " / ".join(f"{x}×" for x in sp), rates)
+                 for label, sp, rates in parts]
+        out.append((name, chosen, parts, merged))
     return out
+
+
+def _group_sentence(name, rows, parts, merged):
+    """One group in the first screen's sentence: "converging variants (2): 1–2× either
+    reference, rates 2.00", or per choice "converging variants (12), per p space, ÷ either
+    reference: pcontinuous 0.95–1.04× (rates 0.56–0.59), ptangential 0.41–0.45× (rates
+    2.01–2.21)"."""
+    if parts[0][0] is None:
+        (_, ratio, rates), = parts
+        return f"{name} ({len(rows)}): {ratio}{' either reference' if merged else ''}, rates {rates}"
+    return (f"{name} ({len(rows)}), per {choices.varying_axes(rows)}"
+            + (", ÷ either reference" if merged else "") + ": "
+            + ", ".join(f"{label} {ratio} (rates {rates})" for label, ratio, rates in parts))
+
+
+def _group_index(name, rows, parts, merged, ref_rates):
+    """One group in the index's line: "converging variants 1–2× either reference (rates 2.00
+    vs 2.00)", or per choice "converging variants per p space, ÷ either reference: pcontinuous
+    0.95–1.04× (rates 0.56–0.59), ptangential 0.41–0.45× (rates 2.01–2.21); the references'
+    rates 2.12"; the rates for the converging group only."""
+    rated = name == "converging variants"
+    if parts[0][0] is None:
+        (_, ratio, rates), = parts
+        return (f"{name} {ratio}{' either reference' if merged else ''}"
+                + (f" (rates {rates} vs {ref_rates})" if rated else ""))
+    return (f"{name} per {choices.varying_axes(rows)}" + (", ÷ either reference" if merged else "")
+            + ": " + ", ".join(f"{label} {ratio}" + (f" (rates {rates})" if rated else "")
+                               for label, ratio, rates in parts)
+            + (f", the references' rates {ref_rates}" if rated else ""))
 
 
 def _own(g, t):
@@ -249,8 +392,7 @@ def reference_sentence(g):
     ref_part = (f"{own[tools[0]]}, {_names(tools, ' and ')} alike"
                 if len(set(own.values())) == 1 and len(tools) > 1 else
                 "; ".join(f"{REFERENCE_NAMES[t]} {own[t]}" for t in tools))
-    parts = [f"{name} ({len(rows)}): {per_tool}, rates {rates}"
-             for name, rows, per_tool, rates in groups(g)]
+    parts = [_group_sentence(*group) for group in groups(g)]
     return (f"**sdcrack against {_names(tools, ' and ')}** (u at level {g['level']}, {against}; "
             f"ratio = sdcrack's ÷ {_names(tools, ' / ')}'s): " + "; ".join(parts)
             + f". The references' own: {ref_part}." + ("" if g["against"] == "exact" else
@@ -266,9 +408,7 @@ def index_line(g):
         tools = tools_of(g)
         own = {t: _own(g, t) for t in tools}
         ref_rates = " / ".join(sorted({own[t].split("(rate ")[1].rstrip(")") for t in tools}))
-        parts = [f"{name} {per_tool}" + (f" (rates {rates} vs {ref_rates})"
-                                         if name == "converging variants" else "")
-                 for name, _, per_tool, rates in groups(g)]
+        parts = [_group_index(*group, ref_rates) for group in groups(g)]
         what = "" if g["against"] == "exact" else " (distances to their finest level)"
         head = f"u at level {g['level']} ÷ {_names(tools, ', ')}{what}: " + "; ".join(parts)
     return f"{head}; δ → 0: {g['delta']['status']}"

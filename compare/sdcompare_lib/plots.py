@@ -45,7 +45,7 @@ PARTS = ("u space", "multiplier", "p mass", "p space")
 # a panel as a note under the figure names it (a no-break space: never wrapped inside)
 PANEL_NAME = {"u_l2": "u", "p_l2": "p\u00a0(L²)", "p_x": "p\u00a0(X)", "lambda_l2": "λ"}
 # the mesh parameter of the series (read.py's "h" or "N^-1/2") as the axes write it
-MESH_NAME = {"h": "h", "N^-1/2": "$N^{-1/2}$"}
+MESH_NAME = {"h": "h", "N^-1/2": "$N^{-1/2}$", "N_V^-1/2": "$N_V^{-1/2}$"}
 MARK = {"M0": "o", "M1": "s", "M1star": "^"}
 # colour per (u space, p mass, p space): each combination its own hue, so consistent and lumped,
 # continuous and broken-tangential p differ by more than dashing; the line style repeats the p mass
@@ -176,12 +176,13 @@ def _coinciding(ax):
     return [[label for label, _ in g] for g in groups if len(g) > 1]
 
 
-def _component(i, x, varying):
+def _component(i, x, varying, name_p_mass=False):
     """Part i of a variant's label (u space, multiplier, p mass, p space); the consistent p mass
     and the continuous p space ("pcontinuous", as "ptangential") are named only where they vary
-    within a group."""
+    within a group, the consistent p mass also where `name_p_mass` (a note of a figure with both
+    p masses: "broken/{M0 = M1}" was read as covering the lumped lines too)."""
     if i == 2:
-        return x if varying or x != DEFAULT_P_MASS else ""
+        return x if varying or name_p_mass or x != DEFAULT_P_MASS else ""
     if i == 3:
         return (p_space_tag(x) or f"p{x}") if varying else p_space_tag(x)
     return x
@@ -198,13 +199,13 @@ def _product(labels, variants):
     return values if math.prod(len(x) for x in values) == len(vs) else None
 
 
-def _product_text(values, each=()):
+def _product_text(values, each=(), name_p_mass=False):
     """The label of a product of variants (_product), the parts that vary in braces:
     "broken/{M1 = M1star}/{consistent = lumped}"; the parts `each` are left out and said after
-    it: "broken/{M1 = M1star} with each p mass and p space"."""
+    it: "broken/{M1 = M1star} with each p mass and p space"; `name_p_mass`: _component's."""
     parts = []
     for i, vals in enumerate(values):
-        words = [_component(i, x, len(vals) > 1) for x in vals]
+        words = [_component(i, x, len(vals) > 1, name_p_mass and i not in each) for x in vals]
         if i in each:
             continue
         if len(words) > 1:
@@ -214,25 +215,26 @@ def _product_text(values, each=()):
     return "/".join(parts) + (f" with each {' and '.join(PARTS[i] for i in each)}" if each else "")
 
 
-def _group_text(labels, variants, names=None):
+def _group_text(labels, variants, names=None, name_p_mass=False):
     """The label of lines that coincide: _product_text of a product of variants, otherwise its
     lines joined by " = ", a reference by its tool (`names`: {label: short name}):
     "broken/M1 = dolfinx"."""
     values = _product(labels, variants)
     if values:
-        return _product_text(values)
+        return _product_text(values, name_p_mass=name_p_mass)
     return " = ".join((names or {}).get(label, label) for label in labels)
 
 
-def _panel_texts(groups, variants, names):
+def _panel_texts(groups, variants, names, name_p_mass=False):
     """The texts of a panel's groups of coinciding lines. Groups alike but for parts that are one
     value in each (broken/{M1 = M1star} of each p mass and p space, four groups) are one text
-    when together they are every combination of those parts; the references' groups last."""
+    when together they are every combination of those parts; the references' groups last;
+    `name_p_mass`: _component's."""
     alike, others = {}, []
     for g in groups:
         values = _product(g, variants)
         if values is None:
-            others.append(_group_text(g, variants, names))
+            others.append(_group_text(g, variants, names, name_p_mass))
             continue
         varying = tuple((i, tuple(v)) for i, v in enumerate(values) if len(v) > 1)
         alike.setdefault(varying, []).append(values)
@@ -241,9 +243,9 @@ def _panel_texts(groups, variants, names):
         union = [list(dict.fromkeys(x for m in members for x in m[i])) for i in range(4)]
         each = [i for i, v in enumerate(union) if len(v) > 1 and i not in dict(varying)]
         if len(members) > 1 and math.prod(len(union[i]) for i in each) == len(members):
-            texts.append(_product_text(union, each))
+            texts.append(_product_text(union, each, name_p_mass))
         else:
-            texts += [_product_text(m) for m in members]
+            texts += [_product_text(m, name_p_mass=name_p_mass) for m in members]
     return texts + others
 
 
@@ -267,25 +269,59 @@ def _merged(panels, groups, variants):
     return [g for g in merged if len(g) > 1]
 
 
+def _spread(groups, drawn):
+    """The largest relative distance |a − b| / max(a, b) between the x or the y of the same point
+    of any two lines of one of `groups` (lists of labels) in any panel where both are drawn
+    (`drawn`: {panel: {label: points}}): what a caption saying those lines coincide may claim
+    (a group joins a line within OVERLAP_REL of its first one, so two members may be farther
+    apart)."""
+    worst = 0.0
+    for pts in drawn.values():
+        for g in groups:
+            lines = [pts[label] for label in g if label in pts]
+            for i, a in enumerate(lines):
+                for b in lines[i + 1:]:
+                    worst = max([worst] + [abs(u - v) / max(u, v) for pa, pb in zip(a, b)
+                                           for u, v in zip(pa, pb)])
+    return worst
+
+
+def _within(spread):
+    """A caption's tolerance: "identical points", or "every point within 1.8 %", the measured
+    spread (_spread) rounded up to two significant digits (so it holds for every line)."""
+    if spread == 0:
+        return "identical points"
+    pct = 100 * spread
+    digits = 1 - math.floor(math.log10(pct))
+    bound = math.ceil(pct * 10 ** digits - 1e-9) / 10 ** digits
+    return f"every point within {bound:g} %"
+
+
 def _coincidences(panels, variants, names=None):
     """(legend groups [(label, [line labels])], note) of the lines that lie on top of each other
     (only the last drawn shows): those that coincide in every panel are one legend entry
     (_merged, _group_text); those that coincide in some panels are named in a note, per panel
-    (panels alike together). `panels`: {name: axes}; `variants`, `names`: as _group_text's."""
+    (panels alike together). Each sentence states the largest distance between the lines it
+    covers (_spread), and a figure with both p masses names the consistent one in the note.
+    `panels`: {name: axes}; `variants`, `names`: as _group_text's."""
     groups = {name: _coinciding(ax) for name, ax in panels.items()}
+    drawn = {name: dict(_data_lines(ax)) for name, ax in panels.items()}
     merged = _merged(panels, groups, variants)
     known = [set(g) for g in merged]
+    both_masses = len({v[2] for v in variants.values()}) > 1
     panels_of = {}
     for panel, gs in groups.items():
-        texts = tuple(_panel_texts([g for g in gs if set(g) not in known], variants, names))
+        rest = [g for g in gs if set(g) not in known]
+        texts = tuple(_panel_texts(rest, variants, names, both_masses))
         if texts:
-            panels_of.setdefault(texts, []).append(panel)
-    within = f"every point within {100 * OVERLAP_REL:g} %"
-    out = [f"“=” in the legend: lines on top of each other ({within})"] if merged else []
+            panels_of.setdefault(texts, []).append((panel, rest))
+    out = ([f"“=” in the legend: lines on top of each other ({_within(_spread(merged, drawn))})"]
+           if merged else [])
     if panels_of:
-        out.append(("Also" if merged else f"Lines on top of each other ({within})") + " in "
-                   + "; in ".join(f"{', '.join(panels)}: {', '.join(texts)}"
-                                  for texts, panels in panels_of.items()))
+        out.append(("Also" if merged else "Lines on top of each other") + " in " + "; in ".join(
+            f"{', '.join(p for p, _ in where)}: {', '.join(texts)} ("
+            + _within(max(_spread(rest, {p: drawn[p]}) for p, rest in where)) + ")"
+            for texts, where in panels_of.items()))
     return [(_group_text(g, variants), g) for g in merged], (". ".join(out) + ".") if out else None
 
 
@@ -412,18 +448,19 @@ def _reference_line(ax, r):
 
 
 @matplotlib.rc_context(RC)
-def rate_plot(folder, scene, rate_entries, ref_series=None):
+def rate_plot(folder, scene, rate_entries, ref_series=None, axis_note=None):
     """Errors against h per quantity (u = the exact or the reference solution, per the series'
     `against`); a series that does not converge is pale. `ref_series` (dicts of tool, quantity,
     h, errors, label): the references' own curves, drawn over the series of their quantity. A
-    note names the lines that lie on top of each other."""
+    note names the lines that lie on top of each other; `axis_note` says what x is (the x of
+    the series' mesh_parameter, MESH_NAME)."""
     ents = [r for r in rate_entries if any(_positive(e) for e in r["errors"])]
     if not ents:
         return None
     qs = [q for q in QLABEL if any(r["quantity"] == q for r in ents)]
     fig, axes = _panels(len(qs))
-    graded = any(r.get("mesh_parameter") == "N^-1/2" for r in ents)
-    hname = MESH_NAME["N^-1/2" if graded else "h"]
+    params = [r.get("mesh_parameter") for r in ents if r.get("mesh_parameter") in MESH_NAME]
+    hname = MESH_NAME[params[0] if params else "h"]
     pale, variants, names = False, {}, {}
     for ax, q in zip(axes, qs):
         for r in (r for r in ents if r["quantity"] == q):
@@ -447,8 +484,8 @@ def rate_plot(folder, scene, rate_entries, ref_series=None):
     against = sorted({r["against"] for r in ents if r["against"]})
     fig.suptitle(f"{scene}: errors against {hname}"
                  + (f" (u = {' / '.join(against)})" if against else ""))
-    _finish(fig, axes, ["Pale: a series that does not converge (see the tables)." if pale
-                        else None, note], merged)
+    _finish(fig, axes, [axis_note, "Pale: a series that does not converge (see the tables)."
+                        if pale else None, note], merged)
     return _save(fig, folder, f"rates-{scene}.png")
 
 

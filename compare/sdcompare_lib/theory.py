@@ -11,10 +11,13 @@ which order applies to which series, and why:
 * **Regularity index s** (u ∈ H^{1+s} on each side of the crack, s ≤ 1). With an exact solution,
   s is read from the exact solution alone: the compare tool interpolates the exact u in P1 on the
   run's meshes and measures the rate r_I of ‖∇(u − I_h u)‖ over the last step (interpolation
-  theory: r_I = s). r_I ≥ SMOOTH_INTERPOLATION_RATE → s = 1 ("smooth"); otherwise s = 1/2, the
+  theory: r_I = s). r_I ≥ SMOOTH_INTERPOLATION_RATE → s = 1 (P1's orders); otherwise s = 1/2, the
   crack tip's r^{1/2} singularity, the worst a crack or a polygon corner produces (a corner of angle
   ω < 2π gives π/ω > 1/2). Without an exact solution s = 1/2 (the series are distances to a
-  reference solution; a crack open at a tip has the r^{1/2} singularity).
+  reference solution; a crack open at a tip has the r^{1/2} singularity). Whether the reason calls
+  u "smooth" or "singular" is measured apart (yardsticks.gradient_growth: the growth of |∇u|
+  towards each crack node and domain corner, SINGULAR_GROWTH): on graded meshes a tip-singular u
+  reaches r_I ≥ SMOOTH_INTERPOLATION_RATE, and "smooth" would be false of it.
 * **Orders** (docs/design.md, docs/verification.md) of the paper's continuous p (p space
   "continuous"):
 
@@ -136,6 +139,10 @@ SMOOTH_S = float(ORDERS["regularity"]["smooth_s"])
 SINGULAR_S = float(ORDERS["regularity"]["singular_s"])
 # ‖∇(u − I_h u)‖ has rate s: at or above this rate the exact u is classified smooth.
 SMOOTH_INTERPOLATION_RATE = float(ORDERS["regularity"]["smooth_interpolation_rate"])
+# |∇u| growing towards a point faster than r^-(1 − SMOOTH_INTERPOLATION_RATE) is a singularity
+# u ~ r^s with s below the rate at which u is classified smooth: the growth of |∇u|
+# (yardsticks.gradient_growth) and the interpolation rate share one threshold.
+SINGULAR_GROWTH = 1.0 - SMOOTH_INTERPOLATION_RATE
 # P1's orders on the cracked mesh as multiples of s (p1_order).
 P1_ORDER_PER_S = {q: float(ORDERS["p1"][q]) for q in ("u_l2", "p_l2", "p_x")}
 # Theorem 4.3's order of λ_h per multiplier.
@@ -148,20 +155,38 @@ OPEN_CRACK_RATE = float(ORDERS["open_crack"]["order"])
 P0_JUMP_RATE = float(ORDERS["lambda"]["p0_jump"])
 
 
-def regularity(interpolation_rate, has_exact=True):
+def regularity(interpolation_rate, has_exact=True, growth=None, graded=False):
     """(s, reason) from the observed rate of ‖∇(u − I_h u)‖ over the last step (None: no exact
-    solution, or too few levels or no stored mesh to measure it)."""
+    solution, or too few levels or no stored mesh to measure it). s comes from that rate alone;
+    the reason's words "smooth" and "singular" from `growth` (yardsticks.gradient_growth: how fast
+    |∇u| grows towards a crack node or domain corner; None: not measured): on `graded` meshes a
+    singular u's interpolation rate reaches the smooth one, and "smooth" would be false."""
     if interpolation_rate is None:
         why = ("no exact solution to measure the regularity" if not has_exact else
                "the exact u's interpolation error could not be measured (fewer than two levels "
                "with stored fields)")
         return SINGULAR_S, f"{why}: s = 1/2, the crack tip's r^{{1/2}} singularity (the worst case)"
-    if interpolation_rate >= SMOOTH_INTERPOLATION_RATE:
-        return SMOOTH_S, (f"smooth exact u: its P1 interpolation error ‖∇(u − I_h u)‖ has rate "
-                          f"{interpolation_rate:.2f} ≥ {SMOOTH_INTERPOLATION_RATE:g}")
-    return SINGULAR_S, (f"singular exact u: its P1 interpolation error ‖∇(u − I_h u)‖ has rate "
-                        f"{interpolation_rate:.2f} < {SMOOTH_INTERPOLATION_RATE:g} (r^{{1/2}} at a "
-                        "crack tip: s = 1/2)")
+    meshes = "these graded meshes" if graded else "these meshes"
+    smooth_rate = interpolation_rate >= SMOOTH_INTERPOLATION_RATE
+    measured = (f"its P1 interpolation error ‖∇(u − I_h u)‖ has rate {interpolation_rate:.2f} "
+                f"{'≥' if smooth_rate else '<'} {SMOOTH_INTERPOLATION_RATE:g} per halving of h on "
+                f"{meshes}")
+    singular = growth is not None and growth["exponent"] > SINGULAR_GROWTH
+    where = ("" if growth is None else f"|∇u| grows as r^-{growth['exponent']:.2f} towards "
+             f"({growth['point'][0]:g}, {growth['point'][1]:g})" if singular else
+             f"|∇u| grows no faster than r^-{max(growth['exponent'], 0.0):.2f} towards any crack "
+             "node or domain corner")
+    if smooth_rate:
+        verdict = f"{measured}: P1's orders apply (s = 1)"
+        if singular:
+            return SMOOTH_S, f"singular exact u ({where}), resolved: {verdict}"
+        return SMOOTH_S, ("smooth exact u" + (f" ({where})" if where else "") + f": {verdict}"
+                          if growth is not None else verdict[0].upper() + verdict[1:])
+    verdict = f"{measured}: s = 1/2"
+    if singular:
+        return SINGULAR_S, f"singular exact u ({where}): {verdict}, as at a crack tip's r^{{1/2}}"
+    return SINGULAR_S, ((f"exact u with bounded gradient ({where}), but " if where else "")
+                        + f"{verdict}, the worst case")
 
 
 def expected_rate(quantity, multiplier, p_mass, s, crack_closed=False, p_space=DEFAULT_P_SPACE):
@@ -193,7 +218,8 @@ def expected_rate(quantity, multiplier, p_mass, s, crack_closed=False, p_space=D
                 f"error in a strip of width h along the crack: h^{OPEN_CRACK_RATE:g} (measured on "
                 "a smooth open crack and on graded meshes: rates → 0.54, docs/design.md)")
         if smooth:
-            return p1_order(quantity, SMOOTH_S), f"smooth u: {what} approximates ∇u to order h"
+            return p1_order(quantity, SMOOTH_S), (f"s = 1 (the regularity above): {what} "
+                                                  "approximates ∇u to order h")
         return p1_order(quantity, s), f"singular u: ∇u ~ r^(s−1) near a tip limits {what} to h^s"
     if quantity == "lambda_l2":
         return paper, f"Theorem 4.3: λ_h of {multiplier} converges as h^{paper:g}"

@@ -125,6 +125,81 @@ def exact_jump_norm(data, cases, exact, quad=None):
     return None
 
 
+# Where the exact u may be singular (a crack's end or kink, a corner of the domain), the growth of
+# |∇u| towards the point says whether it is: |∇u| ~ r^(s−1) at an r^s singularity (s = 1/2 at a
+# crack tip, π/ω at a corner of angle ω), bounded where u is smooth. It is measured between these
+# two distances (fractions of the domain's diameter), far below any mesh's h, where a smooth u's
+# |∇u| is constant to ~1e-3 relative (its first-order Taylor term) and a singular one's has its
+# asymptotic exponent; the largest |∇u| over GROWTH_DIRECTIONS directions into the domain.
+GROWTH_RADII = (1e-3, 1e-5)
+GROWTH_DIRECTIONS = 16
+
+
+def _domain_polygon(scene_file):
+    """The domain's boundary as (K, 2) vertices (rectangle or polygon), or None (another domain:
+    the growth is then sampled in every direction)."""
+    dom = (scene_file.get("geometry") or {}).get("domain") or {}
+    try:
+        if "rectangle" in dom:
+            (x0, y0), (x1, y1) = dom["rectangle"]
+            return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=float)
+        if "polygon" in dom:
+            poly = np.asarray(dom["polygon"], dtype=float)
+            return poly if poly.ndim == 2 and poly.shape[1] == 2 and len(poly) >= 3 else None
+    except (TypeError, ValueError):
+        return None
+    return None
+
+
+def _inside(poly, q):
+    """(K,) bool: the points q (K, 2) strictly inside the polygon (even–odd ray casting)."""
+    if poly is None:
+        return np.ones(len(q), dtype=bool)
+    inside = np.zeros(len(q), dtype=bool)
+    for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+        crosses = (a[1] > q[:, 1]) != (b[1] > q[:, 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = a[0] + (q[:, 1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+        inside ^= crosses & (q[:, 0] < x)
+    return inside
+
+
+def gradient_growth(exact, scene_file):
+    """{"point": (x, y), "exponent": a} of the candidate point (every node of every crack, every
+    vertex of the domain) towards which |∇u| of the exact u grows fastest, |∇u| ~ r^-a between
+    GROWTH_RADII; a ≤ 0 where it stays bounded (theory.SINGULAR_GROWTH says which a is a
+    singularity). None where nothing could be measured (no
+    candidate, or |∇u| zero or not finite at every one)."""
+    poly = _domain_polygon(scene_file)
+    points = [p for c in exact.cracks for p in c] + (list(poly) if poly is not None else [])
+    if not points:
+        return None
+    span = np.ptp(np.array(points if poly is None else poly), axis=0)
+    diameter = float(np.hypot(*span)) or 1.0
+    angles = (np.arange(GROWTH_DIRECTIONS) + 0.5) * 2 * np.pi / GROWTH_DIRECTIONS
+    ray = np.column_stack([np.cos(angles), np.sin(angles)])
+    best = None
+    for p in points:
+        largest = []
+        for r in GROWTH_RADII:
+            q = np.asarray(p, dtype=float) + r * diameter * ray
+            q = q[_inside(poly, q)]
+            if not len(q):
+                break
+            with np.errstate(all="ignore"):
+                gx, gy = exact.grad(q[:, 0], q[:, 1])
+                g = np.hypot(np.asarray(gx, dtype=float) * np.ones(len(q)),
+                             np.asarray(gy, dtype=float) * np.ones(len(q)))
+            g = g[np.isfinite(g)]
+            largest.append(float(g.max()) if len(g) else 0.0)
+        if len(largest) < 2 or not min(largest) > 0:
+            continue
+        a = math.log(largest[1] / largest[0]) / math.log(GROWTH_RADII[0] / GROWTH_RADII[1])
+        if best is None or a > best["exponent"]:
+            best = {"point": (float(p[0]), float(p[1])), "exponent": a}
+    return best
+
+
 def interpolation_rate(interp):
     """Observed rate of ‖∇(u − I_h u)‖ over the last step, or None with fewer than two levels."""
     lv = sorted(interp)
@@ -307,7 +382,7 @@ def _interpolation_row(a, declared, has_exact):
     if not a["interpolation"]:
         return label, what, ["could not run: no stored mesh to interpolate the exact u on"], None
     if a["regularity"] < 1.0:
-        return label, what, [], (f"the exact u is not smooth ({a['regularity_reason']}): the "
+        return label, what, [], (f"s = {a['regularity']:g} < 1 ({a['regularity_reason']}): the "
                                  "interpolation error does not bound the Galerkin error there")
     quantities, notes = tuple(INTERPOLATION_FACTOR), []
     if a.get("graded"):

@@ -894,8 +894,8 @@ def test_undamaged_exact_scenes_pass_every_new_check(judged, case):
         assert {s["expected_rate"] for s in rep["series"] if s["quantity"] == "u_l2"} == {2.0}
     else:
         assert rep["regularity"]["s"] == 0.5
-        assert status["interpolation yardstick"].startswith("not applicable: the exact u is not "
-                                                            "smooth")
+        assert status["interpolation yardstick"].startswith("not applicable: s = 0.5 < 1 ("
+                                                            "singular exact u")
         assert status["Theorem 2.1 (exact)"] == "ok" and rep["theorem21"]
         assert status["δ → 0"] == "ok"
         # levels 2-4, three δ > 0, u and p of M1 with both u spaces: 12 constants judged on the

@@ -149,7 +149,9 @@ def test_coinciding_lines_are_one_legend_entry_or_named_in_a_note(figs):
                       "continuous/{M0 = M1 = M1star}", "continuous/{M0 = M1 = M1star}/lumped"]
     (note,) = [t.get_text().replace("\n", " ") for t in delta.texts if t is not delta._suptitle]
     assert note.startswith("“=” in the legend: lines on top of each other")
-    assert "Also in u, p: continuous/{M0 = M1 = M1star}/{consistent = lumped}." in note
+    assert note.startswith("“=” in the legend: lines on top of each other (identical points)")
+    assert ("Also in u, p: continuous/{M0 = M1 = M1star}/{consistent = lumped} (identical "
+            "points).") in note
 
 
 def test_a_reference_among_coinciding_lines_is_named_by_its_tool():

@@ -551,9 +551,10 @@ def test_index_lines_say_what_converged_and_the_first_problem():
         s("broken", "M1", "lambda_l2", "converges", 0.86, "lumped"),
         s("broken", "M0", "u_l2", "converges", 0.9), s("broken", "M0", "p_l2", "does not converge", 0.21),
         s("continuous", "M1", "u_l2", "expected failure", -0.03)]}
+    # the last rates per p mass (sdcompare_lib/choices.py), never one range across them
     assert ci.converged_line(report) == ("2 of 4 variants converge (broken/M1, broken/M1/lumped); "
-                                         "last rates u 0.95–0.99, λ 0.86–0.88; "
-                                         "1 declared expected failure(s)")
+                                         "last rates per p mass: consistent u 0.95, λ 0.88; "
+                                         "lumped u 0.99, λ 0.86; 1 declared expected failure(s)")
     assert ci.first_problem(report) == "broken/M0 p_l2: rate 0.21 < 0.4"
     assert ci.first_problem({"series": []}) is None
     assert ci.converged_line({"series": []}) == "no series measured"
@@ -722,7 +723,12 @@ def test_index_labels_of_the_p_spaces():
         s("continuous", "M1", "u_l2", "expected failure", -0.03, ps="continuous")]}
     assert ci.converged_line(report) == (
         "3 of 5 variants converge (broken/M1, broken/M1/lumped/ptangential, "
-        "broken/M1/ptangential); last rates u 0.95–0.99; 1 declared expected failure(s)")
+        "broken/M1/ptangential); last rates per p mass × p space: consistent/pcontinuous u 0.95; "
+        "consistent/ptangential u 0.99; lumped/ptangential u 0.97; 1 declared expected failure(s)")
+    # one p mass and one p space: one range, as before
+    report["series"] = [x for x in report["series"] if x.get("p_space") != "broken-tangential"]
+    report["series"].append(s("broken", "M1star", "u_l2", "converges", 0.99, ps="continuous"))
+    assert "; last rates u 0.95–0.99; " in ci.converged_line(report)
 
 
 def test_both_p_spaces_merge_as_one_process(tmp_path):
