@@ -399,6 +399,7 @@ def reference_rates_check(res, a):
                                  f"({a.get('regularity_reason')}): the grading does not restore "
                                  "the optimal order")
     problems, measured = [], []
+    undecided = a["meshcheck"].setdefault("reference_rates_undecided", [])
     for tool, ref in sorted(res["refs"].items()):
         unknowns = {int(c["level"]): c.get("unknowns") for c in ref["summary"].get("cases", [])}
         rows = sorted((r for r in a.get("independent") or [] if r["source"] == tool),
@@ -421,10 +422,12 @@ def reference_rates_check(res, a):
             last = [x for x in rates.successive_rates(N, e)[-2:] if x is not None]
             measured.append(f"{tool} {'u' if q == 'u_l2' else '∇u'} "
                             + ", ".join(f"{x:.2f}" for x in last))
-            if status != "converges":
-                problems.append(f"reference {tool} {q} on the graded meshes (β = {beta:g}): "
-                                f"{reason} (P1's order {order:g} per halving of N^-1/2, "
-                                f"threshold {threshold:g})")
+            line = (f"reference {tool} {q} on the graded meshes (β = {beta:g}): {reason} "
+                    f"(P1's order {order:g} per halving of N^-1/2, threshold {threshold:g})")
+            if status == "inconclusive":  # cannot judge yet: the verdict says which levels to run
+                undecided.append(line)
+            elif status != "converges":
+                problems.append(line)
     if not measured:
         return label, what, [], (f"fewer than {rates.RULE_LEVELS} levels with the references' "
                                  "errors: two rates cannot be measured")

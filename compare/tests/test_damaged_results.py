@@ -642,13 +642,11 @@ DAMAGES = {
         "independent errors: sdcrack's reported errors of level 4 broken M1 δ=0 differ from the "
         "independent computation"]),
     "open: finest level dropped from summary.json": (1, [
-        "completeness: 6 case(s) asked for are missing from summary.json, e.g. level 4",
-        "series: broken/M0 u_l2: inconclusive: 2 level(s)"]),
+        "completeness: 6 case(s) asked for are missing from summary.json, e.g. level 4"]),
     # the expectation at level 4 is skipped (the run's levels are the plan's: issue 42, a
     # campaign at --levels 2-3 is judged alike); completeness fails the dropped level
     "open: finest level dropped from summary.json and its plan": (1, [
-        "completeness: the run's levels [2, 3] are neither the scene's [2, 3, 4] nor one level",
-        "series: broken/M0 u_l2: inconclusive: 2 level(s)"]),
+        "completeness: the run's levels [2, 3] are neither the scene's [2, 3, 4] nor one level"]),
     "open: null error": (1, [
         "completeness: 1 case(s) of an exact scene lack a finite error (u_l2, p_l2, p_x, "
         "lambda_l2), e.g. level 4 broken M0",
@@ -724,8 +722,7 @@ DAMAGES = {
         "independent errors: sdcrack's case level 4 broken M1 δ=0 is of p mass consistent in "
         "summary.json but lumped in fields.h5",
         "independent errors: sdcrack's errors of level 4 broken M1 δ=0 cannot be recomputed: no "
-        "p_bubble in fields.h5",
-        "series: broken/M1/lumped u_l2: inconclusive: 2 level(s)"]),
+        "p_bubble in fields.h5"]),
     "lumped: lumped cases removed": (1, [
         "completeness: 6 case(s) asked for are missing from summary.json, e.g. level 2 broken M1 "
         "lumped δ=0"]),
@@ -826,7 +823,11 @@ def test_undamaged_mixed_passes_with_the_default_expectations(judged, case):
 def test_continuous_u_on_an_open_crack_does_not_converge(judged, case):
     rep = assert_fails(result(judged, case), "series: continuous/M0 u_l2: does not converge")
     assert rep["series"] and {s["u_space"] for s in rep["series"]} == {"continuous"}
-    assert {s["status"] for s in rep["series"]} == {"does not converge"}
+    # u, p and λ stall or grow; p_x's rates (0.41, 0.35 against 1/2) dip within 1/4 of its
+    # order on these levels: it cannot be judged yet, the others fail the folder
+    status = {s["quantity"]: s["status"] for s in rep["series"]}
+    assert {status[q] for q in ("u_l2", "p_l2", "lambda_l2")} == {"does not converge"}, status
+    assert set(status.values()) <= {"does not converge", "inconclusive"}
     assert all(s["expected_failure"] is None for s in rep["series"])
     assert all(r.startswith("series: ") for r in rep["reasons"]), rep["reasons"]
 
@@ -848,11 +849,21 @@ def test_a_declared_failure_that_converges_is_an_unexpected_pass(judged, case):
 
 
 @pytest.mark.parametrize("case", ["two levels"], ids=_slug)
-def test_two_levels_are_inconclusive_and_fail(judged, case):
-    rep = assert_fails(result(judged, case), "series: broken/M0 u_l2: inconclusive: 2 level(s); "
-                                             "3 are needed to measure two rates")
+def test_two_levels_cannot_be_judged_yet(judged, case):
+    """Two levels give one rate: no series can be judged, and the verdict says so (INCONCLUSIVE,
+    exit 3, the levels to run), neither PASS nor FAIL; the declared failures stay declared."""
+    r = result(judged, case)
+    rep = r["report"]
+    assert r["rc"] == 3 and rep["verdict"] == "INCONCLUSIVE", r["what"]
     assert rep["settings"]["smoke"] is False
-    assert {s["status"] for s in rep["series"]} == {"inconclusive"}
+    last = r["out"].strip().splitlines()[-1]
+    assert last.startswith(f"{rep['scene']}: INCONCLUSIVE (cannot judge yet: ") and \
+        "run levels up to" in last, last
+    assert any("series: broken/M0 u_l2: inconclusive: 2 level(s); 3 are needed to measure two "
+               "rates: run levels up to" in x for x in rep["reasons"]), rep["reasons"]
+    assert {s["status"] for s in rep["series"] if s["expected_failure"] is None} == \
+        {"inconclusive"}
+    assert {s["status"] for s in rep["series"] if s["expected_failure"]} <= {"expected failure"}
     assert all(r.startswith("series: ") for r in rep["reasons"]), rep["reasons"]
 
 
@@ -860,7 +871,10 @@ def test_two_levels_are_inconclusive_and_fail(judged, case):
 def test_two_levels_of_a_smoke_run_pass(judged, case):
     rep = assert_passes(result(judged, case))
     assert rep["settings"]["smoke"] is True
-    assert {s["status"] for s in rep["series"]} == {"inconclusive"}
+    # the declared failures cannot be judged either: they stay declared, not passed
+    assert {s["status"] for s in rep["series"] if s["expected_failure"] is None} == \
+        {"inconclusive"}
+    assert {s["status"] for s in rep["series"] if s["expected_failure"]} <= {"expected failure"}
 
 
 @pytest.mark.parametrize("case", ["lumped undamaged"], ids=_slug)

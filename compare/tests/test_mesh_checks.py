@@ -99,7 +99,7 @@ def judge(folder, tmp_path, damage=None, scene_from=None):
         damage(str(copy))
     p = subprocess.run([sys.executable, SCRIPT, str(copy), "--quiet"], capture_output=True,
                        text=True, env=run_env(), timeout=600)
-    assert p.returncode in (0, 1), p.stderr[-2000:]
+    assert p.returncode in (0, 1, 3), p.stderr[-2000:]
     report = json.loads((copy / "report" / "report.json").read_text())
     return p.returncode, p.stdout.strip(), {c["check"]: c for c in report["checks"]}
 
@@ -184,17 +184,20 @@ def test_a_references_h_written_as_2h_fails(folders, tmp_path):
 def test_a_mesh_graded_with_a_larger_beta_fails(folders, tmp_path):
     """Meshes of β = 0.6 (β + 0.2, also 1 − β) judged against the scene's β = 0.4: coarser near the
     tips than the law, the upper bound (the mesher's own stopping rule) fails on every level; the
-    references' rates drop below P1's order (1.38, 1.79 in u)."""
+    references' rates fall short of P1's order (1.38, 1.79 in u)."""
     code, _, checks = judge(folders["beta 0.6"], tmp_path, scene_from=folders["graded"])
     assert code == 1
     law = checks["graded mesh law"]
     assert law["status"] == "FAIL" and len(law["problems"]) == 3, law
     assert all("exceed the grading target" in p and "coarser than the scene's grading" in p
                for p in law["problems"]), law["problems"]
+    # the references' rates 1.38, 1.79 (u) over levels 0–2 rise fast toward P1's 2: on three
+    # levels the rule cannot judge them yet (the law above fails the folder)
     rates = checks["graded reference rates"]
-    assert rates["status"] == "FAIL"
-    assert any(p.startswith("reference dolfinx u_l2 on the graded meshes (β = 0.4): rate 1.38 "
-                            "< 1.9") for p in rates["problems"]), rates["problems"]
+    assert rates["status"] == "INCONCLUSIVE" and rates["problems"] == [], rates
+    assert any(p.startswith("reference dolfinx u_l2 on the graded meshes (β = 0.4): rate 1.79 "
+                            "from level 1 to 2 < 1.9, rising from 1.38")
+               for p in rates["cannot_judge_yet"]), rates["cannot_judge_yet"]
 
 
 def test_a_mesh_graded_with_a_smaller_beta_fails(folders, tmp_path):

@@ -150,6 +150,7 @@ def judged(tmp_path_factory):
                            capture_output=True, text=True, timeout=900)
         with open(folder / "report" / "report.json", encoding="utf-8") as fh:
             out[n] = (c.returncode, c.stdout, json.load(fh))
+        out[n][2]["_markdown"] = (folder / "report" / "report.md").read_text(encoding="utf-8")
     return out
 
 
@@ -168,6 +169,12 @@ def test_levels_0_to_2_cannot_be_judged_yet(judged):
     (row,) = [c for c in rep["checks"] if c["check"] == "series"]
     assert row["status"] == "INCONCLUSIVE" and row["problems"] == []
     assert row["cannot_judge_yet"], row
+    # the report's first sentence: no problem, how many series, the levels to run, each reason
+    # once with the series it holds for
+    n = len(rep["reasons"])
+    assert (f"Cannot judge yet: no check found a problem, but {n} series cannot carry a verdict "
+            "at these levels; run levels up to 3.") in rep["_markdown"]
+    assert rep["_markdown"].count(s["reason"]) >= 1
 
 
 def test_levels_0_to_3_pass_where_the_former_rule_failed(judged):
