@@ -494,6 +494,13 @@ def load_expectations(path):
     return exps
 
 
+# The names an expectation may give per axis (the scene format's vocabularies): one the scene
+# does not run is skipped, any other is a mistake.
+EXPECTATION_NAMES = {"u_space": ("continuous", "broken"), "multiplier": ("M0", "M1", "M1star"),
+                     "p_mass": ("consistent", "lumped"),
+                     "p_space": ("continuous", "broken-tangential")}
+
+
 def validate_expectations(exps, path, scene, scene_file, run_levels=None):
     """The expectations that apply to `scene`; a name that matches nothing, or a level that is no
     level at all (not an integer ≥ 0), is a ValueError. One whose level (or, for min_rate, the
@@ -512,19 +519,26 @@ def validate_expectations(exps, path, scene, scene_file, run_levels=None):
                              f"results folder's scene nor a scene file beside {path}")
         if e["scene"] not in ("*", scene):
             continue
+        not_run = None
         for key, values in (("u_space", u_spaces), ("multiplier", multipliers),
                             ("p_mass", scene_p_masses(scene_file)),
                             ("p_space", scene_p_spaces(scene_file))):
             if key in EXPECTATION_DEFAULTS and key not in e:
                 continue  # the default, also in a scene that does not run it: no match
             if e[key] != "*" and e[key] not in values:
-                raise ValueError(f"expectation {i}: {key} {e[key]!r} is not run by scene "
-                                 f"{scene!r} (its scene file lists {values})")
+                if e[key] not in EXPECTATION_NAMES[key]:
+                    raise ValueError(f"expectation {i}: {key} {e[key]!r} is none of "
+                                     f"{list(EXPECTATION_NAMES[key])}")
+                # a variant this scene copy does not run (a campaign of a scene cut down to some
+                # variants): skipped and said, as a level it has not got
+                not_run = not_run or (f"this run has no {key} {e[key]} (its scene file lists "
+                                      f"{', '.join(map(str, values))})")
         level = e["level"]
         if not isinstance(level, int) or isinstance(level, bool) or level < 0:
             raise ValueError(f"expectation {i}: level must be a level (an integer ≥ 0), not "
                              f"{level!r}")
-        mine.append({**e, "index": i, **_skipped_level(e, run)})
+        skipped = {"skipped": not_run} if not_run else _skipped_level(e, run)
+        mine.append({**e, "index": i, **skipped})
     return mine
 
 

@@ -932,12 +932,17 @@ def test_expectations_with_and_without_p_mass(tmp_path):
     got = [(e["index"], e["variant"], e["status"]) for e in verdict.check_expectations(series, exps)]
     assert got == [(0, "broken/M1", "ok"), (1, "broken/M1/lumped", "violated"),
                    (2, "broken/M1", "ok"), (2, "broken/M1/lumped", "violated")]
-    with pytest.raises(ValueError, match="p_mass 'lumpd' is not run by scene 's'"):
+    with pytest.raises(ValueError, match="p_mass 'lumpd' is none of"):
         verdict.validate_expectations([dict(base, p_mass="lumpd")], path, "s", scene_file)
+    # a variant the scene copy does not run (a campaign of a scene cut down to some variants) is
+    # skipped and said, as a level the run has not got
     consistent_only = {"name": "s", "discretization": dict(scene_file["discretization"])}
     del consistent_only["discretization"]["p_mass"]
-    with pytest.raises(ValueError, match="p_mass 'lumped' is not run"):
-        verdict.validate_expectations([dict(base, p_mass="lumped")], path, "s", consistent_only)
+    (skipped,) = verdict.validate_expectations([dict(base, p_mass="lumped")], path, "s",
+                                               consistent_only)
+    assert skipped["skipped"] == "this run has no p_mass lumped (its scene file lists consistent)"
+    (row,) = verdict.check_expectations(series, [skipped])
+    assert row["status"] == "skipped" and "no p_mass lumped" in row["reason"]
     (tmp_path / "e.toml").write_text('[[expectation]]\nscene = "s"\nu_space = "broken"\n'
                                      'multiplier = "M1"\np_mass = "lumped"\nquantity = "u_l2"\n'
                                      'level = 2\nmax_error = 0.3\n')
