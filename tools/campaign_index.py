@@ -205,7 +205,8 @@ def scene_row(root, name, report):
     else:
         if isinstance(verdict, str) and VERDICT_WORD.fullmatch(verdict):
             row["verdict"] = verdict
-        row["reason"] = "the report's verdict"
+        row["reason"] = ("cannot judge yet" if verdict == "INCONCLUSIVE"
+                         else "the report's verdict")
     return row
 
 
@@ -247,8 +248,11 @@ def converged_line(report):
                    if all(s.get("status") == "expected failure" for s in ss))
     if not variants:
         return "no series measured"
+    undecided = [k for k, ss in variants.items() if any(s.get("status") == "inconclusive"
+                                                        for s in ss)]
     parts = [f"{len(ok)} of {len(variants)} variants converge"
-             + (f" ({', '.join(sorted(ok))})" if ok and len(ok) <= 4 else "")]
+             + (f" ({', '.join(sorted(ok))})" if ok and len(ok) <= 4 else "")
+             + (f", {len(undecided)} cannot be judged yet" if undecided else "")]
     converging = [s for ss in ok.values() for s in ss]
     per_choice = [(label, last_rates(ss)) for label, ss in choices.split(converging)]
     per_choice = [(label, text) for label, text in per_choice if text]
@@ -520,7 +524,7 @@ def render_html(rows, verdict, created, baseline=None):
     if baseline is not None:
         body.append(f'<p id="baseline">{e(baseline_line(baseline))}</p>')
     headers = (["scene", "verdict", "what converged, at which rates",
-                "sdcrack's errors / the references'", "first problem"]
+                "sdcrack's errors / the references'", "first problem (or what cannot be judged)"]
                + (["changed since baseline"] if with_baseline else []) + ["report"])
     body += scroll_table([e(h) for h in headers], [table_row(r, with_baseline) for r in rows])
     body += failed_jobs_html(rows)

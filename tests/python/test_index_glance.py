@@ -99,6 +99,9 @@ def test_an_inconclusive_scene_is_listed_with_its_reason_and_fails_nothing(tmp_p
     assert f"  PASS  {tmp_path}/a/report/index.html\n  INCONCLUSIVE" in out  # no line under PASS
     page = (tmp_path / "index.html").read_text()
     assert '<td class="INCONCLUSIVE">INCONCLUSIVE</td>' in page
+    # its row says what the cell holds: not a problem, what cannot be judged yet
+    (row,) = [r for r in index["scenes"] if r["name"] == "b"]
+    assert row["reason"] == "cannot judge yet", row
     from sdcompare_lib.page import CSS
 
     assert ".INCONCLUSIVE{color:#555;" in CSS  # grey: neither PASS's green nor FAIL's red
