@@ -737,8 +737,8 @@ DAMAGES = {
         "recomputed: the case has a p_bubble dataset, but the lumped p is P1 without bubble"]),
     "lumped: lumped expectation violated": (1, [
         "expectations: broken/M1/lumped p_x (expectation 0): violated: error 4.0"]),
-    "lumped: expectation of a misspelt p mass": (2, "expectation 0: p_mass 'lumpd' is not run by "
-                                                    "scene 'open-exact'"),
+    "lumped: expectation of a misspelt p mass": (2, "expectation 0: p_mass 'lumpd' is none of "
+                                                    "['consistent', 'lumped']"),
     # wrong solvers that converge, and checks that could not run
     "open sweep: the field of one δ 93× off": (1, [
         "δ → 0: δ → 0 point δ=1e-4 of level 4 broken M1 u_l2 lies a factor"]),

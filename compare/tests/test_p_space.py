@@ -273,7 +273,7 @@ def test_expectations_name_the_p_space(tmp_path):
            for e in verdict.check_expectations(series, exps)]
     assert got == [(0, "broken/M1", "ok"), (1, "broken/M1/ptangential", "violated"),
                    (2, "broken/M1", "ok"), (2, "broken/M1/ptangential", "violated")]
-    with pytest.raises(ValueError, match="p_space 'broken' is not run"):
+    with pytest.raises(ValueError, match="p_space 'broken' is none of"):
         verdict.validate_expectations([dict(base, p_space="broken")], str(tmp_path / "e.toml"),
                                       "s", scene_file)
 
