@@ -7,7 +7,6 @@ for are run), and on a real smooth open crack whose λ rates approach 2 from bel
 The rule is compare/sdcompare_lib/rates.py's; its numbers (margin, levels, bug_gap,
 extra_levels) are scenes/orders.toml's [rule]."""
 import json
-import math
 import os
 import subprocess
 import sys
