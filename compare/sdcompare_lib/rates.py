@@ -10,7 +10,7 @@ from . import theory
 #   The observed rate of a step, r = log(e_(l-1)/e_l)/log(h_(l-1)/h_l), estimates p* only in the
 #   asymptotic range: with e(h) = C h^p* (1 + D h^q + ...), q > 0, the deficit p* − r shrinks by
 #   about 2^-q per halving of h, from either side and not always monotonically (a P1 multiplier's
-#   rate dips below its order before it settles). A series is judged on its last RULE_LEVELS = theory.RULE_LEVELS
+#   rate dips below its order before it settles). A series is judged on its last RULE_LEVELS (3)
 #   levels and its last two rates r_(k-1), r_k against t = p* − margin (theory.RATE_MARGIN, and the
 #   scene's min_rate when it declares one):
 #   * "converges": the errors decrease strictly, r_k ≥ t, and r_(k-1) ≥ t or r_(k-1) is within
@@ -30,7 +30,7 @@ from . import theory
 #   order (a load evaluated at one vertex: u rate 2.0 -> 1.06 on the closed crack) fails against
 #   p* = 2 at any length. A series whose errors are all <= ZERO_FLOOR is exact ("converges", rates
 #   null): e.g. e_lambda on a closed crack, where lambda_h = [u] = 0 exactly.
-RULE_LEVELS = 3
+RULE_LEVELS = theory.RULE_LEVELS
 ZERO_FLOOR = 1e-13
 BUG_GAP = theory.BUG_GAP
 EXTRA_LEVELS = theory.EXTRA_LEVELS

@@ -9,8 +9,8 @@ import numpy as np
 
 from . import norms, rates, theory
 from .baseline import error_change, rate_change
-from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, case_key, finite_number, p_mass, p_space,
-                   total_time, variant_label, variant_of, variant_order)
+from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, P_MASSES, P_SPACES, case_key, finite_number,
+                   p_mass, p_space, total_time, variant_label, variant_of, variant_order)
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.
@@ -496,9 +496,8 @@ def load_expectations(path):
 
 # The names an expectation may give per axis (the scene format's vocabularies): one the scene
 # does not run is skipped, any other is a mistake.
-EXPECTATION_NAMES = {"u_space": ("continuous", "broken"), "multiplier": ("M0", "M1", "M1star"),
-                     "p_mass": ("consistent", "lumped"),
-                     "p_space": ("continuous", "broken-tangential")}
+EXPECTATION_NAMES = {"u_space": ("continuous", "broken"), "multiplier": theory.MULTIPLIERS,
+                     "p_mass": P_MASSES, "p_space": P_SPACES}
 
 
 def validate_expectations(exps, path, scene, scene_file, run_levels=None):
