@@ -616,10 +616,10 @@ def _domain_errors(P, tris, exact, tips, quad, u_tri=None, p_tri=None, bubble=No
 def bubble_projection(P, tris, exact, tips, quad, p_tri):
     """(T,2) coefficients c_T of the L²(T) projection of ∇u − q_h onto the cubic bubble
     b_T = 27 λ0 λ1 λ2, q_h the P1 field of vertex values p_tri (T,3,2): c_T = ∫_T b_T (∇u − q_h) /
-    ∫_T b_T², with ∫_T b_T² = 729 · 2|T| · 2!2!2!/8! = (36/70 · 9/16)|T| computed exactly below.
+    ∫_T b_T², with ∫_T b_T² = 729 · 2|T| · 2!2!2!/8! = (81/280)|T| (exact, below).
     With q_h = ∇I_h u this is the MINI interpolant of ∇u (P1 part and bubble), the yardstick of
     the consistent p in the X-norm (yardsticks.interpolation_errors)."""
-    X, area, _, _ = _geometry(P, tris)
+    _, area, _, _ = _geometry(P, tris)
     num = np.zeros((tris.shape[0], 2))
     for ids, L, w, vals in _quadrature_with_exact(P, tris, exact, tips, quad, ("px", "py")):
         b = 27.0 * L[..., 0] * L[..., 1] * L[..., 2]
