@@ -186,3 +186,49 @@ fn the_export_of_two_cracks_lists_both_chains() {
     assert_eq!(meta["n_cracks"], 2);
     assert!(meta["nx"].is_null());
 }
+
+/// scenes/open-kink.toml, an open right-angled kink with [u] = 1 at the kink node: M1star's λ_h
+/// there is within 1 % of [u] at level 3 with the broken-tangential p, as M1's, and its L² order is
+/// P1's (docs/design.md, Multipliers and the LCP: the kink row splits the moment ∫ λ_h φ in the
+/// edges' shares; normalised to a unit normal it read 0.49 of [u] and converged at order 1/2).
+#[test]
+fn m1star_lambda_at_an_open_kink_is_the_jump() {
+    use sdcrack::multiplier::CrackField;
+    use sdcrack::study::{run_study, CasePlan, Silent};
+    let mut scene = common::load("open-kink");
+    scene.axes.levels = vec![0, 1, 2, 3];
+    scene.axes.p_masses = vec![PMass::Consistent];
+    scene.axes.p_spaces = vec![PSpace::BrokenTangential];
+    scene.axes.multipliers = vec![MultiplierSpace::M1, MultiplierSpace::M1Star];
+    let plan = CasePlan::new(&scene, &CaseFilter::default());
+    let study = run_study(&scene, &plan, &mut Silent).expect("study runs");
+    let finest = study.meshes.iter().find(|m| m.level == 3).expect("level 3");
+    let kink = finest
+        .crack_points
+        .iter()
+        .position(|p| *p == [0.0, 0.0])
+        .expect("the kink is a crack node");
+    let o = Orders::repository();
+    for m in [MultiplierSpace::M1, MultiplierSpace::M1Star] {
+        let cases: Vec<_> = study.cases.iter().filter(|c| c.multiplier == m).collect();
+        assert!(cases.iter().all(|c| c.converged), "{m}: all converge");
+        let last = cases.iter().find(|c| c.level == 3).expect("level 3");
+        let lambda = match &last.fields.as_ref().expect("fields kept").lambda {
+            CrackField::PerNode(v) => v[kink],
+            CrackField::PerSegment(_) => panic!("{m} is nodal"),
+        };
+        assert!((lambda - 1.0).abs() < 0.01, "{m}: λ_h at the kink {lambda}");
+        let s: Vec<(f64, f64)> = cases
+            .iter()
+            .map(|c| (c.h, c.errors.expect("exact").lambda_l2))
+            .collect();
+        for w in s[1..].windows(2) {
+            let r = rate(w[0].0, w[0].1, w[1].0, w[1].1);
+            // [u] is smooth on the crack: P1 multipliers approximate it at P1's L² order
+            assert!(
+                r > o.lowest_rate(o.p1_u(o.regularity.smooth_s)),
+                "{m}: λ rate {r}"
+            );
+        }
+    }
+}

@@ -20,10 +20,17 @@
 //! - M1 (13): one per node, ∫ φ_j p·ν = Σ_{k ∋ j} ℓ_k/3 p(x_j)·ν_k + ℓ_k/6 p(x_other)·ν_k ≤ 0: on
 //!   a straight crack S is the crack mass M_c. No choice is made at a kink: each edge's
 //!   integral uses its own normal.
-//! - M1star (14): one per node, p(x_j)·ν̄_j ≤ 0. Away from kinks ν̄_j = ν (S = I). **At a kink**
-//!   ν̄_j is the direction of ∫ φ_j ν = (ℓ_{k−1}ν_{k−1} + ℓ_kν_k)/2: the constraint is
-//!   (ℓ_{k−1} p·ν_{k−1} + ℓ_k p·ν_k)/|ℓ_{k−1}ν_{k−1} + ℓ_kν_k| ≤ 0, the normal of M1's row for a
-//!   constant p. λ_h = M_c⁻¹ Λ̃ as on a straight crack (M_c the scalar P1 mass of the polyline).
+//! - M1star (14): one per node, p(x_j)·n_j ≤ 0 with the moment Λ̃_j = ∫ λ_h φ_j as its
+//!   multiplier. Away from kinks n_j = ν (S = I). **At a kink** the contact term ∫ λ_h q·ν puts
+//!   q(x_j)·ν_{k−1} under ∫_{t_{k−1}} λ_h φ_j and q(x_j)·ν_k under ∫_{t_k} λ_h φ_j; one moment
+//!   Λ̃_j carries both, so its row splits it in the shares these integrals have for a locally
+//!   constant λ_h, ℓ_{k−1} : ℓ_k: n_j = (ℓ_{k−1}ν_{k−1} + ℓ_kν_k)/(ℓ_{k−1} + ℓ_k) = ∫ φ_j ν / ∫ φ_j,
+//!   M1's row for a constant p over the hat's integral (weights summing to 1, as at a straight
+//!   node). The constraint is p(x_j)·n_j ≤ 0 (n_j is a positive multiple of the nodal normal
+//!   ν̄_j of [`CrackOperators::node_normals`], so the cone is the same), and λ_h = M_c⁻¹ Λ̃ as on a
+//!   straight crack (M_c the scalar P1 mass of the polyline). Normalising n_j to unit length
+//!   instead (before issue 43) made Λ̃_j |n_j| the moment, λ_h at an open right-angled kink
+//!   cos 45° of [u] (docs/design.md).
 
 use crate::contact::KktResiduals;
 use crate::mesh::{frame_directions, Mesh, PTopology};
@@ -330,8 +337,8 @@ impl Multiplier {
     }
 }
 
-/// M1star's rows: p(x_j)·ν̄_j with ν̄_j = ν away from kinks and the normalised
-/// (ℓ_{k−1}ν_{k−1} + ℓ_kν_k) at a kink (module documentation).
+/// M1star's rows: p(x_j)·n_j with n_j = ν away from kinks and
+/// (ℓ_{k−1}ν_{k−1} + ℓ_kν_k)/(ℓ_{k−1} + ℓ_k) at a kink (module documentation).
 fn m1star_rows(ops: &CrackOperators) -> Vec<Vec<f64>> {
     let rows = ops.rows.len();
     // the edges at each node: (edge, its row at this node)
@@ -353,13 +360,10 @@ fn m1star_rows(ops: &CrackOperators) -> Vec<Vec<f64>> {
                 row[r] = 1.0;
                 return row;
             }
-            let sum = edges.iter().fold([0.0, 0.0], |acc, &(k, _)| {
-                let (l, nu) = (ops.lengths[k], ops.normals[k]);
-                [acc[0] + l * nu[0], acc[1] + l * nu[1]]
-            });
-            let norm = sum[0].hypot(sum[1]);
+            // ∫ φ_j = (ℓ_{k−1} + ℓ_k)/2; each edge's row gets its share ℓ_k/(ℓ_{k−1} + ℓ_k)
+            let hat: f64 = edges.iter().map(|&(k, _)| ops.lengths[k]).sum();
             for &(k, r) in edges {
-                row[r] += ops.lengths[k] / norm;
+                row[r] += ops.lengths[k] / hat;
             }
             row
         })
@@ -460,14 +464,19 @@ mod tests {
                 .sum();
             assert!((y - expected).abs() < 1e-15, "M1 row {j}");
         }
-        // M1star at the kink: p·ν̄ with ν̄ ∝ ℓ_a ν_a + ℓ_b ν_b (both edges have the level-1
-        // lengths 0.25 and 0.25√2)
+        // M1star at the kink: p·n with n = (ℓ_a ν_a + ℓ_b ν_b)/(ℓ_a + ℓ_b) (the edges have the
+        // level-1 lengths 0.25 and 0.25√2), M1's row of a constant p over ∫ φ_kink
         let star = Multiplier::new(MultiplierSpace::M1Star, &ops);
         let (la, lb) = (0.25, 0.25 * 2f64.sqrt());
-        let nu_bar = [la * 0.0 + lb * -r, la * 1.0 + lb * r];
-        let norm = nu_bar[0].hypot(nu_bar[1]);
+        let n = [
+            (la * 0.0 + lb * -r) / (la + lb),
+            (la * 1.0 + lb * r) / (la + lb),
+        ];
         let y: f64 = star.s[kink].iter().zip(&np).map(|(a, b)| a * b).sum();
-        assert!((y - dot([nu_bar[0] / norm, nu_bar[1] / norm])).abs() < 1e-15);
+        assert!((y - dot(n)).abs() < 1e-15);
+        let y1: f64 = m1.s[kink].iter().zip(&np).map(|(a, b)| a * b).sum();
+        assert!((y - y1 / ((la + lb) / 2.0)).abs() < 1e-15);
+        assert!((star.s[kink].iter().sum::<f64>() - 1.0).abs() < 1e-15);
         // away from the kink the M1star rows are unit rows
         for (j, row) in star.s.iter().enumerate().filter(|(j, _)| *j != kink) {
             assert_eq!(row.iter().filter(|&&v| v != 0.0).count(), 1, "row {j}");
