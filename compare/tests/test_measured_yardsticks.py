@@ -465,7 +465,7 @@ def test_the_repository_rows_validate_against_their_scenes():
             sf = tomllib.load(fh)
         if sf.get("outputs", {}).get("references"):
             with_references.add(sf["name"])
-    assert scenes == with_references and len(scenes) == 17
+    assert scenes == with_references and len(scenes) == 18
 
     for name in sorted(scenes):
         with open(os.path.join(ROOT, "scenes", f"{name}.toml"), "rb") as fh:
