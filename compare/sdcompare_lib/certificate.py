@@ -101,8 +101,8 @@ LABEL = "discrete certificate"
 # Cases with more unknowns are not certified (module docstring: an assembly bug shows at every level).
 UNKNOWNS_LIMIT = 20_000
 # |r_i| ≤ ROUNDOFF_FACTOR·ε·(|K||x| + |b|)_i + QUADRATURE_FACTOR·q_i (module docstring).
-ROUNDOFF_FACTOR = 2.0 ** 16
-QUADRATURE_FACTOR = 8.0
+ROUNDOFF_FACTOR = 64.0
+QUADRATURE_FACTOR = 4.0
 # Complementarity and the multiplier's sign: ≤ COMPLEMENTARITY_FACTOR·κ·ε (module docstring).
 COMPLEMENTARITY_FACTOR = 64.0
 KAPPA_WITHOUT_ESTIMATE = 1e12
@@ -117,7 +117,7 @@ COLLINEAR_SIN = 1e-12
 # boundary edges' Gauss–Legendre points; the element matrices need degree 6 (bubble × bubble).
 LOAD_CONICAL_N = 5
 ELEMENT_CONICAL_N = 5
-LINE_N = (8, 12)
+LINE_N = (5, 12)
 
 EQUATIONS = {
     "u": "first equation of (15), δ(u,v) − (v, div p) = (f,v), tested with the P1 hats of u",
@@ -412,6 +412,27 @@ def constraint(multiplier, p_node, geo, segs):
 
 
 # ------------------------------------------------------------------------------- one case
+def condensed_scale(E, x):
+    """(T, 11) the magnitudes the bubble elimination moves into the p and u rows: the solver's
+    system is the condensed one (docs/design.md), whose rows read Σ (E_cc − E_cb E_bb⁻¹ E_bc) x_c;
+    its componentwise backward error is relative to those terms, |E_cb E_bb⁻¹| |E_bc| |x_c| among
+    them (for the u rows the (7/10)A|U| of the condensed stiffness, which the uncondensed row
+    sees only through the small bubble). Zero in the bubble rows."""
+    keep = np.r_[0:6, 8:11]
+    z = np.einsum("tbj,tj->tb", np.abs(E[:, 6:8][:, :, keep]), np.abs(x[:, keep]))
+    W = np.abs(np.einsum("tib,tbc->tic", E[:, keep, 6:8], np.linalg.inv(E[:, 6:8, 6:8])))
+    out = np.zeros_like(x)
+    out[:, keep] = np.einsum("tib,tb->ti", W, z)
+    return out
+
+
+def scatter2(index, values, n):
+    """(n, 2) Σ of the 2-vectors `values` (..., 2) at `index` (...) (np.bincount per component)."""
+    i = np.ravel(index)
+    v = np.reshape(values, (-1, 2))
+    return np.column_stack([np.bincount(i, v[:, 0], minlength=n), np.bincount(i, v[:, 1], minlength=n)])
+
+
 def _rows(r, s, q):
     """(backward error max |r|/s, worst ratio |r|/tolerance, index of the worst row) of rows."""
     r, s, q = np.abs(np.ravel(r)), np.ravel(s), np.ravel(q)
@@ -485,6 +506,8 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
         iu = slice(8, 11)
     r = np.einsum("tij,tj->ti", E, x)
     s = np.einsum("tij,tj->ti", np.abs(E), np.abs(x))
+    if not lumped:
+        s += condensed_scale(E, x)
     r[:, iu] -= delta * np.einsum("tij,tj->ti", md.Mu, uc)
     s[:, iu] += delta * np.einsum("tij,tj->ti", md.Mu, np.abs(uc))
     # u rows: Ex − b with b = −F
@@ -498,11 +521,8 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
     cvec, cabs, mu = contact(multiplier, lam, geo, segs, cg, md.nv)
     rq, sq = r[:, :6].reshape(T, 3, 2), s[:, :6].reshape(T, 3, 2)
     g3 = md.gid[tris]
-    Rg, Sg = np.zeros((md.nv, 2)), np.zeros((md.nv, 2))
-    np.add.at(Rg, g3, rq)
-    np.add.at(Sg, g3, sq)
-    Rg += cvec - md.G
-    Sg += cabs + md.G_abs
+    Rg = scatter2(g3, rq, md.nv) + cvec - md.G
+    Sg = scatter2(g3, sq, md.nv) + cabs + md.G_abs
     Qg = md.G_err.copy()
     framed = np.zeros(md.nv, bool)
     framed[cg[doubled]] = True
@@ -514,9 +534,7 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
         p_r.append(np.einsum("id,id->i", Rg[gd], nu_d))
         p_s.append(np.einsum("id,id->i", Sg[gd], np.abs(nu_d)))
         p_q.append(np.einsum("id,id->i", Qg[gd], np.abs(nu_d)))
-        Rc, Sc = np.zeros((n, 2)), np.zeros((n, 2))
-        np.add.at(Rc, tris, rq)
-        np.add.at(Sc, tris, sq)
+        Rc, Sc = scatter2(tris, rq, n), scatter2(tris, sq, n)
         for copy in (c1[doubled], c2[doubled]):  # p⁺·τ, p⁻·τ: one copy's triangles each
             p_r.append(np.einsum("id,id->i", Rc[copy], tau_d))
             p_s.append(np.einsum("id,id->i", Sc[copy], np.abs(tau_d)))
@@ -530,10 +548,6 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
             problems.append(f"{EQUATIONS[name]}: residual {ratio:.3g} × its tolerance "
                             f"(componentwise backward error {back:.1e}; tolerance "
                             f"{ROUNDOFF_FACTOR:g}ε·(|K||x| + |b|) + {QUADRATURE_FACTOR:g}·quadrature)")
-    out["quadrature_share"] = float(max(
-        (QUADRATURE_FACTOR * qq.max(initial=0.0)
-         / max(float((ROUNDOFF_FACTOR * EPS * ss).max(initial=0.0)), np.finfo(float).tiny))
-        for rr, ss, qq in rows.values()))
     # -------- complementarity
     p_node = 0.5 * (p[c1] + p[c2])
     gval, snorm = constraint(multiplier, p_node, geo, segs)
