@@ -297,7 +297,7 @@ class MeshData:
                                    absolute=True)
         self._sorted_gid = np.argsort(self.gid, kind="stable")
         self._lookup = None
-        self._lumped = None
+        self._lumped, self._weights, self._abs = None, None, {}
 
     def groups_of(self, pts):
         """The vertex group of each point (exact coordinates), -1 where no vertex is there."""
@@ -318,7 +318,19 @@ class MeshData:
     def lumped(self):
         if self._lumped is None:
             self._lumped = lumped_element_matrices(self.E0)
+            self._abs[True] = np.abs(self._lumped)
         return self._lumped
+
+    def absolute(self, lumped):
+        """|E| of the element matrices at δ = 0 (lumped: the condensed ones)."""
+        if lumped not in self._abs:
+            self._abs[lumped] = np.abs(self.lumped() if lumped else self.E0)
+        return self._abs[lumped]
+
+    def weights(self):
+        if self._weights is None:
+            self._weights = condensation_weights(self.E0)
+        return self._weights
 
 
 
@@ -412,18 +424,25 @@ def constraint(multiplier, p_node, geo, segs):
 
 
 # ------------------------------------------------------------------------------- one case
-def condensed_scale(E, x):
+def condensation_weights(E):
+    """(W (T, 11, 2), Z (T, 2, 11)) for condensed_scale: |E_cb E_bb⁻¹| and |E_bc| (zero in the
+    bubble rows and columns), per mesh."""
+    keep = np.r_[0:6, 8:11]
+    W = np.zeros((len(E), 11, 2))
+    W[:, keep] = np.abs(E[:, keep, 6:8] @ np.linalg.inv(E[:, 6:8, 6:8]))
+    Z = np.abs(E[:, 6:8]).copy()
+    Z[:, :, 6:8] = 0.0
+    return W, Z
+
+
+def condensed_scale(weights, x):
     """(T, 11) the magnitudes the bubble elimination moves into the p and u rows: the solver's
     system is the condensed one (docs/design.md), whose rows read Σ (E_cc − E_cb E_bb⁻¹ E_bc) x_c;
     its componentwise backward error is relative to those terms, |E_cb E_bb⁻¹| |E_bc| |x_c| among
     them (for the u rows the (7/10)A|U| of the condensed stiffness, which the uncondensed row
     sees only through the small bubble). Zero in the bubble rows."""
-    keep = np.r_[0:6, 8:11]
-    z = np.einsum("tbj,tj->tb", np.abs(E[:, 6:8][:, :, keep]), np.abs(x[:, keep]))
-    W = np.abs(np.einsum("tib,tbc->tic", E[:, keep, 6:8], np.linalg.inv(E[:, 6:8, 6:8])))
-    out = np.zeros_like(x)
-    out[:, keep] = np.einsum("tib,tb->ti", W, z)
-    return out
+    W, Z = weights
+    return (W @ (Z @ np.abs(x)[:, :, None]))[:, :, 0]
 
 
 def scatter2(index, values, n):
@@ -504,12 +523,13 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
         E = md.E0
         x = np.concatenate([Pc, np.asarray(bub, dtype=float), uc], axis=1)
         iu = slice(8, 11)
-    r = np.einsum("tij,tj->ti", E, x)
-    s = np.einsum("tij,tj->ti", np.abs(E), np.abs(x))
+    r = (E @ x[:, :, None])[:, :, 0]
+    s = (md.absolute(lumped) @ np.abs(x)[:, :, None])[:, :, 0]
     if not lumped:
-        s += condensed_scale(E, x)
-    r[:, iu] -= delta * np.einsum("tij,tj->ti", md.Mu, uc)
-    s[:, iu] += delta * np.einsum("tij,tj->ti", md.Mu, np.abs(uc))
+        s += condensed_scale(md.weights(), x)
+    if delta:
+        r[:, iu] -= delta * (md.Mu @ uc[:, :, None])[:, :, 0]
+        s[:, iu] += delta * (md.Mu @ np.abs(uc)[:, :, None])[:, :, 0]
     # u rows: Ex − b with b = −F
     n = len(md.xy)
     ru = np.bincount(tris.ravel(), r[:, iu].ravel(), minlength=n) + md.F
@@ -585,7 +605,7 @@ def certify(res, sf):
     """{"rows": one per certified case, "problems": [...], "skipped": cases above
     UNKNOWNS_LIMIT, "seconds": the check's cost, "not_applicable": why nothing was certified or
     None} for the results folder res (read.load_results) with scene copy sf."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     data = res.get("data")
     f, g = _expression(sf, "f"), _expression(sf, "g")
     out = {"rows": [], "problems": [], "skipped": 0, "seconds": 0.0, "not_applicable": None,
@@ -627,6 +647,7 @@ def certify(res, sf):
         out["problems"] += [f"{what}: {p}" for p in row["problems"]]
         out["rows"].append(row)
     out["seconds"] = time.perf_counter() - t0
+    out["cpu_seconds"] = time.process_time() - c0
     if not out["rows"] and not out["problems"]:
         out["not_applicable"] = (f"no case with ≤ {UNKNOWNS_LIMIT} unknowns and stored fields"
                                  if out["skipped"] else "no solver case with stored fields")
@@ -661,3 +682,42 @@ def requirement(cert):
                  f"error {back:.1e}, largest residual {ratio:.2g} × tolerance; "
                  f"{cert['seconds']:.2f} s)")
     return text
+
+
+ROW_KEYS = ("level", "u_space", "multiplier", "p_mass", "p_space", "delta", "unknowns", "ok")
+MEASURED_KEYS = BACKWARD_KEYS + RATIO_KEYS + ("primal", "dual", "complementarity",
+                                              "complementarity_tolerance", "space")
+
+
+def report_json(cert):
+    """report.json's `discrete_certificate`: the tolerances, the cost, and per certified case its
+    measured residuals."""
+    return {"unknowns_limit": UNKNOWNS_LIMIT, "roundoff_factor": ROUNDOFF_FACTOR,
+            "quadrature_factor": QUADRATURE_FACTOR,
+            "complementarity_factor": COMPLEMENTARITY_FACTOR, "seconds": cert["seconds"],
+            "cpu_seconds": cert.get("cpu_seconds"), "certified": len(cert["rows"]),
+            "skipped": cert["skipped"], "worst": summary_numbers(cert),
+            "cases": [{k: r.get(k) for k in ROW_KEYS + MEASURED_KEYS} for r in cert["rows"]]}
+
+
+def table(cert):
+    """(headers, rows, entries): one row per level × variant, the worst over its δ values."""
+    worst = {}
+    for r in cert["rows"]:
+        key = (r["level"], r["u_space"], r["multiplier"], r["p_mass"], r["p_space"])
+        w = worst.setdefault(key, dict(r, deltas=0))
+        w["deltas"] += 1
+        w["ok"] = w["ok"] and r["ok"]
+        for k in MEASURED_KEYS:
+            if isinstance(r.get(k), float):
+                w[k] = max(w.get(k) or 0.0, r[k])
+    fmt = lambda v: "–" if not isinstance(v, float) or not math.isfinite(v) else f"{v:.1e}"
+    entries = [worst[k] for k in sorted(worst)]
+    rows = [[w["level"], w["u_space"], w["multiplier"], w["deltas"],
+             fmt(max(w.get(k) or 0.0 for k in BACKWARD_KEYS)),
+             fmt(max(w.get(k) or 0.0 for k in RATIO_KEYS)),
+             fmt(max(w.get(k) or 0.0 for k in ("primal", "dual", "complementarity"))),
+             fmt(w.get("complementarity_tolerance")), "ok" if w["ok"] else "**FAIL**"]
+            for w in entries]
+    return (["level", "u space", "mult.", "δ values", "backward error", "residual ÷ tolerance",
+             "KKT (primal, dual, compl.)", "its tolerance", "status"], rows, entries)
