@@ -668,7 +668,8 @@ def summary_numbers(cert):
 
 
 def requirement(cert):
-    """The check's sentence with the measured worst values and the cost."""
+    """The check's sentence with the measured worst values (not the cost, which varies from run
+    to run: it is in the report's section and report.json)."""
     n = len(cert["rows"])
     worst = summary_numbers(cert)
     ratio = max((v for k, v in worst.items() if k in RATIO_KEYS and v is not None), default=None)
@@ -679,8 +680,7 @@ def requirement(cert):
             f"on every case with ≤ {UNKNOWNS_LIMIT} unknowns")
     if n:
         text += (f" ({n} cases, {cert['skipped']} larger ones not certified; largest backward "
-                 f"error {back:.1e}, largest residual {ratio:.2g} × tolerance; "
-                 f"{cert['seconds']:.2f} s)")
+                 f"error {back:.1e}, largest residual {ratio:.2g} × tolerance)")
     return text
 
 
