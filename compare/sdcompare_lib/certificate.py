@@ -545,6 +545,7 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
     ru = np.bincount(tris.ravel(), r[:, iu].ravel(), minlength=n) + md.F
     su = np.bincount(tris.ravel(), s[:, iu].ravel(), minlength=n) + md.F_abs
     rows = {"u": (ru, su, md.F_err)}
+    where = {"u": md.xy, "bubble": np.repeat(md.xy[tris].mean(axis=1), 2, axis=0)}
     if not lumped:
         rows["bubble"] = (r[:, 6:8], s[:, 6:8], np.zeros((T, 2)))
     # p rows: Ex − b with b = G_Γ − crack term, per vertex group; frames at doubled vertices
@@ -557,11 +558,13 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
     framed = np.zeros(md.nv, bool)
     framed[cg[doubled]] = True
     p_r, p_s, p_q = [Rg[~framed]], [Sg[~framed]], [Qg[~framed]]
+    p_at = [np.repeat(md.gxy[~framed], 2, axis=0)]
     if doubled.any():
         nu_d = nu_node[doubled]
         tau_d = np.column_stack([nu_d[:, 1], -nu_d[:, 0]])  # ν turned by −90°
         gd = cg[doubled]
         p_r.append(np.einsum("id,id->i", Rg[gd], nu_d))
+        p_at += [md.gxy[gd]] * 3
         p_s.append(np.einsum("id,id->i", Sg[gd], np.abs(nu_d)))
         p_q.append(np.einsum("id,id->i", Qg[gd], np.abs(nu_d)))
         Rc, Sc = scatter2(tris, rq, n), scatter2(tris, sq, n)
@@ -570,12 +573,14 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
             p_s.append(np.einsum("id,id->i", Sc[copy], np.abs(tau_d)))
             p_q.append(np.zeros(len(copy)))
     rows["p"] = tuple(np.concatenate([np.ravel(a) for a in v]) for v in (p_r, p_s, p_q))
+    where["p"] = np.concatenate(p_at)
     for name, (rr, ss, qq) in rows.items():
-        back, ratio, _ = _rows(rr, ss, qq)
+        back, ratio, i = _rows(rr, ss, qq)
+        at = f" at ({where[name][i, 0]:.6g}, {where[name][i, 1]:.6g})" if i >= 0 else ""
         out[f"{name}_backward_error"] = back
         out[f"{name}_ratio"] = ratio
         if not ratio <= 1.0:
-            problems.append(f"{EQUATIONS[name]}: residual {ratio:.3g} × its tolerance "
+            problems.append(f"{EQUATIONS[name]}: residual {ratio:.3g} × its tolerance{at} "
                             f"(componentwise backward error {back:.1e}; tolerance "
                             f"{ROUNDOFF_FACTOR:g}ε·(|K||x| + |b|) + {QUADRATURE_FACTOR:g}·quadrature)")
     # -------- complementarity
