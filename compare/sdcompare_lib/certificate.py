@@ -48,37 +48,34 @@ p(x_j)·ν̄_j) and their product vanishes.
 
 **Tolerances.** Equations: each row i passes when
     |r_i| ≤ ROUNDOFF_FACTOR·ε·s_i + QUADRATURE_FACTOR·q_i,
-s_i = (|K||x| + |b|)_i the componentwise (Oettli–Prager) scale of the row in this module's own
+s_i = (|K||x| + |b|)_i the componentwise (Oettli–Prager) scale of the row in this module's
 uncondensed matrix K (for the lumped p the condensed one), x the stored values, b the load, the
-boundary term and the crack term; q_i the estimate of this module's quadrature error of the row's
-load and boundary term (below). The solver refines its solution to a componentwise backward error
-≤ 1e-15 (~4.5ε) in its condensed system (docs/design.md, *Multipliers and the LCP*); its matrix
-and this module's differ by the round-off of their entries (a few ε each: products of
-coordinates, 1/det, the reference integrals), and the bubble it stores is its own closed-form
-elimination, exact to a few ε. The uncondensed rows' scale is smaller than the condensed ones':
-the condensed u rows carry C = (7/10)A, |C||U| ~ |U|/h² per area, where the uncondensed rows see
-B_b c_T, and c_T ~ ∇u_h − p is the small difference of the two terms it is eliminated from;
-measured on the repository scenes (levels with ≤ UNKNOWNS_LIMIT unknowns) the clean backward
-error of the uncondensed rows is ≤ 3e-13 (~1400ε), growing like 1/h. ROUNDOFF_FACTOR = 2**16 ≈
-6.6e4 (1.5e-11) leaves a factor ≥ 50 above the measured clean values and lies ≥ 10⁸ below what
-the damaged data of compare/tests/test_certificate.py and the solver's assembly bugs of ≤ 1.5×
-give (relative residuals 1e-4 … 1 in the rows they touch).
-Quadrature: the load ∫ f φ_i and the boundary term ∫_Γ g λ_v n ds are each computed with two rules
-of different families and degrees (triangles: the 55-point symmetric degree-16 rule of sdquad and
-this module's conical product rule of degree 22; edges: Gauss–Legendre with 8 and 12 points); the
-higher is used and q_i is the sum over the row's triangles (edges) of the two rules' absolute
-difference. On smooth data both are at round-off; where f jumps inside a triangle (a sign line
-that continues past a crack's tip off the mesh lines) neither rule is accurate, and neither is the
-solver's: QUADRATURE_FACTOR = 8 bounds the solver's quadrature error by eight times this estimate.
-The certificate thus holds the solver to its discrete system wherever the data are smooth on each
-triangle (the repository's scenes put every kink of f on mesh lines, except inclined-30 and
-l-shape-graded, whose sign lines cross triangles beyond the crack tips: there the rows of those
-triangles are held to the quadrature estimate).
+boundary term and the crack term, plus the terms the bubble elimination moves into the p and u
+rows, |K_cb K_bb⁻¹||K_bc||x_c| (condensed_scale): the solver solves the condensed system and
+refines its solution to a componentwise backward error ≤ 1e-15 (~4.5ε) there (docs/design.md),
+and the uncondensed u rows alone see the condensed stiffness (7/10)A|U| only through the small
+bubble, c_T ~ ∇u_h − p: without those terms the clean backward error grows like h⁻² (7.6e-16 to
+3.9e-14 over levels 0–3 of all-closed), with them it is ~2ε at every level. The two codes' entries
+differ by their round-off (products of coordinates, 1/det, the reference integrals, the order of
+summation): on the repository scenes the rows without a quadrature share reach ≤ 3.6ε, and
+ROUNDOFF_FACTOR = 64 leaves a factor ≥ 15 (docs/verification.md, *The discrete certificate*).
+Quadrature: q_i is the estimate of this module's quadrature error of the row's load ∫ f φ_i and
+boundary term ∫_Γ g λ_v n ds, the sum over the row's triangles (edges) of the absolute difference
+of two rules: on triangles the 55-point symmetric rule of degree 16 (sdquad; the value used) and a
+5 × 5 conical product rule of degree 8, on edges Gauss–Legendre with 12 and 5 points (degree 9).
+The low rules have the degrees of the solver's, measured: its loads and boundary terms agree
+with them to round-off and with no rule of higher degree (docs/design.md), so QUADRATURE_FACTOR
+= 4 bounds the solver's quadrature error by four times that of a rule of its degree (the factor
+of docs/verification.md's *Quadrature tolerances*: the difference of two rules is at least 1/4 of
+the lower rule's error); a solver whose rules were of a lower degree would fail. On smooth data
+per triangle q is at round-off; where f jumps inside a triangle (a sign line that continues past
+a crack's tip off the mesh lines) neither rule is accurate and the rows of those triangles are
+held to the estimate only.
 Complementarity: where the crack is open, the constraint on p vanishes only to the forward error
 of the solve, ≤ κ·(backward error)·‖x‖ with κ the case's `condition_estimate` (a lower bound of
 κ₁ "usually within 3×", docs/design.md): the constraint, the multiplier's sign and their product,
 scaled as the solver's KKT residuals (by ‖S‖∞‖P‖∞ and ‖μ‖∞), pass when ≤ COMPLEMENTARITY_FACTOR·κ·ε
-(+ ROUNDOFF_FACTOR·ε for κ small); a case without a condition estimate is held to κ = 1e12.
++ ROUNDOFF_FACTOR·ε; a case without a condition estimate is held to κ = 1e12.
 
 **Cost.** It runs on the cases whose summary `unknowns` ≤ UNKNOWNS_LIMIT = 2·10⁴: an assembly bug
 is a wrong coefficient in every element it touches, so it shows at every level, and the coarse
