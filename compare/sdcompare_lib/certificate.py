@@ -82,10 +82,8 @@ is a wrong coefficient in every element it touches, so it shows at every level, 
 levels of every series are enough (issue 43). Vectorised numpy, no loop over triangles; the loads
 and element matrices are computed once per mesh and shared by that mesh's cases.
 """
-import hashlib
 import math
 import time
-from collections import defaultdict
 
 import numpy as np
 

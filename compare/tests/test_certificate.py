@@ -69,7 +69,7 @@ def test_element_matrices_against_closed_forms():
     p = np.tile([0.4, -1.1], 3)
     assert np.allclose(E[8:, :6] @ p, 0, atol=1e-14)
     assert np.allclose(E[6:8, :6] @ p, 9 / 20 * area * np.array([0.4, -1.1]), rtol=1e-14)
-    # the P1 stiffness through B (u–p) on a linear p = ∇(x²/2 + y²/2)·…: symmetric form
+    # the symmetric form of (15): the u rows are the transpose of the (u, div q) columns
     assert np.allclose(E, np.transpose(E), atol=1e-15)
 
 
@@ -94,7 +94,7 @@ def test_loads_boundary_and_crack_operators():
     one = lambda x, y: np.ones_like(x)
     assert np.allclose(C.load_on_triangles(one, TRI[None], area, C.symmetric_rule()), area / 3,
                        rtol=1e-14)
-    # the unit square's boundary: ∫_Γ x λ_v n ds at the corner (1, 1) is ((1/2) e_x + (1/2 λ…)
+    # the unit square's boundary term ∫_Γ g λ_v n ds with g = x, at the corner (1, 1)
     xy = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     tris = np.array([[0, 1, 2], [0, 2, 3]])
     edges = C.boundary_edges(tris, xy)
