@@ -649,8 +649,13 @@ def certify(res, sf):
         if key not in meshes:
             meshes[key] = (fields["points"], MeshData(fields["points"], fields["tris"], f, g, ref))
         kappa = c.get("condition_estimate")
-        row = certify_case(meshes[key][1], fields, k[2], k[4], k[5], k[3],
-                           float(kappa) if finite_number(kappa) else None)
+        try:
+            with np.errstate(all="ignore"):  # a NaN residual fails its row (not ≤ tolerance)
+                row = certify_case(meshes[key][1], fields, k[2], k[4], k[5], k[3],
+                                   float(kappa) if finite_number(kappa) else None)
+        except (ValueError, IndexError) as exc:  # stored arrays of inconsistent shapes
+            row = {"problems": [f"cannot be certified: its stored arrays do not fit together "
+                                f"({exc})"]}
         row.update({"level": k[0], "u_space": k[1], "multiplier": k[2], "delta": k[3],
                     "p_mass": k[4], "p_space": k[5], "unknowns": unknowns})
         row["ok"] = not row["problems"]
