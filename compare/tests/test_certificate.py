@@ -258,3 +258,19 @@ def test_only_cases_up_to_the_unknowns_limit_are_certified(results, monkeypatch)
     cert = certify(results)
     assert cert["skipped"] > 0 and cert["rows"]
     assert all(r["unknowns"] <= 150 for r in cert["rows"])
+
+
+def test_continuous_p_fields_do_not_solve_the_broken_tangential_system(results):
+    """The tangential unknowns never doubled (a frame bug of the solver): the fields of the
+    continuous p judged in the broken-tangential space fail its τ rows (second equation)."""
+    c = next(c for c in results["summary"]["cases"] if is_case(1, "broken", "M1")(c))
+    fields = results["data"].case(c["fields_grid"])
+    sf = results["scene_file"]
+    md = C.MeshData(fields["points"], fields["tris"], C._expression(sf, "f"),
+                    C._expression(sf, "g"), C.reference_integrals())
+    right = C.certify_case(md, fields, "M1", "consistent", "continuous", 0.0,
+                           c["condition_estimate"])
+    wrong = C.certify_case(md, fields, "M1", "consistent", "broken-tangential", 0.0,
+                           c["condition_estimate"])
+    assert right["problems"] == [] and right["p_ratio"] <= 1
+    assert wrong["p_ratio"] > 1e6 and any("second equation of (15)" in p for p in wrong["problems"])
