@@ -274,3 +274,32 @@ def test_continuous_p_fields_do_not_solve_the_broken_tangential_system(results):
                            c["condition_estimate"])
     assert right["problems"] == [] and right["p_ratio"] <= 1
     assert wrong["p_ratio"] > 1e6 and any("second equation of (15)" in p for p in wrong["problems"])
+
+
+def test_sdcompare_fails_the_verdict_by_the_certificate(results, tmp_path):
+    """End to end: one case's bubbles zeroed in fields.h5, compare/sdcompare exits 1 and names
+    the check and the equation; report.json and report.md carry the residuals and the cost."""
+    import json
+    import shutil
+
+    import h5py
+
+    folder = tmp_path / "cert"
+    shutil.copytree(results["folder"], folder)
+    c = next(c for c in results["summary"]["cases"] if is_case(1, "broken", "M1")(c))
+    with h5py.File(folder / "fields.h5", "r+") as h5:
+        h5[f"cases/{c['fields_grid']}/p_bubble"][...] = 0.0
+    p = subprocess.run([sys.executable, os.path.join(ROOT, "compare", "sdcompare"), str(folder),
+                        "--quiet"], capture_output=True, text=True, env=run_env(), timeout=300)
+    rep = json.loads((folder / "report" / "report.json").read_text(encoding="utf-8"))
+    assert p.returncode == 1 and rep["verdict"] == "FAIL", p.stdout + p.stderr
+    mine = [r for r in rep["reasons"] if r.startswith(f"{C.LABEL}: level 1 broken M1 δ=0: ")]
+    # the bubble enters all three equations: one problem line each
+    assert len(mine) == 3 and any("tested with the bubbles b_T e" in r for r in mine), mine
+    row = next(x for x in rep["checks"] if x["check"] == C.LABEL)
+    assert row["status"] != "ok" and len(row["problems"]) == 3
+    cert = rep["discrete_certificate"]
+    assert cert["certified"] == len(results["summary"]["cases"]) and cert["seconds"] > 0
+    bad = [x for x in cert["cases"] if not x["ok"]]
+    assert len(bad) == 1 and bad[0]["bubble_ratio"] > 1e6
+    assert "## Discrete certificate" in (folder / "report" / "report.md").read_text(encoding="utf-8")
