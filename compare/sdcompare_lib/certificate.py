@@ -51,7 +51,7 @@ p(x_j)·ν̄_j) and their product vanishes.
 s_i = (|K||x| + |b|)_i the componentwise (Oettli–Prager) scale of the row in this module's
 uncondensed matrix K (for the lumped p the condensed one), x the stored values, b the load, the
 boundary term and the crack term, plus the terms the bubble elimination moves into the p and u
-rows, |K_cb K_bb⁻¹||K_bc||x_c| (condensed_scale): the solver solves the condensed system and
+rows, |K_cb K_bb⁻¹||K_bc||x_c| (condensation_weights): the solver solves the condensed system and
 refines its solution to a componentwise backward error ≤ 1e-15 (~4.5ε) there (docs/design.md),
 and the uncondensed u rows alone see the condensed stiffness (7/10)A|U| only through the small
 bubble, c_T ~ ∇u_h − p: without those terms the clean backward error grows like h⁻² (7.6e-16 to
@@ -302,7 +302,7 @@ class MeshData:
                                    absolute=True)
         self._sorted_gid = np.argsort(self.gid, kind="stable")
         self._lookup = None
-        self._lumped, self._weights, self._abs = None, None, {}
+        self._lumped, self._abs = None, {}
 
     def groups_of(self, pts):
         """The vertex group of each point (exact coordinates), -1 where no vertex is there."""
@@ -323,19 +323,20 @@ class MeshData:
     def lumped(self):
         if self._lumped is None:
             self._lumped = lumped_element_matrices(self.E0)
-            self._abs[True] = np.abs(self._lumped)
         return self._lumped
 
     def absolute(self, lumped):
-        """|E| of the element matrices at δ = 0 (lumped: the condensed ones)."""
+        """The scale's matrices: |E| of the element matrices at δ = 0 plus, for the consistent p
+        mass, W Z of condensation_weights (the rows' scale |E||x| + W Z |x| is this matrix times
+        |x|); the lumped p mass's |S| of its condensed matrices."""
         if lumped not in self._abs:
-            self._abs[lumped] = np.abs(self.lumped() if lumped else self.E0)
+            if lumped:
+                self._abs[True] = np.abs(self.lumped())
+            else:
+                W, Z = condensation_weights(self.E0)
+                self._abs[False] = np.abs(self.E0) + W @ Z
         return self._abs[lumped]
 
-    def weights(self):
-        if self._weights is None:
-            self._weights = condensation_weights(self.E0)
-        return self._weights
 
 
 
@@ -430,24 +431,18 @@ def constraint(multiplier, p_node, geo, segs):
 
 # ------------------------------------------------------------------------------- one case
 def condensation_weights(E):
-    """(W (T, 11, 2), Z (T, 2, 11)) for condensed_scale: |E_cb E_bb⁻¹| and |E_bc| (zero in the
-    bubble rows and columns), per mesh."""
+    """(W (T, 11, 2), Z (T, 2, 11)) = (|E_cb E_bb⁻¹|, |E_bc|), zero in the bubble rows and
+    columns: W Z |x| are the magnitudes the bubble elimination moves into the p and u rows. The
+    solver's system is the condensed one (docs/design.md), whose rows read Σ (E_cc −
+    E_cb E_bb⁻¹ E_bc) x_c; its componentwise backward error is relative to those terms (for the u
+    rows the (7/10)A|U| of the condensed stiffness, which the uncondensed row sees only through the
+    small bubble), so they belong to the rows' scale."""
     keep = np.r_[0:6, 8:11]
     W = np.zeros((len(E), 11, 2))
     W[:, keep] = np.abs(E[:, keep, 6:8] @ inverse2(E[:, 6:8, 6:8]))
     Z = np.abs(E[:, 6:8]).copy()
     Z[:, :, 6:8] = 0.0
     return W, Z
-
-
-def condensed_scale(weights, x):
-    """(T, 11) the magnitudes the bubble elimination moves into the p and u rows: the solver's
-    system is the condensed one (docs/design.md), whose rows read Σ (E_cc − E_cb E_bb⁻¹ E_bc) x_c;
-    its componentwise backward error is relative to those terms, |E_cb E_bb⁻¹| |E_bc| |x_c| among
-    them (for the u rows the (7/10)A|U| of the condensed stiffness, which the uncondensed row
-    sees only through the small bubble). Zero in the bubble rows."""
-    W, Z = weights
-    return (W @ (Z @ np.abs(x)[:, :, None]))[:, :, 0]
 
 
 def scatter2(index, values, n):
@@ -530,8 +525,6 @@ def certify_case(md, fields, multiplier, p_mass, p_space, delta, kappa):
         iu = slice(8, 11)
     r = (E @ x[:, :, None])[:, :, 0]
     s = (md.absolute(lumped) @ np.abs(x)[:, :, None])[:, :, 0]
-    if not lumped:
-        s += condensed_scale(md.weights(), x)
     if delta:
         r[:, iu] -= delta * (md.Mu @ uc[:, :, None])[:, :, 0]
         s[:, iu] += delta * (md.Mu @ np.abs(uc)[:, :, None])[:, :, 0]
