@@ -39,6 +39,10 @@
   load F is the same rule in both, a shared module: its difference is round-off, far below τ).
 
 **viewer datasets**
+* every XDMF attribute NAME of a grid G (the solver's fields/*.xdmf, each reference's
+  <tool>/fields/*.xdmf) points at /cases/G/NAME of its folder's fields.h5, which holds it: what
+  a viewer labels NAME is the dataset the checks read under that name (the Topology and
+  Geometry links are the "field files' mesh" check's).
 * fields.h5 and verification.h5, when both are written, hold the same values in every dataset
   of a case that both have (the viewer reads the first, every check the second): bit for bit
   (one writer writes both from the same arrays).
@@ -335,20 +339,25 @@ def _reference_crack_fields(res, problems, tol, kkt):
 # ---------------------------------------------------------------- viewer datasets
 def viewer_datasets_check(res, a):
     label = "viewer datasets"
-    what = ("fields.h5 equals verification.h5 in every dataset both hold; the solver's constant "
+    what = ("every attribute NAME of a grid G of the field files (fields/*.xdmf, <tool>/fields/"
+            "*.xdmf) is the dataset /cases/G/NAME of its folder's fields.h5; "
+            "fields.h5 equals verification.h5 in every dataset both hold; the solver's constant "
             "fields delta are the case's δ; each reference's u in fields.h5 is its u_levelL.txt "
             "and its p the area-weighted vertex mean of its P1 gradient (to "
             f"{P_ROUNDOFF / EPS:g} ε round-off, recomputed here); bit for bit otherwise")
     problems = []
+    n_links = _attribute_links(res, problems)
     n_same = _fields_equal_verification(res, problems)
     n_delta = _delta_constants(res, problems)
     n_ref = _reference_point_fields(res, problems)
-    if not (n_same or n_delta or n_ref):
+    if not (n_links or n_same or n_delta or n_ref):
         return label, what, [], "no field file"
-    a["crackcheck"]["viewer_datasets"] = {"datasets_against_verification": n_same,
+    a["crackcheck"]["viewer_datasets"] = {"attribute_links": n_links,
+                                          "datasets_against_verification": n_same,
                                           "delta_fields": n_delta, "reference_levels": n_ref}
-    return (label, what + f" ({n_same} datasets against verification.h5, {n_delta} δ fields, "
-            f"{n_ref} reference levels)", _fold(problems), None)
+    return (label, what + f" ({n_links} XDMF attributes, {n_same} datasets against "
+            f"verification.h5, {n_delta} δ fields, {n_ref} reference levels)", _fold(problems),
+            None)
 
 
 def _datasets(group, prefix=""):
@@ -366,6 +375,55 @@ def _datasets(group, prefix=""):
         else:
             out.update(_datasets(obj, prefix + name + "/"))
     return out
+
+
+def _xdmf_files(res):
+    """(folder of its fields.h5, XDMF path) of every field file: the solver's fields/*.xdmf and
+    each reference's <tool>/fields/*.xdmf."""
+    out = []
+    for sub in [""] + sorted(res["refs"]):
+        base = os.path.join(res["folder"], sub)
+        d = os.path.join(base, "fields")
+        if os.path.isdir(d):
+            out.extend((base, os.path.join(d, f)) for f in sorted(os.listdir(d))
+                       if f.endswith(".xdmf"))
+    return out
+
+
+def _attribute_links(res, problems):
+    """Every XDMF attribute NAME of grid G points at /cases/G/NAME of its folder's fields.h5,
+    which holds it: the writers' layout (crates/sdcrack-io/src/output/xdmf/mod.rs, sdfields.py),
+    so that what a viewer labels NAME is the dataset the checks read under that name."""
+    import h5py
+
+    n, files = 0, {}
+    try:
+        for base, path in _xdmf_files(res):
+            x = meshcheck._Xdmf(path)
+            if x.error:
+                continue  # field files' mesh reports an unreadable file
+            h5path = os.path.normpath(os.path.abspath(os.path.join(base, "fields.h5")))
+            rel = os.path.relpath(path, res["folder"])
+            for grid, entry in x.grids.items():
+                for name, link in entry["links"].items():
+                    n += 1
+                    want = f"/cases/{grid}/{name}"
+                    if link is None or link[0] != h5path or link[1] != want:
+                        problems.append(f"{rel}: its attribute {name} of grid {grid} points at "
+                                        f"{'no HDF5 dataset' if link is None else link[1]} "
+                                        f"({'' if link is None else os.path.basename(link[0])})"
+                                        f", not {want} of its fields.h5")
+                        continue
+                    if h5path not in files:
+                        files[h5path] = h5py.File(h5path, "r") if os.path.exists(h5path) else None
+                    if files[h5path] is None or want not in files[h5path]:
+                        problems.append(f"{rel}: its attribute {name} of grid {grid} points at "
+                                        f"{want}, which its fields.h5 does not hold")
+    finally:
+        for f in files.values():
+            if f is not None:
+                f.close()
+    return n
 
 
 def _fields_equal_verification(res, problems):

@@ -438,7 +438,8 @@ def reference_rates_check(res, a):
 # ---------------------------------------------------------------- 4. field files
 class _Xdmf:
     """The uniform grids of an XDMF file: name → {"topology": (h5 file, dataset, dims, n),
-    "geometry": (...), "attributes": {name: dims}}; a file that cannot be read: error text."""
+    "geometry": (...), "attributes": {name: dims}, "links": {name: (h5 file, dataset, dims) or
+    None}}; a file that cannot be read: error text."""
 
     def __init__(self, path):
         self.path = path
@@ -452,7 +453,7 @@ class _Xdmf:
         for g in root.iter("Grid"):
             if g.get("GridType", "Uniform") != "Uniform":
                 continue
-            entry = {"attributes": {}}
+            entry = {"attributes": {}, "links": {}}
             for tag in ("Topology", "Geometry"):
                 el = g.find(tag)
                 item = el.find("DataItem") if el is not None else None
@@ -462,6 +463,7 @@ class _Xdmf:
                 item = at.find("DataItem")
                 entry["attributes"][at.get("Name")] = (item.get("Dimensions") if item is not None
                                                        else None)
+                entry["links"][at.get("Name")] = self._ref(item)
             self.grids[g.get("Name")] = entry
 
     def _ref(self, item):

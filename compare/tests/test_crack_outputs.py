@@ -367,3 +367,22 @@ def test_a_references_viewer_p_fails(folders, tmp_path):
     (line,) = judge(folders["mixed"], tmp_path, damage)["viewer datasets"]
     assert line.startswith("reference freefem level 1: its p is not the area-weighted vertex "
                            "mean of its P1 gradient at 1 vertices, e.g. vertex 5"), line
+
+
+def test_an_attribute_pointing_at_another_dataset_fails(folders, tmp_path):
+    """The crack file's `jump` attribute points at λ (a viewer labels λ as the jump)."""
+    rel = "fields/level1-broken-M1-delta0.crack.xdmf"
+
+    def damage(folder):
+        path = os.path.join(folder, rel)
+        with open(path, encoding="utf-8") as fh:
+            text = fh.read()
+        old = "/cases/level1-broken-M1-delta0/crack/jump<"
+        assert text.count(old) == 1
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(text.replace(old, "/cases/level1-broken-M1-delta0/crack/lambda<"))
+
+    probs = judge(folders["kink"], tmp_path, damage)["viewer datasets"]
+    assert probs == [f"{rel}: its attribute jump of grid level1-broken-M1-delta0/crack points at "
+                     "/cases/level1-broken-M1-delta0/crack/lambda (fields.h5), not "
+                     "/cases/level1-broken-M1-delta0/crack/jump of its fields.h5"], probs
