@@ -51,14 +51,19 @@ which every other check takes on trust.
 * **field files' mesh** — the field files a viewer opens (fields/*.xdmf, the state and series
   file of every case in summary.json) point at a triangle grid (Topology, Geometry) that is the
   case's stored mesh, array for array (exactly: the same float64 and int64 data); every stored
-  mesh is cut along the crack as its u space says: for the broken u every triangle corner at an
-  interior crack node uses the copy of its own face — the vertex number on the + face (left of the
-  path a → v → b along the crack, crates/sdcrack-core/src/mesh.rs `corner_sides`), the − copy on the − face, two
-  different vertices — and, where the mesh export is there, exactly the (plus, minus) pair of the
-  export's crack.txt, with the mesh equal to the export's vertices.txt / triangles.txt (the cracked
-  mesh the references solved on, written by another writer); for the continuous u one vertex per
-  crack node. The crack polylines (fields/*.crack.xdmf) point at the case's crack nodes and
-  segments, and each reference's fields/levelL.xdmf at the export's cracked mesh.
+  mesh and every level of the mesh export is cut along the crack as the SCENE's polylines say
+  (crackcut.py, from the scene copy's [geometry] and the mesh's coordinates alone, kinks and
+  several cracks included): for the broken u (and the export) every interior crack node has the +
+  copy, its original vertex number, and the − copy, one of the last I vertices in crack order
+  (docs/design.md), and every triangle corner at it uses the copy of the face its triangle lies
+  on (+ when left of the polyline walked from its first point: the wedge at a kink); the
+  export's crack.txt lists the (+, −) copies, and with the mesh equal to the export's
+  vertices.txt / triangles.txt (the cracked mesh the references solved on, written by another
+  writer); for the continuous u one vertex per crack node; a tip has one vertex. The case's
+  stored crack nodes and segments are the scene's; the crack polylines (fields/*.crack.xdmf)
+  point at them, and each reference's fields/levelL.xdmf at the export's cracked mesh. A scene
+  on a gmsh file of its own has its cracks in that file, which the folder does not keep: the
+  stored crack (the export's for the export) stands in for the polylines there.
 """
 import math
 import os
@@ -517,9 +522,11 @@ def _dims(text):
 def field_files_check(res, a, meshes):
     label = "field files' mesh"
     what = ("the triangle grid of every case's field files (fields/*.xdmf) is its stored mesh, "
-            "array for array; every stored mesh is cut along the crack as its u space says (broken "
-            "u: the + and − copies of each interior crack node on their own faces, as in the mesh "
-            "export's crack.txt; continuous u: one vertex)")
+            "array for array; every stored mesh and every exported level is cut along the scene's "
+            "polylines as its u space says (broken u: each interior crack node's + copy, the "
+            "original vertex, on the + face left of the polyline, its − copy, one of the last "
+            "vertices in crack order, on the − face, as the mesh export's crack.txt lists them; "
+            "continuous u: one vertex)")
     folder = res["folder"]
     cases = sorted(res["summary"]["cases"], key=case_key)
     exported = _export_levels(res)
