@@ -270,8 +270,9 @@ def test_freefem_contact_force_shifted_by_one_node_fails(folders, tmp_path):
 
     # level 0's one interior node is open (force 0): the shift moves zeros there
     (line,) = judge(folders["mixed"], tmp_path, damage)["crack outputs"]
+    # ‖K‖∞ of the structured grid's P1 stiffness: 4 on the diagonal, 4 × |−1| off it
     assert line.startswith("references dolfinx and freefem level 1: their contact_force differ "
-                           "by 0.699 > 8.23e-08 (‖K‖∞ = 8; "), line
+                           "by ") and "(‖K‖∞ = 8; " in line, line
 
 
 def test_a_contact_force_at_a_tip_fails(folders, tmp_path):
