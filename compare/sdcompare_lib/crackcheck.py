@@ -19,10 +19,11 @@
   at both ends, where λ_h > 0 on the whole edge), ‖λ_h − [u_h]‖ < ‖λ_h‖ in L²(open part), i.e.
   [u_h] is nearer to λ_h than zero is. A jump of the wrong sign (−[u_h]) or a u whose faces are
   exchanged gives ‖λ_h + [u_h]‖ ≥ ‖λ_h‖ wherever λ_h, [u_h] ≥ 0 — a relative distance ≥ 1 —
-  and a u that does not open (zero jump) exactly 1. Measured on the repository's scenes (levels
-  0-2, δ = 0): ≤ 0.34, at tip-contact's level 1 (0.14 at its level 2) and user-mesh's level 0
-  (0.18, 0.08 at levels 1, 2), ≤ 0.17 on the others; falling with h (mixed: 0.134, 1.9e-2,
-  1.6e-2, 1.0e-2 at levels 0-3, 0.141 at level 0 with δ = 1; open-smooth 8e-3 at level 0). LAMBDA_JUMP_BOUND = 1 is that bound: it holds for every δ (the
+  and a u that does not open (zero jump) exactly 1. Measured on every repository scene
+  with an open part (levels 0-2, δ = 0): ≤ 0.47, at stress-active-set's level 0 (0.066, 0.009
+  at levels 1, 2); tip-contact 0.34, 0.14 at levels 1, 2; user-mesh and l-shape ≤ 0.33 at level
+  0; ≤ 0.17 on the others; falling with h (mixed: 0.134, 1.9e-2, 1.6e-2, 1.0e-2 at levels 0-3,
+  0.141 at level 0 with δ = 1). LAMBDA_JUMP_BOUND = 1 is that bound: it holds for every δ (the
   second equation does not contain δ).
 * **each reference's `jump`** (<tool>/fields.h5 /cases/levelL/crack/jump) is u⁺ − u⁻ of its own
   stored u at the (plus, minus) rows of the export's crack.txt, bit for bit (the reference
