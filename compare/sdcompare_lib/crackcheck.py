@@ -194,15 +194,17 @@ def _solver_jumps(res, problems):
             g = f.h5[f"cases/{grid}"]
             if "crack/jump" not in g or "crack/points" not in g:
                 continue
-            d = f.case(grid) if "u" in g else (res["data"].case(grid) if res["data"] is not None
-                                               and res["data"].has_case(grid) else None)
-            if d is None or d["u"] is None:
+            # u from this file, else from the recomputation file (fields.h5 without u)
+            src = g if "u" in g else (res["data"].h5[f"cases/{grid}"] if res["data"] is not None
+                                      and res["data"].has_case(grid) else None)
+            if src is None or "u" not in src:
                 continue
+            u = np.asarray(src["u"][()], dtype=float)
             jump = np.asarray(g["crack/jump"][()], dtype=float)
             cp = np.asarray(g["crack/points"][()], dtype=float)[:, :2]
-            key = (id(d["points"]), cp.tobytes())
+            key = (_mesh_key(g, grid), cp.tobytes())
             if key not in copies:
-                copies[key] = copies_at(d["points"], cp)
+                copies[key] = copies_at(_mesh_points(f, g), cp)
             plus, minus = copies[key]
             where = f"{fname} {_case_text(c)}"
             n += 1
@@ -210,7 +212,7 @@ def _solver_jumps(res, problems):
                 problems.append(f"{where}: {int((plus < 0).sum())} crack node(s) of its jump are no "
                                 "vertex of its mesh")
                 continue
-            want = d["u"][plus] - d["u"][minus]
+            want = u[plus] - u[minus]
             if jump.shape != want.shape or not np.array_equal(jump, want):
                 bad = (np.flatnonzero(jump != want) if jump.shape == want.shape else [0])
                 k = int(bad[0])
@@ -224,7 +226,8 @@ def _solver_jumps(res, problems):
             # M1, broken u: λ_h against the jump on the open part (module docstring), once a case
             if c.get("multiplier") != "M1" or c.get("u_space") != "broken" or grid in ratio_seen:
                 continue
-            lam = d.get("lam")
+            lam = (np.asarray(src["crack/lambda"][()], dtype=float) if "crack/lambda" in src
+                   else None)
             if lam is None or lam.shape != jump.shape:
                 continue
             ratio_seen.add(grid)
@@ -243,6 +246,22 @@ def _solver_jumps(res, problems):
                                 f"{dist[1]:.3g} (ratio {r:.3g} ≥ {LAMBDA_JUMP_BOUND:g}): the "
                                 "stored jump does not open the crack where λ_h does")
     return n, worst, n_ratio
+
+
+def _mesh_key(g, grid):
+    """The dataset path of a case group's mesh (the cases of one mesh link to /meshes/KEY)."""
+    import h5py
+
+    link = g.get("mesh", getlink=True)
+    return link.path if isinstance(link, h5py.SoftLink) else f"/cases/{grid}/mesh"
+
+
+def _mesh_points(f, g):
+    """The points of a case group's mesh in read.Fields `f` (its cache of linked meshes)."""
+    key = _mesh_key(g, "")
+    if key.startswith("/meshes/") and f.has_mesh(key[len("/meshes/"):]):
+        return f.mesh_by_key(key[len("/meshes/"):])[0]
+    return np.asarray(g["mesh/points"][()], dtype=float)
 
 
 def _reference_fields(res, tool):
