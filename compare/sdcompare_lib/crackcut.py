@@ -118,10 +118,7 @@ class SceneCrack:
         polyline point; the faces and the copies' numbers are checked all the same, the node
         set is the stored one)."""
         polylines = exact_mod.scene_cracks(scene_file)
-        self = cls(polylines if polylines or stored is None else chains(*stored), points)
-        self.from_scene = bool(polylines)
-        return self
-
+        return cls(polylines if polylines or stored is None else chains(*stored), points)
 
     def vertices_at(self, points):
         """{node: sorted vertex numbers at its position (bit for bit)}."""
