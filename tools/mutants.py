@@ -36,7 +36,9 @@ from sdcompare_lib.sdresults import write_atomic
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CATALOGUE = os.path.join(ROOT, "tools", "mutants.toml")
 DEFAULT_SCENES = ["scenes/closed-exact.toml", "scenes/open-exact.toml", "scenes/mixed.toml",
-                  "scenes/open-smooth.toml", "scenes/open-graded.toml"]
+                  "scenes/open-smooth.toml", "scenes/open-graded.toml",
+                  # a kink and no reference (issue 43): the cut judged from the scene alone
+                  "tests/data/scenes/kinked-no-references.toml"]
 MUTANT_KEYS = {"name", "file", "find", "replace", "bug", "catches"}
 BEGIN, END = "<!-- tools/mutants: begin -->", "<!-- tools/mutants: end -->"
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable

@@ -51,14 +51,19 @@ which every other check takes on trust.
 * **field files' mesh** — the field files a viewer opens (fields/*.xdmf, the state and series
   file of every case in summary.json) point at a triangle grid (Topology, Geometry) that is the
   case's stored mesh, array for array (exactly: the same float64 and int64 data); every stored
-  mesh is cut along the crack as its u space says: for the broken u every triangle corner at an
-  interior crack node uses the copy of its own face — the vertex number on the + face (left of the
-  path a → v → b along the crack, crates/sdcrack-core/src/mesh.rs `corner_sides`), the − copy on the − face, two
-  different vertices — and, where the mesh export is there, exactly the (plus, minus) pair of the
-  export's crack.txt, with the mesh equal to the export's vertices.txt / triangles.txt (the cracked
-  mesh the references solved on, written by another writer); for the continuous u one vertex per
-  crack node. The crack polylines (fields/*.crack.xdmf) point at the case's crack nodes and
-  segments, and each reference's fields/levelL.xdmf at the export's cracked mesh.
+  mesh and every level of the mesh export is cut along the crack as the SCENE's polylines say
+  (crackcut.py, from the scene copy's [geometry] and the mesh's coordinates alone, kinks and
+  several cracks included): for the broken u (and the export) every interior crack node has the +
+  copy, its original vertex number, and the − copy, one of the last I vertices in crack order
+  (docs/design.md), and every triangle corner at it uses the copy of the face its triangle lies
+  on (+ when left of the polyline walked from its first point: the wedge at a kink); the
+  export's crack.txt lists the (+, −) copies, and with the mesh equal to the export's
+  vertices.txt / triangles.txt (the cracked mesh the references solved on, written by another
+  writer); for the continuous u one vertex per crack node; a tip has one vertex. The case's
+  stored crack nodes and segments are the scene's; the crack polylines (fields/*.crack.xdmf)
+  point at them, and each reference's fields/levelL.xdmf at the export's cracked mesh. A scene
+  on a gmsh file of its own has its cracks in that file, which the folder does not keep: the
+  stored crack (the export's for the export) stands in for the polylines there.
 """
 import math
 import os
@@ -67,7 +72,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from . import exact as exact_mod
-from . import rates, theory
+from . import crackcut, rates, theory
 from .read import case_key, finite_number, variant_suffix
 from .render import fmt_delta
 
@@ -436,118 +441,10 @@ def reference_rates_check(res, a):
 
 
 # ---------------------------------------------------------------- 4. field files
-def _side_plus(out, back, d):
-    """crates/sdcrack-core/src/mesh.rs `left_of_path`, vectorised: direction d from a crack node lies left of the
-    path arriving from `back` and leaving along `out` (the + face)."""
-    def cross(a, b):
-        return a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-
-    def dot(a, b):
-        return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1]
-
-    straight = (cross(out, back) == 0.0) & (dot(out, back) < 0.0)
-
-    def angle(x):
-        t = np.arctan2(cross(out, x), dot(out, x))
-        return np.where(t < 0.0, t + 2.0 * math.pi, t)
-
-    return np.where(straight, cross(out, d) > 0.0, angle(d) < angle(back))
-
-
-def crack_faces(points, tris, crack_points, segments, broken, pairs=None):
-    """Problems of one mesh's cut along the crack: at each interior crack node the triangle
-    corners of the + face use one vertex, those of the − face another (broken u) or the same one
-    (continuous u); `pairs` (I, 2): the export's (plus, minus) vertex of each crack node, which
-    the corners must use. Tips have one vertex either way."""
-    P = np.asarray(points, dtype=float)[:, :2]
-    T = np.asarray(tris, dtype=np.int64)
-    C = np.asarray(crack_points, dtype=float)[:, :2]
-    S = np.asarray(segments, dtype=np.int64)
-    out = []
-    # the mesh vertices at each crack node's position (the node and, broken, its − copy)
-    zp = P[:, 0] + 1j * P[:, 1]
-    zc = C[:, 0] + 1j * C[:, 1]
-    on = np.flatnonzero(np.isin(zp, zc))
-    node_of = {complex(z): k for k, z in enumerate(zc)}
-    at = {}
-    for v in on:
-        at.setdefault(node_of[complex(zp[v])], []).append(int(v))
-    missing = [k for k in range(len(C)) if k not in at]
-    if missing:
-        k = missing[0]
-        return [f"{len(missing)} crack node(s) are no mesh vertex, e.g. ({C[k, 0]:.6g}, "
-                f"{C[k, 1]:.6g})"]
-    after = np.full(len(C), -1)
-    before = np.full(len(C), -1)
-    after[S[:, 0]] = S[:, 1]
-    before[S[:, 1]] = S[:, 0]
-    vert_node = np.full(len(P), -1)
-    for k, vs in at.items():
-        vert_node[vs] = k
-    corner = np.argwhere(vert_node[T] >= 0)  # (n, 2): triangle, corner
-    tri, j = corner[:, 0], corner[:, 1]
-    node = vert_node[T[tri, j]]
-    interior = (after[node] >= 0) & (before[node] >= 0)
-    tri, j, node = tri[interior], j[interior], node[interior]
-    x = C[node]
-    cen = P[T[tri]].sum(axis=1) / 3.0
-    plus = _side_plus(C[after[node]] - x, C[before[node]] - x, cen - x)
-    used = T[tri, j]
-    big = np.iinfo(np.int64).max
-
-    def spread(mask):
-        """Per crack node: the smallest and largest vertex its corners in `mask` use (big, -1
-        where it has none)."""
-        lo, hi = np.full(len(C), big), np.full(len(C), -1)
-        np.minimum.at(lo, node[mask], used[mask])
-        np.maximum.at(hi, node[mask], used[mask])
-        return lo, hi
-
-    seen = np.zeros(len(C), dtype=bool)
-    seen[node] = True
-    lo_p, hi_p = spread(plus)
-    lo_m, hi_m = spread(~plus)
-    if broken:
-        one_each = (lo_p == hi_p) & (lo_m == hi_m) & (hi_p >= 0) & (hi_m >= 0) & (lo_p != lo_m)
-        merged = np.flatnonzero(seen & ~one_each)
-        if len(merged):
-            k = merged[0]
-            vp, vm = sorted(set(used[(node == k) & plus].tolist())), \
-                sorted(set(used[(node == k) & ~plus].tolist()))
-            out.append(f"the broken u's mesh is not cut along the crack at {len(merged)} of "
-                       f"{int(seen.sum())} interior crack node(s), e.g. at ({C[k, 0]:.6g}, "
-                       f"{C[k, 1]:.6g}) the + face uses vertex {vp} and the − face vertex {vm} "
-                       "(each face must use one copy of its own, the two different)")
-        if pairs is not None:
-            want = np.where(plus, pairs[node, 0], pairs[node, 1])
-            wrong = np.flatnonzero(used != want)
-            if len(wrong):
-                i = wrong[0]
-                k = node[i]
-                out.append(f"{len(wrong)} triangle corner(s) at interior crack nodes use another "
-                           f"vertex than their face's copy in the mesh export's crack.txt, e.g. at "
-                           f"({C[k, 0]:.6g}, {C[k, 1]:.6g}) a corner of the "
-                           f"{'+' if plus[i] else '−'} face uses vertex {used[i]}, crack.txt's "
-                           f"{'plus' if plus[i] else 'minus'} copy is {want[i]}")
-    else:
-        lo, hi = np.minimum(lo_p, lo_m), np.maximum(hi_p, hi_m)
-        split = np.flatnonzero(seen & (lo != hi))
-        if len(split):
-            k = split[0]
-            out.append(f"the continuous u's mesh is cut at {len(split)} crack node(s), e.g. at "
-                       f"({C[k, 0]:.6g}, {C[k, 1]:.6g}) its corners use vertices "
-                       f"{sorted(set(used[node == k].tolist()))}")
-    tips = [k for k in range(len(C)) if (after[k] < 0 or before[k] < 0) and len(at[k]) != 1]
-    if tips:
-        k = tips[0]
-        out.append(f"{len(tips)} crack tip(s) have more than one vertex, e.g. ({C[k, 0]:.6g}, "
-                   f"{C[k, 1]:.6g}): {at[k]}")
-    return out
-
-
 class _Xdmf:
     """The uniform grids of an XDMF file: name → {"topology": (h5 file, dataset, dims, n),
-    "geometry": (...), "attributes": {name: dims}}; a file that cannot be read: error text."""
+    "geometry": (...), "attributes": {name: dims}, "links": {name: (h5 file, dataset, dims) or
+    None}}; a file that cannot be read: error text."""
 
     def __init__(self, path):
         self.path = path
@@ -561,7 +458,7 @@ class _Xdmf:
         for g in root.iter("Grid"):
             if g.get("GridType", "Uniform") != "Uniform":
                 continue
-            entry = {"attributes": {}}
+            entry = {"attributes": {}, "links": {}}
             for tag in ("Topology", "Geometry"):
                 el = g.find(tag)
                 item = el.find("DataItem") if el is not None else None
@@ -571,6 +468,7 @@ class _Xdmf:
                 item = at.find("DataItem")
                 entry["attributes"][at.get("Name")] = (item.get("Dimensions") if item is not None
                                                        else None)
+                entry["links"][at.get("Name")] = self._ref(item)
             self.grids[g.get("Name")] = entry
 
     def _ref(self, item):
@@ -624,9 +522,11 @@ def _dims(text):
 def field_files_check(res, a, meshes):
     label = "field files' mesh"
     what = ("the triangle grid of every case's field files (fields/*.xdmf) is its stored mesh, "
-            "array for array; every stored mesh is cut along the crack as its u space says (broken "
-            "u: the + and − copies of each interior crack node on their own faces, as in the mesh "
-            "export's crack.txt; continuous u: one vertex)")
+            "array for array; every stored mesh and every exported level is cut along the scene's "
+            "polylines as its u space says (broken u: each interior crack node's + copy, the "
+            "original vertex, on the + face left of the polyline, its − copy, one of the last "
+            "vertices in crack order, on the − face, as the mesh export's crack.txt lists them; "
+            "continuous u: one vertex)")
     folder = res["folder"]
     cases = sorted(res["summary"]["cases"], key=case_key)
     exported = _export_levels(res)
@@ -643,22 +543,39 @@ def field_files_check(res, a, meshes):
             files[path] = _Xdmf(path) if os.path.exists(path) else None
         return files[path]
 
+    def scene_crack(pts, stored):
+        """The scene's crack nodes on this mesh (crackcut; `stored` the crack that stands in for
+        the polylines of a scene on a mesh file), or the problem text."""
+        try:
+            return crackcut.SceneCrack.of_scene(res["scene_file"], pts, stored)
+        except exact_mod.ExactError as exc:
+            return str(exc)
+
     def check_cut(key, pts, tris, c, where):
-        """The cut of one mesh (once per mesh): problems prefixed with `where`."""
+        """The cut of one mesh against the scene's polylines (once per mesh), and the case's
+        stored crack nodes against the scene's: problems prefixed with `where`."""
         if key in cut_checked:
             return
         cp, segs = meshes.crack_of_case(c)
-        if cp is None:
+        sc = scene_crack(pts, None if cp is None else (cp, segs))
+        if isinstance(sc, str):
+            cut_checked[key] = [sc]
+            problems.append(f"{where}: {sc}")
+            return
+        if not len(sc.xy):
             cut_checked[key] = []
             return
         lv = int(c["level"])
         broken = c.get("u_space") == "broken"
-        pairs = None
         m = exported.get(lv)
-        if broken and m is not None and m.crack.shape[0] == len(cp) \
-                and np.array_equal(m.points[m.crack[:, 0], :2], cp[:, :2]):
-            pairs = m.crack
-        found = crack_faces(pts, tris, cp, segs, broken, pairs)
+        pairs = (m.crack if broken and m is not None and m.points.shape[0] == len(pts)
+                 and np.array_equal(m.points[:, :2], pts[:, :2]) else None)
+        found = crackcut.cut_problems(sc, pts, tris, broken, pairs)
+        if cp is not None and not (np.array_equal(cp[:, :2], sc.xy)
+                                   and np.array_equal(segs, sc.segments)):
+            found.append("the case's crack polylines (crack/points, crack/segments) are not the "
+                         f"scene's crack nodes in crack order ({len(cp)} stored, {len(sc.xy)} "
+                         "from the scene's polylines on this mesh)")
         cut_checked[key] = found
         problems.extend(f"{where}: {p}" for p in found)
 
@@ -712,6 +629,15 @@ def field_files_check(res, a, meshes):
                         if cg is not None:
                             problems.extend(f"{crack_rel}: {p}" for p in
                                             _crack_grid_problems(cg, meshes, arrays, c))
+        for lv, em in sorted(exported.items()):
+            # the mesh export the references solve on: cut as the scene says, whatever u the
+            # solver ran (a scene of continuous u only has no stored broken mesh)
+            sc = scene_crack(em.points, (em.points[em.crack[:, 0]], em.segments()))
+            found = ([sc] if isinstance(sc, str) else
+                     crackcut.cut_problems(sc, em.points, em.tris, True, em.crack)
+                     if len(sc.xy) else [])
+            cut_checked[("export", lv)] = found
+            problems.extend(f"mesh/level{lv} (the mesh export): {p}" for p in found)
         for tool, ref in sorted(res["refs"].items()):
             for lv, em in sorted((ref.get("mesh") or {}).items()):
                 rel = os.path.join(tool, "fields", f"level{lv}.xdmf")
