@@ -130,6 +130,16 @@ def p1_field_errors(mesh, u, ex, scene_file):
         mesh.points, mesh.tris, u, mesh.crack, ex, ranges=mesh.ranges))
 
 
+def p1_interpolation_errors(mesh, ex, scene_file):
+    """``exact.p1_interpolation_errors`` on the export level `mesh` (an ExportLevel) through the
+    store: the references' own interpolation yardstick (one per mesh, whichever reference)."""
+    arrays = {"points": mesh.points, "triangles": mesh.tris, "crack": mesh.crack,
+              "ranges": np.asarray(mesh.ranges, dtype=np.int64)}
+    key = _key("p1 interpolant", arrays, scene_file, {})
+    return STORE.lookup(key, lambda: exact.p1_interpolation_errors(
+        mesh.points, mesh.tris, mesh.crack, ex, ranges=mesh.ranges))
+
+
 def precompute(folder):
     """Computes into STORE the independent errors of one shard folder (SHARD/<name>/ of a solver
     shard: summary.json with fields.h5 or verification.h5; or of a reference shard: <tool>/ and
@@ -158,6 +168,7 @@ def precompute(folder):
             lv = int(c["level"])
             if lv in meshes and lv in ref["u"] and isinstance(c.get("errors"), dict):
                 p1_field_errors(meshes[lv], ref["u"][lv], ex, scene_file)
+                p1_interpolation_errors(meshes[lv], ex, scene_file)
                 n += 1
     return n
 
