@@ -32,9 +32,10 @@ mesh it solved on (checks.independent_errors):
 Céa's lemma for the contact problem (Falk's argument, conforming case): the references solve
 min ½a(v, v) − F(v) over K_h = {v P1 on the cracked mesh, v = I_h g on Γ_D, [v](x_j) ≥ 0 at every
 crack node}; [v] is linear on each crack segment, so K_h ⊂ K, and I_h u ∈ K_h ([u] ≥ 0 at the
-nodes). With a(u, w) − F(w) = −⟨λ, [w]⟩_Γc (λ = −∂u/∂ν ≥ 0, λ[u] = 0) and the discrete inequality
-a(u_h, I_h u − u_h) ≥ F(I_h u − u_h):
-    ‖∇(u − u_h)‖² ≤ a(u − u_h, u − I_h u) + ⟨λ, [I_h u] − [u]⟩_Γc.
+nodes). With a(u, w) − F(w) = ⟨λ, [w]⟩_Γc (λ ≥ 0 the contact force, λ[u] = 0 on Γc), the discrete
+inequality a(u_h, I_h u − u_h) ≥ F(I_h u − u_h) and [u_h] ≥ 0:
+    ‖∇(u − u_h)‖² ≤ a(u − u_h, u − I_h u) + ⟨λ, [I_h u] − [u_h]⟩_Γc
+                 ≤ a(u − u_h, u − I_h u) + ⟨λ, [I_h u] − [u]⟩_Γc.
 The last term vanishes where the exact crack is open (λ = 0) and where it is closed along whole
 segments ([u] = 0 there, so [I_h u] = 0): ‖∇(u − u_h)‖ ≤ ‖∇(u − I_h u)‖, constant 1, on any mesh
 and for any regularity. The factor above 1 is for what the argument leaves out: the references'
