@@ -41,10 +41,9 @@ segments ([u] = 0 there, so [I_h u] = 0): ‖∇(u − u_h)‖ ≤ ‖∇(u − 
 and for any regularity. The factor above 1 is for what the argument leaves out: the references'
 load quadrature (F_h ≠ F) and the segments where the exact crack changes from closed to open.
 """
-import math
-
 from . import rates, theory
 from .meshcheck import grading
+from .yardsticks import ABS_FLOOR
 from .read import finite_number
 from .verdict import mesh_parameter
 
@@ -200,6 +199,26 @@ def yardstick_quantities(graded, s):
 FACTORS = {"u_l2": L2_FACTOR, "p_l2": ENERGY_FACTOR}
 
 
+def _worse(row, other):
+    """Whether `row` is a worse level than `other`: over the bound first, then by ratio (a zero
+    yardstick, P1 exact there, ranks by the error)."""
+    def rank(r):
+        return (not r["ok"], r["ratio"] if r["ratio"] is not None else r["error"] / ABS_FLOOR)
+    return rank(row) > rank(other)
+
+
+def _problem_ratio(row):
+    """"ratio 3.68", or "a zero yardstick" (u in P1 on that mesh, the error above round-off)."""
+    return "a zero yardstick" if row["ratio"] is None else f"ratio {row['ratio']:.3g}"
+
+
+def _ratio_text(row):
+    """"0.894 ×", or the error itself where the yardstick is zero (u in P1 on that mesh)."""
+    if row["ratio"] is None:
+        return f"{row['error']:.3e} (a zero yardstick)"
+    return f"{row['ratio']:.3g} ×" if not row["ok"] else f"{row['ratio']:.3f} ×"
+
+
 def yardstick_check(res, a, series, na):
     """Each reference's error ≤ factor × its own interpolation yardstick at every level."""
     label = YARDSTICK_LABEL
@@ -219,22 +238,21 @@ def yardstick_check(res, a, series, na):
         for q in yardstick_quantities(graded, reg):
             worst = None
             for lv, e, y in zip(s["levels"], s["errors"][q], s["interpolation"][q]):
-                ratio = e / y if y > 0 else (math.inf if e > 0 else 0.0)
-                ok = ratio <= FACTORS[q]
                 row = {"reference": tool, "quantity": q, "level": lv, "error": e,
-                       "yardstick": y, "ratio": ratio, "factor": FACTORS[q], "ok": ok}
+                       "yardstick": y, "ratio": e / y if y > 0 else None, "factor": FACTORS[q],
+                       "ok": e <= FACTORS[q] * y + ABS_FLOOR}
                 a["reference_own"]["yardstick"].append(row)
-                if worst is None or ratio > worst["ratio"]:
+                if worst is None or _worse(row, worst):
                     worst = row
             name = "u" if q == "u_l2" else "∇u"
-            measured.append(f"{tool} {name} ≤ {worst['ratio']:.3f} × (level {worst['level']})")
+            measured.append(f"{tool} {name} ≤ {_ratio_text(worst)} (level {worst['level']})")
             if not worst["ok"]:
                 bad = [r for r in a["reference_own"]["yardstick"]
                        if r["reference"] == tool and r["quantity"] == q and not r["ok"]]
                 problems.append(
                     f"reference {tool} {q} at level {worst['level']}: error {worst['error']:.3e} > "
                     f"{FACTORS[q]:g} × its interpolation yardstick {worst['yardstick']:.3e} "
-                    f"(ratio {worst['ratio']:.3g}; {len(bad)} of {len(s['levels'])} levels over "
+                    f"({_problem_ratio(worst)}; {len(bad)} of {len(s['levels'])} levels over "
                     "the bound): it does not solve the scene's problem as well as P1 on its mesh "
                     "can")
     return label, what + f" (largest ratios: {'; '.join(measured)})", problems, None

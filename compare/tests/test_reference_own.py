@@ -203,3 +203,21 @@ def test_the_interpolation_yardstick_is_the_interpolant_on_the_cracked_mesh():
     square = exact.ExactSolution("x^2", px="2*x", py="0", f="-2", crack=cut)
     e = exact.p1_interpolation_errors(P, T, crack, square)
     assert e["p_l2"] == pytest.approx(h / math.sqrt(3.0), rel=1e-10), e
+
+
+def test_a_zero_yardstick_holds_round_off_and_nothing_more():
+    """Where u is P1 on the mesh (interpolation error 0), the reference's error must be round-off:
+    1e-14 passes (yardsticks.ABS_FLOOR), 1e-6 fails with "a zero yardstick"."""
+    for error, fails in ((1e-14, False), (1e-6, True)):
+        res, a = inputs(tools=("dolfinx",))
+        for r in a["independent"]:
+            r["interpolation"]["p_l2"] = 0.0 if r["level"] == 4 else r["interpolation"]["p_l2"]
+            if r["level"] == 4:
+                r["p_l2"] = (error, error)
+        checks, _ = judged(res, a)
+        problems = checks[YARD][1]
+        assert bool(problems) == fails, problems
+        if fails:
+            assert problems[0].startswith("reference dolfinx p_l2 at level 4: error 1.000e-06 > "
+                                          "1.05 × its interpolation yardstick 0.000e+00 (a zero "
+                                          "yardstick; 1 of 5 levels"), problems
