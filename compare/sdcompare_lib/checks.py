@@ -350,6 +350,9 @@ def independent_errors(res, scene_file):
             m = meshes[lv]
             ours = precomputed.p1_field_errors(m, ref["u"][lv], ex, scene_file)
             row = _error_row(tool, c, c["errors"], ours, quantities=("u_l2", "p_l2", "lambda_l2"))
+            # the reference's own yardstick (refcheck.py): right after its errors, the exact
+            # solution's values at the same quadrature points are still at hand (exact.py)
+            row["interpolation"] = precomputed.p1_interpolation_errors(m, ex, scene_file)
             rows.append(row)
             reported.setdefault(lv, {})[tool] = c["errors"]
             if not row["worst"] <= REFERENCE_ERRORS_RTOL:

@@ -945,6 +945,42 @@ def p1_field_errors(points, triangles, u, crack_pairs, exact, quad=None, ranges=
     return {"u_l2": math.sqrt(su), "p_l2": math.sqrt(sp), "lambda_l2": math.sqrt(sl)}
 
 
+# Corners of a triangle are evaluated this fraction of the way towards its centroid, so that a
+# value on the crack is taken from the triangle's own side (sign(y), atan2's branch cut): the P1
+# interpolant on a cracked mesh has one value per face at every crack node.
+INSIDE = 1e-12
+
+
+def interpolant_corners(exact, P, tris):
+    """(T,3) the P1 interpolant I_h u of the exact u at the corners of each triangle, each corner
+    taken from its own triangle's side of the crack (INSIDE)."""
+    X = np.asarray(P, dtype=float)[:, :2][np.asarray(tris, dtype=np.int64)]  # (T,3,2)
+    c = X.mean(axis=1, keepdims=True)
+    inner = X + INSIDE * (c - X)
+    return np.asarray(exact.u(inner[..., 0], inner[..., 1]), dtype=float) * np.ones(X.shape[:2])
+
+
+def p1_interpolation_errors(points, triangles, crack_pairs, exact, quad=None, ranges=None):
+    """‖u − I_h u‖ and ‖∇(u − I_h u)‖ of the P1 interpolant of the exact u on a cracked mesh (a
+    reference solver's: crack_pairs, ranges as p1_field_errors, for the tips the quadrature
+    refines towards), with the quadrature of p1_field_errors (the same points: its evaluation of
+    the exact solution is shared). Returns {"u_l2", "p_l2"}."""
+    quad = quad or Quadrature()
+    P = np.asarray(points, dtype=float)[:, :2]
+    t = np.asarray(triangles, dtype=np.int64)
+    pairs = np.asarray(crack_pairs, dtype=np.int64)
+    C = P[pairs[:, 0]]
+    segments = consecutive_segments(len(pairs)) if ranges is None else np.concatenate(
+        [consecutive_segments(n) + first for first, n in ranges])
+    tips = list(C[crack_tips(segments, C.shape[0])])
+    u_tri = interpolant_corners(exact, P, t)
+    _, _, G, _ = _geometry(P, t)
+    grad = np.einsum("tv,tvd->td", u_tri, G)
+    p_tri = np.repeat(grad[:, None, :], 3, axis=1)
+    su, sp, _ = _domain_errors(P, t, exact, tips, quad, u_tri, p_tri, None, want_div=False)
+    return {"u_l2": math.sqrt(su), "p_l2": math.sqrt(sp)}
+
+
 def integrate_on_triangle(fn, vertices, tip=None, quad=None):
     """∫_T fn(x, y) over one triangle: the tip rule collapsed at vertex ``tip`` (0, 1 or 2), or
     for tip=None the plain Stroud rule (no near-tip splitting). For tests."""

@@ -58,7 +58,8 @@ NOT_JUDGED = ("not judged: the scene's exact data are inconsistent (see the chec
 # data as this tool does, which holds or not whatever the data are.)
 JUDGED_AGAINST_EXACT = ("series", "expectations", "interpolation yardstick", "reference yardstick",
                         "reference ratio settles", "recorded reference ratio",
-                        "Theorem 2.1 (exact)", "graded reference rates")
+                        "Theorem 2.1 (exact)", "reference orders",
+                        "reference interpolation yardstick")
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,4 +1,4 @@
-"""The meshes are what the scene says: four checks of the meshes themselves,
+"""The meshes are what the scene says: three checks of the meshes themselves,
 which every other check takes on trust.
 
 * **mesh size h** — each case's `h` in summary.json is the largest triangle diameter (the longest
@@ -37,17 +37,6 @@ which every other check takes on trust.
   A mesh graded with a larger β (β + 0.2, or 1 − β for β < 1/2) is coarser near the tips and
   fails the upper bound; one graded with a smaller β has smaller tip elements and fails the lower
   bound.
-* **graded reference rates** — on a graded scene with an exact solution whose regularity the run's
-  meshes resolve (theory.regularity: the exact u's interpolation error converges at the smooth
-  order) and a grading exponent β below the crack tip's singular exponent 1/2 (TIP_EXPONENT:
-  u ~ r^{1/2}; a mesh with h_T ~ h r^{1−β} near such a singularity restores the optimal P1 orders
-  iff β < 1/2, graded-mesh theory (Babuška–Kellogg–Pitkäranta 1979; Apel, Anisotropic finite
-  elements, 1999); at β = 1/2 a log factor remains, docs/scenes.md), each reference's errors
-  against the exact solution, as recomputed by this tool (the independent errors), converge at P1's
-  optimal orders on the cracked mesh (theory.p1_order: u 2, ∇u 1) per halving of N^{-1/2}
-  (N: the reference's unknowns), by the series rule (rates.series_status: errors decreasing over
-  the last three levels and each of the last two rates ≥ order − theory.RATE_MARGIN). The
-  references' λ has no P1 order (their jump superconverges) and is not held.
 * **field files' mesh** — the field files a viewer opens (fields/*.xdmf, the state and series
   file of every case in summary.json) point at a triangle grid (Topology, Geometry) that is the
   case's stored mesh, array for array (exactly: the same float64 and int64 data); every stored
@@ -82,23 +71,19 @@ H_RTOL = 1e-12
 GRADED_UPPER_RTOL = 1e-9
 # d_min ≥ floor / GRADED_LOWER_FACTOR on the structured grid of square cells: one bisection.
 GRADED_LOWER_FACTOR = math.sqrt(2.0)
-# The crack tip's singular exponent (u ~ r^{1/2}): a grading exponent β below it restores the
-# optimal P1 orders of the references.
-TIP_EXPONENT = 0.5
-# The quantities of the references held on graded meshes (their λ has no P1 order).
-REFERENCE_QUANTITIES = ("u_l2", "p_l2")
 # Square cells: the two sides of a cell agree to round-off.
 SQUARE_RTOL = 1e-12
 
 
 def checks(res, a):
-    """The check rows (label, requirement, problems, not-applicable reason or None) of the four
-    mesh checks; measured values go to a["meshcheck"] (report.json's checks carry them in their
+    """The check rows (label, requirement, problems, not-applicable reason or None) of the three
+    mesh checks (the references' own rates on graded meshes, once here, are refcheck.py's, with
+    their rates on uniform meshes); measured values go to a["meshcheck"] (report.json's checks carry them in their
     requirement text)."""
     a["meshcheck"] = {}
     meshes = _MeshCache(res)
     return [h_check(res, a, meshes), graded_check(res, a, meshes),
-            reference_rates_check(res, a), field_files_check(res, a, meshes)]
+            field_files_check(res, a, meshes)]
 
 
 # ---------------------------------------------------------------- geometry
@@ -266,7 +251,8 @@ def h_check(res, a, meshes):
 
 
 # ---------------------------------------------------------------- 2. graded levels
-def _grading(scene_file):
+def grading(scene_file):
+    """(β, R) of the scene's [discretization] grading, or None."""
     d = scene_file.get("discretization")
     g = d.get("grading") if isinstance(d, dict) else None
     if not isinstance(g, dict):
@@ -297,13 +283,13 @@ def _structured_square_h0(scene_file):
 def graded_check(res, a, meshes):
     label = "graded mesh law"
     sf = res["scene_file"]
-    grading = _grading(sf)
+    law = grading(sf)
     what = ("every triangle of every level within the grading law of the mesher: d_T ≤ "
             "h_ℓ (r_T/R)^(1−β) (floored at r₀ = R (h_ℓ/R)^(1/β), h_ℓ beyond R; crates/sdcrack-core/src/mesh/bisect.rs) "
             f"× (1 + {GRADED_UPPER_RTOL:g})")
-    if grading is None:
+    if law is None:
         return label, what, [], "the scene has no [discretization] grading (uniform levels)"
-    beta, radius = grading
+    beta, radius = law
     if beta >= 1.0:
         return label, what, [], "β = 1: the mesher's levels are uniform (no grading)"
     try:
@@ -374,70 +360,6 @@ def graded_check(res, a, meshes):
              "diameters depend on their shapes)")
     return (label, what + f" (β = {beta:g}, R = {radius:g}, h₀ = {h0:.6g} from {h0_from}, "
             f"{len(rows)} level(s){ratio}{lower})", problems, None)
-
-
-# ---------------------------------------------------------------- 3. references' rates
-def reference_rates_check(res, a):
-    label = "graded reference rates"
-    sf = res["scene_file"]
-    grading = _grading(sf)
-    orders = {q: theory.p1_order(q, 1.0) for q in REFERENCE_QUANTITIES}
-    what = (f"on graded meshes (β < {TIP_EXPONENT:g}) each reference's u and ∇u errors against the "
-            f"exact solution (recomputed here) converge at P1's orders {orders['u_l2']:g} and "
-            f"{orders['p_l2']:g} per halving of N^-1/2: each of the last two rates ≥ order − "
-            f"{theory.RATE_MARGIN:g}")
-    if grading is None:
-        return label, what, [], "the scene has no [discretization] grading"
-    beta, _ = grading
-    if not res["refs"]:
-        return label, what, [], "the scene runs no reference"
-    if a.get("exact") is None:
-        return label, what, [], ("the scene has no [exact]: the regularity the references' "
-                                 "orders rest on cannot be measured (a singularity the grading "
-                                 "does not treat, e.g. a re-entrant corner, limits them)")
-    if not beta < TIP_EXPONENT:
-        return label, what, [], (f"β = {beta:g} is not below the tip singularity's exponent "
-                                 f"{TIP_EXPONENT:g}: the grading does not restore the optimal "
-                                 "order (a log factor at β = 1/2)")
-    if a.get("regularity", 0.0) < 1.0:
-        return label, what, [], (f"the exact u is not resolved as smooth on these meshes "
-                                 f"({a.get('regularity_reason')}): the grading does not restore "
-                                 "the optimal order")
-    problems, measured = [], []
-    undecided = a["meshcheck"].setdefault("reference_rates_undecided", [])
-    for tool, ref in sorted(res["refs"].items()):
-        unknowns = {int(c["level"]): c.get("unknowns") for c in ref["summary"].get("cases", [])}
-        rows = sorted((r for r in a.get("independent") or [] if r["source"] == tool),
-                      key=lambda r: r["level"])
-        for q, order in orders.items():
-            levels, N, e = [], [], []
-            for r in rows:
-                pair = r.get(q)
-                v = pair[1] if isinstance(pair, tuple) and finite_number(pair[1]) else (
-                    pair[0] if isinstance(pair, tuple) else None)
-                n = unknowns.get(r["level"])
-                if finite_number(v) and finite_number(n) and n > 0:
-                    levels.append(r["level"])
-                    N.append(float(n) ** -0.5)
-                    e.append(float(v))
-            if len(e) < rates.RULE_LEVELS:
-                continue
-            threshold = theory.threshold(order)
-            status, reason = rates.series_status(N, e, levels, threshold)
-            last = [x for x in rates.successive_rates(N, e)[-2:] if x is not None]
-            measured.append(f"{tool} {'u' if q == 'u_l2' else '∇u'} "
-                            + ", ".join(f"{x:.2f}" for x in last))
-            line = (f"reference {tool} {q} on the graded meshes (β = {beta:g}): {reason} "
-                    f"(P1's order {order:g} per halving of N^-1/2, threshold {threshold:g})")
-            if status == "inconclusive":  # cannot judge yet: the verdict says which levels to run
-                undecided.append(line)
-            elif status != "converges":
-                problems.append(line)
-    if not measured:
-        return label, what, [], (f"fewer than {rates.RULE_LEVELS} levels with the references' "
-                                 "errors: two rates cannot be measured")
-    a["meshcheck"]["reference_rates"] = measured
-    return label, what + f" (last two rates: {'; '.join(measured)})", problems, None
 
 
 # ---------------------------------------------------------------- 4. field files

@@ -17,7 +17,8 @@ solution, stored under a sha256 of everything it depends on:
 The report reads the same arrays from the merged folder (``sdcrack merge`` copies them bit for bit)
 and uses an entry only when its key matches; anything else is recomputed. A stale or foreign file
 can slow a report down, never change what it reports: the report states how many errors came from
-precomputed entries (report.json ``independent_precomputed``).
+precomputed entries (report.json ``independent_precomputed``; the references' interpolation
+yardsticks, refcheck.py, are entries too, one per mesh).
 """
 import hashlib
 import json
@@ -130,6 +131,25 @@ def p1_field_errors(mesh, u, ex, scene_file):
         mesh.points, mesh.tris, u, mesh.crack, ex, ranges=mesh.ranges))
 
 
+# The interpolation yardsticks this process has looked up, by key: both references solve on one
+# mesh export, and the second asks for the first's (not a precomputed entry used: STORE's counts
+# stay those of the files read and of what was computed).
+_INTERPOLANTS = {}
+
+
+def p1_interpolation_errors(mesh, ex, scene_file):
+    """``exact.p1_interpolation_errors`` on the export level `mesh` (an ExportLevel) through the
+    store: the references' own interpolation yardstick (refcheck.py), one per mesh whichever
+    reference asks."""
+    arrays = {"points": mesh.points, "triangles": mesh.tris, "crack": mesh.crack,
+              "ranges": np.asarray(mesh.ranges, dtype=np.int64)}
+    key = _key("p1 interpolant", arrays, scene_file, {})
+    if key not in _INTERPOLANTS:
+        _INTERPOLANTS[key] = STORE.lookup(key, lambda: exact.p1_interpolation_errors(
+            mesh.points, mesh.tris, mesh.crack, ex, ranges=mesh.ranges))
+    return dict(_INTERPOLANTS[key])
+
+
 def precompute(folder):
     """Computes into STORE the independent errors of one shard folder (SHARD/<name>/ of a solver
     shard: summary.json with fields.h5 or verification.h5; or of a reference shard: <tool>/ and
@@ -158,6 +178,7 @@ def precompute(folder):
             lv = int(c["level"])
             if lv in meshes and lv in ref["u"] and isinstance(c.get("errors"), dict):
                 p1_field_errors(meshes[lv], ref["u"][lv], ex, scene_file)
+                p1_interpolation_errors(meshes[lv], ex, scene_file)
                 n += 1
     return n
 

@@ -57,18 +57,6 @@ GRADED_INTERPOLATION_QUANTITIES = ("p_l2",)
 REFERENCE_FACTOR = {"u_l2": 3.0, "p_l2": 3.0, "lambda_l2": 3.0}
 # Errors at or below this are zero to round-off (λ on a closed crack): never a violation.
 ABS_FLOOR = 1e-12
-# Corners are evaluated this fraction of the way towards the triangle's centroid, so that a value
-# on the crack is taken from the triangle's own side (sign(y), atan2's branch cut).
-INSIDE = 1e-12
-
-
-def _interpolant(exact, P, tris):
-    """(T,3) vertex values of the P1 interpolant of exact u, each triangle's corners taken from
-    its own side of the crack."""
-    X = P[tris]  # (T,3,2)
-    c = X.mean(axis=1, keepdims=True)
-    inner = X + INSIDE * (c - X)
-    return np.asarray(exact.u(inner[..., 0], inner[..., 1]), dtype=float)
 
 
 def interpolation_errors(data, cases, exact, quad=None):
@@ -86,7 +74,7 @@ def interpolation_errors(data, cases, exact, quad=None):
         P = np.asarray(f["points"], dtype=float)[:, :2]
         t = np.asarray(f["tris"], dtype=np.int64)
         C, _, tips = exact_mod._crack_geometry(f["crack_points"], f["crack_segments"], exact)
-        u_tri = _interpolant(exact, P, t)
+        u_tri = exact_mod.interpolant_corners(exact, P, t)
         _, _, G, _ = exact_mod._geometry(P, t)
         grad = np.einsum("tv,tvd->td", u_tri, G)
         p_tri = np.repeat(grad[:, None, :], 3, axis=1)

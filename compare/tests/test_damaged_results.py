@@ -225,6 +225,23 @@ def shift_reference_u(folder, others, tool="dolfinx"):
     np.savetxt(path, np.loadtxt(path) + 0.1, fmt="%.17g")
 
 
+def jump_closed_at_one_node(tool):
+    """At every level, `tool`'s u at the middle crack node (mesh/levelL/crack.txt) with both copies
+    set to their mean: [u_h] = 0 there, what a constraint of the wrong sign at that node gives
+    where the crack opens (the real bug, re-solved: tools/mutants.toml freefem-constraint-flipped)."""
+    def damage(folder, others):
+        for path in glob.glob(os.path.join(folder, tool, "u_level*.txt")):
+            lv = re.search(r"u_level(\d+)\.txt$", path).group(1)
+            pairs = np.loadtxt(os.path.join(folder, "mesh", f"level{lv}", "crack.txt"),
+                               dtype=np.int64, ndmin=2)
+            plus, minus = pairs[len(pairs) // 2]
+            assert plus != minus
+            u = np.loadtxt(path)
+            u[plus] = u[minus] = 0.5 * (u[plus] + u[minus])
+            np.savetxt(path, u, fmt="%.17g")
+    return damage
+
+
 def zero_fields(folder, others):
     import h5py
 
@@ -486,6 +503,8 @@ CASES = {
     "open: NaN error": ("open", error_value(math.nan), "empty", ()),
     "open: dolfinx u shifted by 0.1": ("open", shift_reference_u, "empty", ()),
     "open: fields zeroed": ("open", zero_fields, "empty", ()),
+    "open: freefem's jump closed at one node": ("open", jump_closed_at_one_node("freefem"),
+                                                "empty", ()),
     "open: expectation of a misspelt scene": ("open", nothing, "misspelt scene", ()),
     "open: expectation of a misspelt quantity": ("open", nothing, "misspelt quantity", ()),
     "mixed: multiplier M1star removed": ("mixed", drop_cases("multiplier", "M1star"), "empty", ()),
@@ -661,6 +680,11 @@ DAMAGES = {
         "reference agreement: references dolfinx and freefem differ by 0.1",
         "independent errors: dolfinx's reported errors of level 4 differ from the independent "
         "computation"]),
+    # a reference solving a wrong problem is named by its own checks (and differs from the other)
+    "open: freefem's jump closed at one node": (1, [
+        "reference orders: reference freefem p_l2 on the uniform meshes: the error grows",
+        "reference interpolation yardstick: reference freefem p_l2 at level 4: error",
+        "reference agreement: references dolfinx and freefem differ by"]),
     "open: fields zeroed": (1, [
         "independent errors: sdcrack's reported errors of level 2 broken M0 δ=0 differ from the "
         "independent computation"]),
@@ -916,6 +940,23 @@ def test_undamaged_exact_scenes_pass_every_new_check(judged, case):
         # last step
         assert status["δ-constant"] == "ok"
         assert len([r for r in rep["delta_constant"] if r["judged"]]) == 12
+
+
+@pytest.mark.parametrize("case", ["open undamaged", "closed undamaged"], ids=_slug)
+def test_each_reference_passes_its_own_orders_and_yardstick(judged, case):
+    """refcheck.py on real references: open-exact's r^{1/2} tips give s = 1/2 on the uniform
+    meshes (u order 1, ∇u 1/2, the ∇u yardstick alone), closed-exact's smooth u s = 1 (u 2, ∇u 1,
+    both yardsticks); each reference's ∇u error below its interpolant's (Céa)."""
+    rep = assert_passes(result(judged, case))
+    status = {c["check"]: c["status"] for c in rep["checks"]}
+    assert status["reference orders"] == "ok" and status["reference interpolation yardstick"] == "ok"
+    own = rep["reference_own"]
+    orders = {(r["reference"], r["quantity"]): r["expected_rate"] for r in own["orders"]}
+    smooth = case == "closed undamaged"
+    assert orders == {(t, q): (2.0 if q == "u_l2" else 1.0) / (1 if smooth else 2)
+                      for t in ("dolfinx", "freefem") for q in ("u_l2", "p_l2")}
+    assert {r["quantity"] for r in own["yardstick"]} == ({"u_l2", "p_l2"} if smooth else {"p_l2"})
+    assert all(r["ratio"] <= 1.0 for r in own["yardstick"] if r["quantity"] == "p_l2")
 
 
 @pytest.mark.parametrize("case", ["open undamaged", "closed undamaged", "mixed undamaged"],
