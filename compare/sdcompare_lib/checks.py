@@ -370,7 +370,12 @@ def independent_errors(res, scene_file):
 
 
 # The self-check of this tool's quadrature per mesh (exact.quadrature_self_check), by the digest of
-# the mesh and its tips: every δ, multiplier and p mass of a level shares one.
+# the mesh's triangles as coordinates (T, 3, 2) and its tips: every δ, multiplier and p mass of a
+# level shares one, and so do the continuous and the broken u of a level, whose meshes are the same
+# triangles numbered apart (the crack's − copies). The quadrature's pieces, points and weights
+# depend on the triangles' coordinates and the tips only (exact._point_batches), so the second
+# numbering would integrate the same points with the same weights; only the exact moments'
+# boundary edges differ (the broken mesh's two crack faces, whose contributions cancel).
 _SELF_CHECKS = {}
 
 
@@ -383,8 +388,8 @@ def _self_check(h5, case, ex):
         return None, None
     _, _, tips = exact._crack_geometry(d["crack_points"], d["crack_segments"], ex)
     tips = np.asarray(tips, dtype=float).reshape(-1, 2)
-    key = (norms.digest(np.asarray(d["points"])[:, :2], d["triangles"], tips),
-           repr(exact.Quadrature()))
+    corners = np.asarray(d["points"], dtype=float)[:, :2][np.asarray(d["triangles"], dtype=np.int64)]
+    key = (norms.digest(corners, tips), repr(exact.Quadrature()))
     if key not in _SELF_CHECKS:
         _SELF_CHECKS[key] = exact.quadrature_self_check(d["points"], d["triangles"], list(tips))
     return key, _SELF_CHECKS[key]
