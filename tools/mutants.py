@@ -88,7 +88,10 @@ def mutated_text(text, mutant):
 
 
 def copy_checkout(tree):
-    """The checkout's files (tracked, and untracked but not ignored) copied into `tree`."""
+    """The checkout's files (tracked, and untracked but not ignored) copied into `tree`, with
+    fresh modification times: a kept --work's target holds the build of the last mutant, whose
+    file was restored after it, and cargo, comparing times, would take a copy with the checkout's
+    older time for the file it built and run the last mutant's binary as the unmutated one."""
     files = subprocess.run(["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
                            cwd=ROOT, capture_output=True, check=True).stdout.split(b"\0")
     for f in (x.decode() for x in files if x):
@@ -97,7 +100,7 @@ def copy_checkout(tree):
             continue  # deleted but still in the index
         dst = os.path.join(tree, f)
         os.makedirs(os.path.dirname(dst), exist_ok=True)
-        shutil.copy2(src, dst)
+        shutil.copy(src, dst)
 
 
 def first_line(text):

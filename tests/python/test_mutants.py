@@ -8,6 +8,7 @@ catalogue cannot report success.
 import os
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -100,3 +101,14 @@ def test_bad_usage_exits_2_with_one_line():
     p = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "mutants.py"), "--only", "nope"],
                        env=run_env(), capture_output=True, text=True)
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "no mutant named nope" in p.stderr
+
+
+def test_the_scratch_copy_has_fresh_modification_times(tmp_path):
+    """A kept --work's target holds the last mutant's build and its file was restored since: a copy
+    keeping the checkout's older times would make cargo take the mutated binary as up to date."""
+    before = time.time()
+    mutants.copy_checkout(str(tmp_path))
+    copied = tmp_path / "crates" / "sdcrack-core" / "src" / "fe" / "mini.rs"
+    assert copied.read_bytes() == open(os.path.join(ROOT, "crates", "sdcrack-core", "src", "fe",
+                                                    "mini.rs"), "rb").read()
+    assert copied.stat().st_mtime >= before - 1
