@@ -35,6 +35,22 @@ def run_env(*first):
     return e
 
 
+def run_scene(tmp, name, text):
+    """`sdcrack run` of the scene text `text` in tmp/name (scene.toml, out/), which must succeed:
+    the results folder it wrote."""
+    import subprocess
+
+    where = tmp / name
+    where.mkdir()
+    scene = where / "scene.toml"
+    scene.write_text(text)
+    p = subprocess.run([sdcrack_bin(), "run", str(scene), "--out", str(where / "out"), "--quiet"],
+                       capture_output=True, text=True, env=run_env(), timeout=600)
+    assert p.returncode == 0, p.stderr[-2000:]
+    (folder,) = [d for d in (where / "out").iterdir() if d.is_dir()]
+    return str(folder)
+
+
 @pytest.fixture
 def sdcrack():
     """The sdcrack binary (sdcrack_bin), or the test skips when it is not built."""

@@ -277,11 +277,9 @@ def _reference_fields(res, tool):
         return None
 
 
-def _reference_crack_fields(res, problems, tol, kkt):
-    """Each reference's crack fields against its own u and the export; the two references'
-    against each other."""
-    n = 0
-    per_tool = {}
+def _reference_levels(res, need):
+    """(tool, its summary entry, level, export level, fields.h5 File, "cases/levelL") of every
+    reference level whose fields.h5 group has the members `need`, the file open meanwhile."""
     for tool, ref in sorted(res["refs"].items()):
         h5 = _reference_fields(res, tool)
         if h5 is None:
@@ -289,46 +287,54 @@ def _reference_crack_fields(res, problems, tol, kkt):
         with h5:
             for lv, m in sorted((ref.get("mesh") or {}).items()):
                 name = f"cases/level{lv}"
-                if f"{name}/crack" not in h5 or f"{name}/u" not in h5:
-                    continue
-                g = h5[f"{name}/crack"]
-                where = f"reference {tool} level {lv}"
-                try:
-                    jump = np.asarray(crack_field(g, "jump"), dtype=float)
-                    force = np.asarray(crack_field(g, "contact_force"), dtype=float)
-                except KeyError as exc:
-                    problems.append(f"{where}: {exc.args[0]}")
-                    continue
-                u = np.asarray(h5[f"{name}/u"][()], dtype=float)
-                n += 1
-                pairs = m.crack
-                got = [x for x in (jump, force) if x.shape != (len(pairs),)]
-                if got or len(u) != len(m.points):
-                    problems.append(f"{where}: its crack fields have {jump.shape} / {force.shape} "
-                                    f"values for {len(pairs)} crack nodes, or its u "
-                                    f"{len(u)} for {len(m.points)} vertices")
-                    continue
-                pts = np.asarray(g["points"][()], dtype=float)[:, :2] if "points" in g else None
-                segs = np.asarray(g["segments"][()], dtype=np.int64) if "segments" in g else None
-                if pts is None or not np.array_equal(pts, m.points[pairs[:, 0], :2]) or (
-                        segs is not None and not np.array_equal(segs, m.segments())):
-                    problems.append(f"{where}: its crack polylines are not the export's crack "
-                                    "nodes (crack.txt) and segments (cracks.txt)")
-                want = u[pairs[:, 0]] - u[pairs[:, 1]]
-                if not np.array_equal(jump, want):
-                    k = int(np.flatnonzero(jump != want)[0])
-                    problems.append(f"{where}: its jump is not u⁺ − u⁻ of its u at crack.txt's "
-                                    f"rows at {int(np.sum(jump != want))} of {len(want)} nodes, "
-                                    f"e.g. row {k}: jump = {jump[k]:.17g}, u⁺ − u⁻ = "
-                                    f"{want[k]:.17g}")
-                tips = pairs[:, 0] == pairs[:, 1]
-                bad = np.flatnonzero(tips & ((force != 0.0) | (jump != 0.0)))
-                if len(bad):
-                    k = int(bad[0])
-                    problems.append(f"{where}: {len(bad)} crack tip(s) with a nonzero jump or "
-                                    f"contact_force, e.g. row {k}: jump {jump[k]:.3g}, "
-                                    f"contact_force {force[k]:.3g} (both must be 0 at a tip)")
-                per_tool.setdefault(tool, {})[lv] = (jump, force, u, m)
+                if all(f"{name}/{k}" in h5 for k in need):
+                    yield tool, ref, lv, m, h5, name
+
+
+def _reference_crack_fields(res, problems, tol, kkt):
+    """Each reference's crack fields against its own u and the export; the two references'
+    against each other."""
+    n = 0
+    per_tool = {}
+    for tool, _, lv, m, h5, name in _reference_levels(res, ("crack", "u")):
+        g = h5[f"{name}/crack"]
+        where = f"reference {tool} level {lv}"
+        try:
+            jump = np.asarray(crack_field(g, "jump"), dtype=float)
+            force = np.asarray(crack_field(g, "contact_force"), dtype=float)
+        except KeyError as exc:
+            problems.append(f"{where}: {exc.args[0]}")
+            continue
+        u = np.asarray(h5[f"{name}/u"][()], dtype=float)
+        n += 1
+        pairs = m.crack
+        got = [x for x in (jump, force) if x.shape != (len(pairs),)]
+        if got or len(u) != len(m.points):
+            problems.append(f"{where}: its crack fields have {jump.shape} / {force.shape} "
+                            f"values for {len(pairs)} crack nodes, or its u "
+                            f"{len(u)} for {len(m.points)} vertices")
+            continue
+        pts = np.asarray(g["points"][()], dtype=float)[:, :2] if "points" in g else None
+        segs = np.asarray(g["segments"][()], dtype=np.int64) if "segments" in g else None
+        if pts is None or not np.array_equal(pts, m.points[pairs[:, 0], :2]) or (
+                segs is not None and not np.array_equal(segs, m.segments())):
+            problems.append(f"{where}: its crack polylines are not the export's crack "
+                            "nodes (crack.txt) and segments (cracks.txt)")
+        want = u[pairs[:, 0]] - u[pairs[:, 1]]
+        if not np.array_equal(jump, want):
+            k = int(np.flatnonzero(jump != want)[0])
+            problems.append(f"{where}: its jump is not u⁺ − u⁻ of its u at crack.txt's "
+                            f"rows at {int(np.sum(jump != want))} of {len(want)} nodes, "
+                            f"e.g. row {k}: jump = {jump[k]:.17g}, u⁺ − u⁻ = "
+                            f"{want[k]:.17g}")
+        tips = pairs[:, 0] == pairs[:, 1]
+        bad = np.flatnonzero(tips & ((force != 0.0) | (jump != 0.0)))
+        if len(bad):
+            k = int(bad[0])
+            problems.append(f"{where}: {len(bad)} crack tip(s) with a nonzero jump or "
+                            f"contact_force, e.g. row {k}: jump {jump[k]:.3g}, "
+                            f"contact_force {force[k]:.3g} (both must be 0 at a tip)")
+        per_tool.setdefault(tool, {})[lv] = (jump, force, u, m)
     agreement = []
     tools = sorted(per_tool)
     if len(tools) >= 2:
@@ -490,26 +496,18 @@ def _delta_constants(res, problems):
 
 def _reference_point_fields(res, problems):
     n = 0
-    for tool, ref in sorted(res["refs"].items()):
-        h5 = _reference_fields(res, tool)
-        if h5 is None:
-            continue
-        with h5:
-            for lv, m in sorted((ref.get("mesh") or {}).items()):
-                name = f"cases/level{lv}"
-                if f"{name}/u" not in h5:
-                    continue
-                n += 1
-                where = f"reference {tool} level {lv}"
-                u = np.asarray(h5[f"{name}/u"][()], dtype=float)
-                txt = ref["u"].get(lv)
-                if txt is not None and not (u.shape == txt.shape and np.array_equal(u, txt)):
-                    problems.append(f"{where}: the u of its fields.h5 is not its u_level{lv}.txt")
-                if f"{name}/p" in h5 and len(u) == len(m.points):
-                    p = np.asarray(h5[f"{name}/p"][()], dtype=float)[:, :2]
-                    bad = _vertex_gradient_problem(m.points, m.tris, u, p)
-                    if bad:
-                        problems.append(f"{where}: {bad}")
+    for tool, ref, lv, m, h5, name in _reference_levels(res, ("u",)):
+        n += 1
+        where = f"reference {tool} level {lv}"
+        u = np.asarray(h5[f"{name}/u"][()], dtype=float)
+        txt = ref["u"].get(lv)
+        if txt is not None and not (u.shape == txt.shape and np.array_equal(u, txt)):
+            problems.append(f"{where}: the u of its fields.h5 is not its u_level{lv}.txt")
+        if f"{name}/p" in h5 and len(u) == len(m.points):
+            p = np.asarray(h5[f"{name}/p"][()], dtype=float)[:, :2]
+            bad = _vertex_gradient_problem(m.points, m.tris, u, p)
+            if bad:
+                problems.append(f"{where}: {bad}")
     return n
 
 

@@ -15,7 +15,6 @@ Run: FF_LOADPATH=/usr/lib/freefem++ /usr/bin/python3 -m pytest -q compare/tests/
 """
 import os
 import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -25,7 +24,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 from scene_text import set_key
 from sdcompare_lib import crackcheck, crackcut, meshcheck, read, settings
-from conftest import run_env, sdcrack_bin
+from conftest import run_scene, sdcrack_bin
 
 KINK = os.path.join(ROOT, "tests", "data", "scenes", "kinked-no-references.toml")
 NEW_CHECKS = ("field files' mesh", "crack outputs", "viewer datasets")
@@ -43,18 +42,6 @@ def mixed_scene():
     return set_key(text, "name", '"mixed-crack-outputs"')
 
 
-def run(tmp, name, text):
-    where = tmp / name
-    where.mkdir()
-    scene = where / "scene.toml"
-    scene.write_text(text)
-    p = subprocess.run([sdcrack_bin(), "run", str(scene), "--out", str(where / "out"), "--quiet"],
-                       capture_output=True, text=True, env=run_env(), timeout=600)
-    assert p.returncode == 0, p.stderr[-2000:]
-    (folder,) = [d for d in (where / "out").iterdir() if d.is_dir()]
-    return str(folder)
-
-
 @pytest.fixture(scope="module")
 def folders(tmp_path_factory):
     if not os.access(sdcrack_bin(), os.X_OK):
@@ -62,7 +49,7 @@ def folders(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("crack")
     with open(KINK, encoding="utf-8") as fh:
         kink = fh.read()
-    return {"kink": run(tmp, "kink", kink), "mixed": run(tmp, "mixed", mixed_scene())}
+    return {"kink": run_scene(tmp, "kink", kink), "mixed": run_scene(tmp, "mixed", mixed_scene())}
 
 
 def judge(folder, tmp_path, damage=None):

@@ -31,7 +31,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 from scene_text import set_key
 from sdcompare_lib import meshcheck
-from conftest import run_env, sdcrack_bin
+from conftest import run_env, run_scene, sdcrack_bin
 
 SCRIPT = os.path.join(ROOT, "compare", "sdcompare")
 XFAIL = "[[verification.expected_failure]]"
@@ -67,27 +67,15 @@ def mixed_scene():
     return set_key(text, "deltas", "[0.0]")
 
 
-def run(tmp, name, text):
-    where = tmp / name
-    where.mkdir()
-    scene = where / "scene.toml"
-    scene.write_text(text)
-    p = subprocess.run([sdcrack_bin(), "run", str(scene), "--out", str(where / "out"), "--quiet"],
-                       capture_output=True, text=True, env=run_env(), timeout=600)
-    assert p.returncode == 0, p.stderr[-2000:]
-    (folder,) = [d for d in (where / "out").iterdir() if d.is_dir()]
-    return str(folder)
-
-
 @pytest.fixture(scope="module")
 def folders(tmp_path_factory):
     if not os.access(sdcrack_bin(), os.X_OK):
         pytest.skip("no sdcrack binary (cargo build --release, or SDCRACK_BIN)")
     tmp = tmp_path_factory.mktemp("meshcheck")
-    out = {"graded": run(tmp, "graded", graded_scene(0.4)),
-           "mixed": run(tmp, "mixed", mixed_scene())}
+    out = {"graded": run_scene(tmp, "graded", graded_scene(0.4)),
+           "mixed": run_scene(tmp, "mixed", mixed_scene())}
     for beta in (0.6, 0.2):
-        out[f"beta {beta}"] = run(tmp, f"beta{beta}", graded_scene(beta))
+        out[f"beta {beta}"] = run_scene(tmp, f"beta{beta}", graded_scene(beta))
     return out
 
 
