@@ -490,7 +490,7 @@ def _delta_constants(res, problems):
                 if not np.all(x == float(c["delta"])):
                     problems.append(f"{fname} {_case_text(c)}: its constant field {rel} is not the "
                                     f"case's δ = {fmt_delta(c['delta'])} everywhere (e.g. "
-                                    f"{x[np.flatnonzero(x != float(c['delta']))[0]]!r})")
+                                    f"{float(x[np.flatnonzero(x != float(c['delta']))[0]])!r})")
     return n
 
 
