@@ -21,8 +21,9 @@ use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, MeshError};
 use crate::multiplier::CrackOperators;
 use crate::problem::{Meshing, MultiplierSpace, PMass, USpace};
-use crate::scene::{CaseAxes, FieldSet, Scene};
-use crate::study::{run_study, CaseFilter, CasePlan, Observer, StudyError, StudyResult, Timings};
+use crate::scene::{FieldSet, Scene};
+use crate::study::{run_study, CasePlan, Observer, StudyError, StudyResult, Timings};
+use sdcrack_core::case::{CaseAxes, CasePattern};
 
 /// The δ values of the sweep (largest first, as every study runs them).
 pub const SWEEP_DELTAS: [f64; 6] = [1.0, 1e-2, 1e-4, 1e-6, 1e-8, 0.0];
@@ -436,7 +437,7 @@ pub fn run_bench(
     let yardstick_peak_rss_mb = peak_rss_mb();
 
     reset_peak_rss();
-    let one_case = CaseFilter {
+    let one_case = CasePattern {
         level: Some(0),
         u_space: Some(USpace::Broken),
         multiplier: Some(MultiplierSpace::M1),

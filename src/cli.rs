@@ -15,11 +15,12 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::output::summary::{delta_text, Provenance};
+use crate::output::summary::Provenance;
 use crate::output::{write_run, ResultsDir};
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use crate::scene::{Scene, TomlScene};
-use crate::study::{run_study, CaseFilter, CasePlan, CaseResult, Observer, StudyError};
+use crate::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
+use sdcrack_core::case::{delta_text, AxisValues, CaseKey, CasePattern, Pattern};
 
 /// `println!` that survives a closed standard output: `sdcrack bench --json | head` must not
 /// panic, and a run whose reader went away must still finish and keep its results. A closed
@@ -57,7 +58,7 @@ pub struct Cli {
     pub command: Command,
 }
 
-/// The options of `run` that restrict the study to some cases: one [`CaseFilter`].
+/// The options of `run` that restrict the study to some cases: one [`Pattern<CaseKey>`](Pattern).
 #[derive(Args, Debug)]
 pub struct CaseSelection {
     /// Only this refinement level (need not be listed in the scene).
@@ -84,8 +85,8 @@ pub struct CaseSelection {
 
 impl CaseSelection {
     /// The study's filter: each option given replaces the scene's list by its one value.
-    pub fn filter(&self) -> CaseFilter {
-        CaseFilter {
+    pub fn filter(&self) -> CasePattern {
+        CasePattern {
             level: self.level,
             u_space: self.u_space,
             multiplier: self.multiplier,
@@ -198,39 +199,38 @@ fn parse_level(s: &str) -> Result<u32, String> {
 }
 
 /// `s` as one of the names a space's `from_name` knows, or a message naming `what` and `names`.
-fn parse_name<T>(
+/// A name of the vocabulary of `T` (its [`AxisValues::NAMES`]), or an error listing them.
+fn parse_name<T: AxisValues>(
     s: &str,
     from_name: fn(&str) -> Option<T>,
     what: &str,
-    names: &str,
 ) -> Result<T, String> {
-    from_name(s).ok_or_else(|| format!("unknown {what} '{s}' (expected {names})"))
+    from_name(s).ok_or_else(|| format!("unknown {what} '{s}' (expected {})", or_list(T::NAMES)))
+}
+
+/// "a or b", "a, b or c": names in a sentence.
+fn or_list(names: &[&str]) -> String {
+    match names {
+        [] => String::new(),
+        [one] => one.to_string(),
+        [init @ .., last] => format!("{} or {last}", init.join(", ")),
+    }
 }
 
 fn parse_u_space(s: &str) -> Result<USpace, String> {
-    parse_name(s, USpace::from_name, "u space", "continuous or broken")
+    parse_name(s, USpace::from_name, "u space")
 }
 
 fn parse_p_mass(s: &str) -> Result<PMass, String> {
-    parse_name(s, PMass::from_name, "p mass", "consistent or lumped")
+    parse_name(s, PMass::from_name, "p mass")
 }
 
 fn parse_p_space(s: &str) -> Result<PSpace, String> {
-    parse_name(
-        s,
-        PSpace::from_name,
-        "p space",
-        "continuous or broken-tangential",
-    )
+    parse_name(s, PSpace::from_name, "p space")
 }
 
 fn parse_multiplier(s: &str) -> Result<MultiplierSpace, String> {
-    parse_name(
-        s,
-        MultiplierSpace::from_name,
-        "multiplier space",
-        "M0, M1 or M1star",
-    )
+    parse_name(s, MultiplierSpace::from_name, "multiplier space")
 }
 
 /// Vertex counts accepted by `bench` (the upper bound keeps one case within ~60 GB).
@@ -582,7 +582,7 @@ fn invalid_scene(scene: &Scene, origin: &str, message: String) -> Failure {
 /// at most [`crate::scene::MAX_LEVEL`] and within the memory estimate.
 /// Refuses a run whose u spaces and p spaces make no case: the broken-tangential p only runs
 /// with broken u ([`PSpace::serves`]).
-fn check_space_pairs(scene: &Scene, filter: &CaseFilter) -> Result<(), Failure> {
+fn check_space_pairs(scene: &Scene, filter: &Pattern<CaseKey>) -> Result<(), Failure> {
     let axes = filter.restrict(&scene.axes);
     if !axes.space_pairs().is_empty() {
         return Ok(());
@@ -614,10 +614,10 @@ impl Observer for Progress {
         if !case.converged {
             self.bar.println(format!(
                 "warning: level {} {} {} δ = {} did not converge ({})",
-                case.level,
-                case.u_space,
-                case.multiplier,
-                delta_text(case.delta),
+                case.key.level,
+                case.key.u_space,
+                case.key.multiplier,
+                delta_text(case.key.delta),
                 case.status.name()
             ));
         }
@@ -628,7 +628,7 @@ impl Observer for Progress {
 fn run(
     scene: &Scene,
     origin: &str,
-    filter: &CaseFilter,
+    filter: &Pattern<CaseKey>,
     out: &Path,
     quiet: bool,
     solver_only: bool,
@@ -745,13 +745,13 @@ fn rate(prev: Option<(f64, f64)>, h: f64, e: f64) -> String {
 
 /// Prints, per u space and multiplier, the convergence table at the smallest δ solved.
 pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
-    let Some(delta) = cases.iter().map(|c| c.delta).min_by(f64::total_cmp) else {
+    let Some(delta) = cases.iter().map(|c| c.key.delta).min_by(f64::total_cmp) else {
         return;
     };
     say!("scene '{}': δ = {}", scene.name, delta_text(delta));
     let mut keys: Vec<(USpace, MultiplierSpace, PMass, PSpace)> = cases
         .iter()
-        .map(|c| (c.u_space, c.multiplier, c.p_mass, c.p_space))
+        .map(|c| (c.key.u_space, c.key.multiplier, c.key.p_mass, c.key.p_space))
         .collect();
     keys.sort();
     keys.dedup();
@@ -774,18 +774,18 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
         }
         let mut prev: Option<(f64, f64, f64, f64)> = None;
         for c in cases.iter().filter(|c| {
-            c.u_space == u_space
-                && c.multiplier == multiplier
-                && c.p_mass == p_mass
-                && c.p_space == p_space
-                && c.delta == delta
+            c.key.u_space == u_space
+                && c.key.multiplier == multiplier
+                && c.key.p_mass == p_mass
+                && c.key.p_space == p_space
+                && c.key.delta == delta
         }) {
             let flag = if c.converged { "" } else { "  NOT CONVERGED" };
             match c.errors {
                 Some(e) => {
                     say!(
                         "{:5} {:8.5} {:9} {:5} {:7.2e} {} {:7.2e} {} {:7.2e} {} {:7.1e}{flag}",
-                        c.level,
+                        c.key.level,
                         c.h,
                         c.unknowns,
                         c.iterations,
@@ -801,7 +801,7 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
                 }
                 None => say!(
                     "{:5} {:8.5} {:9} {:5} {:7} {:7.1e}{flag}",
-                    c.level,
+                    c.key.level,
                     c.h,
                     c.unknowns,
                     c.iterations,

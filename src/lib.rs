@@ -13,7 +13,7 @@
 //!   re-exports the two crates' modules under their old paths (`sdcrack::study`, …).
 
 pub use sdcrack_core::{
-    assembly, contact, expr, fe, geometry, krylov, linalg, mesh, multiplier, norms, ordering,
+    assembly, case, contact, expr, fe, geometry, krylov, linalg, mesh, multiplier, norms, ordering,
     problem, study,
 };
 pub use sdcrack_io::{output, plain, scene};

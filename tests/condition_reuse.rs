@@ -6,8 +6,9 @@
 
 mod common;
 
+use sdcrack::case::CasePattern;
 use sdcrack::scene::{MultiplierSpace, PMass, USpace};
-use sdcrack::study::{CaseFilter, CONDITION_REUSE_FACTOR};
+use sdcrack::study::CONDITION_REUSE_FACTOR;
 
 #[test]
 fn reused_condition_estimates_are_within_the_declared_factor_of_fresh_ones() {
@@ -17,36 +18,36 @@ fn reused_condition_estimates_are_within_the_declared_factor_of_fresh_ones() {
     let mut reused = 0;
     let mut steps_beyond_the_factor = 0;
     for p_mass in [PMass::Consistent, PMass::Lumped] {
-        let filter = CaseFilter {
+        let filter = CasePattern {
             u_space: Some(USpace::Broken),
             multiplier: Some(MultiplierSpace::M1),
             p_mass: Some(p_mass),
-            ..CaseFilter::default()
+            ..CasePattern::default()
         };
         scene.axes.deltas = deltas.clone();
         let sweep = common::solve(&scene, filter);
         assert_eq!(sweep.len(), deltas.len());
         let mut previous_fresh: Option<f64> = None;
         for case in &sweep {
-            scene.axes.deltas = vec![case.delta];
+            scene.axes.deltas = vec![case.key.delta];
             let alone = common::solve(&scene, filter);
             let fresh = &alone[0];
             assert_eq!(
-                fresh.condition_delta, case.delta,
+                fresh.condition_delta, case.key.delta,
                 "a lone δ estimates afresh"
             );
             let ratio = case.condition_estimate / fresh.condition_estimate;
             assert!(
                 (1.0 / CONDITION_REUSE_FACTOR..=CONDITION_REUSE_FACTOR).contains(&ratio),
                 "{p_mass} δ = {:e}: reported {:e} (‖K⁻¹‖₁ from δ' = {:e}), afresh {:e}",
-                case.delta,
+                case.key.delta,
                 case.condition_estimate,
                 case.condition_delta,
                 fresh.condition_estimate
             );
-            if case.condition_delta != case.delta {
+            if case.condition_delta != case.key.delta {
                 assert!(
-                    case.condition_delta > case.delta,
+                    case.condition_delta > case.key.delta,
                     "reused from an earlier δ"
                 );
                 reused += 1;

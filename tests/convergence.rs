@@ -20,9 +20,10 @@ mod common;
 use common::expectations::{bound, SeriesAt};
 use common::orders::Orders;
 use common::{errors_by_level, last_two_rates, QUANTITIES};
+use sdcrack::case::CasePattern;
 use sdcrack::norms::{NormQuadrature, TipRule};
 use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, USpace};
-use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
+use sdcrack::study::{run_study, CasePlan, CaseResult, Silent};
 
 /// The scene `name` at `levels`, δ = 0, no fields, the consistent p mass only (the lumped one
 /// has its own test).
@@ -45,7 +46,7 @@ fn series(
 ) -> Vec<(f64, [f64; 4])> {
     errors_by_level(
         cases,
-        |c| c.u_space == u && c.multiplier == m && c.p_mass == p_mass,
+        |c| c.key.u_space == u && c.key.multiplier == m && c.key.p_mass == p_mass,
         false,
     )
 }
@@ -55,14 +56,14 @@ fn assert_kkt(cases: &[CaseResult]) {
         assert!(
             c.converged,
             "level {} {} {}: {:?}",
-            c.level, c.u_space, c.multiplier, c.status
+            c.key.level, c.key.u_space, c.key.multiplier, c.status
         );
         assert!(
             c.kkt.max() <= 1e-10,
             "level {} {} {}: KKT {:?}",
-            c.level,
-            c.u_space,
-            c.multiplier,
+            c.key.level,
+            c.key.u_space,
+            c.key.multiplier,
             c.kkt
         );
     }
@@ -79,10 +80,10 @@ fn assert_finest_level(
     orders: [Option<f64>; 4],
 ) {
     let table = Orders::repository();
-    let level = cases.iter().map(|c| c.level).max().expect("cases");
+    let level = cases.iter().map(|c| c.key.level).max().expect("cases");
     let s = series(cases, u, m, p_mass);
     let finest = s[s.len() - 1].1;
-    for (q, quantity) in QUANTITIES.into_iter().enumerate() {
+    for (q, quantity) in QUANTITIES.iter().enumerate() {
         let id = format!("{scene} {u} {m} {p_mass} {quantity}");
         let [_, r] = last_two_rates(&s, q);
         if let Some(order) = orders[q] {
@@ -147,7 +148,7 @@ fn assert_open_exact(cases: &[CaseResult], m: MultiplierSpace, p_mass: PMass) {
 #[test]
 fn closed_crack_converges_optimally_for_every_variant() {
     let scene = scene_at_levels("closed-exact", &[2, 3, 4]);
-    let cases = common::solve(&scene, CaseFilter::default());
+    let cases = common::solve(&scene, CasePattern::default());
     assert_eq!(cases.len(), 3 * 6);
     assert_kkt(&cases);
     let orders = closed_crack_orders(&Orders::repository());
@@ -162,7 +163,7 @@ fn closed_crack_converges_optimally_for_every_variant() {
 #[test]
 fn open_crack_broken_converges_continuous_does_not() {
     let scene = scene_at_levels("open-exact", &[2, 3, 4]);
-    let cases = common::solve(&scene, CaseFilter::default());
+    let cases = common::solve(&scene, CasePattern::default());
     assert_kkt(&cases);
     for m in MultiplierSpace::ALL {
         assert_open_exact(&cases, m, PMass::Consistent);
@@ -193,9 +194,9 @@ fn open_crack_broken_converges_continuous_does_not() {
 #[test]
 fn refining_the_norm_quadrature_changes_norms_by_less_than_1e10() {
     let scene = scene_at_levels("open-exact", &[2]);
-    let filter = CaseFilter {
+    let filter = CasePattern {
         u_space: Some(USpace::Broken),
-        ..CaseFilter::default()
+        ..CasePattern::default()
     };
     let mut plan = CasePlan::new(&scene, &filter);
     let base = run_study(&scene, &plan, &mut Silent).unwrap().cases;
@@ -226,10 +227,10 @@ fn assert_same_norms(what: &str, a: &[CaseResult], b: &[CaseResult]) {
             assert!(
                 (x - y).abs() <= 1e-10 * y.abs(),
                 "{what} level {} {} {} {} {quantity}: {x} vs {y}",
-                ca.level,
-                ca.u_space,
-                ca.multiplier,
-                ca.p_mass
+                ca.key.level,
+                ca.key.u_space,
+                ca.key.multiplier,
+                ca.key.p_mass
             );
         }
     }
@@ -251,7 +252,7 @@ fn collapsed_tip_rule_gives_the_graded_rules_norms_to_1e10() {
     ] {
         let mut scene = scene_at_levels(name, &[0, 2]);
         scene.axes.p_masses = vec![PMass::Consistent, PMass::Lumped];
-        let mut plan = CasePlan::new(&scene, &CaseFilter::default());
+        let mut plan = CasePlan::new(&scene, &CasePattern::default());
         assert!(matches!(
             plan.norm_quadrature.tip,
             TipRule::Collapsed { .. }
@@ -265,10 +266,10 @@ fn collapsed_tip_rule_gives_the_graded_rules_norms_to_1e10() {
 
 #[test]
 fn lumped_p_mass_converges_on_both_cracks() {
-    let filter = CaseFilter {
+    let filter = CasePattern {
         u_space: Some(USpace::Broken),
         p_mass: Some(PMass::Lumped),
-        ..CaseFilter::default()
+        ..CasePattern::default()
     };
     let closed = common::solve(&scene_at_levels("closed-exact", &[2, 3, 4]), filter);
     let open = common::solve(&scene_at_levels("open-exact", &[2, 3, 4]), filter);
@@ -276,7 +277,7 @@ fn lumped_p_mass_converges_on_both_cracks() {
     assert!(closed
         .iter()
         .chain(&open)
-        .all(|c| c.p_mass == PMass::Lumped));
+        .all(|c| c.key.p_mass == PMass::Lumped));
     assert_kkt(&closed);
     assert_kkt(&open);
     let orders = closed_crack_orders(&Orders::repository());

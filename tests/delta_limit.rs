@@ -3,8 +3,8 @@
 
 mod common;
 
+use sdcrack::case::CasePattern;
 use sdcrack::scene::{FieldSet, MultiplierSpace, PMass, PSpace, USpace};
-use sdcrack::study::CaseFilter;
 
 /// Every (u space, p mass, p space) sdcrack runs: the p spaces with the u spaces they serve.
 const VARIANTS: [(USpace, PMass, PSpace); 5] = [
@@ -29,12 +29,12 @@ fn distance_to_delta_zero_is_linear_in_delta() {
         for m in MultiplierSpace::ALL {
             let cases = common::solve(
                 &scene,
-                CaseFilter {
+                CasePattern {
                     u_space: Some(u_space),
                     multiplier: Some(m),
                     p_mass: Some(p_mass),
                     p_space: Some(p_space),
-                    ..CaseFilter::default()
+                    ..CasePattern::default()
                 },
             );
             assert!(cases.iter().all(|c| c.converged && c.kkt.max() <= 1e-10));
@@ -53,7 +53,7 @@ fn distance_to_delta_zero_is_linear_in_delta() {
                             .zip(&zero.p)
                             .map(|(a, b)| (a[0] - b[0]).abs().max((a[1] - b[1]).abs()))
                             .fold(0.0, f64::max);
-                    (c.delta, du.max(dp))
+                    (c.key.delta, du.max(dp))
                 })
                 .collect();
             let slope = common::loglog_slope(&dist);
@@ -113,18 +113,18 @@ fn delta_zero_at_the_end_of_a_sweep_is_delta_zero_solved_alone() {
     alone.axes.deltas = vec![0.0];
     let mut compared = 0;
     for (u_space, p_mass, p_space) in VARIANTS {
-        let filter = CaseFilter {
+        let filter = CasePattern {
             u_space: Some(u_space),
             p_mass: Some(p_mass),
             p_space: Some(p_space),
-            ..CaseFilter::default()
+            ..CasePattern::default()
         };
         let swept = common::solve(&sweep, filter);
         let direct = common::solve(&alone, filter);
         for d in &direct {
             let s = swept
                 .iter()
-                .find(|s| s.multiplier == d.multiplier && s.delta == 0.0)
+                .find(|s| s.key.multiplier == d.key.multiplier && s.key.delta == 0.0)
                 .expect("the sweep has δ = 0");
             assert!(s.converged && d.converged);
             let tol = 10.0 * s.condition_estimate.max(d.condition_estimate) * f64::EPSILON;
@@ -138,7 +138,7 @@ fn delta_zero_at_the_end_of_a_sweep_is_delta_zero_solved_alone() {
                     diff <= tol,
                     "{u_space} {} {p_mass:?} {p_space}: {name} of δ = 0 differs by {diff:e} \
                      between the sweep and the direct solve (> 10·κ·ε = {tol:e})",
-                    d.multiplier
+                    d.key.multiplier
                 );
             }
             compared += 1;

@@ -6,9 +6,9 @@ mod common;
 
 use common::orders::Orders;
 use common::{error_series, rate, solve};
+use sdcrack::case::CasePattern;
 use sdcrack::mesh::{Layout, Side};
 use sdcrack::scene::{Meshing, MultiplierSpace, PMass, PSpace, Polyline, Scene, USpace};
-use sdcrack::study::CaseFilter;
 
 /// The repository scene `name` at levels 0–3, δ = 0, consistent p mass, no fields.
 fn exact_scene(name: &str) -> Scene {
@@ -36,7 +36,7 @@ fn closed_kinked_and_double_cracks_converge_at_the_p1_rates() {
     for name in ["kinked-exact", "two-cracks-exact"] {
         let scene = exact_scene(name);
         assert!(matches!(scene.meshing, Meshing::MeshSize(_)));
-        let cases = solve(&scene, CaseFilter::default());
+        let cases = solve(&scene, CasePattern::default());
         assert!(cases.iter().all(|c| c.converged), "{name}: all converge");
         for u in [USpace::Continuous, USpace::Broken] {
             for m in MultiplierSpace::ALL {
@@ -71,8 +71,8 @@ fn a_straight_polyline_is_the_segment_bit_for_bit() {
     polyline.cracks = vec![Polyline {
         points: vec![[-0.5, 0.0], [0.0, 0.0], [0.5, 0.0]],
     }];
-    let a = solve(&segment, CaseFilter::default());
-    let b = solve(&polyline, CaseFilter::default());
+    let a = solve(&segment, CasePattern::default());
+    let b = solve(&polyline, CasePattern::default());
     assert_eq!(a.len(), b.len());
     for (x, y) in a.iter().zip(&b) {
         assert_eq!(format!("{:?}", x.kkt), format!("{:?}", y.kkt));
@@ -200,9 +200,13 @@ fn m1star_lambda_at_an_open_kink_is_the_jump() {
     scene.axes.p_masses = vec![PMass::Consistent];
     scene.axes.p_spaces = vec![PSpace::BrokenTangential];
     scene.axes.multipliers = vec![MultiplierSpace::M1, MultiplierSpace::M1Star];
-    let plan = CasePlan::new(&scene, &CaseFilter::default());
+    let plan = CasePlan::new(&scene, &CasePattern::default());
     let study = run_study(&scene, &plan, &mut Silent).expect("study runs");
-    let finest = study.meshes.iter().find(|m| m.level == 3).expect("level 3");
+    let finest = study
+        .meshes
+        .iter()
+        .find(|m| m.key.level == 3)
+        .expect("level 3");
     let kink = finest
         .crack_points
         .iter()
@@ -210,9 +214,13 @@ fn m1star_lambda_at_an_open_kink_is_the_jump() {
         .expect("the kink is a crack node");
     let o = Orders::repository();
     for m in [MultiplierSpace::M1, MultiplierSpace::M1Star] {
-        let cases: Vec<_> = study.cases.iter().filter(|c| c.multiplier == m).collect();
+        let cases: Vec<_> = study
+            .cases
+            .iter()
+            .filter(|c| c.key.multiplier == m)
+            .collect();
         assert!(cases.iter().all(|c| c.converged), "{m}: all converge");
-        let last = cases.iter().find(|c| c.level == 3).expect("level 3");
+        let last = cases.iter().find(|c| c.key.level == 3).expect("level 3");
         let lambda = match &last.fields.as_ref().expect("fields kept").lambda {
             CrackField::PerNode(v) => v[kink],
             CrackField::PerSegment(_) => panic!("{m} is nodal"),

@@ -13,8 +13,9 @@ mod common;
 
 use common::orders::Orders;
 use common::{errors_by_level, last_two_rates, QUANTITIES};
+use sdcrack::case::CasePattern;
 use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, TomlScene, USpace};
-use sdcrack::study::{CaseFilter, CaseResult};
+use sdcrack::study::CaseResult;
 
 /// The repository scene `name` at `levels`, δ = 0, no fields, both p spaces and both p masses.
 fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {
@@ -35,19 +36,19 @@ fn at_levels(mut s: Scene, levels: &[u32]) -> Scene {
 fn solve_broken(scene: &Scene) -> Vec<CaseResult> {
     let cases = common::solve(
         scene,
-        CaseFilter {
+        CasePattern {
             u_space: Some(USpace::Broken),
-            ..CaseFilter::default()
+            ..CasePattern::default()
         },
     );
     for c in &cases {
         assert!(
             c.converged && c.kkt.max() <= 1e-10,
             "level {} {} {} {}: {:?}",
-            c.level,
-            c.multiplier,
-            c.p_mass,
-            c.p_space,
+            c.key.level,
+            c.key.multiplier,
+            c.key.p_mass,
+            c.key.p_space,
             c.kkt
         );
     }
@@ -61,7 +62,9 @@ fn series(
     (m, p_mass, p_space): (MultiplierSpace, PMass, PSpace),
     by_unknowns: bool,
 ) -> Vec<(f64, [f64; 4])> {
-    let keep = |c: &CaseResult| c.multiplier == m && c.p_mass == p_mass && c.p_space == p_space;
+    let keep = |c: &CaseResult| {
+        c.key.multiplier == m && c.key.p_mass == p_mass && c.key.p_space == p_space
+    };
     errors_by_level(cases, keep, by_unknowns)
 }
 

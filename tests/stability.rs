@@ -20,6 +20,7 @@ mod common;
 
 use common::orders::Orders;
 use sdcrack::assembly::assemble;
+use sdcrack::case::CasePattern;
 use sdcrack::contact::{Lcp, LcpOptions, LcpStatus};
 use sdcrack::linalg::{Ldlt, SymbolicLdlt};
 use sdcrack::multiplier::{CrackField, CrackOperators, Multiplier};
@@ -27,7 +28,7 @@ use sdcrack::scene::{
     Domain, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass, PSpace, Polyline,
     Rectangle, Scene, USpace,
 };
-use sdcrack::study::{CaseFilter, CaseResult};
+use sdcrack::study::CaseResult;
 
 const ALL_FIELDS: FieldSet = FieldSet {
     u: true,
@@ -79,7 +80,7 @@ fn scaled_distance(a: &CaseResult, b: &CaseResult, su: f64, sp: f64, sl: f64) ->
 fn case_id(c: &CaseResult) -> String {
     format!(
         "level {} {} {} δ = {:e}",
-        c.level, c.u_space, c.multiplier, c.delta
+        c.key.level, c.key.u_space, c.key.multiplier, c.key.delta
     )
 }
 
@@ -176,7 +177,7 @@ fn delta_sweep(name: &str) {
     scene.axes.deltas = deltas.clone();
     scene.fields = ALL_FIELDS;
     scene.exact = None; // the error norms are not what is measured here
-    let cases = common::solve(&scene, CaseFilter::default());
+    let cases = common::solve(&scene, CasePattern::default());
     assert_eq!(
         cases.len(),
         2 * scene.axes.u_spaces.len()
@@ -187,7 +188,7 @@ fn delta_sweep(name: &str) {
     for &d in &deltas {
         let w = cases
             .iter()
-            .filter(|c| c.delta == d)
+            .filter(|c| c.key.delta == d)
             .fold(0.0f64, |a, c| a.max(c.kkt.max()));
         eprintln!("δ sweep {name}: δ = {d:e}: worst KKT {w:.2e}");
     }
@@ -203,16 +204,19 @@ fn delta_sweep(name: &str) {
                 let series: Vec<&CaseResult> = cases
                     .iter()
                     .filter(|c| {
-                        c.level == level && c.u_space == u && c.multiplier == m && c.p_mass == pm
+                        c.key.level == level
+                            && c.key.u_space == u
+                            && c.key.multiplier == m
+                            && c.key.p_mass == pm
                     })
                     .collect();
                 let zero = *series.last().unwrap();
-                assert_eq!(zero.delta, 0.0);
+                assert_eq!(zero.key.delta, 0.0);
                 let dist: Vec<(f64, f64)> = series[..series.len() - 1]
                     .iter()
                     .map(|c| {
                         let (du, dp, _) = scaled_distance(c, zero, 1.0, 1.0, 1.0);
-                        (c.delta, du.max(dp))
+                        (c.key.delta, du.max(dp))
                     })
                     .collect();
                 let id = format!("{name} level {level} {u} {m} {pm:?}");
@@ -325,8 +329,8 @@ fn assert_scaled(
     let mut worst = (0.0f64, 0.0f64, 0.0f64);
     for (c, b) in cases.iter().zip(base) {
         assert_eq!(
-            (c.level, c.u_space, c.multiplier),
-            (b.level, b.u_space, b.multiplier)
+            (c.key.level, c.key.u_space, c.key.multiplier),
+            (b.key.level, b.key.u_space, b.key.multiplier)
         );
         let (du, dp, dl) = scaled_distance(c, b, su, sp, sl);
         worst = (worst.0.max(du), worst.1.max(dp), worst.2.max(dl));
@@ -348,13 +352,13 @@ fn assert_scaled(
 fn data_scaling_scales_the_solution() {
     for name in ["mixed", "open-exact", "closed-exact"] {
         let (scene, f, g) = scaling_base(name);
-        let base = common::solve(&scene, CaseFilter::default());
+        let base = common::solve(&scene, CasePattern::default());
         assert_solved(&base, name);
         for s in [1e-8, 1e-4, 1e4, 1e8] {
             let mut scaled = scene.clone();
             scaled.f = expr(&format!("{s:e}*({f})"));
             scaled.g = expr(&format!("{s:e}*({g})"));
-            let cases = common::solve(&scaled, CaseFilter::default());
+            let cases = common::solve(&scaled, CasePattern::default());
             let kkt = assert_solved(&cases, name);
             let w = assert_scaled(&format!("{name} × {s:e}"), &cases, &base, (s, s, s));
             eprintln!(
@@ -371,7 +375,7 @@ fn data_scaling_scales_the_solution() {
 fn translating_the_domain_changes_nothing() {
     for name in ["mixed", "open-exact"] {
         let (scene, f, g) = scaling_base(name);
-        let base = common::solve(&scene, CaseFilter::default());
+        let base = common::solve(&scene, CasePattern::default());
         for a in [[0.75, -2.5], [40.0, 24.0]] {
             let mut moved = scene.clone();
             let (sx, sy) = (format!("x-{:e}", a[0]), format!("y-{:e}", a[1]));
@@ -379,7 +383,7 @@ fn translating_the_domain_changes_nothing() {
             moved.g = expr(&substitute_xy(&g, &sx, &sy));
             let shift = |p: [f64; 2]| [p[0] + a[0], p[1] + a[1]];
             map_geometry(&mut moved, shift);
-            let cases = common::solve(&moved, CaseFilter::default());
+            let cases = common::solve(&moved, CasePattern::default());
             let kkt = assert_solved(&cases, name);
             let w = assert_scaled(&format!("{name} + {a:?}"), &cases, &base, (1.0, 1.0, 1.0));
             eprintln!(
@@ -424,9 +428,9 @@ fn map_geometry(scene: &mut Scene, f: impl Fn([f64; 2]) -> [f64; 2]) {
 fn check_dilations(names: &[&str], factors: &[f64]) {
     for &name in names {
         let (scene, f, g) = scaling_base(name);
-        let base = common::solve(&scene, CaseFilter::default());
+        let base = common::solve(&scene, CasePattern::default());
         for &l in factors {
-            let cases = common::solve(&dilate(&scene, &f, &g, l), CaseFilter::default());
+            let cases = common::solve(&dilate(&scene, &f, &g, l), CasePattern::default());
             let kkt = cases.iter().fold(0.0f64, |a, c| a.max(c.kkt.max()));
             let reg = cases.iter().map(|c| c.regularized_pivots).max().unwrap();
             let worst = cases
@@ -538,7 +542,7 @@ fn anisotropic_meshes_solve_to_tolerance() {
             };
             for cells in shapes {
                 let scene = anisotropic_scene(dir, cells);
-                let cases = common::solve(&scene, CaseFilter::default());
+                let cases = common::solve(&scene, CasePattern::default());
                 // levels × u spaces × δ × multipliers × p masses
                 assert_eq!(cases.len(), 2 * 2 * 2 * 3 * 2);
                 let what = format!("{dir:?} crack, cells {cells:?}");
@@ -582,7 +586,7 @@ fn exact_solutions_converge_on_aspect_4_meshes() {
             // solved by `anisotropic_meshes_solve_to_tolerance`
             scene.axes.p_masses = vec![PMass::Consistent];
             scene.axes.p_spaces = vec![PSpace::Continuous];
-            let cases = common::solve(&scene, CaseFilter::default());
+            let cases = common::solve(&scene, CasePattern::default());
             assert_solved(&cases, name);
             for u in [USpace::Continuous, USpace::Broken] {
                 for m in MultiplierSpace::ALL {
@@ -636,7 +640,7 @@ fn exact_solutions_converge_on_aspect_4_meshes() {
 /// nodal λ_h with the P1 mass matrix of the (uniformly divided) crack.
 fn open_pattern(c: &CaseResult, crack_length: f64) -> Vec<bool> {
     let v = lambda_values(c);
-    let mu: Vec<f64> = if c.multiplier == MultiplierSpace::M1Star {
+    let mu: Vec<f64> = if c.key.multiplier == MultiplierSpace::M1Star {
         let n = v.len();
         let l = crack_length / (n - 1) as f64;
         (0..n)
@@ -689,7 +693,7 @@ fn stress_scene_alternates_open_and_closed_many_times() {
     let mut scene = common::load("stress-active-set");
     scene.axes.levels = vec![2, 3, 4];
     scene.fields = ALL_FIELDS;
-    let cases = common::solve(&scene, CaseFilter::default());
+    let cases = common::solve(&scene, CasePattern::default());
     // levels × u spaces × multipliers × δ × p masses
     assert_eq!(cases.len(), 3 * 2 * 3 * 3 * 2);
     for c in &cases {
@@ -774,9 +778,9 @@ fn lcp_iteration_cap_is_reported_and_every_start_converges() {
     study_scene.fields = ALL_FIELDS;
     let study = common::solve(
         &study_scene,
-        CaseFilter {
+        CasePattern {
             delta: Some(0.0),
-            ..CaseFilter::default()
+            ..CasePattern::default()
         },
     );
     for u in [USpace::Continuous, USpace::Broken] {
@@ -790,7 +794,7 @@ fn lcp_iteration_cap_is_reported_and_every_start_converges() {
             // the same LCP as the study's (cold-started there too with --delta 0)
             let case = study
                 .iter()
-                .find(|c| c.u_space == u && c.multiplier == m)
+                .find(|c| c.key.u_space == u && c.key.multiplier == m)
                 .unwrap();
             assert_alternates(case, scene.cracks[0].length(), "cold");
             assert_eq!(cold.iterations, case.iterations, "{id}");

@@ -4,9 +4,10 @@
 pub mod expectations;
 pub mod orders;
 
-use sdcrack::norms::ErrorNorms;
+use sdcrack::case::CasePattern;
+use sdcrack::norms::{ErrorNorms, Quantity};
 use sdcrack::scene::{MultiplierSpace, Scene, TomlScene, USpace};
-use sdcrack::study::{run_study, CaseFilter, CasePlan, CaseResult, Silent};
+use sdcrack::study::{run_study, CasePlan, CaseResult, Silent};
 
 /// A small valid scene (levels 0–1 of a 4 × 4 mesh, every variant, fields, no reference) that the
 /// CLI, bad-input and interrupted-run tests edit or run.
@@ -98,7 +99,7 @@ pub fn load(name: &str) -> Scene {
 }
 
 /// Runs the cases of `scene` selected by `filter`.
-pub fn solve(scene: &Scene, filter: CaseFilter) -> Vec<CaseResult> {
+pub fn solve(scene: &Scene, filter: CasePattern) -> Vec<CaseResult> {
     let plan = CasePlan::new(scene, &filter);
     run_study(scene, &plan, &mut Silent)
         .expect("study runs")
@@ -111,12 +112,12 @@ pub fn rate(h0: f64, e0: f64, h1: f64, e1: f64) -> f64 {
 }
 
 /// The error quantities of [`errors_by_level`], in its order, as the expectations and the compare
-/// tool name them.
-pub const QUANTITIES: [&str; 4] = ["u_l2", "p_l2", "p_x", "lambda_l2"];
+/// tool name them: the solver's vocabulary.
+pub const QUANTITIES: &[&str] = Quantity::NAMES;
 
 /// The four errors of a case, in the order of [`QUANTITIES`]: [e_u, e_p, e_p_x, e_λ].
 pub fn quantities(e: &ErrorNorms) -> [f64; 4] {
-    [e.u_l2, e.p_l2, e.p_x, e.lambda_l2]
+    Quantity::ALL.map(|q| e.get(q))
 }
 
 /// One series of a scene with `[exact]`, levels increasing: (size, [e_u, e_p, e_p_x, e_λ]) of the
@@ -174,7 +175,7 @@ pub fn error_series(
 ) -> Vec<(f64, f64, f64, f64)> {
     cases
         .iter()
-        .filter(|c| c.u_space == u && c.multiplier == m)
+        .filter(|c| c.key.u_space == u && c.key.multiplier == m)
         .map(|c| {
             let e = c.errors.expect("exact scene has errors");
             (c.h, e.u_l2, e.p_l2, e.lambda_l2)

@@ -19,6 +19,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod assembly;
+pub mod case;
 pub mod contact;
 pub mod expr;
 pub mod fe;

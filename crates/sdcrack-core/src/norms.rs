@@ -36,17 +36,51 @@ use crate::problem::{eval_on_face, Exact};
 #[cfg(test)]
 mod tests;
 
-/// The three error norms of a case.
-#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
-pub struct ErrorNorms {
+/// Declares [`ErrorNorms`] and its vocabulary [`Quantity`] from one table: each quantity's
+/// field, variant and name (summary.json's `errors` keys, a scene's `quantity`).
+macro_rules! error_norms {
+    ($( $(#[$doc:meta])* $field:ident => $variant:ident ),+ $(,)?) => {
+        /// The error norms of a case, one per [`Quantity`].
+        #[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
+        pub struct ErrorNorms {
+            $( $(#[$doc])* pub $field: f64, )+
+        }
+
+        /// An error quantity of a case: a field of [`ErrorNorms`], named as its field.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub enum Quantity {
+            $( $(#[$doc])* $variant, )+
+        }
+
+        crate::scene_names!(Quantity { $( $variant => stringify!($field), )+ });
+
+        impl ErrorNorms {
+            /// The norm of quantity `q`.
+            pub fn get(&self, q: Quantity) -> f64 {
+                match q {
+                    $( Quantity::$variant => self.$field, )+
+                }
+            }
+
+            /// The norms whose value for `q` is `value(q)`.
+            pub fn from_fn(mut value: impl FnMut(Quantity) -> f64) -> ErrorNorms {
+                ErrorNorms {
+                    $( $field: value(Quantity::$variant), )+
+                }
+            }
+        }
+    };
+}
+
+error_norms! {
     /// ‖u_h − u‖_{L²(Ω)}.
-    pub u_l2: f64,
+    u_l2 => UL2,
     /// ‖p_h − ∇u‖_{L²(Ω_c)}.
-    pub p_l2: f64,
+    p_l2 => PL2,
     /// ‖p_h − ∇u‖_X, the paper's mesh-dependent norm (L² plus h_T² ‖div(p_h − ∇u)‖²_T).
-    pub p_x: f64,
+    p_x => PX,
     /// ‖λ_h − \[u\]‖_{L²(Γc)}.
-    pub lambda_l2: f64,
+    lambda_l2 => LambdaL2,
 }
 
 /// The rule on triangles and crack segments that end at a crack tip.
@@ -776,12 +810,7 @@ impl<'a> NormCache<'a> {
             .into_iter()
             .zip(higher)
             .map(|(e, h)| {
-                let estimate = ErrorNorms {
-                    u_l2: (e.u_l2 - h.u_l2).abs(),
-                    p_l2: (e.p_l2 - h.p_l2).abs(),
-                    p_x: (e.p_x - h.p_x).abs(),
-                    lambda_l2: (e.lambda_l2 - h.lambda_l2).abs(),
-                };
+                let estimate = ErrorNorms::from_fn(|q| (e.get(q) - h.get(q)).abs());
                 (e, estimate)
             })
             .collect()

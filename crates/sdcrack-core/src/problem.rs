@@ -15,11 +15,17 @@ use crate::expr::Expr;
 /// "name", … })`; exported so that the io crate's enums can take their names the same way.
 /// The same table gives serde's `Serialize` (the name, a JSON string) and `Deserialize` (the
 /// name back; any other text is an unknown variant): the results files' case axes (the crate
-/// using the macro must depend on serde).
+/// using the macro must depend on serde). It is the vocabulary's one declaration: `ALL` (every
+/// variant, in the table's order) and `NAMES` (their names) are what the scene schema, the
+/// validation messages and `sdcrack schema` list.
 #[macro_export]
 macro_rules! scene_names {
-    ($ty:ident { $($variant:ident => $name:literal),+ $(,)? }) => {
+    ($ty:ident { $($variant:ident => $name:expr),+ $(,)? }) => {
         impl $ty {
+            /// Every variant, in the order of its names.
+            pub const ALL: [$ty; [$($name),+].len()] = [$($ty::$variant),+];
+            /// The names of [`Self::ALL`], in that order.
+            pub const NAMES: &'static [&'static str] = &[$($name),+];
             /// Name used in scene files, the CLI and result files.
             pub fn name(self) -> &'static str {
                 match self {
@@ -28,10 +34,7 @@ macro_rules! scene_names {
             }
             /// Parses a scene/CLI name.
             pub fn from_name(s: &str) -> Option<$ty> {
-                match s {
-                    $($name => Some($ty::$variant),)+
-                    _ => None,
-                }
+                $ty::ALL.into_iter().find(|v| v.name() == s)
             }
         }
 
@@ -51,7 +54,7 @@ macro_rules! scene_names {
             fn deserialize<D: ::serde::Deserializer<'de>>(d: D) -> Result<$ty, D::Error> {
                 let name = <String as ::serde::Deserialize>::deserialize(d)?;
                 $ty::from_name(&name).ok_or_else(|| {
-                    <D::Error as ::serde::de::Error>::unknown_variant(&name, &[$($name),+])
+                    <D::Error as ::serde::de::Error>::unknown_variant(&name, $ty::NAMES)
                 })
             }
         }
@@ -129,15 +132,6 @@ scene_names!(MultiplierSpace {
     M1 => "M1",
     M1Star => "M1star",
 });
-
-impl MultiplierSpace {
-    /// All variants in their canonical order.
-    pub const ALL: [MultiplierSpace; 3] = [
-        MultiplierSpace::M0,
-        MultiplierSpace::M1,
-        MultiplierSpace::M1Star,
-    ];
-}
 
 /// Axis-aligned rectangle Ω = [x0, x1] × [y0, y1].
 #[derive(Clone, Copy, Debug, PartialEq)]

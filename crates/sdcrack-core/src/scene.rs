@@ -7,8 +7,9 @@ pub mod exact_data;
 pub(crate) mod testing;
 pub mod verification;
 
+use crate::case::CaseAxes;
 use crate::expr::Expr;
-use crate::problem::{Domain, Exact, Meshing, MultiplierSpace, PMass, PSpace, Polyline, USpace};
+use crate::problem::{Domain, Exact, Meshing, Polyline};
 pub use verification::{ExpectedFailure, Verification};
 
 /// Which fields are written to `fields.h5` and the series `fields/*.xdmf` (the results folder
@@ -87,52 +88,6 @@ impl Scene {
             crate::mesh::MeshSource::new(&self.domain, &self.cracks, &self.meshing)?
                 .graded(self.grading),
         )
-    }
-}
-
-/// The axes of a study's cases, one list of values each: a case is one value of every axis,
-/// except that a p space runs only with the u spaces it serves ([`PSpace::serves`]). The scene
-/// lists them (`[discretization]`), a run's plan restricts them (sdcrack's `CaseFilter`), and
-/// summary.json reports the plan's as `plan` (each value by its name, δ as a number).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct CaseAxes {
-    /// Refinement levels, increasing (level ℓ has 2^ℓ·cells cells per direction).
-    pub levels: Vec<u32>,
-    /// u spaces.
-    pub u_spaces: Vec<USpace>,
-    /// Multiplier spaces.
-    pub multipliers: Vec<MultiplierSpace>,
-    /// p masses (`consistent`, `lumped`; a scene's default: the consistent one only).
-    pub p_masses: Vec<PMass>,
-    /// p spaces (`continuous`, `broken-tangential`; a scene's default: the paper's continuous p
-    /// only); each runs with the u spaces it serves ([`PSpace::serves`]).
-    pub p_spaces: Vec<PSpace>,
-    /// Regularisation parameters δ ≥ 0, decreasing.
-    pub deltas: Vec<f64>,
-}
-
-impl CaseAxes {
-    /// The (u space, p space) pairs that make cases, u spaces outermost: every pair the p space
-    /// serves ([`PSpace::serves`]; a continuous u runs with the continuous p only).
-    pub fn space_pairs(&self) -> Vec<(USpace, PSpace)> {
-        self.u_spaces
-            .iter()
-            .flat_map(|&u| {
-                self.p_spaces
-                    .iter()
-                    .filter(move |p| p.serves(u))
-                    .map(move |&p| (u, p))
-            })
-            .collect()
-    }
-
-    /// Number of cases: levels × (u space, p space) pairs × multipliers × p masses × δ.
-    pub fn case_count(&self) -> usize {
-        self.levels.len()
-            * self.space_pairs().len()
-            * self.multipliers.len()
-            * self.p_masses.len()
-            * self.deltas.len()
     }
 }
 

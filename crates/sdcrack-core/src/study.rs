@@ -16,6 +16,7 @@
 use std::time::Instant;
 
 use crate::assembly::{assemble, AssemblyError, System};
+use crate::case::{CaseAxes, CaseKey, MeshKey, Pattern};
 use crate::contact::{KktResiduals, Lcp, LcpOptions, LcpStatus};
 use crate::fe::mini::bubble_coefficients;
 use crate::fe::p1::TriangleGeometry;
@@ -24,8 +25,8 @@ use crate::mesh::{Mesh, MeshError, PTopology, UTopology};
 use crate::multiplier::{CrackField, CrackOperators, Multiplier};
 use crate::norms::{DiscreteSolution, ErrorNorms, NormCache, NormQuadrature, NORM_CACHE_BUDGET};
 use crate::ordering::elimination_order;
-use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
-use crate::scene::{CaseAxes, Scene};
+use crate::problem::PMass;
+use crate::scene::Scene;
 
 #[cfg(test)]
 mod tests;
@@ -66,40 +67,6 @@ pub enum StudyError {
     Linalg(#[from] LinalgError),
 }
 
-/// Restricts a study to some cases (each `Some` replaces the scene's list by one value).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct CaseFilter {
-    /// Only this level.
-    pub level: Option<u32>,
-    /// Only this u space.
-    pub u_space: Option<USpace>,
-    /// Only this multiplier space.
-    pub multiplier: Option<MultiplierSpace>,
-    /// Only this p mass.
-    pub p_mass: Option<PMass>,
-    /// Only this p space.
-    pub p_space: Option<PSpace>,
-    /// Only this δ.
-    pub delta: Option<f64>,
-}
-
-impl CaseFilter {
-    /// `axes` with each axis this filter names replaced by its one value.
-    pub fn restrict(&self, axes: &CaseAxes) -> CaseAxes {
-        fn one_or_all<T: Copy>(one: Option<T>, all: &[T]) -> Vec<T> {
-            one.map_or_else(|| all.to_vec(), |v| vec![v])
-        }
-        CaseAxes {
-            levels: one_or_all(self.level, &axes.levels),
-            u_spaces: one_or_all(self.u_space, &axes.u_spaces),
-            multipliers: one_or_all(self.multiplier, &axes.multipliers),
-            p_masses: one_or_all(self.p_mass, &axes.p_masses),
-            p_spaces: one_or_all(self.p_space, &axes.p_spaces),
-            deltas: one_or_all(self.delta, &axes.deltas),
-        }
-    }
-}
-
 /// The cases a scene asks for after a filter.
 #[derive(Clone, Debug)]
 pub struct CasePlan {
@@ -115,8 +82,9 @@ pub struct CasePlan {
 }
 
 impl CasePlan {
-    /// The plan of `scene` restricted by `filter`.
-    pub fn new(scene: &Scene, filter: &CaseFilter) -> CasePlan {
+    /// The plan of `scene` restricted by `filter` (each axis it names replaces the scene's
+    /// list by its one value).
+    pub fn new(scene: &Scene, filter: &Pattern<CaseKey>) -> CasePlan {
         CasePlan {
             axes: filter.restrict(&scene.axes),
             norm_quadrature: NormQuadrature::default(),
@@ -178,20 +146,10 @@ pub struct CaseFieldData {
 /// One solved case.
 #[derive(Clone, Debug)]
 pub struct CaseResult {
-    /// Level ℓ.
-    pub level: u32,
+    /// The case: its value of every axis.
+    pub key: CaseKey,
     /// Mesh size (triangle diameter).
     pub h: f64,
-    /// u space.
-    pub u_space: USpace,
-    /// Multiplier space.
-    pub multiplier: MultiplierSpace,
-    /// p mass of the system solved.
-    pub p_mass: PMass,
-    /// p space of the system solved.
-    pub p_space: PSpace,
-    /// δ.
-    pub delta: f64,
     /// Unknowns of the condensed system (p unknowns + u dofs) plus multipliers.
     pub unknowns: usize,
     /// Number of multipliers.
@@ -229,10 +187,8 @@ pub struct CaseResult {
 /// Mesh data of a (level, u space) pair, for field output.
 #[derive(Clone, Debug)]
 pub struct MeshRecord {
-    /// Level.
-    pub level: u32,
-    /// u space.
-    pub u_space: USpace,
+    /// The cases whose fields live on this mesh: those of its level and u space.
+    pub key: MeshKey,
     /// Points of the u dofs.
     pub points: Vec<[f64; 2]>,
     /// Triangles in u-dof numbering.
@@ -304,8 +260,7 @@ pub fn run_study(
             let topo_time = mesh_time + t1.elapsed().as_secs_f64();
             if plan.keep_fields {
                 result.meshes.push(MeshRecord {
-                    level,
-                    u_space,
+                    key: MeshKey { level, u_space },
                     points: topo.dof_vertex.iter().map(|&v| mesh.vertices[v]).collect(),
                     triangles: topo.triangle_dofs.clone(),
                     crack_points: ops.points.clone(),
@@ -707,13 +662,15 @@ impl LevelContext<'_> {
         timings.fields = t2.elapsed().as_secs_f64();
         let converged = sol.status.converged() && kkt.max() <= KKT_TOLERANCE;
         CaseResult {
-            level: self.mesh.level,
+            key: CaseKey {
+                level: self.mesh.level,
+                u_space: self.topo.space,
+                multiplier: multiplier.space,
+                p_mass: self.p_mass,
+                p_space: self.ptopo.space,
+                delta,
+            },
             h: self.mesh.h(),
-            u_space: self.topo.space,
-            multiplier: multiplier.space,
-            p_mass: self.p_mass,
-            p_space: self.ptopo.space,
-            delta,
             unknowns: self.system.n() + multiplier.len(),
             multipliers: multiplier.len(),
             iterations: sol.iterations,

@@ -4,7 +4,7 @@
 //! generator for the whole workspace, so a failure reproduces.)
 
 use super::*;
-use crate::problem::Rectangle;
+use crate::problem::{MultiplierSpace, PMass, PSpace, Rectangle, USpace};
 
 /// A scene on (−1, 1)² with the crack [−0.5, 0.5] × {0}, level-0 cells [8, 8], source `f`,
 /// Dirichlet data `g` and, if given, the exact solution (u, \[u\]) — the shape of

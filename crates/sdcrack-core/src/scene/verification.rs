@@ -1,20 +1,16 @@
 //! The validated `[verification]` table of a scene: what the compare tool's verdict may expect
 //! of it (the TOML keys and their validation are sdcrack-io's `scene::verification`).
 
-use crate::problem::{MultiplierSpace, USpace};
-
-/// The error quantities of a series (the keys of `errors` in summary.json).
-pub const QUANTITIES: [&str; 4] = ["u_l2", "p_l2", "p_x", "lambda_l2"];
+use crate::case::{CaseKey, Pattern};
+use crate::norms::Quantity;
 
 /// A series declared not to converge, and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExpectedFailure {
-    /// u space, or `None` for every u space (`"*"`).
-    pub u_space: Option<USpace>,
-    /// Multiplier space, or `None` for every one (`"*"`).
-    pub multiplier: Option<MultiplierSpace>,
-    /// One of [`QUANTITIES`], or `None` for every quantity (`"*"`).
-    pub quantity: Option<String>,
+    /// The series: its u space and multiplier, each `None` for every one (`"*"`).
+    pub series: Pattern<CaseKey>,
+    /// The quantity, or `None` for every quantity (`"*"`).
+    pub quantity: Option<Quantity>,
     /// Why the series is expected not to converge (shown in the report).
     pub reason: String,
 }
@@ -22,16 +18,11 @@ pub struct ExpectedFailure {
 /// A series' expected order of convergence declared by the scene, and why.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExpectedRate {
-    /// u space, or `None` for every u space (`"*"`).
-    pub u_space: Option<USpace>,
-    /// Multiplier space, or `None` for every one (`"*"`).
-    pub multiplier: Option<MultiplierSpace>,
-    /// `"consistent"`, `"lumped"`, or `None` for both (`"*"`).
-    pub p_mass: Option<String>,
-    /// `"continuous"`, `"broken-tangential"`, or `None` for both (`"*"`).
-    pub p_space: Option<String>,
-    /// One of [`QUANTITIES`], or `None` for every quantity (`"*"`).
-    pub quantity: Option<String>,
+    /// The series: its u space, multiplier, p mass and p space, each `None` for every one
+    /// (`"*"`).
+    pub series: Pattern<CaseKey>,
+    /// The quantity, or `None` for every quantity (`"*"`).
+    pub quantity: Option<Quantity>,
     /// The expected order, in (0, 4].
     pub rate: f64,
     /// Where the order comes from (shown in the report).

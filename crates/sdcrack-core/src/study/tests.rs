@@ -1,5 +1,5 @@
 use super::*;
-use crate::problem::Polyline;
+use crate::problem::{PSpace, Polyline, USpace};
 use crate::scene::testing;
 
 /// The reuse test is the Neumann bound, and the bound is tight: K(δ) = A − (δ − δ') M with

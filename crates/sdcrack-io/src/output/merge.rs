@@ -27,7 +27,8 @@ use serde_json::Value;
 
 use super::summary::{CaseSummary, Provenance, ShardRecord, Summary};
 use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
-use crate::scene::{CaseAxes, Scene, TomlScene};
+use crate::scene::{Scene, TomlScene};
+use sdcrack_core::case::{CaseAxes, CaseKey};
 
 /// Errors of a merge.
 #[derive(Debug, thiserror::Error)]
@@ -164,34 +165,25 @@ impl Shard {
     }
 }
 
-/// The position of a solver case in a single run's order (level, u space, p space, p mass, δ,
-/// multiplier: the loops of [`crate::study::run_study`]).
-type CaseKey = (usize, usize, usize, usize, usize, usize);
+/// The position of a solver case in a single run's order ([`CaseAxes::keys`], the loops of
+/// [`crate::study::run_study`]).
+type RunPosition = usize;
 
-/// Where the case `c` sits in `plan`; `None` when it is not a case of it.
-fn case_key(plan: &CaseAxes, c: &CaseSummary) -> Option<CaseKey> {
-    if !c.p_space.serves(c.u_space) {
-        return None;
-    }
-    Some((
-        plan.levels.iter().position(|&l| l == c.level)?,
-        plan.u_spaces.iter().position(|&u| u == c.u_space)?,
-        plan.p_spaces.iter().position(|&p| p == c.p_space)?,
-        plan.p_masses.iter().position(|&m| m == c.p_mass)?,
-        (plan.deltas.iter()).position(|&d| d.to_bits() == c.delta.to_bits())?,
-        plan.multipliers.iter().position(|&m| m == c.multiplier)?,
-    ))
+/// Where the case `key` sits in `order` (a plan's [`CaseAxes::keys`]), δ compared bit for bit;
+/// `None` when it is not a case of the plan.
+fn run_position(order: &[CaseKey], key: &CaseKey) -> Option<RunPosition> {
+    (order.iter()).position(|k| k == key && k.delta.to_bits() == key.delta.to_bits())
 }
 
-/// The case `c` in words, for messages.
-fn case_words(c: &CaseSummary) -> String {
+/// The case `key` in words, for messages.
+fn case_words(key: &CaseKey) -> String {
     let (level, u, m, pm, ps, delta) = (
-        c.level,
-        c.u_space,
-        c.multiplier,
-        c.p_mass,
-        c.p_space,
-        c.delta,
+        key.level,
+        key.u_space,
+        key.multiplier,
+        key.p_mass,
+        key.p_space,
+        key.delta,
     );
     format!("level {level} {u} {m} {pm} {ps} p δ = {delta}")
 }
@@ -317,62 +309,41 @@ fn check_one_build(solver: &[SolverShard]) -> Result<(), MergeError> {
 
 /// Every case of the plan, exactly once, in a single run's order.
 fn ordered_cases(solver: &[SolverShard], plan: &CaseAxes) -> Result<Vec<CaseSummary>, MergeError> {
-    let mut found: BTreeMap<CaseKey, (&CaseSummary, &Path)> = BTreeMap::new();
+    let order = plan.keys();
+    let mut found: BTreeMap<RunPosition, (&CaseSummary, &Path)> = BTreeMap::new();
     for &(path, s) in solver {
         for c in &s.cases {
-            let key = case_key(plan, c).ok_or_else(|| {
+            let key = &c.case.key;
+            let at = run_position(&order, key).ok_or_else(|| {
                 shard_err(
                     path,
-                    format!("case {} is not a case of the scene's plan", case_words(c)),
+                    format!("case {} is not a case of the scene's plan", case_words(key)),
                 )
             })?;
-            if let Some((_, other)) = found.get(&key) {
+            if let Some((_, other)) = found.get(&at) {
                 return Err(shard_err(
                     path,
                     format!(
                         "case {} is also in shard {}",
-                        case_words(c),
+                        case_words(key),
                         other.display()
                     ),
                 ));
             }
-            found.insert(key, (c, path));
+            found.insert(at, (c, path));
         }
     }
-    let expected = plan.case_count();
-    if found.len() != expected {
-        let missing = first_missing(plan, &found);
+    if found.len() != order.len() {
+        let missing = (order.iter().enumerate())
+            .find(|(i, _)| !found.contains_key(i))
+            .map_or_else(|| "none".into(), |(_, k)| case_words(k));
         return Err(MergeError::Incomplete(format!(
-            "the shards hold {} of the scene's {expected} cases; missing e.g. {missing}",
-            found.len()
+            "the shards hold {} of the scene's {} cases; missing e.g. {missing}",
+            found.len(),
+            order.len()
         )));
     }
     Ok(found.into_values().map(|(c, _)| c.clone()).collect())
-}
-
-/// The first case of `plan` (in run order) that `found` lacks, in words.
-fn first_missing<V>(plan: &CaseAxes, found: &BTreeMap<CaseKey, V>) -> String {
-    for (l, level) in plan.levels.iter().enumerate() {
-        for (u, u_space) in plan.u_spaces.iter().enumerate() {
-            for (s, p_space) in plan.p_spaces.iter().enumerate() {
-                if !p_space.serves(*u_space) {
-                    continue;
-                }
-                for (p, p_mass) in plan.p_masses.iter().enumerate() {
-                    for (d, delta) in plan.deltas.iter().enumerate() {
-                        for (m, multiplier) in plan.multipliers.iter().enumerate() {
-                            if !found.contains_key(&(l, u, s, p, d, m)) {
-                                return format!(
-                                    "level {level} {u_space} {multiplier} {p_mass} {p_space} p δ = {delta}"
-                                );
-                            }
-                        }
-                    }
-                }
-            }
-        }
-    }
-    "none".into()
 }
 
 /// One reference tool's shards: `(level, shard folder, <tool>/summary.json)` by level.

@@ -246,10 +246,6 @@ pub fn write_run(
     })
 }
 
-fn mesh_key(level: u32, u_space: crate::problem::USpace) -> String {
-    format!("level{level}-{u_space}")
-}
-
 /// Writes `fields.h5` + `fields/` with the fields the scene lists (none when it lists none) and,
 /// unless it lists u, p and λ, `verification.h5` with all of them.
 fn write_fields(
@@ -280,7 +276,7 @@ fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xd
         .meshes
         .iter()
         .map(|m| xdmf::MeshData {
-            key: mesh_key(m.level, m.u_space),
+            key: m.key.name(),
             points: m.points.clone(),
             triangles: m.triangles.clone(),
         })
@@ -290,8 +286,7 @@ fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xd
         .iter()
         .filter_map(|c| {
             let f = c.fields.as_ref()?;
-            let record =
-                (study.meshes.iter()).position(|m| m.level == c.level && m.u_space == c.u_space);
+            let record = (study.meshes.iter()).position(|m| m.key == c.key.mesh());
             let (crack_points, crack_segments) = record
                 .map(|i| {
                     let m = &study.meshes[i];
@@ -304,8 +299,8 @@ fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xd
                     .collect()
             });
             Some(xdmf::CaseFields {
-                name: summary::case_name(c),
-                mesh_key: mesh_key(c.level, c.u_space),
+                name: c.key.case_name(),
+                mesh_key: c.key.mesh().name(),
                 u: Some(f.u.clone()),
                 p: Some(f.p.clone()),
                 // the lumped p mass has no bubble: no p_bubble dataset
@@ -317,17 +312,14 @@ fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xd
                     CrackField::PerNode(v) => (xdmf::Centering::Node, v.clone()),
                 }),
                 jump,
-                series: summary::series_name(c),
-                metadata: vec![
-                    ("level".into(), Meta::Int(i64::from(c.level))),
-                    ("h".into(), Meta::Float(c.h)),
-                    ("u_space".into(), Meta::Text(c.u_space.to_string())),
-                    ("multiplier".into(), Meta::Text(c.multiplier.to_string())),
-                    ("p_mass".into(), Meta::Text(c.p_mass.to_string())),
-                    ("p_space".into(), Meta::Text(c.p_space.to_string())),
-                    ("delta".into(), Meta::Float(c.delta)),
-                ],
-                constants: vec![("delta".into(), c.delta)],
+                series: c.key.series_name(),
+                // the case's group attributes: summary.json's entries of its key
+                metadata: (summary::SizedKey { key: c.key, h: c.h }
+                    .entries()
+                    .into_iter())
+                .map(|(name, value)| (name.to_string(), Meta::from(value)))
+                .collect(),
+                constants: vec![("delta".into(), c.key.delta)],
             })
         })
         .collect();

@@ -17,9 +17,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::contact::KktResiduals;
 use crate::norms::ErrorNorms;
-use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
-use crate::scene::CaseAxes;
 use crate::study::{CaseResult, Timings, KKT_TOLERANCE};
+use sdcrack_core::case::{AxisValue, CaseAxes, CaseKey};
 
 /// Timing phases shared by several cases (reported with each of them): summary.json's
 /// `shared_timings`.
@@ -202,23 +201,58 @@ impl Provenance {
     }
 }
 
+/// A case's key with its mesh size, as summary.json writes them: the axes in the key's order,
+/// with `h` right after `level` (the order of the entries since before the key existed).
+#[derive(Debug, Clone, Copy)]
+pub struct SizedKey {
+    /// The case.
+    pub key: CaseKey,
+    /// Mesh size (triangle diameter).
+    pub h: f64,
+}
+
+impl SizedKey {
+    /// The entries: each axis of the key, `h` after the level.
+    pub fn entries(&self) -> Vec<(&'static str, AxisValue)> {
+        let mut entries = self.key.entries();
+        let at = entries
+            .iter()
+            .position(|e| e.0 == "level")
+            .map_or(0, |i| i + 1);
+        entries.insert(at, ("h", AxisValue::Number(self.h)));
+        entries
+    }
+}
+
+impl Serialize for SizedKey {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_map(self.entries())
+    }
+}
+
+impl<'de> Deserialize<'de> for SizedKey {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<SizedKey, D::Error> {
+        #[derive(Deserialize)]
+        struct Fields {
+            #[serde(flatten)]
+            key: CaseKey,
+            h: f64,
+        }
+        let f = Fields::deserialize(d)?;
+        Ok(SizedKey { key: f.key, h: f.h })
+    }
+}
+
 /// One case of the summary.
 #[derive(Serialize, Deserialize, Debug, Clone)]
 pub struct CaseSummary {
-    /// Level ℓ.
-    pub level: u32,
-    /// Mesh size (triangle diameter).
-    pub h: f64,
-    /// `continuous` or `broken`.
-    pub u_space: USpace,
-    /// `M0`, `M1` or `M1star`.
-    pub multiplier: MultiplierSpace,
-    /// `consistent` (the paper's MINI p, with bubble) or `lumped` (p = D⁻¹(…), P1, no bubble).
-    pub p_mass: PMass,
-    /// `continuous` (the paper's p) or `broken-tangential` (p·τ one value per crack face).
-    pub p_space: PSpace,
-    /// δ.
-    pub delta: f64,
+    /// The case (level, u space, multiplier, p mass, p space, δ) and its mesh size, flattened:
+    /// `u_space` is `continuous` or `broken`; `multiplier` `M0`, `M1` or `M1star`; `p_mass`
+    /// `consistent` (the paper's MINI p, with bubble) or `lumped` (p = D⁻¹(…), P1, no bubble);
+    /// `p_space` `continuous` (the paper's p) or `broken-tangential` (p·τ one value per crack
+    /// face).
+    #[serde(flatten)]
+    pub case: SizedKey,
     /// Unknowns (p vertex values, u dofs, multipliers).
     pub unknowns: usize,
     /// Number of multipliers.
@@ -276,51 +310,11 @@ pub struct CaseSummary {
     pub fields_state: Option<String>,
 }
 
-/// Name of a case in the field files, e.g. `level3-broken-M1-delta1e-2` (δ = 0 is written
-/// `delta0`): its `/cases/` group in `fields.h5` and `verification.h5`, and its step grid.
-pub fn case_name(c: &CaseResult) -> String {
-    format!("{}-delta{}", series_name(c), delta_text(c.delta))
-}
-
-/// δ as people write it: the shortest round-trip exponent form (`1e-2`, `1.5e-8`), `0` for zero.
-pub fn delta_text(delta: f64) -> String {
-    if delta == 0.0 {
-        "0".to_string()
-    } else {
-        format!("{delta:e}")
-    }
-}
-
-/// Name of the δ sweep a case belongs to in the field files, e.g. `level3-broken-M1` (and
-/// `level3-broken-M1-lumped` for the lumped p mass, `level3-broken-M1-ptangential` for the
-/// broken-tangential p, `level3-broken-M1-lumped-ptangential` for both): the time series
-/// `fields/<series>.series.xdmf` whose steps are the sweep's δ.
-pub fn series_name(c: &CaseResult) -> String {
-    let mass = match c.p_mass {
-        crate::problem::PMass::Consistent => "",
-        crate::problem::PMass::Lumped => "-lumped",
-    };
-    let space = match c.p_space {
-        crate::problem::PSpace::Continuous => "",
-        crate::problem::PSpace::BrokenTangential => "-ptangential",
-    };
-    format!(
-        "level{}-{}-{}{mass}{space}",
-        c.level, c.u_space, c.multiplier
-    )
-}
-
 impl CaseSummary {
     /// The summary entry of a solved case; `with_series` when the XDMF series are written.
     pub fn from_case(c: &CaseResult, with_series: bool) -> CaseSummary {
         CaseSummary {
-            level: c.level,
-            h: c.h,
-            u_space: c.u_space,
-            multiplier: c.multiplier,
-            p_mass: c.p_mass,
-            p_space: c.p_space,
-            delta: c.delta,
+            case: SizedKey { key: c.key, h: c.h },
             unknowns: c.unknowns,
             multipliers: c.multipliers,
             iterations: c.iterations,
@@ -343,13 +337,13 @@ impl CaseSummary {
             timings_s: c.timings,
             errors: c.errors,
             errors_quadrature: c.errors_quadrature,
-            fields_grid: case_name(c),
+            fields_grid: c.key.case_name(),
             fields_series: with_series.then(|| {
-                let file = super::xdmf::series_file(&series_name(c), "");
+                let file = super::xdmf::series_file(&c.key.series_name(), "");
                 format!("{}/{file}", super::FIELDS_STEM)
             }),
             fields_state: with_series.then(|| {
-                let file = super::xdmf::state_file(&case_name(c), "");
+                let file = super::xdmf::state_file(&c.key.case_name(), "");
                 format!("{}/{file}", super::FIELDS_STEM)
             }),
         }
@@ -401,14 +395,17 @@ mod tests {
     /// A solved case with awkward numbers: the shortest round trip needs 17 digits, a
     /// subnormal, the smallest normal, an exact zero, huge and tiny exponents.
     fn case() -> CaseResult {
+        use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
         CaseResult {
-            level: 3,
+            key: CaseKey {
+                level: 3,
+                u_space: USpace::Broken,
+                multiplier: MultiplierSpace::M1Star,
+                p_mass: PMass::Lumped,
+                p_space: PSpace::BrokenTangential,
+                delta: 1.5e-8,
+            },
             h: 0.1 + 0.2,
-            u_space: USpace::Broken,
-            multiplier: MultiplierSpace::M1Star,
-            p_mass: PMass::Lumped,
-            p_space: PSpace::BrokenTangential,
-            delta: 1.5e-8,
             unknowns: 1234,
             multipliers: 17,
             iterations: 4,
@@ -448,7 +445,7 @@ mod tests {
     fn errors_and_kkt_round_trip_through_summary_json_bit_for_bit() {
         let c = case();
         let scene = crate::scene::Scene::default_scene();
-        let plan = crate::study::CasePlan::new(&scene, &crate::study::CaseFilter::default());
+        let plan = crate::study::CasePlan::new(&scene, &sdcrack_core::case::CasePattern::default());
         let study = crate::study::StudyResult {
             cases: vec![c.clone()],
             ..Default::default()
@@ -503,7 +500,7 @@ mod tests {
         assert_eq!(got["kkt"].as_object().unwrap().len(), 4);
         for (key, want) in [
             ("h", c.h),
-            ("delta", c.delta),
+            ("delta", c.key.delta),
             ("condition_estimate", c.condition_estimate),
             ("condition_estimate_delta", c.condition_delta),
         ] {
@@ -516,5 +513,32 @@ mod tests {
         assert_eq!(got["p_space"], "broken-tangential");
         assert_eq!(got["p_mass"], "lumped");
         assert_eq!(json["recomputation_file"], "fields.h5");
+        // the key flattened in summary.json's order: its axes with h after the level, then the
+        // measurements (the order of the entries since before the key existed)
+        let keys: Vec<&str> = got
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
+        assert_eq!(
+            keys[..8],
+            [
+                "level",
+                "h",
+                "u_space",
+                "multiplier",
+                "p_mass",
+                "p_space",
+                "delta",
+                "unknowns"
+            ]
+        );
+        // and read back, the same text
+        let back = Summary::read(&dir.path().join("summary.json")).unwrap();
+        assert_eq!(back.cases[0].case.key, c.key);
+        let again = dir.path().join("again.json");
+        back.write(&again).unwrap();
+        assert_eq!(std::fs::read_to_string(again).unwrap(), text);
     }
 }

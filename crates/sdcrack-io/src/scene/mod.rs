@@ -35,8 +35,8 @@ pub use crate::problem::{
 // parser); re-exported so that a scene's users find them here too.
 pub use sdcrack_core::scene::{
     check_level, estimated_memory_bytes, estimated_memory_bytes_of_cells,
-    estimated_mesh_memory_bytes, exact_data, CaseAxes, ExpectedFailure, FieldSet, Level0Size,
-    Scene, Verification, MAX_LEVEL, MAX_MEMORY_BYTES, MEMORY_BYTES_PER_CELL,
+    estimated_mesh_memory_bytes, exact_data, ExpectedFailure, FieldSet, Level0Size, Scene,
+    Verification, MAX_LEVEL, MAX_MEMORY_BYTES, MEMORY_BYTES_PER_CELL,
 };
 
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).

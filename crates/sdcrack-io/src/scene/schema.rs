@@ -16,8 +16,11 @@ use serde::de::{self, value::Error, DeserializeSeed, IntoDeserializer, MapAccess
 use serde::{Deserialize, Serialize};
 
 use super::raw::SceneToml;
-use super::verification::{NOT_APPLICABLE_CHECKS, QUANTITIES};
+use super::verification::NOT_APPLICABLE_CHECKS;
 use super::KNOWN_REFERENCES;
+use sdcrack_core::case::{AxisSchema, CaseKey};
+use sdcrack_core::norms::Quantity;
+use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
 
 /// What a key's value is, as its struct field declares it (an `Option` is its content).
 #[derive(Clone, Debug, PartialEq)]
@@ -124,35 +127,36 @@ pub struct Schema {
     pub tables: Vec<TableSchema>,
     /// The names shared with the compare tool.
     pub vocabulary: Vocabulary,
+    /// The axes of a case (summary.json's keys of a case, in order), with their values' names
+    /// and the value a summary without the axis means.
+    pub case_key: Vec<AxisSchema>,
 }
 
-/// Names of the u spaces (sdcrack-core's `USpace`).
-pub const U_SPACES: &[&str] = &["continuous", "broken"];
-/// Names of the multiplier spaces (sdcrack-core's `MultiplierSpace`).
-pub const MULTIPLIERS: &[&str] = &["M0", "M1", "M1star"];
-/// Names of the p masses (sdcrack-core's `PMass`).
-pub const P_MASSES: &[&str] = &["consistent", "lumped"];
-/// Names of the p spaces (sdcrack-core's `PSpace`).
-pub const P_SPACES: &[&str] = &["continuous", "broken-tangential"];
 /// Names of the fields `[outputs] fields` may list.
 pub const FIELDS: &[&str] = &["u", "p", "lambda"];
 
 /// The names a key may hold, by `table.key` (the verification patterns also take `"*"`).
 pub const ALLOWED: &[(&str, &[&str])] = &[
-    ("discretization.u_spaces", U_SPACES),
-    ("discretization.multipliers", MULTIPLIERS),
-    ("discretization.p_mass", P_MASSES),
-    ("discretization.p_spaces", P_SPACES),
+    ("discretization.u_spaces", USpace::NAMES),
+    ("discretization.multipliers", MultiplierSpace::NAMES),
+    ("discretization.p_mass", PMass::NAMES),
+    ("discretization.p_spaces", PSpace::NAMES),
     ("outputs.fields", FIELDS),
     ("outputs.references", &KNOWN_REFERENCES),
-    ("verification.expected_failure.u_space", U_SPACES),
-    ("verification.expected_failure.multiplier", MULTIPLIERS),
-    ("verification.expected_failure.quantity", &QUANTITIES),
-    ("verification.expected_rate.u_space", U_SPACES),
-    ("verification.expected_rate.multiplier", MULTIPLIERS),
-    ("verification.expected_rate.p_mass", P_MASSES),
-    ("verification.expected_rate.p_space", P_SPACES),
-    ("verification.expected_rate.quantity", &QUANTITIES),
+    ("verification.expected_failure.u_space", USpace::NAMES),
+    (
+        "verification.expected_failure.multiplier",
+        MultiplierSpace::NAMES,
+    ),
+    ("verification.expected_failure.quantity", Quantity::NAMES),
+    ("verification.expected_rate.u_space", USpace::NAMES),
+    (
+        "verification.expected_rate.multiplier",
+        MultiplierSpace::NAMES,
+    ),
+    ("verification.expected_rate.p_mass", PMass::NAMES),
+    ("verification.expected_rate.p_space", PSpace::NAMES),
+    ("verification.expected_rate.quantity", Quantity::NAMES),
     ("verification.not_applicable.check", &NOT_APPLICABLE_CHECKS),
 ];
 
@@ -207,10 +211,11 @@ pub fn schema() -> Schema {
     Schema {
         tables,
         vocabulary: Vocabulary {
-            quantities: QUANTITIES.to_vec(),
+            quantities: Quantity::NAMES.to_vec(),
             not_applicable_checks: NOT_APPLICABLE_CHECKS.to_vec(),
             references: KNOWN_REFERENCES.to_vec(),
         },
+        case_key: CaseKey::schema(),
     }
 }
 

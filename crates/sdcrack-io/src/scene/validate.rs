@@ -7,13 +7,14 @@
 use std::path::Path;
 
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
-use super::schema::{FIELDS, MULTIPLIERS, P_MASSES, P_SPACES, U_SPACES};
+use super::schema::FIELDS;
 use super::{
-    check_level, CaseAxes, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace,
-    PMass, PSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
+    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass,
+    PSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
     KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
 };
 use crate::did_you_mean::suggest;
+use sdcrack_core::case::CaseAxes;
 
 fn parse_expr(key: &str, text: &str) -> Result<Expr, SceneError> {
     Expr::parse(text).map_err(|error| SceneError::Expression {
@@ -107,27 +108,31 @@ impl SceneToml {
             "discretization.u_spaces",
             &d.u_spaces,
             USpace::from_name,
-            U_SPACES,
+            USpace::NAMES,
         )?;
         let multipliers = validate_names(
             "discretization.multipliers",
             &d.multipliers,
             MultiplierSpace::from_name,
-            MULTIPLIERS,
+            MultiplierSpace::NAMES,
         )?;
         let p_masses = match &d.p_mass {
-            None => vec![PMass::Consistent],
-            Some(names) => {
-                validate_names("discretization.p_mass", names, PMass::from_name, P_MASSES)?
-            }
+            // a scene that leaves the axis out runs the key's default (sdcrack-core's case)
+            None => CaseAxes::defaults().p_masses.unwrap_or_default(),
+            Some(names) => validate_names(
+                "discretization.p_mass",
+                names,
+                PMass::from_name,
+                PMass::NAMES,
+            )?,
         };
         let p_spaces = match &d.p_spaces {
-            None => vec![PSpace::Continuous],
+            None => CaseAxes::defaults().p_spaces.unwrap_or_default(),
             Some(names) => validate_names(
                 "discretization.p_spaces",
                 names,
                 PSpace::from_name,
-                P_SPACES,
+                PSpace::NAMES,
             )?,
         };
         if !p_spaces

@@ -35,11 +35,14 @@
 
 use serde::Deserialize;
 
-use super::schema::{P_MASSES, P_SPACES};
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::norms::Quantity;
+use sdcrack_core::problem::{PMass, PSpace};
+
 use super::{suggest, MultiplierSpace, SceneError, USpace};
 
 pub use sdcrack_core::scene::verification::{
-    ExpectedFailure, ExpectedRate, Verification, NOT_APPLICABLE_CHECKS, QUANTITIES,
+    ExpectedFailure, ExpectedRate, Verification, NOT_APPLICABLE_CHECKS,
 };
 
 #[derive(Deserialize)]
@@ -125,10 +128,9 @@ impl VerificationToml {
         u_spaces: &[USpace],
         multipliers: &[MultiplierSpace],
     ) -> Result<Verification, SceneError> {
-        let us: Vec<(USpace, String)> = u_spaces.iter().map(|&u| (u, u.to_string())).collect();
-        let ms: Vec<(MultiplierSpace, String)> =
-            multipliers.iter().map(|&m| (m, m.to_string())).collect();
-        let qs = indexed(&QUANTITIES);
+        let us = named(u_spaces);
+        let ms = named(multipliers);
+        let qs = named(&Quantity::ALL);
         let mut expected_failures: Vec<ExpectedFailure> = Vec::new();
         for (i, e) in self.expected_failure.into_iter().enumerate() {
             let key = |k: &str| format!("verification.expected_failure[{i}].{k}");
@@ -140,20 +142,22 @@ impl VerificationToml {
                 )));
             }
             let failure = ExpectedFailure {
-                u_space: pattern(&key("u_space"), &e.u_space, &us)?,
-                multiplier: pattern(
-                    &key("multiplier"),
-                    e.multiplier.as_deref().unwrap_or("*"),
-                    &ms,
-                )?,
-                quantity: pattern(&key("quantity"), e.quantity.as_deref().unwrap_or("*"), &qs)?
-                    .map(|q| QUANTITIES[q].to_string()),
+                series: CasePattern {
+                    u_space: pattern(&key("u_space"), &e.u_space, &us)?,
+                    multiplier: pattern(
+                        &key("multiplier"),
+                        e.multiplier.as_deref().unwrap_or("*"),
+                        &ms,
+                    )?,
+                    ..CasePattern::default()
+                },
+                quantity: pattern(&key("quantity"), e.quantity.as_deref().unwrap_or("*"), &qs)?,
                 reason,
             };
-            if expected_failures.iter().any(|f| {
-                (f.u_space, f.multiplier, &f.quantity)
-                    == (failure.u_space, failure.multiplier, &failure.quantity)
-            }) {
+            if expected_failures
+                .iter()
+                .any(|f| (f.series, f.quantity) == (failure.series, failure.quantity))
+            {
                 return Err(SceneError::Value(format!(
                     "verification.expected_failure[{i}] declares the same series as an earlier one"
                 )));
@@ -185,13 +189,9 @@ impl VerificationToml {
     }
 }
 
-/// `names` with their positions, the `known` of [`pattern`].
-fn indexed(names: &[&str]) -> Vec<(usize, String)> {
-    names
-        .iter()
-        .enumerate()
-        .map(|(i, n)| (i, n.to_string()))
-        .collect()
+/// `values` with their names, the `known` of [`pattern`].
+fn named<T: Copy + std::fmt::Display>(values: &[T]) -> Vec<(T, String)> {
+    values.iter().map(|&v| (v, v.to_string())).collect()
 }
 
 fn non_empty(key: String, reason: &str) -> Result<String, SceneError> {
@@ -208,7 +208,7 @@ impl ExpectedRateToml {
         i: usize,
         us: &[(USpace, String)],
         ms: &[(MultiplierSpace, String)],
-        qs: &[(usize, String)],
+        qs: &[(Quantity, String)],
     ) -> Result<ExpectedRate, SceneError> {
         let key = |k: &str| format!("verification.expected_rate[{i}].{k}");
         if !(self.rate.is_finite() && self.rate > 0.0 && self.rate <= 4.0) {
@@ -218,29 +218,18 @@ impl ExpectedRateToml {
                 self.rate
             )));
         }
-        let pms = indexed(P_MASSES);
-        let pss = indexed(P_SPACES);
+        let pms = named(&PMass::ALL);
+        let pss = named(&PSpace::ALL);
+        let any = |v: &Option<String>| v.as_deref().unwrap_or("*").to_string();
         Ok(ExpectedRate {
-            u_space: pattern(&key("u_space"), self.u_space.as_deref().unwrap_or("*"), us)?,
-            multiplier: pattern(
-                &key("multiplier"),
-                self.multiplier.as_deref().unwrap_or("*"),
-                ms,
-            )?,
-            p_mass: pattern(&key("p_mass"), self.p_mass.as_deref().unwrap_or("*"), &pms)?
-                .map(|p| pms[p].1.clone()),
-            p_space: pattern(
-                &key("p_space"),
-                self.p_space.as_deref().unwrap_or("*"),
-                &pss,
-            )?
-            .map(|p| pss[p].1.clone()),
-            quantity: pattern(
-                &key("quantity"),
-                self.quantity.as_deref().unwrap_or("*"),
-                qs,
-            )?
-            .map(|q| QUANTITIES[q].to_string()),
+            series: CasePattern {
+                u_space: pattern(&key("u_space"), &any(&self.u_space), us)?,
+                multiplier: pattern(&key("multiplier"), &any(&self.multiplier), ms)?,
+                p_mass: pattern(&key("p_mass"), &any(&self.p_mass), &pms)?,
+                p_space: pattern(&key("p_space"), &any(&self.p_space), &pss)?,
+                ..CasePattern::default()
+            },
+            quantity: pattern(&key("quantity"), &any(&self.quantity), qs)?,
             rate: self.rate,
             reason: non_empty(key("reason"), &self.reason)?,
         })
@@ -289,15 +278,15 @@ mod tests {
         assert_eq!(v.reference_agreement, None);
         assert_eq!(v.expected_failures.len(), 1);
         let f = &v.expected_failures[0];
-        assert_eq!(f.u_space, Some(crate::scene::USpace::Continuous));
-        assert_eq!((f.multiplier, f.quantity.as_deref()), (None, None));
+        assert_eq!(f.series.u_space, Some(crate::scene::USpace::Continuous));
+        assert_eq!((f.series.multiplier, f.quantity), (None, None));
         assert_eq!(f.reason, "no jump");
         assert_eq!(with("").unwrap().verification, Default::default());
         // the repository's default scene declares the continuous u space an expected failure
         let own = &crate::scene::Scene::default_scene().verification;
         assert_eq!(own.expected_failures.len(), 1);
         assert_eq!(
-            own.expected_failures[0].u_space,
+            own.expected_failures[0].series.u_space,
             Some(crate::scene::USpace::Continuous)
         );
     }
@@ -364,10 +353,14 @@ mod tests {
         let v = &s.verification;
         assert_eq!(v.expected_rates.len(), 1);
         let r = &v.expected_rates[0];
-        assert_eq!(r.u_space, Some(crate::problem::USpace::Broken));
+        assert_eq!(r.series.u_space, Some(crate::problem::USpace::Broken));
         assert_eq!(
-            (r.p_mass.as_deref(), r.quantity.as_deref()),
-            (Some("lumped"), Some("u_l2"))
+            (r.series.p_mass, r.series.p_space, r.quantity),
+            (
+                Some(sdcrack_core::problem::PMass::Lumped),
+                None,
+                Some(sdcrack_core::norms::Quantity::UL2)
+            )
         );
         assert_eq!((r.rate, r.reason.as_str()), (1.0, "corner"));
         assert_eq!(

@@ -211,6 +211,18 @@ pub enum Meta {
     Text(String),
 }
 
+impl From<sdcrack_core::case::AxisValue> for Meta {
+    /// A case axis' value as its group's attribute.
+    fn from(v: sdcrack_core::case::AxisValue) -> Meta {
+        use sdcrack_core::case::AxisValue;
+        match v {
+            AxisValue::Int(i) => Meta::Int(i64::from(i)),
+            AxisValue::Number(x) => Meta::Float(x),
+            AxisValue::Name(n) => Meta::Text(n.to_string()),
+        }
+    }
+}
+
 impl std::fmt::Display for Meta {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
