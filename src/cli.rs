@@ -20,7 +20,8 @@ use crate::output::{write_run, ResultsDir};
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use crate::scene::{Scene, TomlScene};
 use crate::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
-use sdcrack_core::case::{delta_text, AxisValues, CaseKey, CasePattern, Pattern};
+use sdcrack_core::case::{delta_text, CaseKey, CasePattern, Pattern};
+use sdcrack_core::problem::Named;
 
 /// `println!` that survives a closed standard output: `sdcrack bench --json | head` must not
 /// panic, and a run whose reader went away must still finish and keep its results. A closed
@@ -199,13 +200,9 @@ fn parse_level(s: &str) -> Result<u32, String> {
 }
 
 /// `s` as one of the names a space's `from_name` knows, or a message naming `what` and `names`.
-/// A name of the vocabulary of `T` (its [`AxisValues::NAMES`]), or an error listing them.
-fn parse_name<T: AxisValues>(
-    s: &str,
-    from_name: fn(&str) -> Option<T>,
-    what: &str,
-) -> Result<T, String> {
-    from_name(s).ok_or_else(|| format!("unknown {what} '{s}' (expected {})", or_list(T::NAMES)))
+/// A name of the vocabulary `T`, or an error listing them.
+fn parse_name<T: Named>(s: &str, what: &str) -> Result<T, String> {
+    T::from_name(s).ok_or_else(|| format!("unknown {what} '{s}' (expected {})", or_list(T::NAMES)))
 }
 
 /// "a or b", "a, b or c": names in a sentence.
@@ -218,19 +215,19 @@ fn or_list(names: &[&str]) -> String {
 }
 
 fn parse_u_space(s: &str) -> Result<USpace, String> {
-    parse_name(s, USpace::from_name, "u space")
+    parse_name(s, "u space")
 }
 
 fn parse_p_mass(s: &str) -> Result<PMass, String> {
-    parse_name(s, PMass::from_name, "p mass")
+    parse_name(s, "p mass")
 }
 
 fn parse_p_space(s: &str) -> Result<PSpace, String> {
-    parse_name(s, PSpace::from_name, "p space")
+    parse_name(s, "p space")
 }
 
 fn parse_multiplier(s: &str) -> Result<MultiplierSpace, String> {
-    parse_name(s, MultiplierSpace::from_name, "multiplier space")
+    parse_name(s, "multiplier space")
 }
 
 /// Vertex counts accepted by `bench` (the upper bound keeps one case within ~60 GB).

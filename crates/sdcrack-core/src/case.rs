@@ -6,7 +6,7 @@
 //! (its producer in the study, its name in the field files). The key's names in the field
 //! files ([`CaseKey::series_name`], [`CaseKey::case_name`]) have their one home here too.
 
-use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use crate::problem::{MultiplierSpace, Named, PMass, PSpace, USpace};
 
 /// An axis' value as results files write it: a number, or a name.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,19 +53,13 @@ impl AxisValues for f64 {
     }
 }
 
-/// [`AxisValues`] of enums named by [`crate::scene_names!`].
-macro_rules! named_axis {
-    ($($ty:ty),+) => {$(
-        impl AxisValues for $ty {
-            const NAMES: &'static [&'static str] = <$ty>::NAMES;
-            fn value(self) -> AxisValue {
-                AxisValue::Name(self.name())
-            }
-        }
-    )+};
+/// A named axis ([`Named`]: the enums of [`crate::scene_names!`]) is written by its name.
+impl<T: Named> AxisValues for T {
+    const NAMES: &'static [&'static str] = <T as Named>::NAMES;
+    fn value(self) -> AxisValue {
+        AxisValue::Name(Named::name(self))
+    }
 }
-
-named_axis!(USpace, MultiplierSpace, PMass, PSpace);
 
 /// One axis of [`CaseKey`] as `sdcrack schema` prints it.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

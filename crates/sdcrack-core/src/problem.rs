@@ -9,6 +9,17 @@
 
 use crate::expr::Expr;
 
+/// A vocabulary: a type whose values are named ([`scene_names!`] implements it), so that code
+/// can parse, list and suggest names of any of them.
+pub trait Named: Copy + 'static {
+    /// Every name, in the canonical order.
+    const NAMES: &'static [&'static str];
+    /// The name of this value.
+    fn name(self) -> &'static str;
+    /// The value of a name (`None` for any other text, case-sensitive).
+    fn from_name(s: &str) -> Option<Self>;
+}
+
 /// Gives a fieldless enum its names in scene files, the CLI and result files, one table for
 /// both directions: `name()` (variant → name), `from_name()` (name → variant, `None` for any
 /// other text, case-sensitive) and `Display` (the name). Written `scene_names!(Type { Variant =>
@@ -35,6 +46,16 @@ macro_rules! scene_names {
             /// Parses a scene/CLI name.
             pub fn from_name(s: &str) -> Option<$ty> {
                 $ty::ALL.into_iter().find(|v| v.name() == s)
+            }
+        }
+
+        impl $crate::problem::Named for $ty {
+            const NAMES: &'static [&'static str] = $ty::NAMES;
+            fn name(self) -> &'static str {
+                $ty::name(self)
+            }
+            fn from_name(s: &str) -> Option<$ty> {
+                $ty::from_name(s)
             }
         }
 

@@ -9,12 +9,13 @@ use std::path::Path;
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
 use super::schema::FIELDS;
 use super::{
-    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass,
-    PSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
+    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace,
+    Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
     KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
 };
 use crate::did_you_mean::suggest;
 use sdcrack_core::case::CaseAxes;
+use sdcrack_core::problem::Named;
 
 fn parse_expr(key: &str, text: &str) -> Result<Expr, SceneError> {
     Expr::parse(text).map_err(|error| SceneError::Expression {
@@ -104,37 +105,13 @@ impl SceneToml {
             }
         };
         let levels = validate_levels(&d.levels, level0)?;
-        let u_spaces = validate_names(
-            "discretization.u_spaces",
-            &d.u_spaces,
-            USpace::from_name,
-            USpace::NAMES,
-        )?;
-        let multipliers = validate_names(
-            "discretization.multipliers",
-            &d.multipliers,
-            MultiplierSpace::from_name,
-            MultiplierSpace::NAMES,
-        )?;
-        let p_masses = match &d.p_mass {
-            // a scene that leaves the axis out runs the key's default (sdcrack-core's case)
-            None => CaseAxes::defaults().p_masses.unwrap_or_default(),
-            Some(names) => validate_names(
-                "discretization.p_mass",
-                names,
-                PMass::from_name,
-                PMass::NAMES,
-            )?,
-        };
-        let p_spaces = match &d.p_spaces {
-            None => CaseAxes::defaults().p_spaces.unwrap_or_default(),
-            Some(names) => validate_names(
-                "discretization.p_spaces",
-                names,
-                PSpace::from_name,
-                PSpace::NAMES,
-            )?,
-        };
+        let u_spaces = validate_names::<USpace>("discretization.u_spaces", &d.u_spaces)?;
+        let multipliers =
+            validate_names::<MultiplierSpace>("discretization.multipliers", &d.multipliers)?;
+        // a scene that leaves an axis out runs the key's default (sdcrack-core's case)
+        let defaults = CaseAxes::defaults();
+        let p_masses = names_or("discretization.p_mass", &d.p_mass, defaults.p_masses)?;
+        let p_spaces = names_or("discretization.p_spaces", &d.p_spaces, defaults.p_spaces)?;
         if !p_spaces
             .iter()
             .any(|p| u_spaces.iter().any(|&u| p.serves(u)))
@@ -429,12 +406,21 @@ fn validate_levels(levels: &[i64], size: Level0Size) -> Result<Vec<u32>, SceneEr
     Ok(out)
 }
 
-fn validate_names<T: PartialEq + Copy>(
+/// The optional list `names` of the vocabulary `T` ([`validate_names`]), or `default` when the
+/// scene leaves it out.
+fn names_or<T: Named + PartialEq>(
     key: &str,
-    names: &[String],
-    parse: impl Fn(&str) -> Option<T>,
-    known: &[&str],
+    names: &Option<Vec<String>>,
+    default: Option<Vec<T>>,
 ) -> Result<Vec<T>, SceneError> {
+    match names {
+        None => Ok(default.unwrap_or_default()),
+        Some(names) => validate_names(key, names),
+    }
+}
+
+fn validate_names<T: Named + PartialEq>(key: &str, names: &[String]) -> Result<Vec<T>, SceneError> {
+    let (parse, known) = (T::from_name, T::NAMES);
     if names.is_empty() {
         return Err(SceneError::Value(format!(
             "{key} is empty: list at least one of {}",
