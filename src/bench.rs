@@ -442,8 +442,8 @@ pub fn run_bench(
         u_space: Some(USpace::Broken),
         multiplier: Some(MultiplierSpace::M1),
         p_mass: Some(PMass::Consistent),
-        p_space: None,
         delta: Some(0.0),
+        ..CasePattern::default()
     };
     let case_plan = CasePlan {
         // the solver alone: no field arrays kept for output

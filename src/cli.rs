@@ -86,6 +86,8 @@ pub struct CaseSelection {
 
 impl CaseSelection {
     /// The study's filter: each option given replaces the scene's list by its one value.
+    // the struct update is for axes without an option here (none today)
+    #[allow(clippy::needless_update)]
     pub fn filter(&self) -> CasePattern {
         CasePattern {
             level: self.level,
@@ -94,6 +96,8 @@ impl CaseSelection {
             p_mass: self.p_mass,
             p_space: self.p_space,
             delta: self.delta,
+            // an axis with no option here runs every value the scene lists
+            ..CasePattern::default()
         }
     }
 }

@@ -209,6 +209,24 @@ impl CaseKey {
     }
 }
 
+impl std::fmt::Display for CaseKey {
+    /// The case in words, for messages: `level 2 broken M1 lumped continuous p δ = 0.01`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let CaseKey {
+            level,
+            u_space,
+            multiplier,
+            p_mass,
+            p_space,
+            delta,
+        } = self;
+        write!(
+            f,
+            "level {level} {u_space} {multiplier} {p_mass} {p_space} p δ = {delta}"
+        )
+    }
+}
+
 /// The axes of a case that fix its mesh and u dofs: its fields live on the mesh of this key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct MeshKey {
@@ -325,6 +343,14 @@ mod tests {
             ..k
         };
         assert_eq!(plain.case_name(), "level3-broken-M1-delta0");
+    }
+
+    #[test]
+    fn a_key_in_words() {
+        assert_eq!(
+            key().to_string(),
+            "level 3 broken M1 lumped broken-tangential p δ = 0.01"
+        );
     }
 
     #[test]

@@ -175,19 +175,6 @@ fn run_position(order: &[CaseKey], key: &CaseKey) -> Option<RunPosition> {
     (order.iter()).position(|k| k == key && k.delta.to_bits() == key.delta.to_bits())
 }
 
-/// The case `key` in words, for messages.
-fn case_words(key: &CaseKey) -> String {
-    let (level, u, m, pm, ps, delta) = (
-        key.level,
-        key.u_space,
-        key.multiplier,
-        key.p_mass,
-        key.p_space,
-        key.delta,
-    );
-    format!("level {level} {u} {m} {pm} {ps} p δ = {delta}")
-}
-
 /// Merges the shard folders `shards` into `out/<scene name>`; `provenance` is the merge's own.
 pub fn merge_shards(
     shards: &[PathBuf],
@@ -317,17 +304,13 @@ fn ordered_cases(solver: &[SolverShard], plan: &CaseAxes) -> Result<Vec<CaseSumm
             let at = run_position(&order, key).ok_or_else(|| {
                 shard_err(
                     path,
-                    format!("case {} is not a case of the scene's plan", case_words(key)),
+                    format!("case {} is not a case of the scene's plan", key),
                 )
             })?;
             if let Some((_, other)) = found.get(&at) {
                 return Err(shard_err(
                     path,
-                    format!(
-                        "case {} is also in shard {}",
-                        case_words(key),
-                        other.display()
-                    ),
+                    format!("case {} is also in shard {}", key, other.display()),
                 ));
             }
             found.insert(at, (c, path));
@@ -336,7 +319,7 @@ fn ordered_cases(solver: &[SolverShard], plan: &CaseAxes) -> Result<Vec<CaseSumm
     if found.len() != order.len() {
         let missing = (order.iter().enumerate())
             .find(|(i, _)| !found.contains_key(i))
-            .map_or_else(|| "none".into(), |(_, k)| case_words(k));
+            .map_or_else(|| "none".into(), |(_, k)| k.to_string());
         return Err(MergeError::Incomplete(format!(
             "the shards hold {} of the scene's {} cases; missing e.g. {missing}",
             found.len(),

@@ -9,9 +9,9 @@ use std::path::Path;
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
 use super::schema::FIELDS;
 use super::{
-    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace,
-    Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
-    KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
+    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, Polyline,
+    Rectangle, Scene, SceneError, Segment, USpace, Var, Verification, KNOWN_REFERENCES, MAX_CELLS,
+    MAX_LEVEL,
 };
 use crate::did_you_mean::suggest;
 use sdcrack_core::case::CaseAxes;
