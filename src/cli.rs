@@ -458,21 +458,23 @@ fn plan_json(scene: &Scene, triangles: &[usize]) -> String {
     let mesh_memory = per_level(&|cells| {
         (crate::scene::estimated_mesh_memory_bytes(cells) / (1u64 << 20) as f64).ceil() as u64
     });
-    let value = serde_json::json!({
-        "name": scene.name,
-        "cases": scene.axes.case_count(),
-        "levels": scene.axes.levels,
-        "u_spaces": scene.axes.u_spaces,
-        "multipliers": scene.axes.multipliers,
-        "p_masses": scene.axes.p_masses,
-        "p_spaces": scene.axes.p_spaces,
-        "deltas": scene.axes.deltas,
+    let mut value = serde_json::Map::new();
+    value.insert("name".into(), scene.name.clone().into());
+    value.insert("cases".into(), scene.axes.case_count().into());
+    // every axis' list, as summary.json's plan writes them (levels, u_spaces, …, deltas)
+    if let Ok(serde_json::Value::Object(axes)) = serde_json::to_value(&scene.axes) {
+        value.extend(axes);
+    }
+    let rest = serde_json::json!({
         "references": scene.references,
         "fields": !scene.fields.is_empty(),
         "memory_mb": memory,
         "mesh_memory_mb": mesh_memory,
     });
-    value.to_string()
+    if let serde_json::Value::Object(rest) = rest {
+        value.extend(rest);
+    }
+    serde_json::Value::Object(value).to_string()
 }
 
 /// `sdcrack reference`: one tool on one level, into OUT/<scene name>/.

@@ -84,15 +84,23 @@ pub trait Keyed {
 /// The pattern of key type `K` ([`Keyed`]): `Pattern<CaseKey>` is [`CasePattern`].
 pub type Pattern<K> = <K as Keyed>::Pattern;
 
+/// The list of a defaulted axis that a summary written before the axis existed means: its
+/// type's default alone.
+fn default_list<T: Default>() -> Vec<T> {
+    vec![T::default()]
+}
+
 /// Declares [`CaseKey`], [`CasePattern`] and [`CaseAxes`] from one table of axes, in the key's
-/// order (summary.json's, and the field files'): `field: Type => plural [= default],`.
+/// order (summary.json's, and the field files'): `field: Type => plural`, followed by
+/// `(default)` for an axis a scene may leave out: it then runs the type's `Default` value, which
+/// is also what a results file written before the axis existed means.
 macro_rules! case_axes {
-    ($( $(#[$doc:meta])* $field:ident : $ty:ty => $plural:ident $(= $default:expr)? ),+ $(,)?) => {
+    ($( $(#[$doc:meta])* $field:ident : $ty:ty => $plural:ident $(($default:ident))? ),+ $(,)?) => {
         /// One case of a study: a value of every axis. summary.json writes it flattened into
         /// the case's entry (with the mesh size `h` after the level).
         #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
         pub struct CaseKey {
-            $( $(#[$doc])* pub $field: $ty, )+
+            $( $(#[$doc])* $(#[serde($default)])? pub $field: $ty, )+
         }
 
         /// [`CaseKey`]'s axes, each optional: `None` matches every value (a filter's axis not
@@ -109,7 +117,7 @@ macro_rules! case_axes {
         /// `plan` (each value by its name, δ as a number).
         #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
         pub struct CaseAxes {
-            $( $(#[$doc])* pub $plural: Vec<$ty>, )+
+            $( $(#[$doc])* $(#[serde($default = "default_list")])? pub $plural: Vec<$ty>, )+
         }
 
         impl CaseKey {
@@ -125,7 +133,7 @@ macro_rules! case_axes {
                     axis: stringify!($field),
                     plural: stringify!($plural),
                     values: <$ty as AxisValues>::NAMES,
-                    default: None $(.or(Some(<$ty>::name($default))))?,
+                    default: None $(.or(Some(<$ty as Default>::$default().name())))?,
                 }),+]
             }
         }
@@ -145,19 +153,29 @@ macro_rules! case_axes {
         }
 
         impl CaseAxes {
-            /// The lists of a scene that does not list the axes with a default: those take it.
-            pub fn defaults() -> CaseAxesDefaults {
-                CaseAxesDefaults {
-                    $( $plural: None $(.or(Some(vec![$default])))?, )+
+            /// The lists before a scene is read: each axis a scene may leave out holds its
+            /// default ([`default_list`]), the others nothing yet.
+            pub fn defaults() -> AxesDraft {
+                AxesDraft {
+                    $( $plural: None $(.or(Some(vec![<$ty as Default>::$default()])))?, )+
                 }
             }
         }
 
-        /// [`CaseAxes::defaults`]: the list of each axis a scene may leave out (`None`: it must
-        /// list it).
+        /// The lists of a scene as it is read ([`CaseAxes::defaults`], then each list the scene
+        /// gives): `None` where nothing is known yet.
         #[derive(Clone, Debug, PartialEq)]
-        pub struct CaseAxesDefaults {
+        pub struct AxesDraft {
             $( $(#[$doc])* pub $plural: Option<Vec<$ty>>, )+
+        }
+
+        impl AxesDraft {
+            /// The axes, once every list is known; else the name of the first axis missing.
+            pub fn complete(self) -> Result<CaseAxes, &'static str> {
+                Ok(CaseAxes {
+                    $( $plural: self.$plural.ok_or(stringify!($plural))?, )+
+                })
+            }
         }
     };
 }
@@ -170,10 +188,10 @@ case_axes! {
     /// Multiplier space.
     multiplier: MultiplierSpace => multipliers,
     /// p mass of the system solved (a scene's default: the consistent one).
-    p_mass: PMass => p_masses = PMass::Consistent,
+    p_mass: PMass => p_masses (default),
     /// p space of the system solved (a scene's default: the paper's continuous p); each runs
     /// with the u spaces it serves ([`PSpace::serves`]).
-    p_space: PSpace => p_spaces = PSpace::Continuous,
+    p_space: PSpace => p_spaces (default),
     /// Regularisation parameter δ ≥ 0; a list decreasing.
     delta: f64 => deltas,
 }
@@ -429,8 +447,15 @@ mod tests {
         assert_eq!(entries[5].1, AxisValue::Number(1e-2));
         assert_eq!(s[4].default, Some("continuous"));
         assert_eq!(s[1].default, None);
-        let d = CaseAxes::defaults();
+        let mut d = CaseAxes::defaults();
         assert_eq!(d.p_masses, Some(vec![PMass::Consistent]));
+        assert_eq!(d.p_spaces, Some(vec![PSpace::Continuous]));
         assert_eq!(d.levels, None);
+        assert_eq!(d.clone().complete(), Err("levels"));
+        d.levels = Some(vec![0]);
+        d.u_spaces = Some(vec![USpace::Broken]);
+        d.multipliers = Some(vec![MultiplierSpace::M0]);
+        d.deltas = Some(vec![0.0]);
+        assert_eq!(d.complete().map(|a| a.case_count()), Ok(1));
     }
 }

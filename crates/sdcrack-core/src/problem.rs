@@ -104,9 +104,11 @@ pub enum MultiplierSpace {
 
 /// The space of p = ∇u (docs/design.md, The p spaces): the paper's continuous MINI field, or
 /// one whose tangential component may jump across the crack.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum PSpace {
-    /// The paper's X_h: continuous vector P1 ⊕ bubble on Ω.
+    /// The paper's X_h: continuous vector P1 ⊕ bubble on Ω (the default: a scene that lists no
+    /// p space, a summary written before the axis).
+    #[default]
     Continuous,
     /// X_h with the tangential component doubled at every interior crack vertex where the crack
     /// is straight: p·ν shared, p·τ one value per face; shared at tips and kinks. Still in
@@ -129,9 +131,10 @@ impl PSpace {
 
 /// The p–p block of the condensed system: the paper's consistent MINI mass, or its
 /// row-sum diagonal, which lets p be eliminated exactly (docs/design.md, The lumped p mass).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum PMass {
     /// G̃ = the P1 vector mass after the bubble condensation, M_T − (7|T|/90) 1 1ᵀ per element.
+    #[default]
     Consistent,
     /// D = the row sums of G̃, 0.1 Σ_{T∋i} |T| per component: p is the recovered gradient
     /// D⁻¹(G_Γ − B̃ᵀU − contact term), P1 without bubble.

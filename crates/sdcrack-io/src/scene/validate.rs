@@ -109,9 +109,9 @@ impl SceneToml {
         let multipliers =
             validate_names::<MultiplierSpace>("discretization.multipliers", &d.multipliers)?;
         // a scene that leaves an axis out runs the key's default (sdcrack-core's case)
-        let defaults = CaseAxes::defaults();
-        let p_masses = names_or("discretization.p_mass", &d.p_mass, defaults.p_masses)?;
-        let p_spaces = names_or("discretization.p_spaces", &d.p_spaces, defaults.p_spaces)?;
+        let mut axes = CaseAxes::defaults();
+        let p_masses = names_or("discretization.p_mass", &d.p_mass, axes.p_masses.take())?;
+        let p_spaces = names_or("discretization.p_spaces", &d.p_spaces, axes.p_spaces.take())?;
         if !p_spaces
             .iter()
             .any(|p| u_spaces.iter().any(|&u| p.serves(u)))
@@ -139,6 +139,18 @@ impl SceneToml {
             None => Verification::default(),
             Some(v) => v.validate(&u_spaces, &multipliers)?,
         };
+        // the lists the scene gives; the axes it may leave out keep their defaults
+        axes.levels = Some(levels);
+        axes.u_spaces = Some(u_spaces);
+        axes.multipliers = Some(multipliers);
+        axes.p_masses = Some(p_masses);
+        axes.p_spaces = Some(p_spaces);
+        axes.deltas = Some(deltas);
+        let axes = axes.complete().map_err(|axis| {
+            SceneError::Value(format!(
+                "discretization: no list of {axis} (a defect of sdcrack)"
+            ))
+        })?;
         Ok(Scene {
             name,
             description: self.description,
@@ -151,14 +163,7 @@ impl SceneToml {
             f,
             g,
             exact,
-            axes: CaseAxes {
-                levels,
-                u_spaces,
-                multipliers,
-                p_masses,
-                p_spaces,
-                deltas,
-            },
+            axes,
             fields,
             references,
             verification,
