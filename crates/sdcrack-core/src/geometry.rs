@@ -14,19 +14,11 @@
 //! Validation errors name the offending item the way the scene file does: `domain.polygon` for the
 //! domain and `geometry.cracks[i]` for crack `i`.
 
-use std::fmt;
-
 mod error;
 #[cfg(test)]
 mod tests;
 
-pub use error::GeometryError;
-
-/// Largest accepted magnitude of a coordinate.
-///
-/// Below this bound the cross products used by the predicates cannot overflow, so their signs are
-/// meaningful; larger (but finite) coordinates are rejected by the validation functions.
-pub const MAX_COORDINATE: f64 = 1e100;
+pub use error::{GeometryError, MAX_COORDINATE};
 
 /// Where a point lies relative to a polygon; see [`point_in_polygon`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -433,37 +425,6 @@ fn is_finite(p: [f64; 2]) -> bool {
 
 fn in_range(p: [f64; 2]) -> bool {
     p[0].abs() <= MAX_COORDINATE && p[1].abs() <= MAX_COORDINATE
-}
-
-/// Displays a point as `(x, y)`.
-struct Pt([f64; 2]);
-
-impl fmt::Display for Pt {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "({}, {})", self.0[0], self.0[1])
-    }
-}
-
-/// Displays a segment as `from (x, y) to (x, y)`.
-struct Seg([[f64; 2]; 2]);
-
-impl fmt::Display for Seg {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "from {} to {}", Pt(self.0[0]), Pt(self.0[1]))
-    }
-}
-
-fn pt(p: &[f64; 2]) -> Pt {
-    Pt(*p)
-}
-
-fn seg(s: &[[f64; 2]; 2]) -> Seg {
-    Seg(*s)
-}
-
-/// A zero-length edge at `p`.
-fn point_edge(p: &[f64; 2]) -> Seg {
-    Seg([*p, *p])
 }
 
 /// The L-shaped domain of the unit tests (here and in [`crate::mesh::gmsh`]), counter-clockwise.
