@@ -80,6 +80,7 @@
 
 mod cholesky;
 mod csc;
+mod error;
 mod estimate;
 mod ldlt;
 mod refine;
@@ -88,69 +89,7 @@ mod tests;
 
 pub use cholesky::{cholesky_solve, Cholesky, CholeskyTimings};
 pub use csc::SymCsc;
+pub use error::LinalgError;
 pub use estimate::CONDITION_ITERATIONS;
 pub use ldlt::{FactorStats, Ldlt, SymbolicLdlt};
 pub use refine::componentwise_backward_error;
-
-/// Relative pivot threshold: `|d| <= PIVOT_EPS_REL · scale` counts as a zero pivot.
-const PIVOT_EPS_REL: f64 = 1e-13;
-/// Relative magnitude of a regularized pivot: it becomes `± PIVOT_DELTA_REL · scale`.
-const PIVOT_DELTA_REL: f64 = 1e-6;
-/// Factor by which `delta` grows when a factorization meets a non-finite pivot.
-const DELTA_RETRY_FACTOR: f64 = 100.0;
-/// Retries with a larger `delta` before giving up.
-const MAX_DELTA_RETRIES: usize = 2;
-/// Refinement stops after this many consecutive steps without a new best residual.
-const STAGNATION_STEPS: usize = 2;
-/// Minimum number of right-hand sides per thread in [`Ldlt::solve_many_in_place`].
-const MIN_COLS_PER_THREAD: usize = 16;
-/// Minimum `n · ncols` for [`Ldlt::solve_many_in_place`] to spawn threads.
-const MIN_WORK_FOR_THREADS: usize = 1 << 16;
-
-/// Errors of the sparse symmetric solver.
-#[derive(Debug, thiserror::Error)]
-pub enum LinalgError {
-    /// The symbolic analysis (ordering, elimination tree) failed, e.g. out of memory.
-    #[error("symbolic analysis failed: {0}")]
-    Symbolic(String),
-    /// The numeric factorization failed (out of memory, zero or non-finite pivot, zero matrix).
-    #[error("numeric factorization failed: {0}")]
-    Numeric(String),
-    /// A vector or matrix has the wrong size.
-    #[error("dimension mismatch for {what}: expected {expected}, found {found}")]
-    Dimension {
-        /// What was being checked.
-        what: &'static str,
-        /// Expected length.
-        expected: usize,
-        /// Actual length.
-        found: usize,
-    },
-    /// A triplet index lies outside the `n × n` matrix.
-    #[error("entry ({row}, {col}) out of bounds for a {n}x{n} matrix")]
-    IndexOutOfBounds {
-        /// Row index of the offending entry.
-        row: usize,
-        /// Column index of the offending entry.
-        col: usize,
-        /// Matrix dimension.
-        n: usize,
-    },
-    /// The CSC arrays of a [`SymCsc`] violate its invariants.
-    #[error("invalid symmetric CSC structure: {0}")]
-    Structure(String),
-    /// A pivot sign other than `+1` / `−1` was given.
-    #[error("invalid pivot sign {value} at index {index} (expected +1 or -1)")]
-    InvalidSign {
-        /// Row (original numbering) of the offending sign.
-        index: usize,
-        /// The sign given.
-        value: i8,
-    },
-    /// The matrix does not have the sparsity pattern the symbolic analysis was made for.
-    #[error("matrix pattern differs from the one used for the symbolic analysis")]
-    PatternMismatch,
-    /// A matrix entry is NaN or infinite.
-    #[error("non-finite matrix entry")]
-    NonFinite,
-}

@@ -8,7 +8,9 @@
 //! once per point. Every value is computed by the same f64 operations, on the same operands and in
 //! the same order, as [`Expr::eval`]: the results are bit for bit those of the stack program.
 
-use super::{literal_int, Expr, Fn1, Fn2, Node};
+use super::expression::Expr;
+use super::tree::{Fn1, Fn2, Node};
+use super::vm::literal_int;
 use std::collections::HashMap;
 
 /// Points evaluated per pass over the program.

@@ -9,8 +9,8 @@
 //! bound is what the scene's exact-data check ([`crate::scene::exact_data`]) uses as the
 //! round-off tolerance of two values that should agree.
 
+use super::tree::{Fn1, Fn2};
 use super::vm::Op;
-use super::{Fn1, Fn2};
 
 /// The unit round-off of f64, 2⁻⁵³.
 const U: f64 = f64::EPSILON / 2.0;

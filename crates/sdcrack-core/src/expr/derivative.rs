@@ -3,7 +3,7 @@
 //! select of the active argument's derivative.
 
 use super::simplify::{add, f1, is_num, mul, neg, num, pow, select};
-use super::{is_const, Fn1, Fn2, Node, Var};
+use super::tree::{is_const, Fn1, Fn2, Node, Var};
 
 /// Product rule for a plain product `f_0 * f_1 * ... * f_n`.
 pub(super) fn product_rule(fs: &[Node], var: Var) -> Node {

@@ -1,7 +1,7 @@
 //! The expression lexer: characters to tokens (numbers, names, operators, parentheses,
 //! commas), each token with the character position it starts at, for error messages.
 
-use super::ExprError;
+use super::error::ExprError;
 
 #[derive(Clone, Debug, PartialEq)]
 pub(super) enum Tok {

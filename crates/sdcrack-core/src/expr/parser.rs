@@ -2,8 +2,9 @@
 //! the expression tree, with the length and nesting limits, and a "did you mean" suggestion
 //! for a misspelt function or variable name.
 
+use super::error::{ExprError, MAX_DEPTH, MAX_LEN};
 use super::lexer::{lex, Tok, Token};
-use super::{ExprError, Fn1, Fn2, Node, MAX_DEPTH, MAX_LEN};
+use super::tree::{Fn1, Fn2, Node};
 
 pub(super) fn parse_src(src: &str) -> Result<Node, ExprError> {
     let chars: Vec<char> = src.chars().collect();

@@ -2,7 +2,7 @@
 //! accepts: numbers in their shortest round-trip form, every operator application wrapped
 //! in parentheses.
 
-use super::Node;
+use super::tree::Node;
 
 pub(super) fn render_root(n: &Node) -> String {
     let mut out = String::new();

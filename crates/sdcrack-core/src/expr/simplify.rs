@@ -2,7 +2,8 @@
 //! applications that fold constants and drop neutral terms (`0*a -> 0`, `1*a -> a`,
 //! `a + 0 -> a`) as they are built; what the derivative is made of.
 
-use super::{literal_int, Fn1, Node};
+use super::tree::{Fn1, Node};
+use super::vm::literal_int;
 
 pub(super) fn num(v: f64) -> Node {
     Node::Num(v)

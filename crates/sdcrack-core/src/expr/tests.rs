@@ -18,7 +18,7 @@ fn close(a: f64, b: f64, tol: f64) -> bool {
 }
 
 fn sgn(v: f64) -> f64 {
-    super::sign(v)
+    super::tree::sign(v)
 }
 
 const LONG: &str =

@@ -2,7 +2,7 @@
 //! instruction per tree node in post-order, literal integer exponents as `powi`, every
 //! operation the same f64 operation as the tree's definition.
 
-use super::{Fn1, Fn2, Node};
+use super::tree::{Fn1, Fn2, Node};
 
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Op {

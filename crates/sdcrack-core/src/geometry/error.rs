@@ -1,7 +1,14 @@
 //! [`GeometryError`]: why a domain polygon or a set of cracks is rejected, one variant per
-//! broken requirement, each message one line naming the offending item.
+//! broken requirement, each message one line naming the offending item; the coordinate bound
+//! [`MAX_COORDINATE`] it enforces, and the display of points and segments in its messages.
 
-use super::{point_edge, pt, seg, MAX_COORDINATE};
+use std::fmt;
+
+/// Largest accepted magnitude of a coordinate.
+///
+/// Below this bound the cross products used by the predicates cannot overflow, so their signs are
+/// meaningful; larger (but finite) coordinates are rejected by the validation functions.
+pub const MAX_COORDINATE: f64 = 1e100;
 
 /// Why a domain polygon or a set of cracks is not acceptable.
 ///
@@ -199,4 +206,35 @@ pub enum GeometryError {
         /// Index of the segment within the second crack.
         second_segment: usize,
     },
+}
+
+/// Displays a point as `(x, y)`.
+struct Pt([f64; 2]);
+
+impl fmt::Display for Pt {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "({}, {})", self.0[0], self.0[1])
+    }
+}
+
+/// Displays a segment as `from (x, y) to (x, y)`.
+struct Seg([[f64; 2]; 2]);
+
+impl fmt::Display for Seg {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "from {} to {}", Pt(self.0[0]), Pt(self.0[1]))
+    }
+}
+
+fn pt(p: &[f64; 2]) -> Pt {
+    Pt(*p)
+}
+
+fn seg(s: &[[f64; 2]; 2]) -> Seg {
+    Seg(*s)
+}
+
+/// A zero-length edge at `p`.
+fn point_edge(p: &[f64; 2]) -> Seg {
+    Seg([*p, *p])
 }

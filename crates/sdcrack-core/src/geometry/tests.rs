@@ -1,3 +1,4 @@
+use super::predicates::is_finite;
 use super::*;
 
 fn l_shape_reversed() -> Vec<[f64; 2]> {

@@ -9,8 +9,9 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::SparseColMatRef;
 use faer::{Conj, MatMut, Par, Side, Spec};
 
+use super::csc::SymCsc;
+use super::error::LinalgError;
 use super::ldlt::factor_buffer;
-use super::{LinalgError, SymCsc};
 
 /// Seconds spent by [`cholesky_solve`] in each phase.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]

@@ -4,7 +4,7 @@
 
 use faer::sparse::SymbolicSparseColMatRef;
 
-use super::LinalgError;
+use super::error::LinalgError;
 /// Symmetric sparse matrix, lower triangle (diagonal included) stored column-major (CSC), sorted row indices.
 ///
 /// Invariants (checked by [`SymbolicLdlt::analyze`] and [`Ldlt::factor`]):

@@ -1,7 +1,7 @@
 //! The estimate of `‖K⁻¹‖₁` of a factored [`Ldlt`] (Hager–Higham), for the condition number
 //! `κ₁(K) = ‖K‖₁ ‖K⁻¹‖₁` that the study reports.
 
-use super::Ldlt;
+use super::ldlt::Ldlt;
 
 impl Ldlt {
     /// An estimate of `‖K⁻¹‖₁` of the factored matrix, for the condition number

@@ -16,10 +16,22 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::SparseColMatRef;
 use faer::{Conj, MatMut, Par, Side, Spec};
 
-use super::{
-    LinalgError, SymCsc, DELTA_RETRY_FACTOR, MAX_DELTA_RETRIES, MIN_COLS_PER_THREAD,
-    MIN_WORK_FOR_THREADS, PIVOT_DELTA_REL, PIVOT_EPS_REL,
-};
+use super::csc::SymCsc;
+use super::error::LinalgError;
+
+/// Relative pivot threshold: `|d| <= PIVOT_EPS_REL · scale` counts as a zero pivot.
+const PIVOT_EPS_REL: f64 = 1e-13;
+/// Relative magnitude of a regularized pivot: it becomes `± PIVOT_DELTA_REL · scale`.
+pub(super) const PIVOT_DELTA_REL: f64 = 1e-6;
+/// Factor by which `delta` grows when a factorization meets a non-finite pivot.
+const DELTA_RETRY_FACTOR: f64 = 100.0;
+/// Retries with a larger `delta` before giving up.
+const MAX_DELTA_RETRIES: usize = 2;
+/// Minimum number of right-hand sides per thread in [`Ldlt::solve_many_in_place`].
+const MIN_COLS_PER_THREAD: usize = 16;
+/// Minimum `n · ncols` for [`Ldlt::solve_many_in_place`] to spawn threads.
+const MIN_WORK_FOR_THREADS: usize = 1 << 16;
+
 /// Symbolic analysis (fill-reducing ordering + elimination tree/supernodes), done once per pattern.
 pub struct SymbolicLdlt {
     inner: Arc<SymbolicCholesky<usize>>,

@@ -2,7 +2,11 @@
 //! max-norm residual for one right-hand side ([`Ldlt::solve_refined`]), on the componentwise
 //! (Oettli–Prager) backward error column by column ([`Ldlt::solve_refined_many`]).
 
-use super::{Ldlt, SymCsc, STAGNATION_STEPS};
+use super::csc::SymCsc;
+use super::ldlt::Ldlt;
+
+/// Refinement stops after this many consecutive steps without a new best residual.
+const STAGNATION_STEPS: usize = 2;
 
 impl Ldlt {
     /// The unrefined solve `x = K⁻¹ b`; returns a zeroed residual buffer of the dimension.

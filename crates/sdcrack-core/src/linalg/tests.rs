@@ -1,5 +1,6 @@
 use super::*;
 
+use super::ldlt::PIVOT_DELTA_REL;
 use super::refine::{inf_norm, residual};
 use fastrand::Rng;
 

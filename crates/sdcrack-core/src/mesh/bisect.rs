@@ -17,7 +17,7 @@
 
 use std::collections::HashMap;
 
-use super::{diameter, CrackChain, Layout, Mesh};
+use super::triangulation::{diameter, CrackChain, Layout, Mesh};
 
 pub use crate::problem::Grading;
 

@@ -11,7 +11,7 @@
 
 use std::collections::HashMap;
 
-use super::{CrackChain, Layout, Mesh};
+use super::triangulation::{CrackChain, Layout, Mesh};
 
 /// The next level of `mesh` (uniform refinement, numbering of the module documentation).
 pub fn refine(mesh: &Mesh) -> Mesh {

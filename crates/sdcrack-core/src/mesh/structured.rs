@@ -3,7 +3,8 @@
 //! segment must join two level-0 vertices along a grid line (horizontal, vertical or SW–NE
 //! diagonal) strictly inside Ω; its nodes are then grid vertices and its pieces grid edges.
 
-use super::{CrackChain, Layout, Mesh, MeshError};
+use super::error::MeshError;
+use super::triangulation::{CrackChain, Layout, Mesh};
 use crate::problem::{Polyline, Rectangle};
 
 /// Grid index of a coordinate on `n` cells of [lo, hi], if it is a grid point.

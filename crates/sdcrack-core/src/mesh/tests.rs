@@ -1,5 +1,5 @@
 use super::*;
-use crate::problem::{Segment, UNIT_SQUARE};
+use crate::problem::{PSpace, Polyline, Segment, USpace, UNIT_SQUARE};
 
 fn seg(a: [f64; 2], b: [f64; 2]) -> Segment {
     Segment { a, b }

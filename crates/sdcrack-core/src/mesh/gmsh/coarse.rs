@@ -4,8 +4,36 @@
 
 use std::collections::{BTreeMap, HashMap, HashSet};
 
+use super::error::{invalid, unsupported, Result};
 use super::msh::{type_name, RawElement, RawMesh};
-use super::{invalid, unsupported, CoarseMesh, Result};
+
+/// A coarse conforming triangulation of a planar domain Ω with cracks embedded as chains of
+/// mesh edges.
+///
+/// Conventions:
+/// * `vertices` holds only the nodes used by triangles, numbered `0..n` in the order of the
+///   file's `$Nodes` section;
+/// * every triangle is counter-clockwise (strictly positive signed area);
+/// * every edge of the outer boundary ∂Ω appears once in `boundary_edges`, oriented so that
+///   Ω lies on its left (as the edge appears in its unique counter-clockwise triangle);
+/// * `cracks[c]` is the physical group `crack{c+1}` as the ordered chain of vertex numbers
+///   from its first tip to its last tip; a crack is an ordinary interior edge chain of the
+///   triangulation here (the mesh is not cut along it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CoarseMesh {
+    /// Vertex coordinates (x, y); only vertices used by triangles, in gmsh node order.
+    pub vertices: Vec<[f64; 2]>,
+    /// Triangles as vertex numbers, counter-clockwise.
+    pub triangles: Vec<[usize; 3]>,
+    /// Edges of ∂Ω as vertex numbers, oriented with Ω on the left, in the file order of the
+    /// `"boundary"` group's line elements.
+    pub boundary_edges: Vec<[usize; 2]>,
+    /// Crack `c` (physical group `crack{c+1}`) as the chain of vertex numbers from its first
+    /// tip to its last tip. The chain runs in the stored direction (node a → node b) of the
+    /// group's first line element in the file; for meshes made by [`mesh_polygon`](super::mesh_polygon) this is
+    /// from the polyline's first point to its last.
+    pub cracks: Vec<Vec<usize>>,
+}
 
 /// The physical tags of the named 1D groups.
 pub(super) struct Groups {

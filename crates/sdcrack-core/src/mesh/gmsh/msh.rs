@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use super::{invalid, malformed, snippet, unsupported, GmshError, Result};
+use super::error::{invalid, malformed, snippet, unsupported, GmshError, Result};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Version {

@@ -7,7 +7,20 @@ use std::path::Path;
 use std::process::{Command, Output};
 use std::time::Instant;
 
-use super::{io_error, read_msh_snapped, CoarseMesh, GmshError, GmshRun, Result};
+use super::coarse::CoarseMesh;
+use super::error::{io_error, GmshError, Result};
+use super::read::read_msh_snapped;
+
+/// What one run of the `gmsh` binary did.
+#[derive(Debug, Clone)]
+pub struct GmshRun {
+    /// The output of `gmsh --version`, trimmed (e.g. `4.8.4`).
+    pub version: String,
+    /// Wall-clock seconds of the meshing call (process start to exit).
+    pub seconds: f64,
+    /// The ASCII msh 4.1 text gmsh produced.
+    pub msh_text: String,
+}
 // ---------------------------------------------------------------------------------------
 // Running gmsh
 // ---------------------------------------------------------------------------------------
@@ -127,10 +140,10 @@ pub(super) fn open_polygon(polygon: &[[f64; 2]]) -> &[[f64; 2]] {
 ///
 /// Writes `workdir/coarse.geo` ([`geo_script`]), runs
 /// `gmsh coarse.geo -2 -o coarse.msh -format msh41 -v 2 -nt 1` there (creating `workdir` if
-/// needed), and reads `workdir/coarse.msh` with the rules of [`read_msh`]. The vertices at the
-/// given polygon and crack points carry the given coordinates exactly (gmsh writes only 16
-/// significant digits, so they are restored from the input); other crack vertices lie on the
-/// crack segments up to rounding. `cracks[c]` of the result runs from `cracks[c][0]` to the
+/// needed), and reads `workdir/coarse.msh` with the rules of [`read_msh`](super::read_msh). The
+/// vertices at the given polygon and crack points carry the given coordinates exactly (gmsh
+/// writes only 16 significant digits, so they are restored from the input); other crack
+/// vertices lie on the crack segments up to rounding. `cracks[c]` of the result runs from `cracks[c][0]` to the
 /// last point of `cracks[c]`. The same input gives a byte-identical `.msh`.
 pub fn mesh_polygon(
     polygon: &[[f64; 2]],

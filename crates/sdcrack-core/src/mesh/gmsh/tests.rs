@@ -1,4 +1,5 @@
 use super::coarse::{key, order_chain, signed_area};
+use super::read::dist;
 use super::run::{first_error_line, run_gmsh};
 use super::*;
 use std::collections::BTreeSet;
