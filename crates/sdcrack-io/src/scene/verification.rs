@@ -33,59 +33,13 @@
 //! reason = "..."
 //! ```
 
-use serde::Deserialize;
-
+use super::raw::{ExpectedRateToml, NotApplicableToml, VerificationToml};
 use super::schema::{P_MASSES, P_SPACES};
 use super::{suggest, MultiplierSpace, SceneError, USpace};
 
 pub use sdcrack_core::scene::verification::{
     ExpectedFailure, ExpectedRate, Verification, NOT_APPLICABLE_CHECKS, QUANTITIES,
 };
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct VerificationToml {
-    #[serde(default)]
-    smoke: bool,
-    kkt_tolerance: Option<f64>,
-    reference_agreement: Option<f64>,
-    delta_slope_tolerance: Option<f64>,
-    min_rate: Option<f64>,
-    #[serde(default)]
-    expected_failure: Vec<ExpectedFailureToml>,
-    #[serde(default)]
-    expected_rate: Vec<ExpectedRateToml>,
-    #[serde(default)]
-    not_applicable: Vec<NotApplicableToml>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct ExpectedRateToml {
-    u_space: Option<String>,
-    multiplier: Option<String>,
-    p_mass: Option<String>,
-    p_space: Option<String>,
-    quantity: Option<String>,
-    rate: f64,
-    reason: String,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct NotApplicableToml {
-    check: String,
-    reason: String,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct ExpectedFailureToml {
-    u_space: String,
-    multiplier: Option<String>,
-    quantity: Option<String>,
-    reason: String,
-}
 
 /// `"*"` → `None`; otherwise one of `known` (a value the scene runs), with a suggestion.
 fn pattern<T: Copy>(
