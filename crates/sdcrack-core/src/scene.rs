@@ -3,12 +3,14 @@
 //! re-exports it; the study ([`crate::study`]) runs it.
 
 pub mod exact_data;
+pub mod key_path;
 #[cfg(test)]
 pub(crate) mod testing;
 pub mod verification;
 
 use crate::expr::Expr;
 use crate::problem::{Domain, Exact, Meshing, MultiplierSpace, PMass, PSpace, Polyline, USpace};
+pub use key_path::{KeyPath, PathSegment};
 pub use verification::{ExpectedFailure, Verification};
 
 /// Which fields are written to `fields.h5` and the series `fields/*.xdmf` (the results folder
@@ -47,8 +49,6 @@ pub struct Scene {
     pub domain: Domain,
     /// The cracks Γc, in the scene's order.
     pub cracks: Vec<Polyline>,
-    /// How messages name each crack (`geometry.crack.segment`, `geometry.cracks[1]`, …).
-    pub crack_names: Vec<String>,
     /// How the level-0 mesh is made.
     pub meshing: Meshing,
     /// Grading of every level towards the crack tips (`[discretization] grading`), if any.
@@ -69,8 +69,6 @@ pub struct Scene {
     pub references: Vec<String>,
     /// What the verdict may expect of the scene (`[verification]`).
     pub verification: Verification,
-    /// The scene's TOML text as read (copied byte for byte into the results folder).
-    pub source: String,
 }
 
 /// Largest refinement level accepted (4^13 · cells would not fit in memory anyway).

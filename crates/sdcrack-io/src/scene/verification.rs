@@ -35,7 +35,7 @@
 
 use super::raw::{ExpectedRateToml, NotApplicableToml, VerificationToml};
 use super::schema::{P_MASSES, P_SPACES};
-use super::{suggest, MultiplierSpace, SceneError, USpace};
+use super::{suggest, KeyPath, MultiplierSpace, SceneError, USpace};
 
 pub use sdcrack_core::scene::verification::{
     ExpectedFailure, ExpectedRate, Verification, NOT_APPLICABLE_CHECKS, QUANTITIES,
@@ -43,7 +43,7 @@ pub use sdcrack_core::scene::verification::{
 
 /// `"*"` → `None`; otherwise one of `known` (a value the scene runs), with a suggestion.
 fn pattern<T: Copy>(
-    key: &str,
+    key: &KeyPath,
     value: &str,
     known: &[(T, String)],
 ) -> Result<Option<T>, SceneError> {
@@ -57,17 +57,21 @@ fn pattern<T: Copy>(
     let hint = suggest(value, &names)
         .map(|s| format!("; did you mean \"{s}\"?"))
         .unwrap_or_default();
-    Err(SceneError::Value(format!(
-        "{key}: {value:?} is not among the scene's values ({} or \"*\"){hint}",
-        names.join(", ")
-    )))
+    Err(SceneError::value(
+        key.clone(),
+        format!(
+            ": {value:?} is not among the scene's values ({} or \"*\"){hint}",
+            names.join(", ")
+        ),
+    ))
 }
 
 fn positive(key: &str, v: Option<f64>) -> Result<Option<f64>, SceneError> {
     match v {
-        Some(x) if !(x.is_finite() && x > 0.0) => Err(SceneError::Value(format!(
-            "verification.{key} = {x} must be a finite number > 0"
-        ))),
+        Some(x) if !(x.is_finite() && x > 0.0) => Err(SceneError::value(
+            KeyPath::keys("verification").key(key),
+            format!(" = {x} must be a finite number > 0"),
+        )),
         _ => Ok(v),
     }
 }
@@ -85,13 +89,14 @@ impl VerificationToml {
         let qs = indexed(&QUANTITIES);
         let mut expected_failures: Vec<ExpectedFailure> = Vec::new();
         for (i, e) in self.expected_failure.into_iter().enumerate() {
-            let key = |k: &str| format!("verification.expected_failure[{i}].{k}");
+            let table = KeyPath::keys("verification.expected_failure").index(i);
+            let key = |k: &str| table.clone().key(k);
             let reason = e.reason.trim().to_string();
             if reason.is_empty() {
-                return Err(SceneError::Value(format!(
-                    "{}: say why the series is expected not to converge",
-                    key("reason")
-                )));
+                return Err(SceneError::value(
+                    key("reason"),
+                    ": say why the series is expected not to converge",
+                ));
             }
             let failure = ExpectedFailure {
                 u_space: pattern(&key("u_space"), &e.u_space, &us)?,
@@ -108,9 +113,10 @@ impl VerificationToml {
                 (f.u_space, f.multiplier, &f.quantity)
                     == (failure.u_space, failure.multiplier, &failure.quantity)
             }) {
-                return Err(SceneError::Value(format!(
-                    "verification.expected_failure[{i}] declares the same series as an earlier one"
-                )));
+                return Err(SceneError::value(
+                    table,
+                    " declares the same series as an earlier one",
+                ));
             }
             expected_failures.push(failure);
         }
@@ -148,10 +154,10 @@ fn indexed(names: &[&str]) -> Vec<(usize, String)> {
         .collect()
 }
 
-fn non_empty(key: String, reason: &str) -> Result<String, SceneError> {
+fn non_empty(key: KeyPath, reason: &str) -> Result<String, SceneError> {
     let r = reason.trim();
     if r.is_empty() {
-        return Err(SceneError::Value(format!("{key}: say why")));
+        return Err(SceneError::value(key, ": say why"));
     }
     Ok(r.to_string())
 }
@@ -164,13 +170,12 @@ impl ExpectedRateToml {
         ms: &[(MultiplierSpace, String)],
         qs: &[(usize, String)],
     ) -> Result<ExpectedRate, SceneError> {
-        let key = |k: &str| format!("verification.expected_rate[{i}].{k}");
+        let key = |k: &str| KeyPath::keys("verification.expected_rate").index(i).key(k);
         if !(self.rate.is_finite() && self.rate > 0.0 && self.rate <= 4.0) {
-            return Err(SceneError::Value(format!(
-                "{} = {} must be a number in (0, 4]",
+            return Err(SceneError::value(
                 key("rate"),
-                self.rate
-            )));
+                format!(" = {} must be a number in (0, 4]", self.rate),
+            ));
         }
         let pms = indexed(P_MASSES);
         let pss = indexed(P_SPACES);
@@ -203,14 +208,16 @@ impl ExpectedRateToml {
 
 impl NotApplicableToml {
     fn validate(self, i: usize) -> Result<(String, String), SceneError> {
-        let key = |k: &str| format!("verification.not_applicable[{i}].{k}");
+        let key = |k: &str| KeyPath::keys("verification.not_applicable").index(i).key(k);
         if !NOT_APPLICABLE_CHECKS.contains(&self.check.as_str()) {
-            return Err(SceneError::Value(format!(
-                "{}: {:?} is none of {}",
+            return Err(SceneError::value(
                 key("check"),
-                self.check,
-                NOT_APPLICABLE_CHECKS.join(", ")
-            )));
+                format!(
+                    ": {:?} is none of {}",
+                    self.check,
+                    NOT_APPLICABLE_CHECKS.join(", ")
+                ),
+            ));
         }
         Ok((self.check, non_empty(key("reason"), &self.reason)?))
     }
