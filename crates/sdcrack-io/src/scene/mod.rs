@@ -28,7 +28,8 @@ use std::path::{Path, PathBuf};
 
 pub use crate::did_you_mean::suggest;
 pub use crate::one_line::escape_controls;
-use position::{key_position, line_column, Position};
+pub use position::Position;
+use position::{key_position, line_column};
 
 pub use crate::expr::{BatchScratch, Expr, ExprBatch, ExprError, Var};
 pub use sdcrack_core::scene::{KeyPath, PathSegment};

@@ -182,6 +182,26 @@ fn toml_errors_name_table_key_line_and_column() {
     assert_eq!(header_before("a = 1\n[data]\n", 2), "");
 }
 
+/// A syntax error names the table it is in, except a key set twice, whose message (toml's)
+/// names its table already: told by the lines before, which set the key in that table.
+#[test]
+fn a_key_set_twice_is_told_from_the_lines_before() {
+    let message = |edit: &str| {
+        let scene = DEFAULT_SCENE.replacen("cells = [8, 8]\n", edit, 1);
+        Scene::from_toml(&scene).unwrap_err().to_string()
+    };
+    let twice = message("cells = [8, 8]\ncells = [4, 4]\n");
+    assert!(
+        twice.contains("duplicate key `cells` in table `discretization` (at line"),
+        "{twice}"
+    );
+    let bare = message("cells = [8, 8]\nlevels [0]\n");
+    assert!(bare.contains(" in [discretization] (at line"), "{bare}");
+    // the key after the bad token is set before, but the error is not at a key: not twice
+    let after = message("cells = [8, 8]\nmesh_size cells = 1\n");
+    assert!(after.contains(" in [discretization] (at line"), "{after}");
+}
+
 #[test]
 fn messages_escape_control_characters() {
     let scene = DEFAULT_SCENE.replacen("name = \"mixed\"", "name = \"a\\r\\nb\"", 1);
