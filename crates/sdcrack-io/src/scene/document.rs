@@ -14,7 +14,7 @@
 use std::fmt;
 use std::ops::Range;
 
-use serde::de::{self, DeserializeSeed, IntoDeserializer, MapAccess, SeqAccess, Unexpected};
+use serde::de::{self, DeserializeSeed, IntoDeserializer, MapAccess, Unexpected};
 use serde::Deserialize;
 use toml_edit::{ArrayOfTables, Item, TableLike, Value};
 
@@ -197,27 +197,19 @@ impl<'de> de::Deserializer<'de> for Node<'_> {
             Part::Value(Value::Integer(i)) => visitor.visit_i64(*i.value()),
             Part::Value(Value::Float(x)) => visitor.visit_f64(*x.value()),
             Part::Value(Value::Boolean(b)) => visitor.visit_bool(*b.value()),
-            // toml shows a datetime as a table of one private key holding its text
-            Part::Value(Value::Datetime(d)) => visitor.visit_map(Datetime {
-                text: Some(d.value().to_string()),
-                span: span.clone(),
-                path: &path,
-            }),
-            Part::Value(Value::Array(a)) => visitor.visit_seq(Elements {
-                parts: a.iter().map(Part::of_value).collect::<Vec<_>>().into_iter(),
-                path: &path,
-                next: 0,
-            }),
+            // toml shows a datetime as a table of one private key holding its text (an error
+            // in it is the datetime's, at its key)
+            Part::Value(Value::Datetime(d)) => visitor.visit_map(de::value::MapDeserializer::new(
+                std::iter::once((DATETIME_KEY, d.value().to_string())),
+            )),
+            Part::Value(Value::Array(a)) => {
+                visitor.visit_seq(elements(a.iter().map(Part::of_value), &path))
+            }
             Part::Value(Value::InlineTable(t)) => visitor.visit_map(Entries::new(t, &path)),
             Part::Table(t, _) => visitor.visit_map(Entries::new(t, &path)),
-            Part::Tables(a) => visitor.visit_seq(Elements {
-                parts: (a.iter())
-                    .map(|t| Part::Table(t, t.span()))
-                    .collect::<Vec<_>>()
-                    .into_iter(),
-                path: &path,
-                next: 0,
-            }),
+            Part::Tables(a) => {
+                visitor.visit_seq(elements(a.iter().map(|t| Part::Table(t, t.span())), &path))
+            }
         }
         .map_err(|e| e.at(&path, span))
     }
@@ -234,26 +226,23 @@ impl<'de> de::Deserializer<'de> for Node<'_> {
     }
 }
 
-/// The elements of an array (of values or of tables), each at its index.
-struct Elements<'a, 'p> {
-    parts: std::vec::IntoIter<Part<'a>>,
-    path: &'p KeyPath,
-    next: usize,
+/// The elements of an array (of values or of tables) at `path`, each at its index.
+fn elements<'a>(
+    parts: impl Iterator<Item = Part<'a>>,
+    path: &KeyPath,
+) -> de::value::SeqDeserializer<impl Iterator<Item = Node<'a>>, RawError> {
+    let path = path.clone();
+    de::value::SeqDeserializer::new(parts.enumerate().map(move |(i, part)| Node {
+        part,
+        path: path.clone().index(i),
+    }))
 }
 
-impl<'de> SeqAccess<'de> for Elements<'_, '_> {
-    type Error = RawError;
+impl<'de, 'a> IntoDeserializer<'de, RawError> for Node<'a> {
+    type Deserializer = Node<'a>;
 
-    fn next_element_seed<T: DeserializeSeed<'de>>(
-        &mut self,
-        seed: T,
-    ) -> Result<Option<T::Value>, RawError> {
-        let Some(part) = self.parts.next() else {
-            return Ok(None);
-        };
-        let path = self.path.clone().index(self.next);
-        self.next += 1;
-        seed.deserialize(Node { part, path }).map(Some)
+    fn into_deserializer(self) -> Node<'a> {
+        self
     }
 }
 
@@ -313,36 +302,5 @@ impl<'de> MapAccess<'de> for Entries<'_, '_> {
     }
 }
 
-/// A datetime as toml's deserializer shows it: a table whose one key is toml's private name for
-/// a datetime, holding the datetime's text.
-struct Datetime<'p> {
-    text: Option<String>,
-    span: Option<Range<usize>>,
-    path: &'p KeyPath,
-}
-
 /// toml's name of the one key of a datetime's table.
 const DATETIME_KEY: &str = "$__toml_private_datetime";
-
-impl<'de> MapAccess<'de> for Datetime<'_> {
-    type Error = RawError;
-
-    fn next_key_seed<K: DeserializeSeed<'de>>(
-        &mut self,
-        seed: K,
-    ) -> Result<Option<K::Value>, RawError> {
-        if self.text.is_none() {
-            return Ok(None);
-        }
-        let key: de::value::StrDeserializer<'_, RawError> = DATETIME_KEY.into_deserializer();
-        seed.deserialize(key)
-            .map(Some)
-            // at the datetime's own key, as toml places it
-            .map_err(|e| e.at(self.path, self.span.clone()))
-    }
-
-    fn next_value_seed<V: DeserializeSeed<'de>>(&mut self, seed: V) -> Result<V::Value, RawError> {
-        let text = self.text.take().unwrap_or_default();
-        seed.deserialize(de::value::StringDeserializer::<RawError>::new(text))
-    }
-}

@@ -77,42 +77,13 @@ pub enum SceneError {
         /// Where the key is in the scene file.
         at: Option<Position>,
     },
-    /// A value is out of its allowed range: `key`, then `message` (`: level 13 is outside
-    /// 0..=12`, ` = -1 must be a finite number > 0`, ` is empty: …`).
-    Value {
-        /// The key.
+    /// An error about a key: the key, how the message shows it ([`KeyRole`]), what is wrong.
+    Key {
+        /// The key (or table) the error is about.
         key: KeyPath,
-        /// What is wrong with it, written after the key.
-        message: String,
-        /// Where the key is in the scene file.
-        at: Option<Position>,
-    },
-    /// A table that must not be there, or must be: `[table]`, then `message`.
-    Table {
-        /// The table.
-        table: KeyPath,
-        /// What is wrong with it, written after `[table]`.
-        message: String,
-        /// Where the table is in the scene file.
-        at: Option<Position>,
-    },
-    /// A key that a table must have: ``missing key `key` in [table]``, then `message`.
-    MissingKey {
-        /// The table.
-        table: KeyPath,
-        /// The key it lacks.
-        key: String,
-        /// What to write, after the table.
-        message: String,
-        /// Where the table is in the scene file.
-        at: Option<Position>,
-    },
-    /// A message of sdcrack-core's that names its key in its own words (a crack that crosses
-    /// the domain, exact data that is not a solution): `key` says where it is.
-    Named {
-        /// The key the message is about.
-        key: KeyPath,
-        /// The message, naming the key.
+        /// How the message shows the key.
+        role: KeyRole,
+        /// What is wrong, written after the key (or, for [`KeyRole::Named`], the whole message).
         message: String,
         /// Where the key is in the scene file.
         at: Option<Position>,
@@ -127,6 +98,22 @@ pub enum SceneError {
         /// What is wrong in it.
         error: Box<SceneError>,
     },
+}
+
+/// How a [`SceneError::Key`] shows its key, and what its line and column are.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum KeyRole {
+    /// A value out of its range: `key`, then the message (`: level 13 is outside 0..=12`,
+    /// ` = -1 must be a finite number > 0`, ` is empty: …`); at the key.
+    Value,
+    /// A table that must not be there, or must be: `[key]`, then the message; at its header.
+    Table,
+    /// A key the table `key` lacks: ``missing key `NAME` in [key]``, then the message; at the
+    /// table, `(the table is at line L, column C)`.
+    Missing(String),
+    /// A message of sdcrack-core's that names the key in its own words (a crack that crosses
+    /// the domain, exact data that is not a solution); at the key.
+    Named,
 }
 
 impl std::error::Error for SceneError {}
@@ -177,41 +164,43 @@ impl SceneError {
                 escape_controls(&error.to_string()),
                 at_words(at)
             ),
-            SceneError::Value { key, message, at } => format!("{key}{message}{}", at_words(at)),
-            SceneError::Table { table, message, at } => {
-                format!("[{table}]{message}{}", at_words(at))
-            }
-            SceneError::MissingKey {
-                table,
+            SceneError::Key {
                 key,
+                role,
                 message,
                 at,
-            } => format!(
-                "missing key `{key}` in [{table}]{message}{}",
-                at.map(|(l, c)| format!(" (the table is at line {l}, column {c})"))
-                    .unwrap_or_default()
-            ),
-            SceneError::Named { message, at, .. } => format!("{message}{}", at_words(at)),
+            } => match role {
+                KeyRole::Value => format!("{key}{message}{}", at_words(at)),
+                KeyRole::Table => format!("[{key}]{message}{}", at_words(at)),
+                KeyRole::Missing(name) => format!(
+                    "missing key `{name}` in [{key}]{message}{}",
+                    at.map(|(l, c)| format!(" (the table is at line {l}, column {c})"))
+                        .unwrap_or_default()
+                ),
+                KeyRole::Named => format!("{message}{}", at_words(at)),
+            },
             SceneError::Read { .. } | SceneError::InFile { .. } => self.to_string(),
+        }
+    }
+
+    /// An error about `key` shown as `role` says.
+    pub fn key(key: KeyPath, role: KeyRole, message: impl Into<String>) -> SceneError {
+        SceneError::Key {
+            key,
+            role,
+            message: message.into(),
+            at: None,
         }
     }
 
     /// A value error: `key`, then `message`.
     pub fn value(key: KeyPath, message: impl Into<String>) -> SceneError {
-        SceneError::Value {
-            key,
-            message: message.into(),
-            at: None,
-        }
+        SceneError::key(key, KeyRole::Value, message)
     }
 
     /// A message of the core's naming its `key` in its own words.
     pub fn named(key: KeyPath, message: impl Into<String>) -> SceneError {
-        SceneError::Named {
-            key,
-            message: message.into(),
-            at: None,
-        }
+        SceneError::key(key, KeyRole::Named, message)
     }
 
     /// This error with the line and column of its key (or table) in the scene `text`, where the
@@ -230,30 +219,12 @@ impl SceneError {
                 source_text,
                 error,
             },
-            SceneError::Value { key, message, .. } => SceneError::Value {
+            SceneError::Key {
+                key, role, message, ..
+            } => SceneError::Key {
                 at: at(&key),
                 key,
-                message,
-            },
-            SceneError::Table { table, message, .. } => SceneError::Table {
-                at: at(&table),
-                table,
-                message,
-            },
-            SceneError::MissingKey {
-                table,
-                key,
-                message,
-                ..
-            } => SceneError::MissingKey {
-                at: at(&table),
-                table,
-                key,
-                message,
-            },
-            SceneError::Named { key, message, .. } => SceneError::Named {
-                at: at(&key),
-                key,
+                role,
                 message,
             },
             SceneError::InFile { path, error } => SceneError::InFile {

@@ -65,12 +65,7 @@ fn key_positions_in_the_scene_text() {
         nan.located(text).to_string(),
         "invalid scene: data.g = \"0\" evaluates to NaN (at line 5, column 3)"
     );
-    let missing = SceneError::MissingKey {
-        table: path("discretization"),
-        key: "cells".into(),
-        message: String::new(),
-        at: None,
-    };
+    let missing = SceneError::key(path("discretization"), KeyRole::Missing("cells".into()), "");
     assert_eq!(
         missing.located(text).to_string(),
         "invalid scene: missing key `cells` in [discretization] (the table is at line 6, column 1)"

@@ -9,9 +9,9 @@ use std::path::Path;
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
 use super::schema::{FIELDS, MULTIPLIERS, P_MASSES, P_SPACES, U_SPACES};
 use super::{
-    check_level, CaseAxes, CrackName, Domain, Exact, Expr, FieldSet, KeyPath, Level0Size, Meshing,
-    MultiplierSpace, PMass, PSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var,
-    Verification, KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
+    check_level, CaseAxes, CrackName, Domain, Exact, Expr, FieldSet, KeyPath, KeyRole, Level0Size,
+    Meshing, MultiplierSpace, PMass, PSpace, Polyline, Rectangle, Scene, SceneError, Segment,
+    USpace, Var, Verification, KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
 };
 use crate::did_you_mean::suggest;
 
@@ -42,11 +42,7 @@ fn check_finite_point(what: &KeyPath, p: [f64; 2]) -> Result<(), SceneError> {
 
 /// `[geometry]`, then `message`.
 fn geometry_table(message: &str) -> SceneError {
-    SceneError::Table {
-        table: KeyPath::keys("geometry"),
-        message: message.to_string(),
-        at: None,
-    }
+    SceneError::key(KeyPath::keys("geometry"), KeyRole::Table, message)
 }
 
 impl SceneToml {
@@ -279,14 +275,11 @@ fn validate_geometry(
             ))
         }
         (None, None) => {
-            return Err(SceneError::MissingKey {
-                table: KeyPath::keys("geometry"),
-                key: "crack".into(),
-                message:
-                    ": give crack = { segment = [[xa, ya], [xb, yb]] } or a list cracks = [...]"
-                        .into(),
-                at: None,
-            })
+            return Err(SceneError::key(
+                KeyPath::keys("geometry"),
+                KeyRole::Missing("crack".into()),
+                ": give crack = { segment = [[xa, ya], [xb, yb]] } or a list cracks = [...]",
+            ))
         }
         _ => {
             return Err(value(
