@@ -30,36 +30,23 @@ fn key_positions_in_the_scene_text() {
                 grading = { beta = 0.5, radius = 0.25 }\nlevels = [0, 1]\n\
                 [[verification.expected_failure]]\nu_space = \"continuous\"\n\
                 [[verification.expected_failure]]\nmultiplier = \"M0\"\nu_space = \"broken\"\n";
-    assert_eq!(key_position(text, &path("name")), Some((1, 1)));
-    assert_eq!(key_position(text, &path("data.f")), Some((4, 1)));
-    assert_eq!(key_position(text, &path("data.g")), Some((5, 3)));
-    assert_eq!(key_position(text, &path("data")), Some((3, 1)));
-    assert_eq!(
-        key_position(text, &path("discretization.grading")),
-        Some((7, 1))
-    );
-    assert_eq!(
-        key_position(text, &path("discretization.grading.radius")),
-        Some((7, 25))
-    );
-    assert_eq!(
-        key_position(text, &path("discretization.levels")),
-        Some((8, 1))
-    );
-    assert_eq!(
-        key_position(text, &path("verification.expected_failure[0].u_space")),
-        Some((10, 1))
-    );
-    assert_eq!(
-        key_position(text, &path("verification.expected_failure[1].u_space")),
-        Some((13, 1))
-    );
-    assert_eq!(
-        key_position(text, &path("verification.expected_failure[1]")),
-        Some((11, 1))
-    );
-    assert_eq!(key_position(text, &path("discretization.deltas")), None);
-    assert_eq!(key_position(text, &path("geometry")), None);
+    let expected = [
+        ("name", Some((1, 1))),
+        ("data.f", Some((4, 1))),
+        ("data.g", Some((5, 3))),
+        ("data", Some((3, 1))),
+        ("discretization.grading", Some((7, 1))),
+        ("discretization.grading.radius", Some((7, 25))),
+        ("discretization.levels", Some((8, 1))),
+        ("verification.expected_failure[0].u_space", Some((10, 1))),
+        ("verification.expected_failure[1].u_space", Some((13, 1))),
+        ("verification.expected_failure[1]", Some((11, 1))),
+        ("discretization.deltas", None),
+        ("geometry", None),
+    ];
+    for (key, at) in expected {
+        assert_eq!(key_position(text, &path(key)), at, "{key}");
+    }
     let nan = SceneError::named(path("data.g"), "data.g = \"0\" evaluates to NaN");
     assert_eq!(
         nan.located(text).to_string(),
