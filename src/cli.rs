@@ -18,7 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::output::summary::Provenance;
 use crate::output::{write_run, ResultsDir};
 use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
-use crate::scene::{Scene, TomlScene};
+use crate::scene::{KeyPath, LoadedScene, Scene, SceneError};
 use crate::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
 use sdcrack_core::case::{delta_text, CaseKey, CasePattern, Pattern};
 use sdcrack_core::problem::Named;
@@ -347,17 +347,20 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             Ok(0)
         }
         Command::Check { scene, json } => {
-            let s = Scene::from_file(&scene).map_err(usage)?;
+            let loaded = LoadedScene::from_file(&scene).map_err(usage)?;
+            let s = &loaded.scene;
             let origin = scene.display().to_string();
-            let meshes = check_meshes(&s, &origin)?;
+            let meshes = check_meshes(&loaded, &origin)?;
             // the exact data against what the scene implies (∂u, −Δu, u on ∂Ω, the faces, the
             // contact conditions): a scene whose exact solution is not one is refused, no solve
-            crate::scene::exact_data::check(&s).map_err(|m| invalid_scene(&s, &origin, m))?;
+            crate::scene::exact_data::check(s).map_err(|e| {
+                invalid_scene(&loaded, &origin, SceneError::named(e.key, e.message))
+            })?;
             if json {
                 let max_level = s.axes.levels.iter().copied().max().unwrap_or(0);
                 let triangles = (meshes.triangle_counts(max_level))
-                    .map_err(|e| mesh_failure(&s, &origin, e))?;
-                say!("{}", plan_json(&s, &triangles));
+                    .map_err(|e| mesh_failure(&loaded, &origin, e))?;
+                say!("{}", plan_json(s, &triangles));
                 return Ok(0);
             }
             say!(
@@ -382,15 +385,16 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             vertices,
             json,
         } => {
-            let (scene, _) = load_checked(scene)?;
-            bench(&scene, vertices, json)
+            let (loaded, _) = load_checked(scene)?;
+            bench(&loaded.scene, vertices, json)
         }
         Command::Mesh { scene, out, level } => {
-            let (scene, _) = load_checked(scene)?;
-            check_level_option(&scene, level)?;
+            let (loaded, _) = load_checked(scene)?;
+            let scene = &loaded.scene;
+            check_level_option(scene, level)?;
             let levels = level.map_or_else(|| scene.axes.levels.clone(), |l| vec![l]);
             let path =
-                crate::output::mesh_export::export_meshes(&scene, &levels, &out).map_err(usage)?;
+                crate::output::mesh_export::export_meshes(scene, &levels, &out).map_err(usage)?;
             say!("meshes of levels {levels:?} written to {}", path.display());
             Ok(0)
         }
@@ -401,11 +405,11 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             quiet,
             solver_only,
         } => {
-            let (scene, origin) = load_checked(scene)?;
+            let (loaded, origin) = load_checked(scene)?;
             let filter = cases.filter();
-            check_level_option(&scene, filter.level)?;
-            check_space_pairs(&scene, &filter)?;
-            run(&scene, &origin, &filter, &out, quiet, solver_only)
+            check_level_option(&loaded.scene, filter.level)?;
+            check_space_pairs(&loaded.scene, &filter)?;
+            run(&loaded, &origin, &filter, &out, quiet, solver_only)
         }
         Command::Reference {
             scene,
@@ -413,9 +417,9 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             level,
             out,
         } => {
-            let (scene, _) = load_checked(scene)?;
-            check_level_option(&scene, Some(level))?;
-            reference(&scene, &tool, level, &out)
+            let (loaded, _) = load_checked(scene)?;
+            check_level_option(&loaded.scene, Some(level))?;
+            reference(&loaded, &tool, level, &out)
         }
         Command::Merge { shards, out } => merge(&shards, &out),
     }
@@ -478,7 +482,8 @@ fn plan_json(scene: &Scene, triangles: &[usize]) -> String {
 }
 
 /// `sdcrack reference`: one tool on one level, into OUT/<scene name>/.
-fn reference(scene: &Scene, tool: &str, level: u32, out: &Path) -> Result<i32, Failure> {
+fn reference(loaded: &LoadedScene, tool: &str, level: u32, out: &Path) -> Result<i32, Failure> {
+    let scene = &loaded.scene;
     if !scene.references.iter().any(|t| t == tool) {
         return Err(usage(format!(
             "--tool {tool}: the scene '{}' lists the references {:?}",
@@ -489,7 +494,7 @@ fn reference(scene: &Scene, tool: &str, level: u32, out: &Path) -> Result<i32, F
     let results = ResultsDir::create(out, &scene.name).map_err(usage)?;
     let dir = results.work_path();
     let copy = dir.join(crate::output::SCENE_COPY);
-    crate::output::atomic_write(&copy, scene.source.as_bytes()).map_err(runtime)?;
+    crate::output::atomic_write(&copy, loaded.text.as_bytes()).map_err(runtime)?;
     let converged = run_references(scene, &[tool.to_string()], &[level], dir, true)?;
     let path = results.commit().map_err(runtime)?;
     say!("results in {}", path.display());
@@ -543,42 +548,55 @@ fn bench(scene: &Scene, vertices: usize, json: bool) -> Result<i32, Failure> {
 }
 
 /// The scene file `path` (or the embedded default scene) and how messages name it.
-fn load(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
+fn load(path: Option<PathBuf>) -> Result<(LoadedScene, String), Failure> {
     match path {
         Some(p) => Ok((
-            Scene::from_file(&p).map_err(usage)?,
+            LoadedScene::from_file(&p).map_err(usage)?,
             p.display().to_string(),
         )),
-        None => Ok((Scene::default_scene(), "(embedded default)".to_string())),
+        None => Ok((
+            LoadedScene::default_scene(),
+            "(embedded default)".to_string(),
+        )),
     }
 }
 
 /// [`load`], then [`check_meshes`]: a scene the commands that mesh it can run.
-fn load_checked(path: Option<PathBuf>) -> Result<(Scene, String), Failure> {
-    let (scene, origin) = load(path)?;
-    check_meshes(&scene, &origin)?;
-    Ok((scene, origin))
+fn load_checked(path: Option<PathBuf>) -> Result<(LoadedScene, String), Failure> {
+    let (loaded, origin) = load(path)?;
+    check_meshes(&loaded, &origin)?;
+    Ok((loaded, origin))
 }
 
 /// Checks the crack against the level-0 mesh (the same check every level makes).
-fn check_meshes(scene: &Scene, origin: &str) -> Result<crate::mesh::MeshSource, Failure> {
-    scene
-        .mesh_source()
-        .map_err(|e| mesh_failure(scene, origin, e))
+fn check_meshes(loaded: &LoadedScene, origin: &str) -> Result<crate::mesh::MeshSource, Failure> {
+    (loaded.scene.mesh_source()).map_err(|e| mesh_failure(loaded, origin, e))
 }
 
 /// A mesh error of the scene `origin`, naming the crack it concerns.
-fn mesh_failure(scene: &Scene, origin: &str, e: crate::mesh::MeshError) -> Failure {
-    match e.crack().and_then(|c| scene.crack_names.get(c)) {
-        Some(name) => invalid_scene(scene, origin, format!("{name}: {e}")),
-        None => invalid_scene(scene, origin, e.to_string()),
-    }
+fn mesh_failure(loaded: &LoadedScene, origin: &str, e: crate::mesh::MeshError) -> Failure {
+    invalid_scene(loaded, origin, loaded.mesh_error(&e))
 }
 
 /// A usage failure found after the scene file was read (a crack off a finer mesh, NaN data):
-/// `invalid scene ORIGIN: MESSAGE (at line L, column C)`, where the message names the key.
-fn invalid_scene(scene: &Scene, origin: &str, message: String) -> Failure {
-    usage(format!("invalid scene {origin}: {}", scene.locate(message)))
+/// `invalid scene ORIGIN: MESSAGE (at line L, column C)`, with the line and column of the key
+/// the error is about.
+fn invalid_scene(loaded: &LoadedScene, origin: &str, error: SceneError) -> Failure {
+    usage(SceneError::InFile {
+        path: origin.to_string(),
+        error: Box::new(loaded.locate(error)),
+    })
+}
+
+/// A study error that is the scene's fault, at its key: non-finite data (`data.f`) at a
+/// quadrature point, or a crack off a finer mesh (named by the mesh's words).
+fn study_scene_error(e: &StudyError) -> SceneError {
+    match e {
+        StudyError::Assembly(crate::assembly::AssemblyError::NonFinite { name, .. }) => {
+            SceneError::named(KeyPath::keys("data").key(name), e.to_string())
+        }
+        _ => SceneError::Scene(e.to_string()),
+    }
 }
 
 /// Checks a `--level` (which need not be listed in the scene) like the scene's own levels:
@@ -629,13 +647,14 @@ impl Observer for Progress {
 }
 
 fn run(
-    scene: &Scene,
+    loaded: &LoadedScene,
     origin: &str,
     filter: &Pattern<CaseKey>,
     out: &Path,
     quiet: bool,
     solver_only: bool,
 ) -> Result<i32, Failure> {
+    let scene = &loaded.scene;
     let references: &[String] = if solver_only { &[] } else { &scene.references };
     for tool in references {
         crate::references::check_available(tool).map_err(usage)?;
@@ -658,11 +677,19 @@ fn run(
     let study = run_study(scene, &plan, &mut progress).map_err(|e| match e {
         StudyError::Linalg(_) => runtime(e),
         // Non-finite data at a quadrature point, a crack off a finer mesh: the scene's fault.
-        _ => invalid_scene(scene, origin, e.to_string()),
+        _ => invalid_scene(loaded, origin, study_scene_error(&e)),
     })?;
     progress.bar.finish_and_clear();
     let wall = start.elapsed().as_secs_f64();
-    write_run(results.work_path(), scene, &plan, &study, wall, &provenance).map_err(runtime)?;
+    write_run(
+        results.work_path(),
+        loaded,
+        &plan,
+        &study,
+        wall,
+        &provenance,
+    )
+    .map_err(runtime)?;
     let references_converged = run_references(
         scene,
         references,

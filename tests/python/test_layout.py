@@ -20,7 +20,7 @@ CARGO = shutil.which("cargo") or str(pathlib.Path.home() / ".cargo" / "bin" / "c
 # Each workspace crate's direct dependencies (normal, i.e. not dev or build), exactly.
 GRAPH = {
     "sdcrack-core": {"faer", "rayon", "thiserror", "serde", "strsim"},
-    "sdcrack-io": {"sdcrack-core", "hdf5", "hdf5-sys", "thiserror", "serde", "serde_json", "toml",
+    "sdcrack-io": {"sdcrack-core", "hdf5", "hdf5-sys", "thiserror", "serde", "serde_json",
                    "toml_edit", "strsim", "humantime"},
     "sdcrack": {"sdcrack-core", "sdcrack-io", "faer", "rayon", "thiserror", "clap", "serde",
                 "serde_json", "indicatif"},

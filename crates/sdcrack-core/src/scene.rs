@@ -3,6 +3,7 @@
 //! re-exports it; the study ([`crate::study`]) runs it.
 
 pub mod exact_data;
+pub mod key_path;
 #[cfg(test)]
 pub(crate) mod testing;
 pub mod verification;
@@ -10,6 +11,7 @@ pub mod verification;
 use crate::case::CaseAxes;
 use crate::expr::Expr;
 use crate::problem::{Domain, Exact, Meshing, Polyline};
+pub use key_path::{KeyPath, PathSegment};
 pub use verification::{ExpectedFailure, Verification};
 
 /// Which fields are written to `fields.h5` and the series `fields/*.xdmf` (the results folder
@@ -48,8 +50,6 @@ pub struct Scene {
     pub domain: Domain,
     /// The cracks Γc, in the scene's order.
     pub cracks: Vec<Polyline>,
-    /// How messages name each crack (`geometry.crack.segment`, `geometry.cracks[1]`, …).
-    pub crack_names: Vec<String>,
     /// How the level-0 mesh is made.
     pub meshing: Meshing,
     /// Grading of every level towards the crack tips (`[discretization] grading`), if any.
@@ -70,8 +70,6 @@ pub struct Scene {
     pub references: Vec<String>,
     /// What the verdict may expect of the scene (`[verification]`).
     pub verification: Verification,
-    /// The scene's TOML text as read (copied byte for byte into the results folder).
-    pub source: String,
 }
 
 /// Largest refinement level accepted (4^13 · cells would not fit in memory anyway).

@@ -238,3 +238,23 @@ fn seg(s: &[[f64; 2]; 2]) -> Seg {
 fn point_edge(p: &[f64; 2]) -> Seg {
     Seg([*p, *p])
 }
+
+impl GeometryError {
+    /// The scene crack an error is about (the first of two that intersect), if any: the caller
+    /// names it as the scene does.
+    pub fn crack(&self) -> Option<usize> {
+        match self {
+            GeometryError::CrackTooFewPoints { crack, .. }
+            | GeometryError::CrackNonFinite { crack, .. }
+            | GeometryError::CrackCoordinateTooLarge { crack, .. }
+            | GeometryError::CrackZeroLengthSegment { crack, .. }
+            | GeometryError::CrackSelfIntersection { crack, .. }
+            | GeometryError::CrackFoldsBack { crack, .. }
+            | GeometryError::CrackPointOutside { crack, .. }
+            | GeometryError::CrackPointOnBoundary { crack, .. }
+            | GeometryError::CrackCrossesBoundary { crack, .. } => Some(*crack),
+            GeometryError::CracksIntersect { first, .. } => Some(*first),
+            _ => None,
+        }
+    }
+}

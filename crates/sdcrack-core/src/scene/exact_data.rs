@@ -27,6 +27,7 @@
 //! points themselves for the jump and the contact conditions. A point where a value is not finite
 //! (a singular derivative) is skipped: NaN data are refused elsewhere, at the quadrature points.
 
+use super::KeyPath;
 use crate::expr::Var;
 use crate::geometry::{point_in_polygon, Inside};
 use crate::problem::{face_point, Exact};
@@ -205,9 +206,33 @@ fn face_name(side: f64) -> &'static str {
     }
 }
 
-/// Checks the scene's `[exact]` data (nothing to check without it). `Err`: one line naming the
-/// key first (`exact.px is not ∂u/∂x: …`), the values and the point.
-pub fn check(scene: &Scene) -> Result<(), String> {
+/// Exact data that is not a solution of the scene's problem: the key it is about and one line
+/// naming that key first (`exact.px is not ∂u/∂x: …`), the values and the point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExactDataError {
+    /// The key the message is about (`exact.px`, `data.f`, …).
+    pub key: KeyPath,
+    /// The message, naming the key first.
+    pub message: String,
+}
+
+impl ExactDataError {
+    fn new(key: &str, message: String) -> ExactDataError {
+        ExactDataError {
+            key: KeyPath::keys(key),
+            message,
+        }
+    }
+}
+
+impl std::fmt::Display for ExactDataError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+/// Checks the scene's `[exact]` data (nothing to check without it).
+pub fn check(scene: &Scene) -> Result<(), ExactDataError> {
     let Some(exact) = &scene.exact else {
         return Ok(());
     };
@@ -217,7 +242,7 @@ pub fn check(scene: &Scene) -> Result<(), String> {
     check_crack(exact, scene)
 }
 
-fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), String> {
+fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     for (key, given, var, name) in [
         ("exact.px", &exact.px, Var::X, "∂u/∂x"),
         ("exact.py", &exact.py, Var::Y, "∂u/∂y"),
@@ -227,12 +252,15 @@ fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), String> {
             let g = Known::bounded(given.eval_bounded(p[0], p[1]));
             let d = Known::bounded(derivative.eval_bounded(p[0], p[1]));
             if g.differs(d) {
-                return Err(format!(
-                    "{key} is not {name} of exact.u: {} = {}, {name} = {} at {}",
-                    &key[6..],
-                    num(g.value),
-                    num(d.value),
-                    at(p)
+                return Err(ExactDataError::new(
+                    key,
+                    format!(
+                        "{key} is not {name} of exact.u: {} = {}, {name} = {} at {}",
+                        &key[6..],
+                        num(g.value),
+                        num(d.value),
+                        at(p)
+                    ),
                 ));
             }
         }
@@ -240,7 +268,7 @@ fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), String> {
     Ok(())
 }
 
-fn check_source(exact: &Exact, scene: &Scene) -> Result<(), String> {
+fn check_source(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     let uxx = exact.u.derivative(Var::X).derivative(Var::X);
     let uyy = exact.u.derivative(Var::Y).derivative(Var::Y);
     for p in interior_points(scene) {
@@ -253,27 +281,33 @@ fn check_source(exact: &Exact, scene: &Scene) -> Result<(), String> {
             ea + eb + f64::EPSILON / 2.0 * minus_laplacian.abs(),
         ));
         if f.differs(laplacian) {
-            return Err(format!(
-                "data.f is not −Δu of exact.u (−Δu = f in Ω \\ Γc): f = {}, −Δu = {} at {}",
-                num(f.value),
-                num(laplacian.value),
-                at(p)
+            return Err(ExactDataError::new(
+                "data.f",
+                format!(
+                    "data.f is not −Δu of exact.u (−Δu = f in Ω \\ Γc): f = {}, −Δu = {} at {}",
+                    num(f.value),
+                    num(laplacian.value),
+                    at(p)
+                ),
             ));
         }
     }
     Ok(())
 }
 
-fn check_boundary(exact: &Exact, scene: &Scene) -> Result<(), String> {
+fn check_boundary(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     for p in boundary_points(scene) {
         let g = Known::bounded(scene.g.eval_bounded(p[0], p[1]));
         let u = Known::bounded(exact.u.eval_bounded(p[0], p[1]));
         if g.differs(u) {
-            return Err(format!(
-                "data.g is not exact.u on ∂Ω (u = g on ∂Ω): g = {}, u = {} at {}",
-                num(g.value),
-                num(u.value),
-                at(p)
+            return Err(ExactDataError::new(
+                "data.g",
+                format!(
+                    "data.g is not exact.u on ∂Ω (u = g on ∂Ω): g = {}, u = {} at {}",
+                    num(g.value),
+                    num(u.value),
+                    at(p)
+                ),
             ));
         }
     }
@@ -295,7 +329,7 @@ fn scene_jump(exact: &Exact, c: &CrackPoint) -> Known {
     }
 }
 
-fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), String> {
+fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     let (jump_key, jump_name) = match exact.jump {
         Some(_) => ("exact.jump", "jump"),
         None => ("exact.u", "u⁺ − u⁻ by the face rule"),
@@ -320,44 +354,50 @@ fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), String> {
         };
         let where_ = format!("at {} (ν = {})", at(c.p), at(nu));
         if jump.differs(limits) {
-            return Err(format!(
+            return Err(ExactDataError::new(jump_key, format!(
                 "{jump_key} is not u⁺ − u⁻ on Γc (+ face: the side ν points into): {jump_name} = {}, u⁺ − u⁻ = {} (the limits of exact.u from the faces) {where_}",
                 num(jump.value),
                 num(limits.value)
-            ));
+            )));
         }
         let faces = [
             (1.0, one_sided(&flux, &c, 1.0)),
             (-1.0, one_sided(&flux, &c, -1.0)),
         ];
         if faces[0].1.differs(faces[1].1) {
-            return Err(format!(
+            return Err(ExactDataError::new("exact.u", format!(
                 "exact.u breaks [∂u/∂ν] = 0 on Γc: ∂u/∂ν = {} on the + face, {} on the − face {where_}",
                 num(faces[0].1.value),
                 num(faces[1].1.value)
-            ));
+            )));
         }
         if jump.certainly_negative() {
-            return Err(format!(
-                "{jump_key} breaks [u] ≥ 0 on Γc: [u] = {} {where_}",
-                num(jump.value)
+            return Err(ExactDataError::new(
+                jump_key,
+                format!(
+                    "{jump_key} breaks [u] ≥ 0 on Γc: [u] = {} {where_}",
+                    num(jump.value)
+                ),
             ));
         }
         for (side, q) in faces {
             if q.certainly_positive() {
-                return Err(format!(
-                    "exact.u breaks ∂u/∂ν ≤ 0 on Γc: ∂u/∂ν = {} on the {} face {where_}",
-                    num(q.value),
-                    face_name(side)
+                return Err(ExactDataError::new(
+                    "exact.u",
+                    format!(
+                        "exact.u breaks ∂u/∂ν ≤ 0 on Γc: ∂u/∂ν = {} on the {} face {where_}",
+                        num(q.value),
+                        face_name(side)
+                    ),
                 ));
             }
             if jump.certainly_positive() && q.certainly_negative() {
-                return Err(format!(
+                return Err(ExactDataError::new("exact.u", format!(
                     "exact.u breaks [u]·∂u/∂ν = 0 on Γc: the crack is open ([u] = {}) and its {} face is loaded (∂u/∂ν = {}) {where_}",
                     num(jump.value),
                     face_name(side),
                     num(q.value)
-                ));
+                )));
             }
         }
     }
@@ -366,7 +406,7 @@ fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), String> {
 
 #[cfg(test)]
 mod tests {
-    use super::check;
+    use super::{check, KeyPath};
     use crate::scene::testing::scene;
 
     const W: &str = "max(0.25 - x^2, 0)^3";
@@ -408,7 +448,7 @@ mod tests {
             ),
         ];
         for (s, words) in cases {
-            let e = check(&s).expect_err(&s.name);
+            let e = check(&s).expect_err(&s.name).message;
             assert!(e.contains(words), "{}: {e}", s.name);
             assert!(!e.contains(" is not "), "{}: {e}", s.name);
         }
@@ -436,7 +476,7 @@ mod tests {
             ),
         ];
         for (s, words) in cases {
-            let e = check(&s).expect_err(&s.name);
+            let e = check(&s).expect_err(&s.name).message;
             assert!(
                 e.starts_with(&words[..6]) && e.contains(words),
                 "{}: {e}",
@@ -447,7 +487,8 @@ mod tests {
         let mut s = scene("px", f, u, Some((u, "0")));
         s.exact.as_mut().unwrap().px = crate::expr::Expr::parse("-pi*cos(pi*x)*cos(pi*y)").unwrap();
         let e = check(&s).unwrap_err();
-        assert!(e.starts_with("exact.px is not ∂u/∂x"), "{e}");
+        assert_eq!(e.key, KeyPath::keys("exact.px"));
+        assert!(e.message.starts_with("exact.px is not ∂u/∂x"), "{e}");
     }
 
     /// The round-off bound holds: the Laplacian of a harmonic u (open-exact's, with r^{1/2} tips)

@@ -29,7 +29,6 @@ pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -
         cracks: vec![Polyline {
             points: vec![[-0.5, 0.0], [0.5, 0.0]],
         }],
-        crack_names: vec!["geometry.crack.segment".into()],
         meshing: Meshing::Cells([8, 8]),
         grading: None,
         level0: Level0Size::Grid([8, 8]),
@@ -55,7 +54,6 @@ pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -
         },
         references: Vec::new(),
         verification: Verification::default(),
-        source: String::new(),
     }
 }
 

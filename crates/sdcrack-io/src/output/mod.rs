@@ -217,14 +217,15 @@ pub const SCENE_COPY: &str = "scene.toml";
 /// when it does not ask for all of u, p and λ `verification.h5` with all of them, into `dir`.
 pub fn write_run(
     dir: &Path,
-    scene: &crate::scene::Scene,
+    loaded: &crate::scene::LoadedScene,
     plan: &crate::study::CasePlan,
     study: &crate::study::StudyResult,
     wall_s: f64,
     provenance: &summary::Provenance,
 ) -> Result<(), WriteError> {
+    let scene = &loaded.scene;
     let copy = dir.join(SCENE_COPY);
-    atomic_write(&copy, scene.source.as_bytes()).map_err(|e| WriteError::Io {
+    atomic_write(&copy, loaded.text.as_bytes()).map_err(|e| WriteError::Io {
         path: copy,
         reason: e.to_string(),
     })?;

@@ -390,7 +390,6 @@ mod non_finite {
 mod tests {
     use super::*;
     use crate::contact::LcpStatus;
-    use crate::scene::TomlScene;
 
     /// A solved case with awkward numbers: the shortest round trip needs 17 digits, a
     /// subnormal, the smallest normal, an exact zero, huge and tiny exponents.
@@ -444,8 +443,9 @@ mod tests {
     #[test]
     fn errors_and_kkt_round_trip_through_summary_json_bit_for_bit() {
         let c = case();
-        let scene = crate::scene::Scene::default_scene();
-        let plan = crate::study::CasePlan::new(&scene, &sdcrack_core::case::CasePattern::default());
+        let loaded = crate::scene::LoadedScene::default_scene();
+        let plan =
+            crate::study::CasePlan::new(&loaded.scene, &sdcrack_core::case::CasePattern::default());
         let study = crate::study::StudyResult {
             cases: vec![c.clone()],
             ..Default::default()
@@ -457,7 +457,7 @@ mod tests {
         };
         let provenance = Provenance::of_this_process("test", std::time::SystemTime::now(), build);
         let dir = tempfile::tempdir().unwrap();
-        crate::output::write_run(dir.path(), &scene, &plan, &study, 1.0, &provenance).unwrap();
+        crate::output::write_run(dir.path(), &loaded, &plan, &study, 1.0, &provenance).unwrap();
         let text = std::fs::read_to_string(dir.path().join("summary.json")).unwrap();
         let json: serde_json::Value = serde_json::from_str(&text).unwrap();
         let got = &json["cases"][0];

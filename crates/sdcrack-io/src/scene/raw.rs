@@ -7,8 +7,6 @@
 
 use serde::Deserialize;
 
-use super::verification::VerificationToml;
-
 /// The whole scene file.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -107,4 +105,54 @@ pub(super) struct DiscretizationToml {
 pub(super) struct OutputsToml {
     pub(super) fields: Vec<String>,
     pub(super) references: Vec<String>,
+}
+
+/// `[verification]`: what the compare tool's verdict may expect of the scene (validated by
+/// [`super::verification`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct VerificationToml {
+    #[serde(default)]
+    pub(super) smoke: bool,
+    pub(super) kkt_tolerance: Option<f64>,
+    pub(super) reference_agreement: Option<f64>,
+    pub(super) delta_slope_tolerance: Option<f64>,
+    pub(super) min_rate: Option<f64>,
+    #[serde(default)]
+    pub(super) expected_failure: Vec<ExpectedFailureToml>,
+    #[serde(default)]
+    pub(super) expected_rate: Vec<ExpectedRateToml>,
+    #[serde(default)]
+    pub(super) not_applicable: Vec<NotApplicableToml>,
+}
+
+/// One `[[verification.expected_rate]]`: a series' expected order.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ExpectedRateToml {
+    pub(super) u_space: Option<String>,
+    pub(super) multiplier: Option<String>,
+    pub(super) p_mass: Option<String>,
+    pub(super) p_space: Option<String>,
+    pub(super) quantity: Option<String>,
+    pub(super) rate: f64,
+    pub(super) reason: String,
+}
+
+/// One `[[verification.not_applicable]]`: a check that does not apply, and why.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct NotApplicableToml {
+    pub(super) check: String,
+    pub(super) reason: String,
+}
+
+/// One `[[verification.expected_failure]]`: a series known not to converge.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ExpectedFailureToml {
+    pub(super) u_space: String,
+    pub(super) multiplier: Option<String>,
+    pub(super) quantity: Option<String>,
+    pub(super) reason: String,
 }

@@ -1,6 +1,6 @@
-//! The scene schema, derived from the serde structs of [`super::raw`] (and
-//! [`super::verification`]): every table with its keys, in the structs' order, each key with the
-//! type of its value, the words messages use for it and, for names, the values allowed.
+//! The scene schema, derived from the serde structs of [`super::raw`]: every table with its keys,
+//! in the structs' order, each key with the type of its value, the words messages use for it
+//! and, for names, the values allowed.
 //!
 //! The structs are read by deserializing [`super::raw::SceneToml`] from a [`Recorder`], a serde
 //! `Deserializer` that answers every struct with all of its fields (the names serde passes to
@@ -16,11 +16,11 @@ use serde::de::{self, value::Error, DeserializeSeed, IntoDeserializer, MapAccess
 use serde::{Deserialize, Serialize};
 
 use super::raw::SceneToml;
-use super::verification::NOT_APPLICABLE_CHECKS;
 use super::KNOWN_REFERENCES;
 use sdcrack_core::case::{AxisSchema, CaseKey};
 use sdcrack_core::norms::Quantity;
 use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use sdcrack_core::scene::verification::NOT_APPLICABLE_CHECKS;
 
 /// What a key's value is, as its struct field declares it (an `Option` is its content).
 #[derive(Clone, Debug, PartialEq)]

@@ -1,10 +1,26 @@
 //! Unit tests of the scene module: positions in the text, toml's errors in words, the schema
 //! derived from the structs, the template, the memory limits.
 
-use super::position::{key_position, line_column, locate_message};
+use super::position::{key_position, line_column};
 use super::schema::{schema, Kind, ALLOWED, WORDS};
 use super::toml_error::{header_before, key_on_line};
 use super::*;
+
+/// The key path written `a.b[1].c` (for the tests' literals).
+fn path(written: &str) -> KeyPath {
+    let mut out = KeyPath::root();
+    for part in written.split('.') {
+        let (key, index) = match part.split_once('[') {
+            Some((k, i)) => (k, i.trim_end_matches(']').parse::<usize>().ok()),
+            None => (part, None),
+        };
+        out = out.key(key);
+        if let Some(i) = index {
+            out = out.index(i);
+        }
+    }
+    out
+}
 
 /// Where a value error points: a key of a table, a dotted key, a key of an inline table, a
 /// key in the second of an array of tables, a table header; nothing for an absent key.
@@ -14,39 +30,38 @@ fn key_positions_in_the_scene_text() {
                 grading = { beta = 0.5, radius = 0.25 }\nlevels = [0, 1]\n\
                 [[verification.expected_failure]]\nu_space = \"continuous\"\n\
                 [[verification.expected_failure]]\nmultiplier = \"M0\"\nu_space = \"broken\"\n";
-    assert_eq!(key_position(text, "name"), Some((1, 1)));
-    assert_eq!(key_position(text, "data.f"), Some((4, 1)));
-    assert_eq!(key_position(text, "data.g"), Some((5, 3)));
-    assert_eq!(key_position(text, "data"), Some((3, 1)));
-    assert_eq!(key_position(text, "discretization.grading"), Some((7, 1)));
+    let expected = [
+        ("name", Some((1, 1))),
+        ("data.f", Some((4, 1))),
+        ("data.g", Some((5, 3))),
+        ("data", Some((3, 1))),
+        ("discretization.grading", Some((7, 1))),
+        ("discretization.grading.radius", Some((7, 25))),
+        ("discretization.levels", Some((8, 1))),
+        ("verification.expected_failure[0].u_space", Some((10, 1))),
+        ("verification.expected_failure[1].u_space", Some((13, 1))),
+        ("verification.expected_failure[1]", Some((11, 1))),
+        ("discretization.deltas", None),
+        ("geometry", None),
+    ];
+    for (key, at) in expected {
+        assert_eq!(key_position(text, &path(key)), at, "{key}");
+    }
+    let nan = SceneError::named(path("data.g"), "data.g = \"0\" evaluates to NaN");
     assert_eq!(
-        key_position(text, "discretization.grading.radius"),
-        Some((7, 25))
+        nan.located(text).to_string(),
+        "invalid scene: data.g = \"0\" evaluates to NaN (at line 5, column 3)"
     );
-    assert_eq!(key_position(text, "discretization.levels"), Some((8, 1)));
+    let missing = SceneError::key(path("discretization"), KeyRole::Missing("cells".into()), "");
     assert_eq!(
-        key_position(text, "verification.expected_failure[0].u_space"),
-        Some((10, 1))
+        missing.located(text).to_string(),
+        "invalid scene: missing key `cells` in [discretization] (the table is at line 6, column 1)"
     );
+    let plain = SceneError::Scene("no key here".into());
     assert_eq!(
-        key_position(text, "verification.expected_failure[1].u_space"),
-        Some((13, 1))
+        plain.located(text).to_string(),
+        "invalid scene: no key here"
     );
-    assert_eq!(
-        key_position(text, "verification.expected_failure[1]"),
-        Some((11, 1))
-    );
-    assert_eq!(key_position(text, "discretization.deltas"), None);
-    assert_eq!(key_position(text, "geometry"), None);
-    assert_eq!(
-        locate_message("data.g = \"0\" evaluates to NaN".into(), text),
-        "data.g = \"0\" evaluates to NaN (at line 5, column 3)"
-    );
-    assert_eq!(
-        locate_message("missing key `cells` in [discretization]".into(), text),
-        "missing key `cells` in [discretization] (the table is at line 6, column 1)"
-    );
-    assert_eq!(locate_message("no key here".into(), text), "no key here");
 }
 
 /// The template is a valid scene, names every table and key (commented or not), and its
@@ -149,6 +164,26 @@ fn toml_errors_name_table_key_line_and_column() {
     assert_eq!(header_before("a = 1\n[data]\n", 2), "");
 }
 
+/// A syntax error names the table it is in, except a key set twice, whose message (toml's)
+/// names its table already: told by the lines before, which set the key in that table.
+#[test]
+fn a_key_set_twice_is_told_from_the_lines_before() {
+    let message = |edit: &str| {
+        let scene = DEFAULT_SCENE.replacen("cells = [8, 8]\n", edit, 1);
+        Scene::from_toml(&scene).unwrap_err().to_string()
+    };
+    let twice = message("cells = [8, 8]\ncells = [4, 4]\n");
+    assert!(
+        twice.contains("duplicate key `cells` in table `discretization` (at line"),
+        "{twice}"
+    );
+    let bare = message("cells = [8, 8]\nlevels [0]\n");
+    assert!(bare.contains(" in [discretization] (at line"), "{bare}");
+    // the key after the bad token is set before, but the error is not at a key: not twice
+    let after = message("cells = [8, 8]\nmesh_size cells = 1\n");
+    assert!(after.contains(" in [discretization] (at line"), "{after}");
+}
+
 #[test]
 fn messages_escape_control_characters() {
     let scene = DEFAULT_SCENE.replacen("name = \"mixed\"", "name = \"a\\r\\nb\"", 1);
@@ -208,27 +243,42 @@ fn allowed_names_and_words_name_keys_of_the_schema() {
     }
 }
 
-/// A value error inside an array of tables or an inline array names the element.
+/// An error of the structs carries the key path of the element it is in (an inline table of
+/// an array, the second of an array of tables) and the span of the value.
 #[test]
-fn paths_at_offsets_come_from_the_document() {
-    let text = "[geometry]\ncracks = [{ segment = 1 }, { polyline = 2 }]\n\
-                [[verification.expected_rate]]\nrate = 1.0\n\
-                [[verification.expected_rate]]\nrate = \"x\"\n";
-    let at = |needle: &str| {
-        let offset = text.find(needle).expect(needle);
-        super::position::path_at(text, offset).map(|p| super::position::path_text(&p))
+fn errors_of_the_structs_carry_their_key_path() {
+    let raw_error = |text: &str| {
+        let doc = toml_edit::ImDocument::parse(text).unwrap();
+        document::from_document::<raw::SceneToml>(&doc)
+            .err()
+            .expect(text)
     };
-    assert_eq!(at("2 }").as_deref(), Some("geometry.cracks[1].polyline"));
-    assert_eq!(at("segment").as_deref(), Some("geometry.cracks[0].segment"));
-    assert_eq!(
-        at("\"x\"").as_deref(),
-        Some("verification.expected_rate[1].rate")
+    let text = "[geometry]\ncracks = [{ segment = [[0, 0], [1, 0]] }, { polyline = 2 }]\n";
+    let e = raw_error(text);
+    assert_eq!(e.path, path("geometry.cracks[1].polyline"));
+    assert_eq!(e.span.map(|s| s.start), text.find("2 }"));
+    assert!(
+        matches!(&e.fault, document::Fault::WrongType { found, .. } if found == "the integer 2")
     );
-    assert_eq!(
-        key_position(text, "verification.expected_rate[1]"),
-        Some((5, 1))
+    let text = "[[verification.expected_rate]]\nrate = 1.0\nreason = \"r\"\n\
+                [[verification.expected_rate]]\nrate = \"x\"\n";
+    let e = raw_error(text);
+    assert_eq!(e.path, path("verification.expected_rate[1].rate"));
+    assert_eq!(e.span.map(|s| s.start), text.find("\"x\""));
+    let text = "[data]\nf = \"1\"\nh = \"2\"\n";
+    let e = raw_error(text);
+    assert_eq!(e.fault, document::Fault::UnknownKey("h".into()));
+    assert_eq!(e.path, path("data.h"));
+    assert_eq!(e.span.map(|s| s.start), text.find("h ="));
+    let e = raw_error("name = \"n\"\n[data]\nf = \"1\"\n");
+    assert_eq!(e.fault, document::Fault::MissingKey("g"));
+    assert_eq!(e.path, path("data"));
+    let text = "[discretization]\nlevels = [0, 1.5]\n";
+    let e = raw_error(text);
+    assert_eq!(e.path, path("discretization.levels[1]"));
+    assert!(
+        matches!(&e.fault, document::Fault::WrongType { found, .. } if found == "the number 1.5")
     );
-    assert_eq!(key_position(text, "geometry.cracks[1]"), Some((2, 1)));
 }
 
 /// docs/scenes.md's table of keys, `(table, row)`: each row's first cell under the

@@ -1,19 +1,24 @@
-//! One-line messages for the errors of toml's deserializer: what is wrong, the key or table,
-//! line and column (from the error's own span), and for an unknown key the closest key of its
-//! table ("did you mean") and the keys allowed there.
+//! One-line messages for the errors of reading a scene's TOML: what is wrong, the key or table,
+//! line and column, and for an unknown key the closest key of its table ("did you mean") and the
+//! keys allowed there.
 //!
-//! Where the document parses (an unknown, missing or mistyped key), the key path comes from the
-//! document's spans ([`super::position::path_at`]) and the tables and types from the schema
-//! derived from the serde structs ([`super::schema`]). A syntax error leaves no document: its
-//! key and table are read off the error's line ([`key_on_line`], [`header_before`]).
+//! An error of the structs ([`RawError`]: an unknown, missing or mistyped key) comes as data, its
+//! key path and span from the document ([`super::document`]), the tables and types from the
+//! schema derived from the serde structs ([`super::schema`]). A syntax error leaves no document:
+//! toml_edit's message is shown as it is, with its span's line and column, and the key and table
+//! read off the scene's text at that span ([`key_on_line`], [`header_before`]). No message text
+//! of serde or toml is read.
 
-use super::position::{line_column, path_at, path_text, schema_path, table_name, table_position};
+use sdcrack_core::scene::KeyPath;
+
+use super::document::{Fault, RawError};
+use super::position::{line_column, table_name, table_position};
 use super::schema::Schema;
 use crate::did_you_mean::suggest;
 use crate::one_line::escape_controls;
 
-/// One-line message for a TOML/serde error `e` of the scene `text`.
-pub(super) fn toml_message(e: &toml::de::Error, text: &str) -> String {
+/// One-line message for the syntax error `e` of the scene `text` (the document does not parse).
+pub(super) fn syntax_message(e: &toml_edit::TomlError, text: &str) -> String {
     // toml puts a detail on a second line ("invalid string\nexpected `\"`"): join with ": ".
     let msg = e
         .message()
@@ -23,22 +28,10 @@ pub(super) fn toml_message(e: &toml::de::Error, text: &str) -> String {
         .collect::<Vec<_>>()
         .join(": ");
     let msg = escape_controls(&msg);
-    let schema = super::schema::schema();
-    let start = e.span().map(|s| s.start);
-    if let Some(rest) = msg.strip_prefix("unknown field `") {
-        return unknown_key(&schema, rest, start, text);
-    }
-    if let Some(rest) = msg.strip_prefix("missing field `") {
-        let key = rest.split('`').next().unwrap_or("");
-        return missing_key(&schema, key, start, text);
-    }
-    let Some(start) = start else {
+    let Some(start) = e.span().map(|s| s.start) else {
         return msg;
     };
     let at = at_words(text, start);
-    if let Some(steps) = path_at(text, start) {
-        return value_message(&schema, &steps, &msg, &at);
-    }
     match key_on_line(text, start) {
         Some(key) => {
             let table = header_before(text, start);
@@ -52,11 +45,38 @@ pub(super) fn toml_message(e: &toml::de::Error, text: &str) -> String {
             let (line, _) = line_column(text, start);
             let line_text = text.lines().nth(line - 1).unwrap_or("").trim_start();
             match header_before(text, start) {
-                // An error in a header itself, or before any header: the line says it all.
-                t if t.is_empty() || line_text.starts_with('[') || msg.contains("table `") => {
+                // An error in a header itself, or before any header: the line says it all; a key
+                // set twice: toml's message names its table.
+                t if t.is_empty()
+                    || line_text.starts_with('[')
+                    || redefines_key(text, start, &t) =>
+                {
                     format!("{msg} (at {at})")
                 }
                 t => format!("{msg} in [{t}] (at {at})"),
+            }
+        }
+    }
+}
+
+/// One-line message for the error `e` of reading the scene `text`'s document into its structs.
+pub(super) fn raw_message(e: &RawError, text: &str) -> String {
+    let schema = super::schema::schema();
+    let start = e.span.as_ref().map(|s| s.start);
+    match &e.fault {
+        Fault::UnknownKey(key) => unknown_key(&schema, &escape_controls(key), &e.path, start, text),
+        Fault::MissingKey(key) => missing_key(&schema, key, &e.path, text),
+        Fault::WrongType { found, message } => match start {
+            Some(start) => wrong_type(&schema, &e.path, found, message, &at_words(text, start)),
+            None => escape_controls(message),
+        },
+        Fault::Other(message) => {
+            let message = escape_controls(message);
+            let shown = e.path.to_last_key();
+            match start {
+                None => message,
+                Some(s) if shown.is_root() => format!("{message} (at {})", at_words(text, s)),
+                Some(s) => format!("{shown}: {message} (at {})", at_words(text, s)),
             }
         }
     }
@@ -68,18 +88,16 @@ fn at_words(text: &str, offset: usize) -> String {
     format!("line {line}, column {column}")
 }
 
-/// `unknown key `k` in [t] at line L, column C; did you mean …? (allowed: …)`. `rest` follows
-/// serde's "unknown field `": the key, then the fields the struct expected.
-fn unknown_key(schema: &Schema, rest: &str, start: Option<usize>, text: &str) -> String {
-    let key = rest.split('`').next().unwrap_or("");
-    let table = start
-        .and_then(|s| path_at(text, s))
-        .map(|mut steps| {
-            steps.pop();
-            schema_path(&steps)
-        })
-        .filter(|t| schema.table(t).is_some())
-        .unwrap_or_else(|| table_expecting(schema, rest));
+/// `unknown key `k` in [t] at line L, column C; did you mean …? (allowed: …)`, for the key
+/// `key` at `path` (whose parent is its table).
+fn unknown_key(
+    schema: &Schema,
+    key: &str,
+    path: &KeyPath,
+    start: Option<usize>,
+    text: &str,
+) -> String {
+    let table = path.parent().schema_path();
     let known = schema
         .table(&table)
         .map(|t| t.key_names())
@@ -103,77 +121,66 @@ fn unknown_key(schema: &Schema, rest: &str, start: Option<usize>, text: &str) ->
     )
 }
 
-/// The table whose keys are the fields serde expected (`…, expected one of `a`, `b``), where the
-/// document does not say: the first such table of the schema, or the top level.
-fn table_expecting(schema: &Schema, rest: &str) -> String {
-    let expected: Vec<&str> = rest
-        .split_once("expected")
-        .map(|(_, list)| list.split('`').skip(1).step_by(2).collect())
-        .unwrap_or_default();
-    schema
-        .tables
-        .iter()
-        .find(|t| t.key_names() == expected)
-        .map(|t| t.table.clone())
-        .unwrap_or_default()
+/// `missing table [t]`, or `missing key `k` in [t]` (with where the table is) for the key `key`
+/// that the table at `table` lacks.
+fn missing_key(schema: &Schema, key: &str, table: &KeyPath, text: &str) -> String {
+    let full = table.clone().key(key);
+    if schema.table(&full.schema_path()).is_some() {
+        return format!("missing table [{full}]");
+    }
+    if table.is_root() {
+        return format!("missing key `{key}` at the top level");
+    }
+    format!(
+        "missing key `{key}` in [{table}]{}",
+        table_position(text, table)
+    )
 }
 
-/// `missing table [t]` or `missing key `k` in [t]` (with where the table is).
-fn missing_key(schema: &Schema, key: &str, start: Option<usize>, text: &str) -> String {
-    if schema.table(key).is_some() {
-        return format!("missing table [{key}]");
+/// A value of the wrong type at `path`: `key must be WORDS, not FOUND (at …)`, the key being
+/// the path up to its last key (an element of a list of values is its list's); serde's
+/// `message` after the key when the schema has no words for it.
+fn wrong_type(schema: &Schema, path: &KeyPath, found: &str, message: &str, at: &str) -> String {
+    let shown = path.to_last_key();
+    let table = shown.parent().schema_path();
+    let key = shown.last_key().unwrap_or("");
+    match schema.key(&table, key) {
+        Some(k) => format!("{shown} must be {}, not {found} (at {at})", k.words),
+        None => format!("{shown}: {} (at {at})", escape_controls(message)),
     }
-    let owners: Vec<&str> = (schema.tables.iter())
-        .filter(|t| t.keys.iter().any(|k| k.key == key))
-        .map(|t| t.table.as_str())
+}
+
+/// For a syntax error at byte `offset`: whether it is at the key that starts its line and the
+/// table `table` (the header in force) already has that key in the lines before, i.e. the key
+/// is set twice. Read off the document of those lines, which parse (the error is the first).
+fn redefines_key(text: &str, offset: usize, table: &str) -> bool {
+    let offset = boundary(text, offset);
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let key: String = text[offset..]
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-'))
         .collect();
-    // The error's span is the table that lacks the key.
-    let spanned = start
-        .and_then(|s| path_at(text, s))
-        .map(|steps| (schema_path(&steps), path_text(&steps)))
-        .filter(|(t, _)| owners.contains(&t.as_str()));
-    match (owners.as_slice(), spanned) {
-        ([""], _) => format!("missing key `{key}` at the top level"),
-        (_, Some((_, shown))) => {
-            format!(
-                "missing key `{key}` in [{shown}]{}",
-                table_position(text, &shown)
-            )
-        }
-        ([t, ..], None) => format!("missing key `{key}` in [{t}]{}", table_position(text, t)),
-        ([], None) => format!("missing key `{key}`"),
+    // a key set twice is the first thing on its line
+    if !text[line_start..offset].trim().is_empty() {
+        return false;
     }
-}
-
-/// A wrong value of the key at `steps`: `path must be WORDS, not GOT (at …)`, or the error's own
-/// words after the path.
-fn value_message(schema: &Schema, steps: &[super::position::Step], msg: &str, at: &str) -> String {
-    let shown = path_text(steps);
-    let table = schema_path(&steps[..steps.len().saturating_sub(1)]);
-    let key = steps.last().map_or("", |(name, _)| name.as_str());
-    match (schema.key(&table, key), got(msg)) {
-        (Some(k), Some(got)) => format!("{shown} must be {}, not {got} (at {at})", k.words),
-        _ => format!("{shown}: {msg} (at {at})"),
+    let Ok(before) = toml_edit::ImDocument::parse(&text[..line_start]) else {
+        return false;
+    };
+    let mut at: &dyn toml_edit::TableLike = before.as_table();
+    for name in table.split('.').map(str::trim) {
+        at = match at.get(name) {
+            // `[[t]]`: the last table of the array, the one being written
+            Some(toml_edit::Item::ArrayOfTables(a)) => match a.iter().last() {
+                Some(t) => t,
+                None => return false,
+            },
+            Some(toml_edit::Item::Table(t)) => t,
+            Some(toml_edit::Item::Value(toml_edit::Value::InlineTable(t))) => t,
+            _ => return false,
+        };
     }
-}
-
-/// What was found, in words, from serde's "invalid type: string \"a\", expected i64".
-fn got(msg: &str) -> Option<String> {
-    let found = msg
-        .strip_prefix("invalid type: ")?
-        .split(", expected")
-        .next()?;
-    let (kind, value) = found.split_once(' ').unwrap_or((found, ""));
-    let value = value.trim_matches('`');
-    Some(match kind {
-        "string" => format!("the string {value}"),
-        "integer" => format!("the integer {value}"),
-        "floating" => format!("the number {}", value.trim_start_matches("point `")),
-        "boolean" => format!("the boolean {value}"),
-        "sequence" => "a list".to_string(),
-        "map" => "a table".to_string(),
-        _ => found.to_string(),
-    })
+    !key.is_empty() && at.contains_key(&key)
 }
 
 /// Byte `offset` snapped down to a character boundary of `text`.

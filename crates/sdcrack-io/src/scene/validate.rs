@@ -1,17 +1,17 @@
 //! Validation of a scene file's structs ([`super::raw`]) into sdcrack-core's [`Scene`]: every
 //! expression parsed once into an [`Expr`] tree, every number checked (cells > 0, levels
 //! distinct, δ ≥ 0 and finite, …), every name one the schema allows ([`super::schema::ALLOWED`]).
-//! Errors are [`SceneError::Value`] / [`SceneError::Expression`] naming the key first, so that
-//! [`super::position`] can append where the key is.
+//! Errors are [`SceneError`]s carrying their key as a [`KeyPath`]; the loader adds where the key
+//! is written ([`SceneError::located`]).
 
 use std::path::Path;
 
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
 use super::schema::FIELDS;
 use super::{
-    check_level, Domain, Exact, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, Polyline,
-    Rectangle, Scene, SceneError, Segment, USpace, Var, Verification, KNOWN_REFERENCES, MAX_CELLS,
-    MAX_LEVEL,
+    check_level, CrackName, Domain, Exact, Expr, FieldSet, KeyPath, KeyRole, Level0Size, Meshing,
+    MultiplierSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
+    KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
 };
 use crate::did_you_mean::suggest;
 use sdcrack_core::case::CaseAxes;
@@ -19,27 +19,38 @@ use sdcrack_core::problem::Named;
 
 fn parse_expr(key: &str, text: &str) -> Result<Expr, SceneError> {
     Expr::parse(text).map_err(|error| SceneError::Expression {
-        key: key.to_string(),
+        key: KeyPath::keys(key),
         source_text: text.to_string(),
         error,
-        at: String::new(),
+        at: None,
     })
 }
 
-fn check_finite_point(what: &str, p: [f64; 2]) -> Result<(), SceneError> {
+/// A value error about the key `dotted` (a name the program writes: no indices).
+fn value(dotted: &str, message: impl Into<String>) -> SceneError {
+    SceneError::value(KeyPath::keys(dotted), message)
+}
+
+fn check_finite_point(what: &KeyPath, p: [f64; 2]) -> Result<(), SceneError> {
     if p.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
-        Err(SceneError::Value(format!(
-            "{what} has a non-finite coordinate ({}, {})",
-            p[0], p[1]
-        )))
+        Err(SceneError::value(
+            what.clone(),
+            format!(" has a non-finite coordinate ({}, {})", p[0], p[1]),
+        ))
     }
 }
 
+/// `[geometry]`, then `message`.
+fn geometry_table(message: &str) -> SceneError {
+    SceneError::key(KeyPath::keys("geometry"), KeyRole::Table, message)
+}
+
 impl SceneToml {
-    /// `base_dir`: the folder relative mesh file paths are read from (the scene file's).
-    pub(super) fn validate(self, base_dir: &Path) -> Result<Scene, SceneError> {
+    /// `base_dir`: the folder relative mesh file paths are read from (the scene file's). With
+    /// the scene, where each of its cracks is written (for messages about a crack).
+    pub(super) fn validate(self, base_dir: &Path) -> Result<(Scene, Vec<CrackName>), SceneError> {
         let name = self.name.trim().to_string();
         if name.is_empty()
             || name.len() > 100
@@ -47,10 +58,13 @@ impl SceneToml {
                 .chars()
                 .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
         {
-            return Err(SceneError::Value(format!(
-                "name {:?} must be 1-100 characters of letters, digits, '-' or '_' (it names the results folder)",
-                self.name
-            )));
+            return Err(value(
+                "name",
+                format!(
+                    " {:?} must be 1-100 characters of letters, digits, '-' or '_' (it names the results folder)",
+                    self.name
+                ),
+            ));
         }
         let d = self.discretization;
         let meshing = validate_meshing(&d, base_dir)?;
@@ -59,21 +73,24 @@ impl SceneToml {
         let (domain, cracks, crack_names) = match (&meshing, self.geometry) {
             (Meshing::File(path), None) => {
                 let (domain, cracks, triangles) = crate::mesh::msh_file_geometry(path)
-                    .map_err(|e| SceneError::Value(format!("discretization.mesh: {e}")))?;
+                    .map_err(|e| value("discretization.mesh", format!(": {e}")))?;
                 file_triangles = triangles;
                 let names = (1..=cracks.len())
-                    .map(|i| format!("crack{i} of {}", path.display()))
+                    .map(|number| CrackName::MeshFile {
+                        number,
+                        file: path.clone(),
+                    })
                     .collect();
                 (domain, cracks, names)
             }
             (Meshing::File(_), Some(_)) => {
-                return Err(SceneError::Value(
-                    "[geometry] must be left out with discretization.mesh: the domain and the cracks come from the mesh file's physical groups".into(),
+                return Err(geometry_table(
+                    " must be left out with discretization.mesh: the domain and the cracks come from the mesh file's physical groups",
                 ))
             }
             (_, None) => {
-                return Err(SceneError::Value(
-                    "[geometry] is missing: give geometry.domain and geometry.crack (or geometry.cracks)".into(),
+                return Err(geometry_table(
+                    " is missing: give geometry.domain and geometry.crack (or geometry.cracks)",
                 ))
             }
             (_, Some(g)) => validate_geometry(g)?,
@@ -116,8 +133,9 @@ impl SceneToml {
             .iter()
             .any(|p| u_spaces.iter().any(|&u| p.serves(u)))
         {
-            return Err(SceneError::Value(
-                "discretization.p_spaces = [\"broken-tangential\"] needs broken u: a continuous u cannot open the crack, so u_spaces must list \"broken\" (or p_spaces \"continuous\")".into(),
+            return Err(value(
+                "discretization.p_spaces",
+                " = [\"broken-tangential\"] needs broken u: a continuous u cannot open the crack, so u_spaces must list \"broken\" (or p_spaces \"continuous\")",
             ));
         }
         let deltas = validate_deltas(&d.deltas)?;
@@ -147,16 +165,16 @@ impl SceneToml {
         axes.p_spaces = Some(p_spaces);
         axes.deltas = Some(deltas);
         let axes = axes.complete().map_err(|axis| {
-            SceneError::Value(format!(
-                "discretization: no list of {axis} (a defect of sdcrack)"
-            ))
+            SceneError::value(
+                KeyPath::keys("discretization"),
+                format!(": no list of {axis} (a defect of sdcrack)"),
+            )
         })?;
-        Ok(Scene {
+        let scene = Scene {
             name,
             description: self.description,
             domain,
             cracks,
-            crack_names,
             meshing,
             grading,
             level0,
@@ -167,151 +185,169 @@ impl SceneToml {
             fields,
             references,
             verification,
-            source: String::new(),
-        })
+        };
+        Ok((scene, crack_names))
     }
 }
 
 /// `[[x, y], [x, y]]`: exactly two points of two numbers each (TOML arrays have any length).
-fn two_points(key: &str, v: &[Vec<f64>]) -> Result<[[f64; 2]; 2], SceneError> {
+fn two_points(key: &KeyPath, v: &[Vec<f64>]) -> Result<[[f64; 2]; 2], SceneError> {
     match v {
         [a, b] if a.len() == 2 && b.len() == 2 => Ok([[a[0], a[1]], [b[0], b[1]]]),
-        _ => Err(SceneError::Value(format!(
-            "{key} must be two points [[x, y], [x, y]]; got {} point(s) with {:?} coordinates",
-            v.len(),
-            v.iter().map(Vec::len).take(8).collect::<Vec<_>>()
-        ))),
+        _ => Err(SceneError::value(
+            key.clone(),
+            format!(
+                " must be two points [[x, y], [x, y]]; got {} point(s) with {:?} coordinates",
+                v.len(),
+                v.iter().map(Vec::len).take(8).collect::<Vec<_>>()
+            ),
+        )),
     }
 }
 
 /// Domain and cracks of `[geometry]`, validated ([`crate::geometry`]), with each crack's name
 /// for messages. A polygon is stored counter-clockwise.
-fn validate_geometry(g: GeometryToml) -> Result<(Domain, Vec<Polyline>, Vec<String>), SceneError> {
-    let value = |m: String| SceneError::Value(m);
+fn validate_geometry(
+    g: GeometryToml,
+) -> Result<(Domain, Vec<Polyline>, Vec<CrackName>), SceneError> {
     let Some(domain) = g.domain else {
         return Err(value(
-            "geometry.domain is missing: give { rectangle = [[x0, y0], [x1, y1]] } or { polygon = [[x, y], ...] }".into(),
+            "geometry.domain",
+            " is missing: give { rectangle = [[x0, y0], [x1, y1]] } or { polygon = [[x, y], ...] }",
         ));
     };
     let domain = match (domain.rectangle, domain.polygon) {
         (Some(r), None) => {
-            let [lo, hi] = two_points("geometry.domain.rectangle", &r)?;
-            check_finite_point("geometry.domain.rectangle", lo)?;
-            check_finite_point("geometry.domain.rectangle", hi)?;
+            let key = KeyPath::keys("geometry.domain.rectangle");
+            let [lo, hi] = two_points(&key, &r)?;
+            check_finite_point(&key, lo)?;
+            check_finite_point(&key, hi)?;
             if !(hi[0] > lo[0] && hi[1] > lo[1]) {
-                return Err(value(format!(
-                    "geometry.domain.rectangle [[{}, {}], [{}, {}]] must list the lower-left corner first and have positive width and height",
+                return Err(SceneError::value(key, format!(
+                    " [[{}, {}], [{}, {}]] must list the lower-left corner first and have positive width and height",
                     lo[0], lo[1], hi[0], hi[1]
                 )));
             }
             Domain::Rectangle(Rectangle { min: lo, max: hi })
         }
         (None, Some(p)) => {
-            let points = points_of("geometry.domain.polygon", &p)?;
-            crate::geometry::validate_polygon(&points).map_err(|e| value(e.to_string()))?;
+            let key = KeyPath::keys("geometry.domain.polygon");
+            let points = points_of(&key, &p)?;
+            crate::geometry::validate_polygon(&points)
+                .map_err(|e| SceneError::named(key, e.to_string()))?;
             Domain::Polygon(crate::geometry::counter_clockwise(&points))
         }
         _ => {
             return Err(value(
-                "geometry.domain must have exactly one of rectangle and polygon".into(),
+                "geometry.domain",
+                " must have exactly one of rectangle and polygon",
             ))
         }
     };
-    let (cracks, names): (Vec<Polyline>, Vec<String>) = match (g.crack, g.cracks) {
+    let (cracks, names): (Vec<Polyline>, Vec<KeyPath>) = match (g.crack, g.cracks) {
         (Some(c), None) => {
-            let (crack, name) = validate_crack(c, "geometry.crack")?;
+            let (crack, name) = validate_crack(c, &KeyPath::keys("geometry.crack"))?;
             (vec![crack], vec![name])
         }
         (None, Some(list)) if !list.is_empty() => list
             .into_iter()
             .enumerate()
-            .map(|(i, c)| validate_crack(c, &format!("geometry.cracks[{i}]")))
+            .map(|(i, c)| validate_crack(c, &KeyPath::keys("geometry.cracks").index(i)))
             .collect::<Result<Vec<_>, _>>()?
             .into_iter()
             .unzip(),
         (None, Some(_)) => {
             return Err(value(
-                "geometry.cracks is empty: give at least one crack".into(),
+                "geometry.cracks",
+                " is empty: give at least one crack",
             ))
         }
         (None, None) => {
-            return Err(value(
-                "missing key `crack` in [geometry]: give crack = { segment = [[xa, ya], [xb, yb]] } or a list cracks = [...]".into(),
+            return Err(SceneError::key(
+                KeyPath::keys("geometry"),
+                KeyRole::Missing("crack".into()),
+                ": give crack = { segment = [[xa, ya], [xb, yb]] } or a list cracks = [...]",
             ))
         }
         _ => {
             return Err(value(
-                "geometry must have exactly one of crack (a single crack) and cracks (a list)"
-                    .into(),
+                "geometry",
+                " must have exactly one of crack (a single crack) and cracks (a list)",
             ))
         }
     };
     let polylines: Vec<Vec<[f64; 2]>> = cracks.iter().map(|c| c.points.clone()).collect();
     crate::geometry::validate_cracks(&domain.polygon(), &polylines).map_err(|e| {
-        // name the cracks as the scene does
+        // the core names crack i `geometry.cracks[i]`: name the cracks as the scene does
         let mut m = e.to_string();
         for (i, name) in names.iter().enumerate().rev() {
-            m = m.replace(&format!("geometry.cracks[{i}]"), name);
+            m = m.replace(&format!("geometry.cracks[{i}]"), &name.to_string());
         }
-        value(m)
+        match e.crack().and_then(|c| names.get(c)) {
+            Some(key) => SceneError::named(key.clone(), m),
+            None => SceneError::Scene(m),
+        }
     })?;
-    Ok((domain, cracks, names))
+    Ok((
+        domain,
+        cracks,
+        names.into_iter().map(CrackName::Key).collect(),
+    ))
 }
 
-/// One crack: `{ segment = [a, b] }` or `{ polyline = [x0, x1, ...] }`, and its name.
-fn validate_crack(c: CrackToml, at: &str) -> Result<(Polyline, String), SceneError> {
+/// One crack: `{ segment = [a, b] }` or `{ polyline = [x0, x1, ...] }`, and the key messages
+/// name it by: `geometry.crack.segment` (or `.polyline`) for the one crack, `geometry.cracks[i]`
+/// for one of a list.
+fn validate_crack(c: CrackToml, at: &KeyPath) -> Result<(Polyline, KeyPath), SceneError> {
+    let single = *at == KeyPath::keys("geometry.crack");
+    let name = |key: KeyPath| if single { key } else { at.clone() };
     match (c.segment, c.polyline) {
         (Some(seg), None) => {
-            let key = format!("{at}.segment");
+            let key = at.clone().key("segment");
             let [a, b] = two_points(&key, &seg)?;
             check_finite_point(&key, a)?;
             check_finite_point(&key, b)?;
             if (Segment { a, b }).length() <= 0.0 {
-                return Err(SceneError::Value(format!(
-                    "{key} has zero length (its two end points coincide)"
-                )));
+                return Err(SceneError::value(
+                    key,
+                    " has zero length (its two end points coincide)",
+                ));
             }
-            let name = if at == "geometry.crack" {
-                key
-            } else {
-                at.to_string()
-            };
-            Ok((Polyline { points: vec![a, b] }, name))
+            Ok((Polyline { points: vec![a, b] }, name(key)))
         }
         (None, Some(line)) => {
-            let key = format!("{at}.polyline");
+            let key = at.clone().key("polyline");
             let points = points_of(&key, &line)?;
             if points.len() < 2 {
-                return Err(SceneError::Value(format!(
-                    "{key} must have at least two points; got {}",
-                    points.len()
-                )));
+                return Err(SceneError::value(
+                    key,
+                    format!(" must have at least two points; got {}", points.len()),
+                ));
             }
-            let name = if at == "geometry.crack" {
-                key
-            } else {
-                at.to_string()
-            };
-            Ok((Polyline { points }, name))
+            Ok((Polyline { points }, name(key)))
         }
-        _ => Err(SceneError::Value(format!(
-            "{at} must have exactly one of segment and polyline"
-        ))),
+        _ => Err(SceneError::value(
+            at.clone(),
+            " must have exactly one of segment and polyline",
+        )),
     }
 }
 
 /// A list of points `[[x, y], ...]` with finite coordinates.
-fn points_of(key: &str, v: &[Vec<f64>]) -> Result<Vec<[f64; 2]>, SceneError> {
+fn points_of(key: &KeyPath, v: &[Vec<f64>]) -> Result<Vec<[f64; 2]>, SceneError> {
     v.iter()
         .map(|p| match p[..] {
             [x, y] => {
                 check_finite_point(key, [x, y])?;
                 Ok([x, y])
             }
-            _ => Err(SceneError::Value(format!(
-                "{key} must be a list of points [x, y]; a point has {} coordinate(s)",
-                p.len()
-            ))),
+            _ => Err(SceneError::value(
+                key.clone(),
+                format!(
+                    " must be a list of points [x, y]; a point has {} coordinate(s)",
+                    p.len()
+                ),
+            )),
         })
         .collect()
 }
@@ -319,16 +355,19 @@ fn points_of(key: &str, v: &[Vec<f64>]) -> Result<Vec<[f64; 2]>, SceneError> {
 /// `grading = { beta, radius }`: 0 < β ≤ 1, R > 0.
 fn validate_grading(g: &GradingToml) -> Result<crate::problem::Grading, SceneError> {
     if !(g.beta.is_finite() && g.beta > 0.0 && g.beta <= 1.0) {
-        return Err(SceneError::Value(format!(
-            "discretization.grading.beta must be in (0, 1] (1/2 or less for the r^(1/2) crack tip; 1 is uniform); got {}",
-            g.beta
-        )));
+        return Err(value(
+            "discretization.grading.beta",
+            format!(
+                " must be in (0, 1] (1/2 or less for the r^(1/2) crack tip; 1 is uniform); got {}",
+                g.beta
+            ),
+        ));
     }
     if !(g.radius.is_finite() && g.radius > 0.0) {
-        return Err(SceneError::Value(format!(
-            "discretization.grading.radius must be a positive length; got {}",
-            g.radius
-        )));
+        return Err(value(
+            "discretization.grading.radius",
+            format!(" must be a positive length; got {}", g.radius),
+        ));
     }
     Ok(crate::problem::Grading {
         beta: g.beta,
@@ -342,42 +381,49 @@ fn validate_meshing(d: &DiscretizationToml, base_dir: &Path) -> Result<Meshing, 
         (Some(c), None, None) => Ok(Meshing::Cells(validate_cells(c)?)),
         (None, Some(h), None) => {
             if !(h.is_finite() && h > 0.0) {
-                return Err(SceneError::Value(format!(
-                    "discretization.mesh_size must be a positive number; got {h}"
+                return Err(value("discretization.mesh_size", format!(
+                    " must be a positive number; got {h}"
                 )));
             }
             Ok(Meshing::MeshSize(h))
         }
         (None, None, Some(m)) => {
             if m.gmsh.is_empty() || m.gmsh.chars().any(char::is_control) {
-                return Err(SceneError::Value(format!(
-                    "discretization.mesh.gmsh {:?} must be a non-empty file path without control characters",
+                return Err(value("discretization.mesh.gmsh", format!(
+                    " {:?} must be a non-empty file path without control characters",
                     m.gmsh
                 )));
             }
             Ok(Meshing::File(base_dir.join(&m.gmsh)))
         }
-        _ => Err(SceneError::Value(
-            "discretization must have exactly one of cells (structured grid of a rectangle), mesh_size (gmsh) and mesh = { gmsh = \"file.msh\" }".into(),
+        _ => Err(value(
+            "discretization",
+            " must have exactly one of cells (structured grid of a rectangle), mesh_size (gmsh) and mesh = { gmsh = \"file.msh\" }",
         )),
     }
 }
 
 fn validate_cells(cells: &[i64]) -> Result<[usize; 2], SceneError> {
     let &[nx, ny] = cells else {
-        return Err(SceneError::Value(format!(
-            "discretization.cells must be two integers [nx, ny]; got {} number(s)",
-            cells.len()
-        )));
+        return Err(value(
+            "discretization.cells",
+            format!(
+                " must be two integers [nx, ny]; got {} number(s)",
+                cells.len()
+            ),
+        ));
     };
     let cells = [nx, ny];
     let mut out = [0usize; 2];
     for (o, c) in out.iter_mut().zip(cells) {
         if c <= 0 || c as usize > MAX_CELLS {
-            return Err(SceneError::Value(format!(
-                "discretization.cells = [{}, {}]: each entry must be between 1 and {MAX_CELLS}",
-                cells[0], cells[1]
-            )));
+            return Err(value(
+                "discretization.cells",
+                format!(
+                    " = [{}, {}]: each entry must be between 1 and {MAX_CELLS}",
+                    cells[0], cells[1]
+                ),
+            ));
         }
         *o = c as usize;
     }
@@ -386,25 +432,27 @@ fn validate_cells(cells: &[i64]) -> Result<[usize; 2], SceneError> {
 
 fn validate_levels(levels: &[i64], size: Level0Size) -> Result<Vec<u32>, SceneError> {
     if levels.is_empty() {
-        return Err(SceneError::Value(
-            "discretization.levels is empty: list at least one level, e.g. [0, 1, 2]".into(),
+        return Err(value(
+            "discretization.levels",
+            " is empty: list at least one level, e.g. [0, 1, 2]",
         ));
     }
     let mut out = Vec::with_capacity(levels.len());
     for &l in levels {
         if !(0..=i64::from(MAX_LEVEL)).contains(&l) {
-            return Err(SceneError::Value(format!(
-                "discretization.levels: level {l} is outside 0..={MAX_LEVEL}"
-            )));
+            return Err(value(
+                "discretization.levels",
+                format!(": level {l} is outside 0..={MAX_LEVEL}"),
+            ));
         }
         let l = l as u32;
         if out.contains(&l) {
-            return Err(SceneError::Value(format!(
-                "discretization.levels: level {l} is listed twice"
-            )));
+            return Err(value(
+                "discretization.levels",
+                format!(": level {l} is listed twice"),
+            ));
         }
-        check_level(size, l)
-            .map_err(|m| SceneError::Value(format!("discretization.levels: {m}")))?;
+        check_level(size, l).map_err(|m| value("discretization.levels", format!(": {m}")))?;
         out.push(l);
     }
     out.sort_unstable();
@@ -427,10 +475,10 @@ fn names_or<T: Named + PartialEq>(
 fn validate_names<T: Named + PartialEq>(key: &str, names: &[String]) -> Result<Vec<T>, SceneError> {
     let (parse, known) = (T::from_name, T::NAMES);
     if names.is_empty() {
-        return Err(SceneError::Value(format!(
-            "{key} is empty: list at least one of {}",
-            known.join(", ")
-        )));
+        return Err(value(
+            key,
+            format!(" is empty: list at least one of {}", known.join(", ")),
+        ));
     }
     let mut out = Vec::new();
     for n in names {
@@ -438,13 +486,16 @@ fn validate_names<T: Named + PartialEq>(key: &str, names: &[String]) -> Result<V
             let hint = suggest(n, known)
                 .map(|s| format!("; did you mean \"{s}\"?"))
                 .unwrap_or_default();
-            SceneError::Value(format!(
-                "{key}: unknown value {n:?} (expected one of {}){hint}",
-                known.join(", ")
-            ))
+            value(
+                key,
+                format!(
+                    ": unknown value {n:?} (expected one of {}){hint}",
+                    known.join(", ")
+                ),
+            )
         })?;
         if out.contains(&v) {
-            return Err(SceneError::Value(format!("{key}: {n:?} is listed twice")));
+            return Err(value(key, format!(": {n:?} is listed twice")));
         }
         out.push(v);
     }
@@ -453,21 +504,24 @@ fn validate_names<T: Named + PartialEq>(key: &str, names: &[String]) -> Result<V
 
 fn validate_deltas(deltas: &[f64]) -> Result<Vec<f64>, SceneError> {
     if deltas.is_empty() {
-        return Err(SceneError::Value(
-            "discretization.deltas is empty: list at least one δ ≥ 0, e.g. [0.0]".into(),
+        return Err(value(
+            "discretization.deltas",
+            " is empty: list at least one δ ≥ 0, e.g. [0.0]",
         ));
     }
     let mut out: Vec<f64> = Vec::new();
     for &d in deltas {
         if !d.is_finite() || d < 0.0 {
-            return Err(SceneError::Value(format!(
-                "discretization.deltas: {d} is not a finite number ≥ 0"
-            )));
+            return Err(value(
+                "discretization.deltas",
+                format!(": {d} is not a finite number ≥ 0"),
+            ));
         }
         if out.contains(&d) {
-            return Err(SceneError::Value(format!(
-                "discretization.deltas: {d} is listed twice"
-            )));
+            return Err(value(
+                "discretization.deltas",
+                format!(": {d} is listed twice"),
+            ));
         }
         out.push(d);
     }
@@ -487,15 +541,14 @@ fn validate_fields(fields: &[String]) -> Result<FieldSet, SceneError> {
                 let hint = suggest(other, FIELDS)
                     .map(|s| format!("; did you mean \"{s}\"?"))
                     .unwrap_or_default();
-                return Err(SceneError::Value(format!(
-                    "outputs.fields: unknown field {other:?} (expected u, p, lambda){hint}"
-                )));
+                return Err(value(
+                    "outputs.fields",
+                    format!(": unknown field {other:?} (expected u, p, lambda){hint}"),
+                ));
             }
         };
         if *slot {
-            return Err(SceneError::Value(format!(
-                "outputs.fields: {f:?} is listed twice"
-            )));
+            return Err(value("outputs.fields", format!(": {f:?} is listed twice")));
         }
         *slot = true;
     }
@@ -509,14 +562,16 @@ fn validate_references(refs: &[String]) -> Result<Vec<String>, SceneError> {
             let hint = suggest(r, &KNOWN_REFERENCES)
                 .map(|s| format!("; did you mean \"{s}\"?"))
                 .unwrap_or_default();
-            return Err(SceneError::Value(format!(
-                "outputs.references: unknown reference {r:?} (expected dolfinx, freefem){hint}"
-            )));
+            return Err(value(
+                "outputs.references",
+                format!(": unknown reference {r:?} (expected dolfinx, freefem){hint}"),
+            ));
         }
         if out.contains(r) {
-            return Err(SceneError::Value(format!(
-                "outputs.references: {r:?} is listed twice"
-            )));
+            return Err(value(
+                "outputs.references",
+                format!(": {r:?} is listed twice"),
+            ));
         }
         out.push(r.clone());
     }

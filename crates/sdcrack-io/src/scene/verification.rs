@@ -33,66 +33,20 @@
 //! reason = "..."
 //! ```
 
-use serde::Deserialize;
-
 use sdcrack_core::case::CasePattern;
 use sdcrack_core::norms::Quantity;
 use sdcrack_core::problem::{PMass, PSpace};
 
-use super::{suggest, MultiplierSpace, SceneError, USpace};
+use super::raw::{ExpectedRateToml, NotApplicableToml, VerificationToml};
+use super::{suggest, KeyPath, MultiplierSpace, SceneError, USpace};
 
 pub use sdcrack_core::scene::verification::{
     ExpectedFailure, ExpectedRate, Verification, NOT_APPLICABLE_CHECKS,
 };
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct VerificationToml {
-    #[serde(default)]
-    smoke: bool,
-    kkt_tolerance: Option<f64>,
-    reference_agreement: Option<f64>,
-    delta_slope_tolerance: Option<f64>,
-    min_rate: Option<f64>,
-    #[serde(default)]
-    expected_failure: Vec<ExpectedFailureToml>,
-    #[serde(default)]
-    expected_rate: Vec<ExpectedRateToml>,
-    #[serde(default)]
-    not_applicable: Vec<NotApplicableToml>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct ExpectedRateToml {
-    u_space: Option<String>,
-    multiplier: Option<String>,
-    p_mass: Option<String>,
-    p_space: Option<String>,
-    quantity: Option<String>,
-    rate: f64,
-    reason: String,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct NotApplicableToml {
-    check: String,
-    reason: String,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct ExpectedFailureToml {
-    u_space: String,
-    multiplier: Option<String>,
-    quantity: Option<String>,
-    reason: String,
-}
-
 /// `"*"` → `None`; otherwise one of `known` (a value the scene runs), with a suggestion.
 fn pattern<T: Copy>(
-    key: &str,
+    key: &KeyPath,
     value: &str,
     known: &[(T, String)],
 ) -> Result<Option<T>, SceneError> {
@@ -106,17 +60,21 @@ fn pattern<T: Copy>(
     let hint = suggest(value, &names)
         .map(|s| format!("; did you mean \"{s}\"?"))
         .unwrap_or_default();
-    Err(SceneError::Value(format!(
-        "{key}: {value:?} is not among the scene's values ({} or \"*\"){hint}",
-        names.join(", ")
-    )))
+    Err(SceneError::value(
+        key.clone(),
+        format!(
+            ": {value:?} is not among the scene's values ({} or \"*\"){hint}",
+            names.join(", ")
+        ),
+    ))
 }
 
 fn positive(key: &str, v: Option<f64>) -> Result<Option<f64>, SceneError> {
     match v {
-        Some(x) if !(x.is_finite() && x > 0.0) => Err(SceneError::Value(format!(
-            "verification.{key} = {x} must be a finite number > 0"
-        ))),
+        Some(x) if !(x.is_finite() && x > 0.0) => Err(SceneError::value(
+            KeyPath::keys("verification").key(key),
+            format!(" = {x} must be a finite number > 0"),
+        )),
         _ => Ok(v),
     }
 }
@@ -133,13 +91,14 @@ impl VerificationToml {
         let qs = named(&Quantity::ALL);
         let mut expected_failures: Vec<ExpectedFailure> = Vec::new();
         for (i, e) in self.expected_failure.into_iter().enumerate() {
-            let key = |k: &str| format!("verification.expected_failure[{i}].{k}");
+            let table = KeyPath::keys("verification.expected_failure").index(i);
+            let key = |k: &str| table.clone().key(k);
             let reason = e.reason.trim().to_string();
             if reason.is_empty() {
-                return Err(SceneError::Value(format!(
-                    "{}: say why the series is expected not to converge",
-                    key("reason")
-                )));
+                return Err(SceneError::value(
+                    key("reason"),
+                    ": say why the series is expected not to converge",
+                ));
             }
             let failure = ExpectedFailure {
                 series: CasePattern {
@@ -158,9 +117,10 @@ impl VerificationToml {
                 .iter()
                 .any(|f| (f.series, f.quantity) == (failure.series, failure.quantity))
             {
-                return Err(SceneError::Value(format!(
-                    "verification.expected_failure[{i}] declares the same series as an earlier one"
-                )));
+                return Err(SceneError::value(
+                    table,
+                    " declares the same series as an earlier one",
+                ));
             }
             expected_failures.push(failure);
         }
@@ -194,10 +154,10 @@ fn named<T: Copy + std::fmt::Display>(values: &[T]) -> Vec<(T, String)> {
     values.iter().map(|&v| (v, v.to_string())).collect()
 }
 
-fn non_empty(key: String, reason: &str) -> Result<String, SceneError> {
+fn non_empty(key: KeyPath, reason: &str) -> Result<String, SceneError> {
     let r = reason.trim();
     if r.is_empty() {
-        return Err(SceneError::Value(format!("{key}: say why")));
+        return Err(SceneError::value(key, ": say why"));
     }
     Ok(r.to_string())
 }
@@ -210,13 +170,12 @@ impl ExpectedRateToml {
         ms: &[(MultiplierSpace, String)],
         qs: &[(Quantity, String)],
     ) -> Result<ExpectedRate, SceneError> {
-        let key = |k: &str| format!("verification.expected_rate[{i}].{k}");
+        let key = |k: &str| KeyPath::keys("verification.expected_rate").index(i).key(k);
         if !(self.rate.is_finite() && self.rate > 0.0 && self.rate <= 4.0) {
-            return Err(SceneError::Value(format!(
-                "{} = {} must be a number in (0, 4]",
+            return Err(SceneError::value(
                 key("rate"),
-                self.rate
-            )));
+                format!(" = {} must be a number in (0, 4]", self.rate),
+            ));
         }
         let pms = named(&PMass::ALL);
         let pss = named(&PSpace::ALL);
@@ -238,14 +197,16 @@ impl ExpectedRateToml {
 
 impl NotApplicableToml {
     fn validate(self, i: usize) -> Result<(String, String), SceneError> {
-        let key = |k: &str| format!("verification.not_applicable[{i}].{k}");
+        let key = |k: &str| KeyPath::keys("verification.not_applicable").index(i).key(k);
         if !NOT_APPLICABLE_CHECKS.contains(&self.check.as_str()) {
-            return Err(SceneError::Value(format!(
-                "{}: {:?} is none of {}",
+            return Err(SceneError::value(
                 key("check"),
-                self.check,
-                NOT_APPLICABLE_CHECKS.join(", ")
-            )));
+                format!(
+                    ": {:?} is none of {}",
+                    self.check,
+                    NOT_APPLICABLE_CHECKS.join(", ")
+                ),
+            ));
         }
         Ok((self.check, non_empty(key("reason"), &self.reason)?))
     }

@@ -1,0 +1,92 @@
+"""The modules of the scene format (crates/sdcrack-io/src/scene/*.rs) import one another without a
+cycle: the serde structs (raw.rs) are the leaf every other part reads, the schema is derived from
+them, validation and messages sit on top. A cycle (raw → verification → schema → raw, as it was
+when the `[verification]` structs lived in verification.rs) means no module can be read, tested or
+moved without the others; this test states the graph, as test_layout.py states the crate graph.
+
+An edge A → B is a `use super::B…` / `use crate::scene::B…` of module A, or a path
+`super::B::…` / `crate::scene::B::…` in its code (comments left out), where B is a sibling
+module. The parent (mod.rs) is not a node: it declares the modules and re-exports; what a child
+takes from it is the shared types' business (issue 44 item 4), not an import between parts."""
+
+import pathlib
+import re
+
+SCENE = pathlib.Path(__file__).resolve().parents[2] / "crates" / "sdcrack-io" / "src" / "scene"
+
+
+def code_of(text):
+    """`text` without `//` comments (doc comments name modules in prose)."""
+    return "\n".join(line.split("//", 1)[0] for line in text.splitlines())
+
+
+def imports(code, modules):
+    """The sibling modules that the Rust `code` of one module names."""
+    found = set()
+    prefix = r"(?:super|crate::scene)::"
+    for group in re.findall(prefix + r"\{([^}]*)\}", code):
+        # `use super::{raw::X, schema::Y, Z}`: the first segment of each item
+        found |= {item.strip().split("::")[0] for item in group.split(",")}
+    found |= set(re.findall(prefix + r"([a-z_][a-z0-9_]*)\b", code))
+    return found & modules
+
+
+def graph(files):
+    """Module name → the sibling modules it imports, for `files` (name → Rust text)."""
+    modules = set(files) - {"mod"}
+    return {m: imports(code_of(files[m]), modules) - {m} for m in modules}
+
+
+def cycle(edges):
+    """One import cycle of `edges` as a list of modules (first = last), or None."""
+    state = {}
+
+    def visit(node, path):
+        state[node] = "open"
+        for nxt in sorted(edges[node]):
+            if state.get(nxt) == "open":
+                return path[path.index(nxt):] + [nxt]
+            if nxt not in state:
+                found = visit(nxt, path + [nxt])
+                if found:
+                    return found
+        state[node] = "done"
+        return None
+
+    for start in sorted(edges):
+        if start not in state:
+            found = visit(start, [start])
+            if found:
+                return found
+    return None
+
+
+def scene_files():
+    return {p.stem: p.read_text() for p in SCENE.glob("*.rs")}
+
+
+def test_the_scene_format_modules_import_without_a_cycle():
+    edges = graph(scene_files())
+    assert {"raw", "schema", "validate", "verification"} <= set(edges)
+    assert cycle(edges) is None, " → ".join(cycle(edges))
+
+
+def test_the_serde_structs_are_a_leaf():
+    """raw.rs imports no sibling: the `[verification]` structs live there too."""
+    assert graph(scene_files())["raw"] == set()
+
+
+def test_a_cycle_is_found():
+    """The check fails on the cycle it was written against, in each spelling of an import."""
+    files = {
+        "mod": "mod raw; mod schema; mod verification;",
+        "raw": "use super::verification::VerificationToml;",
+        "verification": "use super::{schema::P_MASSES, SceneError};",
+        "schema": "fn f() { let s = crate::scene::raw::SceneToml::default(); }",
+    }
+    edges = graph(files)
+    assert edges == {"raw": {"verification"}, "verification": {"schema"}, "schema": {"raw"}}
+    assert cycle(edges) == ["raw", "verification", "schema", "raw"]
+    # a comment naming a module is no import; without the back-edge the graph is a chain
+    files["schema"] = "// see super::raw\nfn f() {}"
+    assert cycle(graph(files)) is None
