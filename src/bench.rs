@@ -15,15 +15,15 @@
 
 use std::time::Instant;
 
-use crate::fe::p1::TriangleGeometry;
-use crate::krylov::{self, KrylovError};
-use crate::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
-use crate::mesh::{Mesh, MeshError};
-use crate::multiplier::CrackOperators;
-use crate::problem::{Meshing, MultiplierSpace, PMass, USpace};
-use crate::scene::{FieldSet, Scene};
-use crate::study::{run_study, CasePlan, Observer, StudyError, StudyResult, Timings};
 use sdcrack_core::case::{CaseAxes, CasePattern};
+use sdcrack_core::fe::p1::TriangleGeometry;
+use sdcrack_core::krylov::{self, KrylovError};
+use sdcrack_core::linalg::{cholesky_solve, CholeskyTimings, LinalgError, SymCsc};
+use sdcrack_core::mesh::{Mesh, MeshError};
+use sdcrack_core::multiplier::CrackOperators;
+use sdcrack_core::problem::{Meshing, MultiplierSpace, PMass, USpace};
+use sdcrack_core::scene::{FieldSet, Scene};
+use sdcrack_core::study::{run_study, CasePlan, Observer, StudyError, StudyResult, Timings};
 
 /// The δ values of the sweep (largest first, as every study runs them).
 pub const SWEEP_DELTAS: [f64; 6] = [1.0, 1e-2, 1e-4, 1e-6, 1e-8, 0.0];
@@ -118,7 +118,7 @@ pub struct BenchReport {
 }
 
 /// The iterative route (preconditioned CG instead of the factorisation), measured on the lumped case's system (broken, δ = 0):
-/// PCG on the Schur operator ([`crate::krylov`]) for x₀, and what a whole case by that route needs.
+/// PCG on the Schur operator ([`sdcrack_core::krylov`]) for x₀, and what a whole case by that route needs.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct IterativeRoute {
     /// Assembly of the lumped system again (not part of the route's cost below).
@@ -127,7 +127,7 @@ pub struct IterativeRoute {
     pub preconditioner_assembly_s: f64,
     /// Preconditioner: its Cholesky (symbolic, numeric).
     pub preconditioner: CholeskyTimings,
-    /// One PCG solve to [`crate::krylov::ROUTE_TOLERANCE`].
+    /// One PCG solve to [`sdcrack_core::krylov::ROUTE_TOLERANCE`].
     pub solve_s: f64,
     /// Its iterations.
     pub iterations: usize,
@@ -425,7 +425,7 @@ pub fn run_bench(
     let cells = bench_cells(scene, vertices)?;
     let mut bench_scene = scene.clone();
     bench_scene.meshing = Meshing::Cells(cells);
-    bench_scene.level0 = crate::scene::Level0Size::Grid(cells);
+    bench_scene.level0 = sdcrack_core::scene::Level0Size::Grid(cells);
     bench_scene.axes.levels = vec![0];
     bench_scene.fields = FieldSet::default();
     bench_scene.exact = None;
@@ -674,8 +674,8 @@ pub fn peak_rss_mb() -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::TomlScene;
-    use crate::study::Silent;
+    use sdcrack_core::study::Silent;
+    use sdcrack_io::scene_file::TomlScene;
 
     /// A missed goal says by how much and lists its phases, largest first; a met one says "met".
     #[test]
@@ -708,11 +708,14 @@ mod tests {
     #[test]
     fn laplacian_rows_sum_to_zero_away_from_the_boundary() {
         let scene = Scene::default_scene();
-        let mesh =
-            crate::mesh::MeshSource::new(&scene.domain, &scene.cracks, &Meshing::Cells([4, 4]))
-                .unwrap()
-                .level(0)
-                .unwrap();
+        let mesh = sdcrack_core::mesh::MeshSource::new(
+            &scene.domain,
+            &scene.cracks,
+            &Meshing::Cells([4, 4]),
+        )
+        .unwrap()
+        .level(0)
+        .unwrap();
         let a = interior_laplacian(&mesh);
         assert_eq!(a.n, 9);
         let mut y = vec![0.0; 9];

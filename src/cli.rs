@@ -15,13 +15,14 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::output::summary::Provenance;
-use crate::output::{write_run, ResultsDir};
-use crate::problem::{MultiplierSpace, PMass, PSpace, USpace};
-use crate::scene::{KeyPath, LoadedScene, Scene, SceneError};
-use crate::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
 use sdcrack_core::case::{delta_text, CaseKey, CasePattern, Pattern};
 use sdcrack_core::problem::Named;
+use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use sdcrack_core::scene::{KeyPath, Scene};
+use sdcrack_core::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
+use sdcrack_io::output::summary::Provenance;
+use sdcrack_io::output::{write_run, ResultsDir};
+use sdcrack_io::scene_file::{LoadedScene, SceneError};
 
 /// `println!` that survives a closed standard output: `sdcrack bench --json | head` must not
 /// panic, and a run whose reader went away must still finish and keep its results. A closed
@@ -195,10 +196,10 @@ pub enum Command {
 
 fn parse_level(s: &str) -> Result<u32, String> {
     match s.parse::<u32>() {
-        Ok(l) if l <= crate::scene::MAX_LEVEL => Ok(l),
+        Ok(l) if l <= sdcrack_core::scene::MAX_LEVEL => Ok(l),
         _ => Err(format!(
             "the level must be an integer from 0 to {}, got '{s}'",
-            crate::scene::MAX_LEVEL
+            sdcrack_core::scene::MAX_LEVEL
         )),
     }
 }
@@ -303,7 +304,7 @@ pub fn main() -> i32 {
         Err(f) => {
             eprintln!(
                 "sdcrack: error: {}",
-                crate::scene::escape_controls(&f.message)
+                sdcrack_io::one_line::escape_controls(&f.message)
             );
             f.code
         }
@@ -331,7 +332,7 @@ fn clap_one_line(e: &clap::Error) -> String {
     if parts.is_empty() {
         parts.push(format!("error: {}", e.kind()));
     }
-    let line = crate::scene::escape_controls(&parts.join("; "));
+    let line = sdcrack_io::one_line::escape_controls(&parts.join("; "));
     format!("{line} (see sdcrack --help)")
 }
 
@@ -339,11 +340,11 @@ fn clap_one_line(e: &clap::Error) -> String {
 pub fn execute(cli: Cli) -> Result<i32, Failure> {
     match cli.command {
         Command::Scene { template: _ } => {
-            say_raw(crate::scene::SCENE_TEMPLATE);
+            say_raw(sdcrack_io::scene_file::SCENE_TEMPLATE);
             Ok(0)
         }
         Command::Schema => {
-            say!("{}", crate::scene::schema::schema().to_json());
+            say!("{}", sdcrack_io::scene_file::schema::schema().to_json());
             Ok(0)
         }
         Command::Check { scene, json } => {
@@ -353,7 +354,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             let meshes = check_meshes(&loaded, &origin)?;
             // the exact data against what the scene implies (∂u, −Δu, u on ∂Ω, the faces, the
             // contact conditions): a scene whose exact solution is not one is refused, no solve
-            crate::scene::exact_data::check(s).map_err(|e| {
+            sdcrack_core::scene::exact_data::check(s).map_err(|e| {
                 invalid_scene(&loaded, &origin, SceneError::named(e.key, e.message))
             })?;
             if json {
@@ -393,8 +394,8 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             let scene = &loaded.scene;
             check_level_option(scene, level)?;
             let levels = level.map_or_else(|| scene.axes.levels.clone(), |l| vec![l]);
-            let path =
-                crate::output::mesh_export::export_meshes(scene, &levels, &out).map_err(usage)?;
+            let path = sdcrack_io::output::mesh_export::export_meshes(scene, &levels, &out)
+                .map_err(usage)?;
             say!("meshes of levels {levels:?} written to {}", path.display());
             Ok(0)
         }
@@ -456,11 +457,13 @@ fn plan_json(scene: &Scene, triangles: &[usize]) -> String {
             })
             .collect()
     };
-    let memory =
-        per_level(&|cells| crate::scene::estimated_memory_bytes_of_cells(cells).div_ceil(1 << 20));
+    let memory = per_level(&|cells| {
+        sdcrack_core::scene::estimated_memory_bytes_of_cells(cells).div_ceil(1 << 20)
+    });
     // the part of it that grows with the mesh, in whole MiB
     let mesh_memory = per_level(&|cells| {
-        (crate::scene::estimated_mesh_memory_bytes(cells) / (1u64 << 20) as f64).ceil() as u64
+        (sdcrack_core::scene::estimated_mesh_memory_bytes(cells) / (1u64 << 20) as f64).ceil()
+            as u64
     });
     let mut value = serde_json::Map::new();
     value.insert("name".into(), scene.name.clone().into());
@@ -493,8 +496,8 @@ fn reference(loaded: &LoadedScene, tool: &str, level: u32, out: &Path) -> Result
     crate::references::check_available(tool).map_err(usage)?;
     let results = ResultsDir::create(out, &scene.name).map_err(usage)?;
     let dir = results.work_path();
-    let copy = dir.join(crate::output::SCENE_COPY);
-    crate::output::atomic_write(&copy, loaded.text.as_bytes()).map_err(runtime)?;
+    let copy = dir.join(sdcrack_io::output::SCENE_COPY);
+    sdcrack_io::output::atomic_write(&copy, loaded.text.as_bytes()).map_err(runtime)?;
     let converged = run_references(scene, &[tool.to_string()], &[level], dir, true)?;
     let path = results.commit().map_err(runtime)?;
     say!("results in {}", path.display());
@@ -504,7 +507,7 @@ fn reference(loaded: &LoadedScene, tool: &str, level: u32, out: &Path) -> Result
 /// `sdcrack merge`: shards into OUT/<scene name>/.
 fn merge(shards: &[PathBuf], out: &Path) -> Result<i32, Failure> {
     let start = std::time::SystemTime::now();
-    let outcome = crate::output::merge::merge_shards(shards, out, |origin| {
+    let outcome = sdcrack_io::output::merge::merge_shards(shards, out, |origin| {
         Provenance::of_this_process(origin, start, crate::BUILD)
     })
     .map_err(|e| {
@@ -569,12 +572,15 @@ fn load_checked(path: Option<PathBuf>) -> Result<(LoadedScene, String), Failure>
 }
 
 /// Checks the crack against the level-0 mesh (the same check every level makes).
-fn check_meshes(loaded: &LoadedScene, origin: &str) -> Result<crate::mesh::MeshSource, Failure> {
+fn check_meshes(
+    loaded: &LoadedScene,
+    origin: &str,
+) -> Result<sdcrack_core::mesh::MeshSource, Failure> {
     (loaded.scene.mesh_source()).map_err(|e| mesh_failure(loaded, origin, e))
 }
 
 /// A mesh error of the scene `origin`, naming the crack it concerns.
-fn mesh_failure(loaded: &LoadedScene, origin: &str, e: crate::mesh::MeshError) -> Failure {
+fn mesh_failure(loaded: &LoadedScene, origin: &str, e: sdcrack_core::mesh::MeshError) -> Failure {
     invalid_scene(loaded, origin, loaded.mesh_error(&e))
 }
 
@@ -592,7 +598,7 @@ fn invalid_scene(loaded: &LoadedScene, origin: &str, error: SceneError) -> Failu
 /// quadrature point, or a crack off a finer mesh (named by the mesh's words).
 fn study_scene_error(e: &StudyError) -> SceneError {
     match e {
-        StudyError::Assembly(crate::assembly::AssemblyError::NonFinite { name, .. }) => {
+        StudyError::Assembly(sdcrack_core::assembly::AssemblyError::NonFinite { name, .. }) => {
             SceneError::named(KeyPath::keys("data").key(name), e.to_string())
         }
         _ => SceneError::Scene(e.to_string()),
@@ -600,7 +606,7 @@ fn study_scene_error(e: &StudyError) -> SceneError {
 }
 
 /// Checks a `--level` (which need not be listed in the scene) like the scene's own levels:
-/// at most [`crate::scene::MAX_LEVEL`] and within the memory estimate.
+/// at most [`sdcrack_core::scene::MAX_LEVEL`] and within the memory estimate.
 /// Refuses a run whose u spaces and p spaces make no case: the broken-tangential p only runs
 /// with broken u ([`PSpace::serves`]).
 fn check_space_pairs(scene: &Scene, filter: &Pattern<CaseKey>) -> Result<(), Failure> {
@@ -617,7 +623,7 @@ fn check_space_pairs(scene: &Scene, filter: &Pattern<CaseKey>) -> Result<(), Fai
 
 fn check_level_option(scene: &Scene, level: Option<u32>) -> Result<(), Failure> {
     match level {
-        Some(l) => crate::scene::check_level(scene.level0, l)
+        Some(l) => sdcrack_core::scene::check_level(scene.level0, l)
             .map_err(|m| usage(format!("--level {l}: {m}"))),
         None => Ok(()),
     }
@@ -742,7 +748,7 @@ fn run_references(
     }
     let mut all_converged = true;
     let mesh_dir = dir.join("mesh");
-    crate::output::mesh_export::export_meshes(scene, levels, &mesh_dir).map_err(runtime)?;
+    sdcrack_io::output::mesh_export::export_meshes(scene, levels, &mesh_dir).map_err(runtime)?;
     for tool in tools {
         let spinner = if quiet || !std::io::stderr().is_terminal() {
             ProgressBar::hidden()

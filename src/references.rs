@@ -4,7 +4,7 @@
 //! `/usr/bin/python3` as `solve.py MESH_EXPORT --out RESULTS/<tool> [--fields]`, with the folder
 //! `compare/` beside `references/` (the package `sdcompare_lib`, whose modules the scripts share
 //! with the compare tool) first on `PYTHONPATH` ([`python`]). It reads the mesh
-//! export written by [`crate::output::mesh_export`] (the same vertices and triangles as the solver)
+//! export written by [`sdcrack_io::output::mesh_export`] (the same vertices and triangles as the solver)
 //! and writes `summary.json` (and fields) into its own subfolder of the results. Before anything is
 //! solved, every requested tool is checked to be installed; a missing one is reported in one line
 //! with the command that installs it.

@@ -548,7 +548,8 @@ fn memory_estimates_of_graded_scenes_count_the_graded_meshes() {
 /// tests/bad_input.rs; the compare tool's synthetic fixtures pass compare/tests/test_exact_data.py.)
 #[test]
 fn every_scene_of_the_repository_and_the_tests_passes_the_exact_data_check() {
-    use sdcrack::scene::{exact_data, Scene, TomlScene};
+    use sdcrack_core::scene::{exact_data, Scene};
+    use sdcrack_io::scene_file::TomlScene;
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = vec![root.join("docs/scene-template.toml")];
     for dir in ["scenes", "tools/untuned-scenes", "tests/data/scenes"] {

@@ -6,9 +6,9 @@
 
 mod common;
 
-use sdcrack::case::CasePattern;
-use sdcrack::scene::{MultiplierSpace, PMass, USpace};
-use sdcrack::study::CONDITION_REUSE_FACTOR;
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::problem::{MultiplierSpace, PMass, USpace};
+use sdcrack_core::study::CONDITION_REUSE_FACTOR;
 
 #[test]
 fn reused_condition_estimates_are_within_the_declared_factor_of_fresh_ones() {

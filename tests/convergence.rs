@@ -20,10 +20,11 @@ mod common;
 use common::expectations::{bound, SeriesAt};
 use common::orders::Orders;
 use common::{errors_by_level, last_two_rates, QUANTITIES};
-use sdcrack::case::CasePattern;
-use sdcrack::norms::{NormQuadrature, TipRule};
-use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, USpace};
-use sdcrack::study::{run_study, CasePlan, CaseResult, Silent};
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::norms::{NormQuadrature, TipRule};
+use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use sdcrack_core::scene::Scene;
+use sdcrack_core::study::{run_study, CasePlan, CaseResult, Silent};
 
 /// The scene `name` at `levels`, δ = 0, no fields, the consistent p mass only (the lumped one
 /// has its own test).

@@ -3,8 +3,9 @@
 
 mod common;
 
-use sdcrack::case::CasePattern;
-use sdcrack::scene::{FieldSet, MultiplierSpace, PMass, PSpace, USpace};
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use sdcrack_core::scene::FieldSet;
 
 /// Every (u space, p mass, p space) sdcrack runs: the p spaces with the u spaces they serve.
 const VARIANTS: [(USpace, PMass, PSpace); 5] = [
@@ -80,10 +81,10 @@ fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
-fn flat(fields: &sdcrack::study::CaseFieldData) -> [Vec<f64>; 4] {
+fn flat(fields: &sdcrack_core::study::CaseFieldData) -> [Vec<f64>; 4] {
     let lambda = match &fields.lambda {
-        sdcrack::multiplier::CrackField::PerSegment(v)
-        | sdcrack::multiplier::CrackField::PerNode(v) => v.clone(),
+        sdcrack_core::multiplier::CrackField::PerSegment(v)
+        | sdcrack_core::multiplier::CrackField::PerNode(v) => v.clone(),
     };
     [
         fields.u.clone(),

@@ -1,7 +1,8 @@
 //! The scene examples of docs/scenes.md are valid scenes, so the documentation stays true; and
 //! the repository refers to nothing outside it.
 
-use sdcrack::scene::{Scene, TomlScene};
+use sdcrack_core::scene::Scene;
+use sdcrack_io::scene_file::TomlScene;
 
 #[test]
 fn every_toml_example_of_the_scene_documentation_is_a_valid_scene() {

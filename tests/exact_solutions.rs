@@ -4,7 +4,8 @@
 
 mod common;
 
-use sdcrack::scene::{eval_on_face, Scene};
+use sdcrack_core::problem::eval_on_face;
+use sdcrack_core::scene::Scene;
 
 const H: f64 = 1e-4;
 

@@ -3,7 +3,7 @@
 //! report the same parse errors at the same columns. The table is written by
 //! references/tests/make_expr_cases.py from the Python side.
 
-use sdcrack::scene::Expr;
+use sdcrack_core::expr::Expr;
 
 #[test]
 fn rust_and_python_evaluators_agree() {

@@ -11,7 +11,8 @@
 use std::collections::BTreeSet;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use sdcrack::scene::{Scene, TomlScene, MAX_SCENE_BYTES};
+use sdcrack_core::scene::Scene;
+use sdcrack_io::scene_file::{TomlScene, MAX_SCENE_BYTES};
 
 /// The seeded generator of the inputs (fastrand's wyrand: deterministic for a seed).
 type Rng = fastrand::Rng;
@@ -108,7 +109,7 @@ const SYNTAX: &[&str] = &[
 /// Every token the inputs are made of: [`SYNTAX`], every key of the scene schema (the loader's
 /// own structs, as `sdcrack schema` prints them) and every name a key allows, quoted.
 fn tokens() -> Vec<String> {
-    let schema = sdcrack::scene::schema::schema();
+    let schema = sdcrack_io::scene_file::schema::schema();
     let keys = schema.key_names().into_iter().map(str::to_string);
     let names = (schema.tables.iter())
         .flat_map(|t| &t.keys)

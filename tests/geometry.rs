@@ -6,9 +6,10 @@ mod common;
 
 use common::orders::Orders;
 use common::{error_series, rate, solve};
-use sdcrack::case::CasePattern;
-use sdcrack::mesh::{Layout, Side};
-use sdcrack::scene::{Meshing, MultiplierSpace, PMass, PSpace, Polyline, Scene, USpace};
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::mesh::{Layout, Side};
+use sdcrack_core::problem::{Meshing, MultiplierSpace, PMass, PSpace, Polyline, USpace};
+use sdcrack_core::scene::Scene;
 
 /// The repository scene `name` at levels 0–3, δ = 0, consistent p mass, no fields.
 fn exact_scene(name: &str) -> Scene {
@@ -100,7 +101,7 @@ fn gmsh_levels_are_nested_with_segment_normals_and_faces() {
     for (t, parent) in m0.triangles.iter().enumerate() {
         let [a, b, c] = parent.map(|v| m0.vertices[v]);
         for child in &m1.triangles[4 * t..4 * t + 4] {
-            let g = sdcrack::mesh::centroid(&m1.vertices, child);
+            let g = sdcrack_core::mesh::centroid(&m1.vertices, child);
             let edge = |p: [f64; 2], q: [f64; 2]| {
                 (q[0] - p[0]) * (g[1] - p[1]) - (q[1] - p[1]) * (g[0] - p[0])
             };
@@ -126,7 +127,7 @@ fn gmsh_levels_are_nested_with_segment_normals_and_faces() {
     let mut seen = [false; 2];
     for (t, sides) in m1.triangles.iter().zip(&m1.corner_sides) {
         if let Some(k) = t.iter().position(|&w| w == v) {
-            let g = sdcrack::mesh::centroid(&m1.vertices, t);
+            let g = sdcrack_core::mesh::centroid(&m1.vertices, t);
             let left = g[1] > -0.2 && g[1] > g[0] - 0.2;
             assert_eq!(sides[k] == Some(Side::Plus), left, "triangle {t:?}");
             seen[usize::from(left)] = true;
@@ -193,8 +194,8 @@ fn the_export_of_two_cracks_lists_both_chains() {
 /// edges' shares; normalised to a unit normal it read 0.49 of [u] and converged at order 1/2).
 #[test]
 fn m1star_lambda_at_an_open_kink_is_the_jump() {
-    use sdcrack::multiplier::CrackField;
-    use sdcrack::study::{run_study, CasePlan, Silent};
+    use sdcrack_core::multiplier::CrackField;
+    use sdcrack_core::study::{run_study, CasePlan, Silent};
     let mut scene = common::load("open-kink");
     scene.axes.levels = vec![0, 1, 2, 3];
     scene.axes.p_masses = vec![PMass::Consistent];

@@ -8,7 +8,9 @@
 
 mod common;
 
-use sdcrack::scene::{Expr, Scene, TomlScene};
+use sdcrack_core::expr::Expr;
+use sdcrack_core::scene::Scene;
+use sdcrack_io::scene_file::TomlScene;
 
 fn hostile(placeholder_path: &str) -> Vec<String> {
     let doc: serde_json::Value =

@@ -6,7 +6,7 @@
 mod common;
 
 use common::orders::{orders_path, Orders};
-use sdcrack::scene::MultiplierSpace;
+use sdcrack_core::problem::MultiplierSpace;
 
 /// The repository's table as text.
 fn table_text() -> String {

@@ -13,9 +13,11 @@ mod common;
 
 use common::orders::Orders;
 use common::{errors_by_level, last_two_rates, QUANTITIES};
-use sdcrack::case::CasePattern;
-use sdcrack::scene::{MultiplierSpace, PMass, PSpace, Scene, TomlScene, USpace};
-use sdcrack::study::CaseResult;
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
+use sdcrack_core::scene::Scene;
+use sdcrack_core::study::CaseResult;
+use sdcrack_io::scene_file::TomlScene;
 
 /// The repository scene `name` at `levels`, δ = 0, no fields, both p spaces and both p masses.
 fn scene_at_levels(name: &str, levels: &[u32]) -> Scene {

@@ -1,5 +1,5 @@
 //! Numerical stability and bad input, through the public library API (scene + `run_study`, and
-//! the crack LCP of `sdcrack::contact` for the iteration cap):
+//! the crack LCP of `sdcrack_core::contact` for the iteration cap):
 //!
 //! 1. δ from 1 down to 1e-14 and δ = 0: every case solved to KKT ≤ 1e-10, ‖x_δ − x_0‖ linear in δ
 //!    down to the round-off floor, and continuous at δ = 0;
@@ -19,16 +19,17 @@
 mod common;
 
 use common::orders::Orders;
-use sdcrack::assembly::assemble;
-use sdcrack::case::CasePattern;
-use sdcrack::contact::{Lcp, LcpOptions, LcpStatus};
-use sdcrack::linalg::{Ldlt, SymbolicLdlt};
-use sdcrack::multiplier::{CrackField, CrackOperators, Multiplier};
-use sdcrack::scene::{
-    Domain, Expr, FieldSet, Level0Size, Meshing, MultiplierSpace, PMass, PSpace, Polyline,
-    Rectangle, Scene, USpace,
+use sdcrack_core::assembly::assemble;
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::contact::{Lcp, LcpOptions, LcpStatus};
+use sdcrack_core::expr::Expr;
+use sdcrack_core::linalg::{Ldlt, SymbolicLdlt};
+use sdcrack_core::multiplier::{CrackField, CrackOperators, Multiplier};
+use sdcrack_core::problem::{
+    Domain, Meshing, MultiplierSpace, PMass, PSpace, Polyline, Rectangle, USpace,
 };
-use sdcrack::study::CaseResult;
+use sdcrack_core::scene::{FieldSet, Level0Size, Scene};
+use sdcrack_core::study::CaseResult;
 
 const ALL_FIELDS: FieldSet = FieldSet {
     u: true,
@@ -717,10 +718,10 @@ fn crack_reduction(
     let system = assemble(
         &mesh,
         &topo,
-        &mesh.p_topology(sdcrack::problem::PSpace::Continuous),
+        &mesh.p_topology(sdcrack_core::problem::PSpace::Continuous),
         &scene.f,
         &scene.g,
-        sdcrack::scene::PMass::Consistent,
+        sdcrack_core::problem::PMass::Consistent,
     )
     .unwrap();
     let symbolic = SymbolicLdlt::analyze(&system.base).unwrap();

@@ -9,7 +9,7 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    if let Err(e) = <sdcrack::scene::Scene as sdcrack::scene::TomlScene>::from_toml(text) {
+    if let Err(e) = <sdcrack_core::scene::Scene as sdcrack_io::scene_file::TomlScene>::from_toml(text) {
         let message = e.to_string();
         assert!(
             !message.contains('\n') && !message.contains('\r'),

@@ -5,7 +5,7 @@
 //! without `p_mass` or `p_space` bounds the consistent p mass and the continuous p only. The tests
 //! that solve the same scenes at the same levels hold the same numbers by reading them here.
 
-use sdcrack::scene::{MultiplierSpace, PMass, PSpace, USpace};
+use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
 
 /// One series of one scene at one level, in the names the expectations use.
 #[derive(Debug, Clone, Copy)]

@@ -4,10 +4,12 @@
 pub mod expectations;
 pub mod orders;
 
-use sdcrack::case::CasePattern;
-use sdcrack::norms::{ErrorNorms, Quantity};
-use sdcrack::scene::{MultiplierSpace, Scene, TomlScene, USpace};
-use sdcrack::study::{run_study, CasePlan, CaseResult, Silent};
+use sdcrack_core::case::CasePattern;
+use sdcrack_core::norms::{ErrorNorms, Quantity};
+use sdcrack_core::problem::{MultiplierSpace, USpace};
+use sdcrack_core::scene::Scene;
+use sdcrack_core::study::{run_study, CasePlan, CaseResult, Silent};
+use sdcrack_io::scene_file::TomlScene;
 
 /// A small valid scene (levels 0–1 of a 4 × 4 mesh, every variant, fields, no reference) that the
 /// CLI, bad-input and interrupted-run tests edit or run.

@@ -6,7 +6,7 @@
 //! crack tip's r^{1/2}). Every section denies keys it does not know, so a number added for one
 //! reader only fails here until the tests know it too.
 
-use sdcrack::scene::MultiplierSpace;
+use sdcrack_core::problem::MultiplierSpace;
 use serde::Deserialize;
 
 /// The whole table, one field per section of `scenes/orders.toml`.

@@ -4,10 +4,8 @@
 //! and writes them.
 
 // The core modules under their own names, as these modules have always called them.
-use sdcrack_core::{contact, expr, geometry, mesh, multiplier, norms, problem, study};
-
 pub mod did_you_mean;
 pub mod one_line;
 pub mod output;
 pub mod plain;
-pub mod scene;
+pub mod scene_file;

@@ -27,8 +27,9 @@ use serde_json::Value;
 
 use super::summary::{CaseSummary, Provenance, ShardRecord, Summary};
 use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
-use crate::scene::{Scene, TomlScene};
+use crate::scene_file::TomlScene;
 use sdcrack_core::case::{CaseAxes, CaseKey};
+use sdcrack_core::scene::Scene;
 
 /// Errors of a merge.
 #[derive(Debug, thiserror::Error)]
@@ -144,7 +145,7 @@ impl Shard {
             None
         };
         let mut tools = Vec::new();
-        for tool in crate::scene::KNOWN_REFERENCES {
+        for tool in crate::scene_file::KNOWN_REFERENCES {
             let path = dir.join(tool).join("summary.json");
             if path.is_file() {
                 tools.push((tool.to_string(), read_json(&path, dir)?));
@@ -166,7 +167,7 @@ impl Shard {
 }
 
 /// The position of a solver case in a single run's order ([`CaseAxes::keys`], the loops of
-/// [`crate::study::run_study`]).
+/// [`sdcrack_core::study::run_study`]).
 type RunPosition = usize;
 
 /// Where the case `key` sits in `order` (a plan's [`CaseAxes::keys`]), δ compared bit for bit;

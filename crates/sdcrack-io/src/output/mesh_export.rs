@@ -36,10 +36,10 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::mesh::{Layout, Mesh, MeshError, Side};
-use crate::multiplier::CrackOperators;
-use crate::problem::{Domain, Meshing, USpace};
-use crate::scene::Scene;
+use sdcrack_core::mesh::{Layout, Mesh, MeshError, Side};
+use sdcrack_core::multiplier::CrackOperators;
+use sdcrack_core::problem::{Domain, Meshing, USpace};
+use sdcrack_core::scene::Scene;
 
 /// Errors of the mesh export.
 #[derive(Debug, thiserror::Error)]
@@ -238,7 +238,7 @@ pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::TomlScene;
+    use crate::scene_file::TomlScene;
 
     #[test]
     fn export_round_trips_coordinates_and_pairs() {

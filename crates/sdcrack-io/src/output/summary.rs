@@ -15,10 +15,10 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::contact::KktResiduals;
-use crate::norms::ErrorNorms;
-use crate::study::{CaseResult, Timings, KKT_TOLERANCE};
 use sdcrack_core::case::{AxisValue, CaseAxes, CaseKey};
+use sdcrack_core::contact::KktResiduals;
+use sdcrack_core::norms::ErrorNorms;
+use sdcrack_core::study::{CaseResult, Timings, KKT_TOLERANCE};
 
 /// Timing phases shared by several cases (reported with each of them): summary.json's
 /// `shared_timings`.
@@ -64,7 +64,7 @@ pub struct Summary {
     /// For an unstructured scene: where level 0 came from (gmsh's version and seconds, or the
     /// mesh file) and its size; gmsh's level 0 is also written as `coarse.msh`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub coarse_mesh: Option<crate::mesh::CoarseProvenance>,
+    pub coarse_mesh: Option<sdcrack_core::mesh::CoarseProvenance>,
     /// The cases.
     pub cases: Vec<CaseSummary>,
     /// Only in a merged summary (`sdcrack merge`): the solver shards it was made of, in the
@@ -88,9 +88,9 @@ impl Summary {
     /// The summary of a run of `scene` over `plan`: its `study`, solved in `wall_s` seconds,
     /// its field files written in `fields_write_s` seconds, by the process `provenance`.
     pub fn of_run(
-        scene: &crate::scene::Scene,
-        plan: &crate::study::CasePlan,
-        study: &crate::study::StudyResult,
+        scene: &sdcrack_core::scene::Scene,
+        plan: &sdcrack_core::study::CasePlan,
+        study: &sdcrack_core::study::StudyResult,
         wall_s: f64,
         fields_write_s: f64,
         provenance: &Provenance,
@@ -286,8 +286,8 @@ pub struct CaseSummary {
     )]
     pub errors: Option<ErrorNorms>,
     /// With `errors`: an estimate of the quadrature error of each, |e(rule) − e(higher rule)| in
-    /// the units of the error (the rule of [`crate::norms::NormQuadrature::default`] against
-    /// [`crate::norms::NormQuadrature::higher`]); the compare tool's tolerance for its own
+    /// the units of the error (the rule of [`sdcrack_core::norms::NormQuadrature::default`] against
+    /// [`sdcrack_core::norms::NormQuadrature::higher`]); the compare tool's tolerance for its own
     /// recomputation of `errors` is built from it (absent in a summary of an older sdcrack).
     #[serde(
         default,
@@ -389,7 +389,7 @@ mod non_finite {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::contact::LcpStatus;
+    use sdcrack_core::contact::LcpStatus;
 
     /// A solved case with awkward numbers: the shortest round trip needs 17 digits, a
     /// subnormal, the smallest normal, an exact zero, huge and tiny exponents.
@@ -443,10 +443,12 @@ mod tests {
     #[test]
     fn errors_and_kkt_round_trip_through_summary_json_bit_for_bit() {
         let c = case();
-        let loaded = crate::scene::LoadedScene::default_scene();
-        let plan =
-            crate::study::CasePlan::new(&loaded.scene, &sdcrack_core::case::CasePattern::default());
-        let study = crate::study::StudyResult {
+        let loaded = crate::scene_file::LoadedScene::default_scene();
+        let plan = sdcrack_core::study::CasePlan::new(
+            &loaded.scene,
+            &sdcrack_core::case::CasePattern::default(),
+        );
+        let study = sdcrack_core::study::StudyResult {
             cases: vec![c.clone()],
             ..Default::default()
         };

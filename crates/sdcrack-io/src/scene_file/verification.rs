@@ -38,7 +38,9 @@ use sdcrack_core::norms::Quantity;
 use sdcrack_core::problem::{PMass, PSpace};
 
 use super::raw::{ExpectedRateToml, NotApplicableToml, VerificationToml};
-use super::{suggest, KeyPath, MultiplierSpace, SceneError, USpace};
+use super::{suggest, SceneError};
+use sdcrack_core::problem::{MultiplierSpace, USpace};
+use sdcrack_core::scene::KeyPath;
 
 pub use sdcrack_core::scene::verification::{
     ExpectedFailure, ExpectedRate, Verification, NOT_APPLICABLE_CHECKS,
@@ -214,7 +216,8 @@ impl NotApplicableToml {
 
 #[cfg(test)]
 mod tests {
-    use crate::scene::{Scene, TomlScene, DEFAULT_SCENE};
+    use crate::scene_file::{TomlScene, DEFAULT_SCENE};
+    use sdcrack_core::scene::Scene;
 
     /// The default scene with `table` in place of its own verification tables.
     fn with(table: &str) -> Result<Scene, String> {
@@ -239,16 +242,19 @@ mod tests {
         assert_eq!(v.reference_agreement, None);
         assert_eq!(v.expected_failures.len(), 1);
         let f = &v.expected_failures[0];
-        assert_eq!(f.series.u_space, Some(crate::scene::USpace::Continuous));
+        assert_eq!(
+            f.series.u_space,
+            Some(sdcrack_core::problem::USpace::Continuous)
+        );
         assert_eq!((f.series.multiplier, f.quantity), (None, None));
         assert_eq!(f.reason, "no jump");
         assert_eq!(with("").unwrap().verification, Default::default());
         // the repository's default scene declares the continuous u space an expected failure
-        let own = &crate::scene::Scene::default_scene().verification;
+        let own = &sdcrack_core::scene::Scene::default_scene().verification;
         assert_eq!(own.expected_failures.len(), 1);
         assert_eq!(
             own.expected_failures[0].series.u_space,
-            Some(crate::scene::USpace::Continuous)
+            Some(sdcrack_core::problem::USpace::Continuous)
         );
     }
 
@@ -314,7 +320,10 @@ mod tests {
         let v = &s.verification;
         assert_eq!(v.expected_rates.len(), 1);
         let r = &v.expected_rates[0];
-        assert_eq!(r.series.u_space, Some(crate::problem::USpace::Broken));
+        assert_eq!(
+            r.series.u_space,
+            Some(sdcrack_core::problem::USpace::Broken)
+        );
         assert_eq!(
             (r.series.p_mass, r.series.p_space, r.quantity),
             (

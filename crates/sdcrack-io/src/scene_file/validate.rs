@@ -8,14 +8,17 @@ use std::path::Path;
 
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
 use super::schema::FIELDS;
-use super::{
-    check_level, CrackName, Domain, Exact, Expr, FieldSet, KeyPath, KeyRole, Level0Size, Meshing,
-    MultiplierSpace, Polyline, Rectangle, Scene, SceneError, Segment, USpace, Var, Verification,
-    KNOWN_REFERENCES, MAX_CELLS, MAX_LEVEL,
-};
+use super::{CrackName, KeyRole, SceneError, KNOWN_REFERENCES, MAX_CELLS};
 use crate::did_you_mean::suggest;
 use sdcrack_core::case::CaseAxes;
+use sdcrack_core::expr::{Expr, Var};
 use sdcrack_core::problem::Named;
+use sdcrack_core::problem::{
+    Domain, Exact, Meshing, MultiplierSpace, Polyline, Rectangle, Segment, USpace,
+};
+use sdcrack_core::scene::{
+    check_level, FieldSet, KeyPath, Level0Size, Scene, Verification, MAX_LEVEL,
+};
 
 fn parse_expr(key: &str, text: &str) -> Result<Expr, SceneError> {
     Expr::parse(text).map_err(|error| SceneError::Expression {
@@ -72,7 +75,7 @@ impl SceneToml {
         let mut file_triangles = 0;
         let (domain, cracks, crack_names) = match (&meshing, self.geometry) {
             (Meshing::File(path), None) => {
-                let (domain, cracks, triangles) = crate::mesh::msh_file_geometry(path)
+                let (domain, cracks, triangles) = sdcrack_core::mesh::msh_file_geometry(path)
                     .map_err(|e| value("discretization.mesh", format!(": {e}")))?;
                 file_triangles = triangles;
                 let names = (1..=cracks.len())
@@ -98,7 +101,7 @@ impl SceneToml {
         let level0 = match meshing {
             Meshing::Cells(c) => Level0Size::Grid(c),
             Meshing::MeshSize(h) => {
-                let area = crate::geometry::signed_area(&domain.polygon()).abs();
+                let area = sdcrack_core::geometry::signed_area(&domain.polygon()).abs();
                 Level0Size::Triangles(1.5 * area / (3f64.sqrt() / 4.0 * h * h))
             }
             Meshing::File(_) => Level0Size::Triangles(file_triangles as f64),
@@ -205,7 +208,7 @@ fn two_points(key: &KeyPath, v: &[Vec<f64>]) -> Result<[[f64; 2]; 2], SceneError
     }
 }
 
-/// Domain and cracks of `[geometry]`, validated ([`crate::geometry`]), with each crack's name
+/// Domain and cracks of `[geometry]`, validated ([`sdcrack_core::geometry`]), with each crack's name
 /// for messages. A polygon is stored counter-clockwise.
 fn validate_geometry(
     g: GeometryToml,
@@ -233,9 +236,9 @@ fn validate_geometry(
         (None, Some(p)) => {
             let key = KeyPath::keys("geometry.domain.polygon");
             let points = points_of(&key, &p)?;
-            crate::geometry::validate_polygon(&points)
+            sdcrack_core::geometry::validate_polygon(&points)
                 .map_err(|e| SceneError::named(key, e.to_string()))?;
-            Domain::Polygon(crate::geometry::counter_clockwise(&points))
+            Domain::Polygon(sdcrack_core::geometry::counter_clockwise(&points))
         }
         _ => {
             return Err(value(
@@ -277,7 +280,7 @@ fn validate_geometry(
         }
     };
     let polylines: Vec<Vec<[f64; 2]>> = cracks.iter().map(|c| c.points.clone()).collect();
-    crate::geometry::validate_cracks(&domain.polygon(), &polylines).map_err(|e| {
+    sdcrack_core::geometry::validate_cracks(&domain.polygon(), &polylines).map_err(|e| {
         // the core names crack i `geometry.cracks[i]`: name the cracks as the scene does
         let mut m = e.to_string();
         for (i, name) in names.iter().enumerate().rev() {
@@ -353,7 +356,7 @@ fn points_of(key: &KeyPath, v: &[Vec<f64>]) -> Result<Vec<[f64; 2]>, SceneError>
 }
 
 /// `grading = { beta, radius }`: 0 < β ≤ 1, R > 0.
-fn validate_grading(g: &GradingToml) -> Result<crate::problem::Grading, SceneError> {
+fn validate_grading(g: &GradingToml) -> Result<sdcrack_core::problem::Grading, SceneError> {
     if !(g.beta.is_finite() && g.beta > 0.0 && g.beta <= 1.0) {
         return Err(value(
             "discretization.grading.beta",
@@ -369,7 +372,7 @@ fn validate_grading(g: &GradingToml) -> Result<crate::problem::Grading, SceneErr
             format!(" must be a positive length; got {}", g.radius),
         ));
     }
-    Ok(crate::problem::Grading {
+    Ok(sdcrack_core::problem::Grading {
         beta: g.beta,
         radius: g.radius,
     })

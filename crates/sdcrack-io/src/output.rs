@@ -27,7 +27,7 @@ pub const VERIFICATION_STEM: &str = "verification";
 /// The file of a results folder that holds every field the compare tool recomputes the errors
 /// from: `fields.h5` when the scene lists u, p and λ, `verification.h5` otherwise (summary.json's
 /// `recomputation_file`).
-pub fn recomputation_file(fields: &crate::scene::FieldSet) -> String {
+pub fn recomputation_file(fields: &sdcrack_core::scene::FieldSet) -> String {
     let stem = if fields.is_complete() {
         FIELDS_STEM
     } else {
@@ -217,9 +217,9 @@ pub const SCENE_COPY: &str = "scene.toml";
 /// when it does not ask for all of u, p and λ `verification.h5` with all of them, into `dir`.
 pub fn write_run(
     dir: &Path,
-    loaded: &crate::scene::LoadedScene,
-    plan: &crate::study::CasePlan,
-    study: &crate::study::StudyResult,
+    loaded: &crate::scene_file::LoadedScene,
+    plan: &sdcrack_core::study::CasePlan,
+    study: &sdcrack_core::study::StudyResult,
     wall_s: f64,
     provenance: &summary::Provenance,
 ) -> Result<(), WriteError> {
@@ -251,8 +251,8 @@ pub fn write_run(
 /// unless it lists u, p and λ, `verification.h5` with all of them.
 fn write_fields(
     dir: &Path,
-    scene: &crate::scene::Scene,
-    study: &crate::study::StudyResult,
+    scene: &sdcrack_core::scene::Scene,
+    study: &sdcrack_core::study::StudyResult,
 ) -> Result<(), WriteError> {
     let (meshes, all) = field_data(study);
     if scene.fields.is_complete() {
@@ -270,8 +270,10 @@ fn write_fields(
 
 /// The meshes and every case's fields, all quantities: u, p, its bubbles (consistent p mass
 /// only: the lumped p has none), λ and the jump [u_h] = u⁺ − u⁻ at the crack nodes.
-fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>) {
-    use crate::multiplier::CrackField;
+fn field_data(
+    study: &sdcrack_core::study::StudyResult,
+) -> (Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>) {
+    use sdcrack_core::multiplier::CrackField;
     use xdmf::Meta;
     let meshes: Vec<xdmf::MeshData> = study
         .meshes
@@ -328,7 +330,7 @@ fn field_data(study: &crate::study::StudyResult) -> (Vec<xdmf::MeshData>, Vec<xd
 }
 
 /// `case` with only the quantities of `fields` (p's bubbles go with p).
-fn restrict(case: &xdmf::CaseFields, fields: &crate::scene::FieldSet) -> xdmf::CaseFields {
+fn restrict(case: &xdmf::CaseFields, fields: &sdcrack_core::scene::FieldSet) -> xdmf::CaseFields {
     xdmf::CaseFields {
         name: case.name.clone(),
         mesh_key: case.mesh_key.clone(),

@@ -10,7 +10,7 @@
 //! checked), positions in the text (`position`) and the read errors in words (`toml_error`).
 //! An error about a key carries the key as a [`KeyPath`]; its line and column are added once,
 //! from the key path and the spans of the text ([`SceneError::located`]). Geometry that depends
-//! on the mesh (crack on mesh lines, inside Ω) is checked by [`crate::mesh`]
+//! on the mesh (crack on mesh lines, inside Ω) is checked by [`sdcrack_core::mesh`]
 //! ([`LoadedScene::mesh_error`] names the crack). Everything downstream works on the validated
 //! [`Scene`], never on raw TOML.
 
@@ -26,32 +26,20 @@ pub mod verification;
 
 use std::path::{Path, PathBuf};
 
-pub use crate::did_you_mean::suggest;
-pub use crate::one_line::escape_controls;
+use crate::did_you_mean::suggest;
+use crate::one_line::escape_controls;
 pub use position::Position;
 use position::{key_position, line_column};
 
-pub use crate::expr::{BatchScratch, Expr, ExprBatch, ExprError, Var};
-pub use sdcrack_core::scene::{KeyPath, PathSegment};
-// The problem's vocabulary lives in crate::problem (the maths modules use it without this
-// parser); re-exported so that a scene's users find it here too.
-pub use crate::problem::{
-    eval_on_face, Domain, Exact, Meshing, MultiplierSpace, PMass, PSpace, Polyline, Rectangle,
-    Segment, USpace,
-};
-// The validated scene and its limits are sdcrack-core's (the study runs them without this
-// parser); re-exported so that a scene's users find them here too.
-pub use sdcrack_core::scene::{
-    check_level, estimated_memory_bytes, estimated_memory_bytes_of_cells,
-    estimated_mesh_memory_bytes, exact_data, ExpectedFailure, FieldSet, Level0Size, Scene,
-    Verification, MAX_LEVEL, MAX_MEMORY_BYTES, MEMORY_BYTES_PER_CELL,
-};
+use sdcrack_core::expr::ExprError;
+use sdcrack_core::scene::KeyPath;
+use sdcrack_core::scene::Scene;
 
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
-pub const SCENE_TEMPLATE: &str = include_str!("../../../../docs/scene-template.toml");
+pub const SCENE_TEMPLATE: &str = include_str!("../../../docs/scene-template.toml");
 
 /// The embedded default scene (`sdcrack run` without argument): a partly open, partly closed crack.
-pub const DEFAULT_SCENE: &str = include_str!("../../../../scenes/mixed.toml");
+pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/mixed.toml");
 
 /// Errors found while reading or validating a scene. An error about a key carries the key as a
 /// [`KeyPath`] and, once [`SceneError::located`] in the scene's text, the key's line and column.
@@ -346,8 +334,8 @@ impl LoadedScene {
     /// A mesh error of this scene, at the key it concerns (which [`LoadedScene::locate`]
     /// finds): the crack, named as the scene does, or `discretization.cells` for cells given
     /// with a polygon.
-    pub fn mesh_error(&self, e: &crate::mesh::MeshError) -> SceneError {
-        if let crate::mesh::MeshError::CellsNeedRectangle = e {
+    pub fn mesh_error(&self, e: &sdcrack_core::mesh::MeshError) -> SceneError {
+        if let sdcrack_core::mesh::MeshError::CellsNeedRectangle = e {
             return SceneError::named(KeyPath::keys("discretization.cells"), e.to_string());
         }
         match e.crack().and_then(|c| self.cracks.get(c)) {
@@ -420,7 +408,7 @@ impl TomlScene for Scene {
         LoadedScene::from_file(path).map(|l| l.scene)
     }
 
-    const SCENE_TEMPLATE: &'static str = include_str!("../../../../docs/scene-template.toml");
+    const SCENE_TEMPLATE: &'static str = include_str!("../../../docs/scene-template.toml");
 
     fn default_scene() -> Scene {
         LoadedScene::default_scene().scene
