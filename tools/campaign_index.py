@@ -52,6 +52,7 @@ from sdcompare_lib import choices
 from sdcompare_lib.baseline import (BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL, error_change,
                                     rate_change)
 from sdcompare_lib.page import cell_class, page, scroll_table
+from sdcompare_lib.read import p_mass, p_space, variant_label
 from sdcompare_lib.sdresults import write_atomic
 
 TAIL = 40
@@ -221,18 +222,11 @@ def campaign_verdict(rows):
 
 # one symbol per quantity, as the report's plots write them
 SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p_X", "lambda_l2": "λ"}
-# the p space's tag in a variant's label, as in the report's labels and the solver's field names
-# (broken/M1/lumped/ptangential); none for the paper's continuous p (a series without `p_space`)
-P_SPACE_TAG = {"continuous": "", "broken-tangential": "ptangential"}
-
-
 def variant_key(s):
-    """"u space/multiplier[/lumped][/ptangential]" of a report.json series: the labels of before
-    the p mass and p space axes for the consistent p mass and the continuous p."""
-    pm, ps = s.get("p_mass"), s.get("p_space")
-    tags = ["" if pm in (None, "consistent") else str(pm),
-            "" if ps is None else P_SPACE_TAG.get(ps, str(ps))]
-    return "/".join([f"{s.get('u_space')}/{s.get('multiplier')}"] + [t for t in tags if t])
+    """"u space/multiplier[/lumped][/ptangential]" of a report.json series (read.variant_label:
+    the labels of before the p mass and p space axes for the consistent p mass and the
+    continuous p)."""
+    return variant_label(str(s.get("u_space")), str(s.get("multiplier")), p_mass(s), p_space(s))
 
 
 def converged_line(report):

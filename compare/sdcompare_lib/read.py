@@ -1,8 +1,10 @@
 """Reading an sdcrack results folder (OUT/<scene>/) and its optional reference subfolders."""
+import decimal
 import json
 import math
 import os
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -99,11 +101,76 @@ def variant_order(v):
     return u, m, pm != DEFAULT_P_MASS, pm, ps != DEFAULT_P_SPACE, ps
 
 
+def shortest_exponent_form(d):
+    """(mantissa, exponent) of a positive finite float in the shortest digits that parse back to
+    it: 0.01 → ("1", -2), 2.5e-3 → ("2.5", -3), 1.0 → ("1", 0)."""
+    _, digits, exp = decimal.Decimal(repr(d)).normalize().as_tuple()
+    m = "".join(map(str, digits))
+    return m[0] + ("." + m[1:] if len(m) > 1 else ""), exp + len(digits) - 1
+
+
+class CaseKey(NamedTuple):
+    """A case's identity: the solver's case axes in the solver's order (its CaseKey, `sdcrack
+    schema`'s "case_key": tests/python/test_schema.py ties the two). Read by field name, never by
+    position. Cases are ordered by `order()`, the order the reports have always listed them in."""
+    level: int
+    u_space: str
+    multiplier: str
+    p_mass: str
+    p_space: str
+    delta: float
+
+    @classmethod
+    def of(cls, c):
+        """The key of a case (or row) of summary.json: its absent p axes are the defaults."""
+        return cls(level=int(c["level"]), u_space=str(c["u_space"]),
+                   multiplier=str(c["multiplier"]), p_mass=p_mass(c), p_space=p_space(c),
+                   delta=float(c["delta"]))
+
+    def series_name(self):
+        """The solver's name of the case's δ sweep in the field files (its series_name):
+        "level3-broken-M1", then "-lumped" for the lumped p mass, "-ptangential" for the
+        broken-tangential p."""
+        tags = "".join(f"-{t}" for t in ("" if self.p_mass == DEFAULT_P_MASS else self.p_mass,
+                                         p_space_tag(self.p_space)) if t)
+        return f"level{self.level}-{self.u_space}-{self.multiplier}{tags}"
+
+    def case_name(self):
+        """The solver's name of the case in the field files (its case_name, summary.json's
+        fields_grid): the series name, then "-delta" and δ as Rust's `{:e}` writes it ("1e-2",
+        "1e0"; "0" for zero), e.g. "level3-broken-M1-lumped-ptangential-delta0"."""
+        if self.delta == 0:
+            return f"{self.series_name()}-delta0"
+        mant, e = shortest_exponent_form(abs(self.delta))
+        return f"{self.series_name()}-delta{'-' if self.delta < 0 else ''}{mant}e{e}"
+
+    def order(self):
+        """The reports' case order: level, u space, multiplier, δ, then the p axes (which came
+        last, so a run without them lists its cases as before them)."""
+        return (self.level, self.u_space, self.multiplier, self.delta, self.p_mass, self.p_space)
+
+    # Sorting keys (sorted(set of keys)) follows `order()`, not the tuple's field order.
+    def __lt__(self, other):
+        return self.order() < other.order()
+
+    def __le__(self, other):
+        return self.order() <= other.order()
+
+    def __gt__(self, other):
+        return self.order() > other.order()
+
+    def __ge__(self, other):
+        return self.order() >= other.order()
+
+
 def case_key(c):
-    """(level, u space, multiplier, δ, p mass, p space): the p axes last, so k[:4] reads as
-    before them."""
-    return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), float(c["delta"]),
-            p_mass(c), p_space(c))
+    """The CaseKey of a case (or row) of summary.json."""
+    return CaseKey.of(c)
+
+
+def case_order(c):
+    """Sort key of cases (or rows) of summary.json: the reports' order (CaseKey.order)."""
+    return CaseKey.of(c).order()
 
 
 def plan_p_masses(plan):
