@@ -67,6 +67,7 @@ from . import theory
 from .sdresults import write_atomic
 from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, InputError, finite_number, p_mass, p_space,
                    variant_label, variant_of, variant_order)
+from .refyard import ABS_FLOOR, reference_inputs
 
 # ρ may differ from the recorded ratio by this factor either way (module docstring).
 RATIO_BAND = 1.25
@@ -80,8 +81,6 @@ H_RTOL = 1e-9
 MERGE_RTOL = 2e-3
 # Significant digits of a recorded ratio (a relative rounding of ≤ 5e-5).
 DIGITS = 4
-# Errors at or below this are zero to round-off (λ of a closed crack): no ratio.
-ABS_FLOOR = 1e-12
 
 SETTLE_LABEL = "reference ratio settles"
 RECORDED_LABEL = "recorded reference ratio"
@@ -259,9 +258,7 @@ def ratio_entries(res, a, tool):
     """(reference level or None, entries): one entry per series of the run that converges at the
     references' order (equal_order) and is not a declared expected failure, with ρ per level
     against `tool` (None where an error is missing or zero to round-off)."""
-    from . import yardsticks
-
-    yard, series = yardsticks.reference_inputs(res, a, tool)
+    yard, series = reference_inputs(res, a, tool)
     ref_level = None if a["exact"] is not None else reference_finest(res["refs"][tool])
     hs = level_h(res["summary"]["cases"])
     out = []

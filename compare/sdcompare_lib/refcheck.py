@@ -43,7 +43,7 @@ load quadrature (F_h ≠ F) and the segments where the exact crack changes from 
 """
 from . import rates, theory
 from .meshcheck import grading
-from .yardsticks import ABS_FLOOR
+from .refyard import ABS_FLOOR
 from .read import finite_number
 from .verdict import mesh_parameter
 
