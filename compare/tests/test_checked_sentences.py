@@ -26,7 +26,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 SCRIPT = os.path.join(os.path.dirname(HERE), "sdcompare")
 
 import synthetic_results as sr
-from sdcompare_lib import checks, exact, glance, plots, theory, yardsticks
+from sdcompare_lib import checks, exact, glance, plots, sections, theory, yardsticks
 
 
 def scene(name):
@@ -257,21 +257,10 @@ def test_the_index_gives_the_ratios_per_p_space():
 
 
 # ------------------------------------------------------------------ the verdict's sentence
-def sdcompare_module():
-    """compare/sdcompare (a script without .py) as a module."""
-    import importlib.machinery
-    import importlib.util
-
-    loader = importlib.machinery.SourceFileLoader("sdcompare_script", SCRIPT)
-    module = importlib.util.module_from_spec(importlib.util.spec_from_loader(loader.name, loader))
-    loader.exec_module(module)
-    return module
-
-
 def test_the_verdict_without_a_problem_counts_what_it_says():
     """"Every series converges … and every check below holds" was printed over a smoke run's
     inconclusive series and over checks of 0 cases."""
-    sentence = sdcompare_module().no_problem_sentence
+    sentence = sections.no_problem_sentence
     a = {"series": [{"status": "converges"}] * 3 + [{"status": "expected failure"}],
          "checks": [("a", "", [], None), ("b", "", [], None)]}
     assert sentence(a) == ("No problem: of 4 series, 3 converge, 1 are declared expected "
