@@ -438,9 +438,24 @@ def certificate_section(a):
 
 
 def build_sections(res, a, exps_path, baseline_dir, images):
+    """The report's sections in their order; the condition section only when the run recorded
+    condition estimates, the baseline section only with --baseline."""
+    secs = [summary_section(res, a, images), provenance_section(a), h_section(a),
+            delta_section(a, images), yardstick_section(a), gci_section(a),
+            reference_section(res, a, images), kkt_section(res, a)]
+    condition = condition_section(a)
+    if condition is not None:
+        secs.append(condition)
+    secs += [rerun_section(res, a), certificate_section(a), work_section(a, images),
+             expectations_section(a, exps_path)]
+    if baseline_dir is not None:
+        secs.append(baseline_section(a, baseline_dir))
+    return secs
+
+
+def summary_section(res, a, images):
+    """The verdict, its problems, the first screen, the two plots and the short tables."""
     s = res["summary"]
-    secs = []
-    st = a["settings"]
     summary = {"title": f"Summary: {headline(a)}", "paras": [
         f"Scene `{a['scene']}` — {s.get('description', '')}. Results folder: `{res['folder']}`.",
         f"**Verdict: {headline(a)}**. " + (
@@ -469,11 +484,18 @@ def build_sections(res, a, exps_path, baseline_dir, images):
         "is a smoke run (verification.smoke). In every table, – marks a value that does not "
         "apply, was not recorded, or is not a finite number; long tables are folded (click to "
         "open)."]
-    secs.append(summary)
-    secs.append({"title": "Provenance", "paras": [], "fold": "always", "tables": [
-        (a["provenance_headers"], a["provenance_rows"],
-         "where the results come from: binaries, versions, command lines, shards")]})
+    return summary
 
+
+def provenance_section(a):
+    """Where the results come from: binaries, versions, command lines, shards (folded)."""
+    return {"title": "Provenance", "paras": [], "fold": "always", "tables": [
+        (a["provenance_headers"], a["provenance_rows"],
+         "where the results come from: binaries, versions, command lines, shards")]}
+
+
+def h_section(a):
+    """h → 0 (Theorem 4.3): the errors by level and their rates."""
     sec = {"title": "h → 0 (Theorem 4.3): errors by level", "paras": [], "tables": [],
            "images": []}
     if a["series"]:
@@ -513,8 +535,11 @@ def build_sections(res, a, exps_path, baseline_dir, images):
             f" Its {a['plot_axis_note']}" if a.get("plot_axis_note") else ""))
         sec["tables"].append(series_table(a))
         sec["tables"].append(rate_table(a))
-    secs.append(sec)
+    return sec
 
+
+def delta_section(a, images):
+    """δ → 0 (Theorem 2.1): the distance to the δ = 0 solution at fixed h."""
     sec = {"title": "δ → 0 (Theorem 2.1): distance to the δ = 0 solution at fixed h",
            "paras": [], "tables": [], "images": []}
     if a["delta_limit"]:
@@ -540,10 +565,11 @@ def build_sections(res, a, exps_path, baseline_dir, images):
             sec["paras"].append("The plot is at the top of the report.")
     else:
         sec["paras"].append("No fields.h5 or fewer than two δ per case: no δ-limit study.")
-    secs.append(sec)
+    return sec
 
-    secs.append(yardstick_section(a))
 
+def gci_section(a):
+    """The grid convergence index of the scalar outputs."""
     sec = {"title": "Grid convergence index (Roache, ASME V&V 20)", "paras": [], "tables": []}
     if a["gci"]:
         sec["paras"].append(
@@ -562,8 +588,11 @@ def build_sections(res, a, exps_path, baseline_dir, images):
                              + ("GCI per variant and output",))
     else:
         sec["paras"].append("Not available (needs fields.h5 with at least 3 levels).")
-    secs.append(sec)
+    return sec
 
+
+def reference_section(res, a, images):
+    """The references: their agreement with each other and with sdcrack, their own runs."""
     sec = {"title": "Reference comparisons", "paras": [], "tables": []}
     if not res["refs"]:
         sec["paras"].append("no reference run (no `dolfinx/` or `freefem/` subfolder).")
@@ -609,8 +638,12 @@ def build_sections(res, a, exps_path, baseline_dir, images):
         if images.get("delta_reference"):
             sec["paras"] += delta_reference_sentences(a)
             sec.setdefault("images", []).append(images["delta_reference"])
-    secs.append(sec)
+    return sec
 
+
+def kkt_section(res, a):
+    """KKT residuals, iterations and active sets per case, the non-converged first."""
+    s = res["summary"]
     bad = [k for k in a["kkt"] if not k["converged"]]
     sec = {"title": "KKT residuals and iterations (non-converged first)", "paras": [
         f"{len(bad)} of {len(a['kkt'])} cases not converged. Residuals are relative (docs/design.md)"
@@ -627,10 +660,16 @@ def build_sections(res, a, exps_path, baseline_dir, images):
                             k["regularized_pivots"]]
                            for k in a["kkt"]], a["kkt"])
                          + ("KKT residuals, iterations and active sets per case",))
+    return sec
+
+
+def rerun_section(res, a):
+    """One rerun command per level × u space × multiplier (× p mass × p space)."""
+    s = res["summary"]
     reruns = {}
     for k in sorted(a["kkt"], key=lambda k: (k["level"], variant_order(variant_of(k)))):
         reruns.setdefault(k["rerun"], ([k["level"], k["u_space"], k["multiplier"]], k))
-    rerun_sec = {"title": "Rerun commands", "paras": [
+    return {"title": "Rerun commands", "paras": [
         "Each command reruns one level × u space × multiplier of this folder, with the run's "
         "δ sweep (each δ warm-started from the previous one, as in the run, so the numbers of "
         "summary.json come back exactly: compare/tests/test_sdcompare.py, "
@@ -659,32 +698,37 @@ def build_sections(res, a, exps_path, baseline_dir, images):
         + ("rerun commands, one per level × u space × multiplier"
            + (" × p mass" if a["show_p_mass"] else "")
            + (" × p space" if a["show_p_space"] else ""),)]}
-    conds = [k for k in a["kkt"] if isinstance(k.get("condition_estimate"), (int, float))]
-    if conds:
-        per_matrix = {}
-        for k in conds:  # the multipliers of one (level, u space, p mass, p space, δ) share K(δ)
-            key = (k["level"], k["u_space"], k["p_mass"], k["p_space"], k["delta"])
-            if key not in per_matrix or k["kkt_max"] > per_matrix[key]["kkt_max"]:
-                per_matrix[key] = k
-        worst = sorted(per_matrix.values(), key=lambda k: -k["condition_estimate"])[:5]
-        secs.append(sec)
-        sec = {"title": "Condition of the factored systems (worst five)", "paras": [
-            "Condition estimates of the factored systems K(δ) (κ₁ = ‖K‖₁‖K⁻¹‖₁ by the "
-            "Hager–Higham estimator, a lower bound usually within a factor 3; one per level, u space "
-            "and δ, shared by the multipliers), with the largest KKT residual of their cases: "
-            "refinement against the unfactored matrix keeps those at round-off even where κ₁ is "
-            "large. ‖K⁻¹‖₁ is estimated afresh at a δ unless an earlier δ' of the sweep is close "
-            "enough that a perturbation bound puts the two within a factor 1.1 (column δ')."],
-            "tables": [(["level", "u space", "δ", "κ₁ estimate", "‖K⁻¹‖₁ from δ'",
-                         "max KKT residual"],
-                        [[k["level"], k["u_space"] + variant_suffix(k["p_mass"], k["p_space"]),
-                          fmt_delta(k["delta"]), fmt(k["condition_estimate"], ".2e"),
-                          fmt_delta(k["condition_estimate_delta"]), fmt(k["kkt_max"], ".1e")]
-                         for k in worst])]}
-    secs.append(sec)
-    secs.append(rerun_sec)
-    secs.append(certificate_section(a))
 
+
+def condition_section(a):
+    """The worst five condition estimates of the factored systems, or None when the run recorded
+    none."""
+    conds = [k for k in a["kkt"] if isinstance(k.get("condition_estimate"), (int, float))]
+    if not conds:
+        return None
+    per_matrix = {}
+    for k in conds:  # the multipliers of one (level, u space, p mass, p space, δ) share K(δ)
+        key = (k["level"], k["u_space"], k["p_mass"], k["p_space"], k["delta"])
+        if key not in per_matrix or k["kkt_max"] > per_matrix[key]["kkt_max"]:
+            per_matrix[key] = k
+    worst = sorted(per_matrix.values(), key=lambda k: -k["condition_estimate"])[:5]
+    return {"title": "Condition of the factored systems (worst five)", "paras": [
+        "Condition estimates of the factored systems K(δ) (κ₁ = ‖K‖₁‖K⁻¹‖₁ by the "
+        "Hager–Higham estimator, a lower bound usually within a factor 3; one per level, u space "
+        "and δ, shared by the multipliers), with the largest KKT residual of their cases: "
+        "refinement against the unfactored matrix keeps those at round-off even where κ₁ is "
+        "large. ‖K⁻¹‖₁ is estimated afresh at a δ unless an earlier δ' of the sweep is close "
+        "enough that a perturbation bound puts the two within a factor 1.1 (column δ')."],
+        "tables": [(["level", "u space", "δ", "κ₁ estimate", "‖K⁻¹‖₁ from δ'",
+                     "max KKT residual"],
+                    [[k["level"], k["u_space"] + variant_suffix(k["p_mass"], k["p_space"]),
+                      fmt_delta(k["delta"]), fmt(k["condition_estimate"], ".2e"),
+                      fmt_delta(k["condition_estimate_delta"]), fmt(k["kkt_max"], ".1e")]
+                     for k in worst])]}
+
+
+def work_section(a, images):
+    """Work–precision: unknowns, time and error per case."""
     sec = {"title": "Work–precision and timings", "paras": [
         "Total per case = sum of `timings_s` (the phases listed in `shared_timings` are shared by "
         "the multipliers of one factorisation and are counted in each of them)."],
@@ -696,8 +740,11 @@ def build_sections(res, a, exps_path, baseline_dir, images):
                                           fmt(t["total_s"], ".3g"), fmt(t["u_l2"])]
                                          for t in a["timings"]], a["timings"])
                          + ("unknowns, time and error per case",))
-    secs.append(sec)
+    return sec
 
+
+def expectations_section(a, exps_path):
+    """The expectations file's rows for this scene, measured."""
     sec = {"title": "Expectations", "paras": [], "tables": []}
     if not a["expectations"]:
         sec["paras"].append(f"`{exps_path}` has no expectation for scene `{a['scene']}`.")
@@ -712,21 +759,22 @@ def build_sections(res, a, exps_path, baseline_dir, images):
                                 fmt(e.get("measured_error")),
                                 "**VIOLATED**" if e["status"] == "violated" else e["status"],
                                 e.get("reason", "")] for e in a["expectations"]]))
-    secs.append(sec)
+    return sec
 
-    if baseline_dir is not None:
-        sec = {"title": "Baseline comparison", "paras": [
-            f"Against `{baseline_dir}`. Flags: error norms changed by more than "
-            f"{BASELINE_ERROR_RTOL:g} relative; rates by more than "
-            f"{BASELINE_RATE_ATOL:g} absolute; `converges` changed; total time per case "
-            f"grown by more than {verdict.BASELINE_TIME_GROWTH:.0%} (cases with old total < "
-            f"{verdict.BASELINE_TIME_MIN_S:g} s ignored as timer noise). Informational: the "
-            f"verdict does not use them. {len(a['baseline'])} flag(s)."], "tables": []}
-        if a["baseline"]:
-            sec["tables"].append((["kind", "what", "quantity", "old", "new", "change"],
-                                  [[f["kind"], f.get("variant") or f.get("case"),
-                                    f.get("quantity", "total_s"), f["old"], f["new"],
-                                    fmt(f.get("rel_change", f.get("abs_change")), ".2e")]
-                                   for f in a["baseline"]]))
-        secs.append(sec)
-    return secs
+
+def baseline_section(a, baseline_dir):
+    """Flags against an earlier results folder of the same scene (informational)."""
+    sec = {"title": "Baseline comparison", "paras": [
+        f"Against `{baseline_dir}`. Flags: error norms changed by more than "
+        f"{BASELINE_ERROR_RTOL:g} relative; rates by more than "
+        f"{BASELINE_RATE_ATOL:g} absolute; `converges` changed; total time per case "
+        f"grown by more than {verdict.BASELINE_TIME_GROWTH:.0%} (cases with old total < "
+        f"{verdict.BASELINE_TIME_MIN_S:g} s ignored as timer noise). Informational: the "
+        f"verdict does not use them. {len(a['baseline'])} flag(s)."], "tables": []}
+    if a["baseline"]:
+        sec["tables"].append((["kind", "what", "quantity", "old", "new", "change"],
+                              [[f["kind"], f.get("variant") or f.get("case"),
+                                f.get("quantity", "total_s"), f["old"], f["new"],
+                                fmt(f.get("rel_change", f.get("abs_change")), ".2e")]
+                               for f in a["baseline"]]))
+    return sec
