@@ -4,7 +4,10 @@ Tests derive their scenes from `scenes/*.toml` by replacing single `key = value`
 scene that moves a line makes the test fail loudly instead of silently running something else.
 """
 
+import pathlib
 import re
+
+SCENES = pathlib.Path(__file__).resolve().parents[2] / "scenes"
 
 
 def set_key(text, key, value):
@@ -21,3 +24,12 @@ def add_key(text, after, key, value):
     new, n = re.subn(rf"(?m)^{after} = .*$", lambda m: f"{m.group(0)}\n{key} = {value}", text)
     assert n == 1, f"scene line `{after} = ...` not found once"
     return new
+
+
+def scene_with(name, *lines):
+    """The text of the repository scene scenes/<name>.toml with each `(key, value)` of `lines`
+    set in turn (set_key)."""
+    text = (SCENES / f"{name}.toml").read_text(encoding="utf-8")
+    for key, value in lines:
+        text = set_key(text, key, value)
+    return text
