@@ -19,6 +19,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "compare"))
 from conftest import run_env, sdcrack_bin
+from scene_text import square_scene
 from sdcompare_lib import certificate as C
 from sdcompare_lib import read
 
@@ -113,26 +114,12 @@ def test_loads_boundary_and_crack_operators():
 
 
 # ------------------------------------------------------------------ real results
-SCENE = """name = "cert"
-description = "partly open crack for the certificate's tests"
-[geometry]
-domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
-crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
-[data]
-f = "20*sin(2*pi*x)*sign(y)"
-g = "0.1*x"
-[discretization]
-cells = [4, 4]
-levels = [0, 1]
-u_spaces = ["continuous", "broken"]
-multipliers = ["M0", "M1", "M1star"]
-p_mass = ["consistent", "lumped"]
-p_spaces = ["continuous", "broken-tangential"]
-deltas = [1e-2, 0.0]
-[outputs]
-fields = ["u", "p", "lambda"]
-references = []
-"""
+SCENE = square_scene(
+    "cert", "partly open crack for the certificate's tests",
+    data={"f": '"20*sin(2*pi*x)*sign(y)"', "g": '"0.1*x"'},
+    discretization={"levels": "[0, 1]", "u_spaces": '["continuous", "broken"]',
+                    "multipliers": '["M0", "M1", "M1star"]', "p_mass": '["consistent", "lumped"]',
+                    "p_spaces": '["continuous", "broken-tangential"]', "deltas": "[1e-2, 0.0]"})
 
 
 @pytest.fixture(scope="module")

@@ -33,3 +33,19 @@ def scene_with(name, *lines):
     for key, value in lines:
         text = set_key(text, key, value)
     return text
+
+
+# The small test scenes' geometry: the square (−1, 1)² cut by the crack (−0.5, 0)–(0.5, 0).
+SQUARE_CRACK = {"domain": "{ rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
+                "crack": "{ segment = [[-0.5, 0.0], [0.5, 0.0]] }"}
+
+
+def square_scene(name, description, data, discretization, exact=None):
+    """A scene file's text on SQUARE_CRACK, 4 × 4 cells, storing u, p and λ, without references:
+    `data`, `discretization` and `exact` (optional) are {key: TOML value text}."""
+    tables = [("geometry", SQUARE_CRACK), ("data", data)] + ([("exact", exact)] if exact else []) \
+        + [("discretization", {"cells": "[4, 4]", **discretization}),
+           ("outputs", {"fields": '["u", "p", "lambda"]', "references": "[]"})]
+    return f'name = "{name}"\ndescription = "{description}"\n' + "".join(
+        f"\n[{table}]\n" + "".join(f"{k} = {v}\n" for k, v in keys.items())
+        for table, keys in tables)
