@@ -599,22 +599,11 @@ def jump_error_numpy(xy, layout, jump_h, trees, degree, n):
     fj = sdexpr.to_numpy(trees["exact_jump"]) if trees.get("exact_jump") is not None else None
     fu = sdexpr.to_numpy(trees["exact_u"])
     g, gw = sdquad.gauss01(degree // 2 + 1)
-    segments = layout.segments()
-    points = xy[layout.pairs[:, 0]]
-    normals = sdexport.segment_normals(points, segments)
-    is_tip = ~layout.interior()
-    total = 0.0
-    for (i, j), normal in zip(segments, normals):
-        a, b = points[i], points[j]
-        s, w = tip_facet_rule(is_tip[i], is_tip[j], n) if is_tip[i] or is_tip[j] else (g, gw)
-        X, Y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
-        if fj is not None:
-            je = fj(X, Y)
-        else:
-            je = fu(*sdexpr.on_face(X, Y, normal, 1.0)) - fu(*sdexpr.on_face(X, Y, normal, -1.0))
-        jh = (1 - s) * jump_h[i] + s * jump_h[j]
-        total += float(np.hypot(*(b - a)) * np.sum(w * (jh - je) ** 2))
-    return math.sqrt(total)
+
+    def rule(tip_a, tip_b):
+        return tip_facet_rule(tip_a, tip_b, n) if tip_a or tip_b else (g, gw)
+
+    return math.sqrt(sdexport.jump_error_sq(layout, xy, jump_h, rule, fj, fu))
 
 
 # ---------------------------------------------------------------------------------------------

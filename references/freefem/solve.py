@@ -426,23 +426,10 @@ def jump_error_sq(xy, layout, u_h, u_ex, exact, degree, depth):
     exact.jump, else u on each face of the segment (sdexpr.on_face with the segment's normal)."""
     cr = layout.pairs
     jump_h = u_h[cr[:, 0]] - u_h[cr[:, 1]]
-    segments = layout.segments()
-    points = xy[cr[:, 0]]
-    normals = sdexport.segment_normals(points, segments)
-    is_tip = ~layout.interior()
     u_jump = to_numpy("exact.jump", exact["jump"]) if exact.get("jump") else None
-    sl = 0.0
-    for (i, j), normal in zip(segments, normals):
-        a, b = points[i], points[j]
-        s, w = graded_segment_rule(is_tip[i], is_tip[j], degree, depth)
-        X, Y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
-        if u_jump is not None:
-            jx = u_jump(X, Y)
-        else:
-            jx = u_ex(*sdexpr.on_face(X, Y, normal, 1.0)) - u_ex(*sdexpr.on_face(X, Y, normal, -1.0))
-        jh = (1 - s) * jump_h[i] + s * jump_h[j]
-        sl += float(np.hypot(*(b - a)) * np.sum(w * (jh - jx) ** 2))
-    return sl
+    return sdexport.jump_error_sq(
+        layout, xy, jump_h, lambda tip_a, tip_b: graded_segment_rule(tip_a, tip_b, degree, depth),
+        u_jump, u_ex)
 
 
 # ---- driver --------------------------------------------------------------------------------------
