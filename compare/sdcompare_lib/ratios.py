@@ -301,16 +301,15 @@ def settling_rows(entries):
 
 
 def settling_problems(rows):
-    out = []
-    for r in rows:
-        if r["ok"]:
-            continue
-        out.append(f"{variant_label(*variant_of(r))} {r['quantity']}: ρ grows from "
-                   f"{r['ratio_from']:.4g} (level {r['from_level']}) to {r['ratio']:.4g} (level "
-                   f"{r['level']}), log change {r['log_change']:.3g} > {r['bound']:.3g} = "
-                   f"{SETTLE_MARGIN:g} × ln(h_{r['from_level']}/h_{r['level']}): sdcrack's rate "
-                   f"lags the references' by {r['rate_lag']:.3g} > {SETTLE_MARGIN:g}")
-    return out
+    return [_settling_problem(r) for r in rows if not r["ok"]]
+
+
+def _settling_problem(r):
+    return (f"{variant_label(*variant_of(r))} {r['quantity']}: ρ grows from "
+            f"{r['ratio_from']:.4g} (level {r['from_level']}) to {r['ratio']:.4g} (level "
+            f"{r['level']}), log change {r['log_change']:.3g} > {r['bound']:.3g} = "
+            f"{SETTLE_MARGIN:g} × ln(h_{r['from_level']}/h_{r['level']}): sdcrack's rate "
+            f"lags the references' by {r['rate_lag']:.3g} > {SETTLE_MARGIN:g}")
 
 
 def _matches(row, entry):

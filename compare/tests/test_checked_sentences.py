@@ -141,19 +141,18 @@ def test_the_caption_states_the_spread_it_covers_and_names_the_consistent_p():
     """open-graded's p (X) at level 0: M0 and M1 1.7 % apart with the consistent p mass, 6.8 %
     with the lumped one. The note said "broken/{M0 = M1 = M1star} … (every point within 2 %)",
     read as covering the lumped lines too."""
-    note = note_of({"broken/M0": (variant("M0", "consistent"), series_pts(4.824)),
-                    "broken/M1": (variant("M1", "consistent"), series_pts(4.744)),
-                    "broken/M0/lumped": (variant("M0", "lumped"), series_pts(1.296)),
-                    "broken/M1/lumped": (variant("M1", "lumped"), series_pts(1.213))})
-    assert note == ("Lines on top of each other in p (X): broken/{M0 = M1}/consistent (every "
-                    "point within 1.7 %).")
+    def note(lumped_m0):
+        """The caption of broken M0 and M1 with each p mass, the lumped M0 at `lumped_m0`."""
+        return note_of({"broken/M0": (variant("M0", "consistent"), series_pts(4.824)),
+                        "broken/M1": (variant("M1", "consistent"), series_pts(4.744)),
+                        "broken/M0/lumped": (variant("M0", "lumped"), series_pts(lumped_m0)),
+                        "broken/M1/lumped": (variant("M1", "lumped"), series_pts(1.213))})
+
+    assert note(1.296) == ("Lines on top of each other in p (X): broken/{M0 = M1}/consistent "
+                           "(every point within 1.7 %).")
     # the lumped lines 1.5 % apart: they join, and the caption covers both p masses
-    note = note_of({"broken/M0": (variant("M0", "consistent"), series_pts(4.824)),
-                    "broken/M1": (variant("M1", "consistent"), series_pts(4.744)),
-                    "broken/M0/lumped": (variant("M0", "lumped"), series_pts(1.232)),
-                    "broken/M1/lumped": (variant("M1", "lumped"), series_pts(1.213))})
-    assert note == ("Lines on top of each other in p (X): broken/{M0 = M1} with each p mass "
-                    "(every point within 1.7 %).")
+    assert note(1.232) == ("Lines on top of each other in p (X): broken/{M0 = M1} with each p "
+                           "mass (every point within 1.7 %).")
 
 
 def test_lines_joined_through_a_third_are_said_as_far_apart_as_they_are():
