@@ -53,7 +53,7 @@ from sdcompare_lib.baseline import (BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL, err
                                     rate_change)
 from sdcompare_lib.page import cell_class, page, scroll_table
 from sdcompare_lib.read import p_mass, p_space, variant_label
-from sdcompare_lib.sdresults import write_atomic
+from sdshared.sdresults import write_atomic
 
 TAIL = 40
 RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks"}

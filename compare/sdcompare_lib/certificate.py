@@ -87,7 +87,7 @@ import time
 
 import numpy as np
 
-from . import sdexpr, sdquad
+from sdshared import sdexpr, sdquad
 from .read import case_key, case_order, finite_number
 from .render import case_text
 

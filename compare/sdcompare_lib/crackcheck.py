@@ -65,7 +65,7 @@ import numpy as np
 from . import meshcheck, norms
 from .read import case_key, case_order
 from .render import case_text, fmt_delta
-from .sdfields import crack_field
+from sdshared.sdfields import crack_field
 
 EPS = float(np.finfo(float).eps)
 LAMBDA_JUMP_BOUND = 1.0

@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from . import sdexpr
+from sdshared import sdexpr
 
 GRID = 20  # grid points per direction over Ω's bounding box
 GRID_OFFSET = 0.381966011250105  # 2 − φ: irrational, so that no point falls on a crack line

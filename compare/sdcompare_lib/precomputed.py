@@ -27,7 +27,7 @@ import os
 import numpy as np
 
 from . import exact
-from .sdresults import write_atomic
+from sdshared.sdresults import write_atomic
 
 FORMAT = "sdcompare-precomputed-1"
 

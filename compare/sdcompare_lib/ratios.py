@@ -64,7 +64,7 @@ import re
 import tomllib
 
 from . import theory
-from .sdresults import write_atomic
+from sdshared.sdresults import write_atomic
 from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, InputError, finite_number, p_mass, p_space,
                    variant_label, variant_of, variant_order)
 from .refyard import ABS_FLOOR, reference_inputs

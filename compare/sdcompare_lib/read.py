@@ -8,7 +8,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import sdexport  # the reader of the mesh export's cracks, shared with the references
+from sdshared import sdexport  # the reader of the mesh export's cracks, shared with the references
 
 REFERENCE_TOOLS = ("dolfinx", "freefem")
 
@@ -298,7 +298,7 @@ class ExportLevel:
     """One level of the mesh export the references solved on: the cracked mesh (points (N,2),
     tris (T,3)), crack (I,2) the (plus, minus) rows of crack.txt, ranges [(first, n)] its cracks
     (cracks.txt), kind "structured" | "refined" | "graded" (mesh.json;
-    compare/sdcompare_lib/sdexport.py), parents (graded levels: parents.txt)."""
+    compare/sdshared/sdexport.py), parents (graded levels: parents.txt)."""
 
     level: int
     points: np.ndarray

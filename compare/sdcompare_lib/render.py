@@ -17,7 +17,7 @@ import struct
 import tempfile
 
 from .page import cell_class, page, scroll_table
-from .sdresults import replace_folder
+from sdshared.sdresults import replace_folder
 from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag,
                    shortest_exponent_form, variant_suffix)
 
@@ -350,7 +350,7 @@ def threads_text(p):
     """What a reference's provenance `p` says of its BLAS/OpenMP threads (sdresults.PINNED_THREADS):
     pinned to 1, not pinned (which, and that a rerun, pinned, may then differ in the last digits),
     or not recorded."""
-    from .sdresults import PINNED_THREADS, threads_pinned
+    from sdshared.sdresults import PINNED_THREADS, threads_pinned
 
     threads = p.get("threads")
     pinned = threads_pinned(threads)
@@ -431,7 +431,7 @@ def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir=None, refer
     and of tools/cases."""
     import shlex
 
-    from .sdresults import pinned_env_args
+    from sdshared.sdresults import pinned_env_args
 
     args = pinned_env_args() + [exe, "run", scene_path] + ([SOLVER_ONLY] if references else []) \
         + ["--level", str(k["level"]), "--u-space", str(k["u_space"]),

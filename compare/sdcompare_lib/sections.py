@@ -387,7 +387,7 @@ def rerun_threads_text(res):
     threads the campaign's jobs run with; with references, it reruns the sdcrack case alone and
     says how to rerun the references too, and warns when a reference's provenance says it ran
     unpinned (its rerun may then differ in the last digits)."""
-    from sdcompare_lib.sdresults import PINNED_THREADS, threads_pinned
+    from sdshared.sdresults import PINNED_THREADS, threads_pinned
 
     pins = " ".join(f"{n}={v}" for n, v in PINNED_THREADS)
     text = (f" Each command starts with `env {pins}`: the BLAS/OpenMP threads the campaign's jobs "

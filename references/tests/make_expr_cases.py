@@ -1,4 +1,4 @@
-"""Writes expr_cases.json: values of the Python translator (compare/sdcompare_lib/sdexpr.py) at
+"""Writes expr_cases.json: values of the Python translator (compare/sdshared/sdexpr.py) at
 random points, crack faces (y = +0.0 / -0.0) included (non-finite values as the strings
 'inf', '-inf', 'nan'), and its parse errors. The Rust test
 tests/expr_crosscheck.rs evaluates the same strings with crates/sdcrack-core/src/expr.rs and must agree, and
@@ -12,7 +12,7 @@ import pathlib
 import random
 
 HERE = pathlib.Path(__file__).resolve().parent
-from sdcompare_lib.sdexpr import ExprError, evaluate, parse
+from sdshared.sdexpr import ExprError, evaluate, parse
 
 EXPRESSIONS = [
     "20*sin(2*pi*x)*sign(y)",
