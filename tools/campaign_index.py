@@ -52,7 +52,7 @@ from sdcompare_lib import choices
 from sdcompare_lib.baseline import (BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL, error_change,
                                     rate_change)
 from sdcompare_lib.page import cell_class, page, scroll_table
-from sdcompare_lib.read import p_mass, p_space, variant_label
+from sdcompare_lib.cases import p_mass, p_space, variant_label
 from sdshared.sdresults import write_atomic
 
 TAIL = 40
@@ -223,7 +223,7 @@ def campaign_verdict(rows):
 # one symbol per quantity, as the report's plots write them
 SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p_X", "lambda_l2": "λ"}
 def variant_key(s):
-    """"u space/multiplier[/lumped][/ptangential]" of a report.json series (read.variant_label:
+    """"u space/multiplier[/lumped][/ptangential]" of a report.json series (cases.variant_label:
     the labels of before the p mass and p space axes for the consistent p mass and the
     continuous p)."""
     return variant_label(str(s.get("u_space")), str(s.get("multiplier")), p_mass(s), p_space(s))

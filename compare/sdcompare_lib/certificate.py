@@ -88,7 +88,8 @@ import time
 import numpy as np
 
 from sdshared import sdexpr, sdquad
-from .read import case_key, case_order, finite_number
+from .read import finite_number
+from .cases import case_key, case_order
 from .render import case_text
 
 EPS = float(np.finfo(float).eps)

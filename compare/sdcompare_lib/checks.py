@@ -9,8 +9,9 @@ import math
 import numpy as np
 
 from . import exact, norms, precomputed
-from .read import (CaseKey, InputError, case_key, case_order, finite_number, p_mass, p_space,
-                   plan_p_masses, plan_p_spaces, runs_together, variant_suffix)
+from .read import InputError, finite_number
+from .cases import (CaseKey, case_key, case_order, p_mass, p_space, plan_p_masses, plan_p_spaces,
+                    runs_together, variant_suffix)
 from .render import case_text, fmt_delta
 from .settings import QUANTITIES, scene_lists, scene_p_masses, scene_p_spaces
 

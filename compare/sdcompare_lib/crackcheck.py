@@ -63,7 +63,7 @@ import os
 import numpy as np
 
 from . import meshcheck, norms
-from .read import case_key, case_order
+from .cases import case_key, case_order
 from .render import case_text, fmt_delta
 from sdshared.sdfields import crack_field
 

@@ -24,7 +24,7 @@ log(2)/4 = 0.173.
 import math
 from collections import defaultdict
 
-from .read import p_mass, p_space, variant_suffix
+from .cases import p_mass, p_space, variant_suffix
 from .render import fmt_delta
 from .verdict import ROUNDOFF_REL  # below it (relative) a δ-difference is round-off: not judged
 

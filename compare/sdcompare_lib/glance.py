@@ -26,7 +26,8 @@ twice: the verdict does not read this module.
 from . import choices, rates, refyard, verdict
 from .checks import NOT_RUN
 from .read import REFERENCE_TOOLS as REFERENCES
-from .read import finite_number, variant_label, variant_of, variant_order
+from .read import finite_number
+from .cases import variant_label, variant_of, variant_order
 from .render import REFERENCE_NAMES
 
 # The check rows that judge the δ → 0 limit (Theorem 2.1).

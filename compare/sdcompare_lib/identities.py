@@ -24,7 +24,8 @@ from collections import defaultdict
 
 import numpy as np
 
-from .read import case_key, finite_number, variant_suffix
+from .read import finite_number
+from .cases import case_key, variant_suffix
 from .render import fmt_delta
 
 EPS = np.finfo(float).eps

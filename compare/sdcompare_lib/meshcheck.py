@@ -62,7 +62,8 @@ import numpy as np
 
 from . import exact as exact_mod
 from . import crackcut, rates, theory
-from .read import case_key, case_order, finite_number
+from .read import finite_number
+from .cases import case_key, case_order
 from .render import case_text
 
 # summary.json's h and the stored mesh's largest diameter (module docstring).

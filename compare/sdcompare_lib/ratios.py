@@ -65,8 +65,9 @@ import tomllib
 
 from . import theory
 from sdshared.sdresults import write_atomic
-from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, InputError, finite_number, p_mass, p_space,
-                   variant_label, variant_of, variant_order)
+from .read import InputError, finite_number
+from .cases import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, variant_label, variant_of,
+                    variant_order)
 from .refyard import ABS_FLOOR, reference_inputs
 
 # ρ may differ from the recorded ratio by this factor either way (module docstring).
@@ -382,7 +383,7 @@ def recorded_rows(rows, res, a):
 
 def _not_run(row, plan):
     """"p_mass lumped" when the row names a value the run's plan does not run, else None."""
-    from .read import plan_p_masses, plan_p_spaces
+    from .cases import plan_p_masses, plan_p_spaces
 
     runs = {"u_space": plan.get("u_spaces", []), "multiplier": plan.get("multipliers", []),
             "p_mass": plan_p_masses(plan), "p_space": plan_p_spaces(plan)}

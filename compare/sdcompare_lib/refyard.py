@@ -5,7 +5,7 @@ yardstick (yardsticks.py), the measured ratio to the references (ratios.py) and 
 import numpy as np
 
 from . import norms
-from .read import variant_of
+from .cases import variant_of
 from .verdict import ref_delta
 
 # Against the references (P1 on the cracked mesh, the same triangles): the smooth-domain method's

@@ -18,8 +18,8 @@ import tempfile
 
 from .page import cell_class, page, scroll_table
 from sdshared.sdresults import replace_folder
-from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag,
-                   shortest_exponent_form, variant_suffix)
+from .cases import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag,
+                    shortest_exponent_form, variant_suffix)
 
 # Tables longer than this are folded (<details>) outside the summary section.
 FOLD_ROWS = 8
@@ -58,7 +58,7 @@ def fmt_delta(d):
 
 
 def case_text(k):
-    """"level L u m[ lumped][ ptangential] δ=D" of a case key (read.CaseKey): how every check
+    """"level L u m[ lumped][ ptangential] δ=D" of a case key (cases.CaseKey): how every check
     names a case."""
     return (f"level {k.level} {k.u_space} {k.multiplier}{variant_suffix(k.p_mass, k.p_space)} "
             f"δ={fmt_delta(k.delta)}")

@@ -17,7 +17,7 @@ import sys
 
 import numpy as np
 
-from . import read
+from . import cases, read
 from .read import REFERENCE_TOOLS
 from .render import fmt_delta
 
@@ -103,9 +103,9 @@ def load_summary(folder):
 
 # ---------------------------------------------------------------- summary.json cases
 def case_key(c):
-    """A case's identity (read.CaseKey), or None for an entry that lacks one."""
+    """A case's identity (cases.CaseKey), or None for an entry that lacks one."""
     try:
-        return read.case_key(c)
+        return cases.case_key(c)
     except (KeyError, TypeError, ValueError):
         return None
 

@@ -5,8 +5,8 @@ from collections import defaultdict
 
 from . import certificate, checks, glance, rates, refcheck, render, sentences, theory, verdict
 from .baseline import BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL
-from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, variant_label, variant_of,
-                   variant_order, variant_suffix)
+from .cases import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, variant_label, variant_of,
+                    variant_order, variant_suffix)
 from .render import fmt, fmt_delta, fmt_rate
 
 

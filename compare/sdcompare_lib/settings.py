@@ -19,7 +19,8 @@ and declare a check that does not apply to it, with a reason ([[verification.not
 """
 import math
 
-from .read import DEFAULT_P_SPACE, P_MASSES, P_SPACES, InputError
+from .read import InputError
+from .cases import DEFAULT_P_SPACE, P_MASSES, P_SPACES
 
 DEFAULTS = {"kkt_tolerance": 1e-10, "reference_agreement": 1e-8, "delta_slope_tolerance": 0.1,
             "min_rate": 0.4}

@@ -9,8 +9,9 @@ import numpy as np
 
 from . import norms, rates, theory
 from .baseline import error_change, rate_change
-from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, P_MASSES, P_SPACES, case_key, case_order,
-                   finite_number, p_mass, p_space, total_time, variant_label, variant_of, variant_order)
+from .read import finite_number, total_time
+from .cases import (DEFAULT_P_MASS, DEFAULT_P_SPACE, P_MASSES, P_SPACES, case_key, case_order,
+                    p_mass, p_space, variant_label, variant_of, variant_order)
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.

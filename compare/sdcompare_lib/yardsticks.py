@@ -29,7 +29,7 @@ import numpy as np
 from . import checks as chk
 from . import exact as exact_mod
 from . import rates, ratios, theory
-from .read import DEFAULT_P_MASS as CONSISTENT, p_space, variant_label, variant_of, variant_order
+from .cases import DEFAULT_P_MASS as CONSISTENT, p_space, variant_label, variant_of, variant_order
 from .refyard import ABS_FLOOR, REFERENCE_FACTOR, reference_inputs
 from .verdict import PREFERRED_REFERENCE
 

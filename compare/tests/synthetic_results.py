@@ -29,6 +29,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 import fake_export as fe
 from sdcompare_lib import exact, read
+from sdcompare_lib.cases import CaseKey
 
 CRACK = [(-0.5, 0.0), (0.5, 0.0)]
 # smooth on each face, open on the crack ([u] = 2 m³ > 0), tangential ∂u/∂x jumps, ∂u/∂y = 0 on
@@ -150,8 +151,8 @@ def write_results(out, name="pspace", solution=OPEN, levels=(0, 1, 2),
                 u, p = u0 + delta * np.cos(pts[:, 1]), p0 * (1 + delta)
                 lam = (lam0 + (stall if u_space == "continuous" else 0.0)) * (1 + 3 * delta)
                 bubble = None if pm == "lumped" else np.zeros((len(tris), 2))
-                grid = read.CaseKey(level=lv, u_space=u_space, multiplier=m, p_mass=pm, p_space=ps,
-                                    delta=float(delta)).case_name()
+                grid = CaseKey(level=lv, u_space=u_space, multiplier=m, p_mass=pm, p_space=ps,
+                               delta=float(delta)).case_name()
                 g = f5.create_group(f"cases/{grid}")
                 g["mesh"] = h5py.SoftLink(f"/meshes/level{lv}-{u_space}")
                 g["u"], g["p"] = u, np.column_stack([p, 0 * u])

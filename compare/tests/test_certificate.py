@@ -21,7 +21,7 @@ sys.path.insert(0, os.path.join(ROOT, "compare"))
 from conftest import run_env, sdcrack_bin
 from scene_text import square_scene
 from sdcompare_lib import certificate as C
-from sdcompare_lib import read
+from sdcompare_lib import cases, read
 
 EPS = np.finfo(float).eps
 # A triangle in general position (no axis-aligned edge), counter-clockwise, and its mirror image.
@@ -166,8 +166,8 @@ def certify(res, which=None, edit=None):
 
 
 def is_case(level, u, m, delta=0.0, pm="consistent", ps="continuous"):
-    return lambda c: (c["level"], c["u_space"], c["multiplier"], c["delta"], read.p_mass(c),
-                      read.p_space(c)) == (level, u, m, delta, pm, ps)
+    return lambda c: (c["level"], c["u_space"], c["multiplier"], c["delta"], cases.p_mass(c),
+                      cases.p_space(c)) == (level, u, m, delta, pm, ps)
 
 
 def test_undamaged_results_pass_with_margin(results):
