@@ -33,10 +33,11 @@ reason on the next line), the baseline's line and the index's path. The campaign
 when a scene's is neither PASS nor INCONCLUSIVE, else INCONCLUSIVE when one scene's is, else PASS;
 exit 0 when it is PASS or INCONCLUSIVE (NOT_FAILING), 1 otherwise, 2 on bad usage (one line).
 Standard library and the numpy-free
-modules of the package sdcompare_lib, found on PYTHONPATH: its launchers (tools/campaign,
-ci/nightly, the GitHub nightly's index job) run it as
-`PYTHONPATH=compare /usr/bin/python3 tools/campaign_index.py DIR`, as sdcrack runs the reference
-scripts; a pip install of the checkout (pyproject.toml) makes it importable too.
+modules of the packages sdcompare_lib and sdshared (page, cases, choices, baseline, sdresults:
+tests/python/test_index_glance.py): tools/campaign and ci/nightly run it with the checkout's
+Python, `.venv/bin/python tools/campaign_index.py DIR` (ci/setup installs both packages
+there); the GitHub nightly's index job, which has no ci/setup, with its runner's python3 and
+PYTHONPATH=compare; a pip install of the checkout (pyproject.toml) makes them importable too.
 """
 
 import argparse

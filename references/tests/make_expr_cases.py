@@ -3,8 +3,8 @@ random points, crack faces (y = +0.0 / -0.0) included (non-finite values as the 
 'inf', '-inf', 'nan'), and its parse errors. The Rust test
 tests/expr_crosscheck.rs evaluates the same strings with crates/sdcrack-core/src/expr.rs and must agree, and
 test_expr_cases.py checks that the Python back-ends still give these values. Regenerate with
-`PYTHONPATH=compare /usr/bin/python3 references/tests/make_expr_cases.py` after changing the
-grammar (the package sdcompare_lib is in compare/)."""
+`.venv/bin/python references/tests/make_expr_cases.py` after changing the grammar
+(the checkout's Python, which ci/setup gives the package sdshared)."""
 
 import json
 import math
