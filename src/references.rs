@@ -2,8 +2,8 @@
 //!
 //! Each reference is an independent program under `references/<tool>/solve.py`, run with Debian's
 //! `/usr/bin/python3` as `solve.py MESH_EXPORT --out RESULTS/<tool> [--fields]`, with the folder
-//! `compare/` beside `references/` (the package `sdcompare_lib`, whose modules the scripts share
-//! with the compare tool) first on `PYTHONPATH` ([`python`]). It reads the mesh
+//! `compare/` beside `references/` (the package `sdshared`, whose modules the scripts share with
+//! each other and the compare tool) first on `PYTHONPATH` ([`python`]). It reads the mesh
 //! export written by [`sdcrack_io::output::mesh_export`] (the same vertices and triangles as the solver)
 //! and writes `summary.json` (and fields) into its own subfolder of the results. Before anything is
 //! solved, every requested tool is checked to be installed; a missing one is reported in one line
@@ -69,7 +69,7 @@ pub fn scripts_dir() -> PathBuf {
 }
 
 /// `/usr/bin/python3 SCRIPT` with `PYTHONPATH` starting with the folder `compare/` beside
-/// [`scripts_dir`] (where the package `sdcompare_lib` that the scripts import lives), followed by
+/// [`scripts_dir`] (where the package `sdshared` that the scripts import lives), followed by
 /// any `PYTHONPATH` of the caller. The one place that says where the scripts find their package.
 fn python(script: &Path) -> Command {
     let package_dir = scripts_dir()

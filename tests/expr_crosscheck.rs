@@ -1,5 +1,5 @@
 //! The Rust expression evaluator agrees with the Python translator used by the references
-//! (compare/sdcompare_lib/sdexpr.py) at random points and on both crack faces (y = ±0.0), and both
+//! (compare/sdshared/sdexpr.py) at random points and on both crack faces (y = ±0.0), and both
 //! report the same parse errors at the same columns. The table is written by
 //! references/tests/make_expr_cases.py from the Python side.
 

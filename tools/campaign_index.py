@@ -33,10 +33,11 @@ reason on the next line), the baseline's line and the index's path. The campaign
 when a scene's is neither PASS nor INCONCLUSIVE, else INCONCLUSIVE when one scene's is, else PASS;
 exit 0 when it is PASS or INCONCLUSIVE (NOT_FAILING), 1 otherwise, 2 on bad usage (one line).
 Standard library and the numpy-free
-modules of the package sdcompare_lib, found on PYTHONPATH: its launchers (tools/campaign,
-ci/nightly, the GitHub nightly's index job) run it as
-`PYTHONPATH=compare /usr/bin/python3 tools/campaign_index.py DIR`, as sdcrack runs the reference
-scripts; a pip install of the checkout (pyproject.toml) makes it importable too.
+modules of the packages sdcompare_lib and sdshared (page, cases, choices, baseline, sdresults:
+tests/python/test_index_glance.py): tools/campaign and ci/nightly run it with the checkout's
+Python, `.venv/bin/python tools/campaign_index.py DIR` (ci/setup installs both packages
+there); the GitHub nightly's index job, which has no ci/setup, with its runner's python3 and
+PYTHONPATH=compare; a pip install of the checkout (pyproject.toml) makes them importable too.
 """
 
 import argparse
@@ -52,7 +53,8 @@ from sdcompare_lib import choices
 from sdcompare_lib.baseline import (BASELINE_ERROR_RTOL, BASELINE_RATE_ATOL, error_change,
                                     rate_change)
 from sdcompare_lib.page import cell_class, page, scroll_table
-from sdcompare_lib.sdresults import write_atomic
+from sdcompare_lib.cases import p_mass, p_space, variant_label
+from sdshared.sdresults import write_atomic
 
 TAIL = 40
 RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks"}
@@ -221,18 +223,11 @@ def campaign_verdict(rows):
 
 # one symbol per quantity, as the report's plots write them
 SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p_X", "lambda_l2": "λ"}
-# the p space's tag in a variant's label, as in the report's labels and the solver's field names
-# (broken/M1/lumped/ptangential); none for the paper's continuous p (a series without `p_space`)
-P_SPACE_TAG = {"continuous": "", "broken-tangential": "ptangential"}
-
-
 def variant_key(s):
-    """"u space/multiplier[/lumped][/ptangential]" of a report.json series: the labels of before
-    the p mass and p space axes for the consistent p mass and the continuous p."""
-    pm, ps = s.get("p_mass"), s.get("p_space")
-    tags = ["" if pm in (None, "consistent") else str(pm),
-            "" if ps is None else P_SPACE_TAG.get(ps, str(ps))]
-    return "/".join([f"{s.get('u_space')}/{s.get('multiplier')}"] + [t for t in tags if t])
+    """"u space/multiplier[/lumped][/ptangential]" of a report.json series (cases.variant_label:
+    the labels of before the p mass and p space axes for the consistent p mass and the
+    continuous p)."""
+    return variant_label(str(s.get("u_space")), str(s.get("multiplier")), p_mass(s), p_space(s))
 
 
 def converged_line(report):

@@ -31,7 +31,7 @@ import sys
 import time
 import tomllib
 
-from sdcompare_lib.sdresults import write_atomic
+from sdshared.sdresults import write_atomic
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CATALOGUE = os.path.join(ROOT, "tools", "mutants.toml")

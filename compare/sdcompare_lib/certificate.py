@@ -87,9 +87,10 @@ import time
 
 import numpy as np
 
-from . import sdexpr, sdquad
-from .read import case_key, finite_number, variant_suffix
-from .render import fmt_delta
+from sdshared import sdexpr, sdquad
+from .read import finite_number
+from .cases import case_key, case_order
+from .render import case_text
 
 EPS = float(np.finfo(float).eps)
 LABEL = "discrete certificate"
@@ -621,7 +622,7 @@ def certify(res, sf):
         return out
     ref = reference_integrals()
     meshes = {}
-    cases = sorted(res["summary"]["cases"], key=case_key)
+    cases = sorted(res["summary"]["cases"], key=case_order)
     for c in cases:
         grid = c.get("fields_grid")
         unknowns = c.get("unknowns")
@@ -629,7 +630,7 @@ def certify(res, sf):
             out["skipped"] += 1
             continue
         k = case_key(c)
-        what = f"level {k[0]} {k[1]} {k[2]}{variant_suffix(k[4], k[5])} δ={fmt_delta(k[3])}"
+        what = case_text(k)
         if not data.has_case(grid):
             continue  # completeness names a missing field
         fields = data.case(grid)
@@ -644,13 +645,14 @@ def certify(res, sf):
         kappa = c.get("condition_estimate")
         try:
             with np.errstate(all="ignore"):  # a NaN residual fails its row (not ≤ tolerance)
-                row = certify_case(meshes[key][1], fields, k[2], k[4], k[5], k[3],
+                row = certify_case(meshes[key][1], fields, k.multiplier, k.p_mass, k.p_space, k.delta,
                                    float(kappa) if finite_number(kappa) else None)
         except (ValueError, IndexError) as exc:  # stored arrays of inconsistent shapes
             row = {"problems": [f"cannot be certified: its stored arrays do not fit together "
                                 f"({exc})"]}
-        row.update({"level": k[0], "u_space": k[1], "multiplier": k[2], "delta": k[3],
-                    "p_mass": k[4], "p_space": k[5], "unknowns": unknowns})
+        row.update({"level": k.level, "u_space": k.u_space, "multiplier": k.multiplier,
+                    "delta": k.delta, "p_mass": k.p_mass, "p_space": k.p_space,
+                    "unknowns": unknowns})
         row["ok"] = not row["problems"]
         out["problems"] += [f"{what}: {p}" for p in row["problems"]]
         out["rows"].append(row)

@@ -9,9 +9,10 @@ import math
 import numpy as np
 
 from . import exact, norms, precomputed
-from .read import (InputError, case_key, finite_number, p_mass, p_space, plan_p_masses,
-                   plan_p_spaces, runs_together, variant_suffix)
-from .render import fmt_delta
+from .read import InputError, finite_number
+from .cases import (CaseKey, case_key, case_order, p_mass, p_space, plan_p_masses, plan_p_spaces,
+                    runs_together, variant_suffix)
+from .render import case_text, fmt_delta
 from .settings import QUANTITIES, scene_lists, scene_p_masses, scene_p_spaces
 
 # The solver's errors against the compare tool's own (exact.py: another rule family, Duffy rules
@@ -147,23 +148,24 @@ def completeness(res, scene_file):
         extra = [v for v in mine if v not in scene]
         if extra:
             problems.append(f"the run's {key} {extra} are not in the scene file")
-    want = {(int(lv), u, m, float(d), pm, ps) for lv in plan["levels"] for u in plan["u_spaces"]
+    want = {CaseKey(level=int(lv), u_space=u, multiplier=m, p_mass=pm, p_space=ps, delta=float(d))
+            for lv in plan["levels"] for u in plan["u_spaces"]
             for m in plan["multipliers"] for d in plan["deltas"] for pm in p_masses
             for ps in p_spaces if runs_together(u, ps)}
     have = [case_key(c) for c in s["cases"]]
     missing = sorted(want - set(have))
     if missing:
         problems.append(f"{len(missing)} case(s) asked for are missing from summary.json, e.g. "
-                        f"{_case_text(missing[0])}")
-    never = [k for k in have if not runs_together(k[1], k[5])]
+                        f"{case_text(missing[0])}")
+    never = [k for k in have if not runs_together(k.u_space, k.p_space)]
     if never:
-        problems.append(f"{len(never)} case(s) in summary.json pair the {never[0][1]} u space with "
-                        f"the {never[0][5]} p space, which sdcrack never runs (a p whose "
-                        f"tangential part jumps needs a broken u), e.g. {_case_text(never[0])}")
+        problems.append(f"{len(never)} case(s) in summary.json pair the {never[0].u_space} u space "
+                        f"with the {never[0].p_space} p space, which sdcrack never runs (a p whose "
+                        f"tangential part jumps needs a broken u), e.g. {case_text(never[0])}")
     extra = sorted(set(have) - want - set(never))
     if extra:
         problems.append(f"{len(extra)} case(s) in summary.json were not asked for, e.g. "
-                        f"{_case_text(extra[0])}")
+                        f"{case_text(extra[0])}")
     if len(set(have)) != len(have):
         problems.append("summary.json lists a case twice")
     if "exact" in scene_file:
@@ -172,8 +174,8 @@ def completeness(res, scene_file):
         if bad:
             k = case_key(bad[0])
             problems.append(f"{len(bad)} case(s) of an exact scene lack a finite error "
-                            f"({', '.join(QUANTITIES)}), e.g. level {k[0]} {k[1]} {k[2]}"
-                            f"{variant_suffix(k[4], k[5])}")
+                            f"({', '.join(QUANTITIES)}), e.g. level {k.level} {k.u_space} "
+                            f"{k.multiplier}{variant_suffix(k.p_mass, k.p_space)}")
     if _fields_asked(scene_file):
         if res["fields"] is None:
             problems.append("the scene asks for fields but fields.h5 is missing")
@@ -202,11 +204,6 @@ def completeness(res, scene_file):
     if exported is not None and exported.get("name") != name:
         problems.append(f"the mesh export mesh/ is of scene {exported.get('name')!r}, not {name!r}")
     return problems
-
-
-def _case_text(k):
-    """"level L u m[ lumped][ ptangential] δ=D" of a case key (read.case_key)."""
-    return f"level {k[0]} {k[1]} {k[2]}{variant_suffix(k[4], k[5])} δ={fmt_delta(k[3])}"
 
 
 def worst_residual(kkt):
@@ -307,11 +304,11 @@ def independent_errors(res, scene_file):
     fields = res["data"]
     unrecomputed = []
     self_checked = set()  # the meshes whose self-check was reported
-    for c in sorted(res["summary"]["cases"], key=case_key):
+    for c in sorted(res["summary"]["cases"], key=case_order):
         if not isinstance(c.get("errors"), dict):
             continue  # completeness reports the missing errors
         pm, ps = p_mass(c), p_space(c)
-        what = _case_text(case_key(c))
+        what = case_text(case_key(c))
         if fields is None or not fields.has_case(c.get("fields_grid")):
             unrecomputed.append(what)
             continue

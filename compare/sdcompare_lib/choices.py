@@ -9,7 +9,7 @@ Standard library only: the campaign index (tools/campaign_index.py) imports it w
 AXES = ("u space", "p mass", "p space")
 # A row without p_mass / p_space is of the consistent p mass and the continuous p (read.py's
 # defaults); the p space as the plots' notes write it, the continuous one named ("pcontinuous"),
-# the broken-tangential one by its label tag (read.P_SPACE_TAG: "ptangential").
+# the broken-tangential one by its label tag (cases.P_SPACE_TAG: "ptangential").
 DEFAULT_P_MASS, DEFAULT_P_SPACE = "consistent", "continuous"
 P_SPACE_WORD = {"continuous": "pcontinuous", "broken-tangential": "ptangential"}
 

@@ -63,9 +63,9 @@ import os
 import numpy as np
 
 from . import meshcheck, norms
-from .read import case_key, variant_suffix
-from .render import fmt_delta
-from .sdfields import crack_field
+from .cases import case_key, case_order
+from .render import case_text, fmt_delta
+from sdshared.sdfields import crack_field
 
 EPS = float(np.finfo(float).eps)
 LAMBDA_JUMP_BOUND = 1.0
@@ -81,11 +81,6 @@ def checks(res, a, st):
 
 
 # ---------------------------------------------------------------- helpers
-def _case_text(c):
-    k = case_key(c)
-    return f"level {k[0]} {k[1]} {k[2]}{variant_suffix(k[4], k[5])} δ={fmt_delta(k[3])}"
-
-
 def _solver_files(res):
     """[(name, read.Fields)] of the solver's HDF5 files, each once."""
     out, seen = [], set()
@@ -185,7 +180,7 @@ def _solver_jumps(res, problems):
     n, worst, n_ratio = 0, 0.0, 0
     ratio_seen = set()
     copies = {}
-    cases = sorted(res["summary"]["cases"], key=case_key)
+    cases = sorted(res["summary"]["cases"], key=case_order)
     for fname, f in _solver_files(res):
         for c in cases:
             grid = c.get("fields_grid")
@@ -206,7 +201,7 @@ def _solver_jumps(res, problems):
             if key not in copies:
                 copies[key] = copies_at(_mesh_points(f, g), cp)
             plus, minus = copies[key]
-            where = f"{fname} {_case_text(c)}"
+            where = f"{fname} {case_text(case_key(c))}"
             n += 1
             if (plus < 0).any():
                 problems.append(f"{where}: {int((plus < 0).sum())} crack node(s) of its jump are no "
@@ -241,7 +236,7 @@ def _solver_jumps(res, problems):
             r = dist[0] / dist[1]
             worst = max(worst, r)
             if not r < LAMBDA_JUMP_BOUND:
-                problems.append(f"{_case_text(c)}: on the open part of the crack (λ_h > 0) "
+                problems.append(f"{case_text(case_key(c))}: on the open part of the crack (λ_h > 0) "
                                 f"‖λ_h − [u_h]‖ = {dist[0]:.3g} is not below ‖λ_h‖ = "
                                 f"{dist[1]:.3g} (ratio {r:.3g} ≥ {LAMBDA_JUMP_BOUND:g}): the "
                                 "stored jump does not open the crack where λ_h does")
@@ -458,7 +453,7 @@ def _fields_equal_verification(res, problems):
     if f is None or v is None or f is v:
         return 0
     n = 0
-    for c in sorted(res["summary"]["cases"], key=case_key):
+    for c in sorted(res["summary"]["cases"], key=case_order):
         grid = c.get("fields_grid")
         if not (f.has_case(grid) and v.has_case(grid)):
             continue
@@ -469,7 +464,7 @@ def _fields_equal_verification(res, problems):
             n += 1
             x, y = ds[()], theirs[rel][()]
             if x.shape != y.shape or not np.array_equal(x, y):
-                problems.append(f"fields.h5 {_case_text(c)}: its {rel} is not verification.h5's "
+                problems.append(f"fields.h5 {case_text(case_key(c))}: its {rel} is not verification.h5's "
                                 "(what a viewer shows is not what was checked)")
     return n
 
@@ -477,7 +472,7 @@ def _fields_equal_verification(res, problems):
 def _delta_constants(res, problems):
     n = 0
     for fname, f in _solver_files(res):
-        for c in sorted(res["summary"]["cases"], key=case_key):
+        for c in sorted(res["summary"]["cases"], key=case_order):
             grid = c.get("fields_grid")
             if not f.has_case(grid):
                 continue
@@ -488,7 +483,7 @@ def _delta_constants(res, problems):
                 n += 1
                 x = np.asarray(g[rel][()], dtype=float)
                 if not np.all(x == float(c["delta"])):
-                    problems.append(f"{fname} {_case_text(c)}: its constant field {rel} is not the "
+                    problems.append(f"{fname} {case_text(case_key(c))}: its constant field {rel} is not the "
                                     f"case's δ = {fmt_delta(c['delta'])} everywhere (e.g. "
                                     f"{float(x[np.flatnonzero(x != float(c['delta']))[0]])!r})")
     return n

@@ -24,7 +24,7 @@ log(2)/4 = 0.173.
 import math
 from collections import defaultdict
 
-from .read import p_mass, p_space, variant_suffix
+from .cases import p_mass, p_space, variant_suffix
 from .render import fmt_delta
 from .verdict import ROUNDOFF_REL  # below it (relative) a δ-difference is round-off: not judged
 
@@ -66,19 +66,18 @@ def rows(delta_limit):
 
 
 def problems(rs):
-    out = []
-    for r in rs:
-        if r["ok"]:
-            continue
-        lo, hi = r["levels"][-2], r["levels"][-1]
-        k = dict(zip(r["levels"], r["constants"]))
-        out.append(f"{r['u_space']} {r['multiplier']}{variant_suffix(r['p_mass'], r['p_space'])} "
-                   f"{r['quantity']} δ={fmt_delta(r['delta'])}: the δ-constant "
-                   f"‖x_δ − x_0‖/(δ‖x_0‖) goes {k[lo]:.3g} → {k[hi]:.3g} from level {lo} to "
-                   f"{hi}, a factor {math.exp(r['last_change']):.3g} per level (> "
-                   f"{math.exp(MAX_LOG_CHANGE):.3g}): it does not converge as h → 0 "
-                   "(Theorem 2.1), as if δ were scaled with the mesh")
-    return out
+    return [_problem(r) for r in rs if not r["ok"]]
+
+
+def _problem(r):
+    lo, hi = r["levels"][-2], r["levels"][-1]
+    k = dict(zip(r["levels"], r["constants"]))
+    return (f"{r['u_space']} {r['multiplier']}{variant_suffix(r['p_mass'], r['p_space'])} "
+            f"{r['quantity']} δ={fmt_delta(r['delta'])}: the δ-constant "
+            f"‖x_δ − x_0‖/(δ‖x_0‖) goes {k[lo]:.3g} → {k[hi]:.3g} from level {lo} to "
+            f"{hi}, a factor {math.exp(r['last_change']):.3g} per level (> "
+            f"{math.exp(MAX_LOG_CHANGE):.3g}): it does not converge as h → 0 "
+            "(Theorem 2.1), as if δ were scaled with the mesh")
 
 
 def requirement(rs):

@@ -18,7 +18,7 @@ evaluated with that segment's normal.
 ``p1_field_errors`` takes a reference solver's P1 field on the cracked mesh (there
 p_h = ∇u_h, constant per triangle, and λ_h = [u_h], piecewise linear along each crack).
 Exact data come from the scene's ``[exact]`` (u, optional px, py, jump) and ``[data] f``, parsed
-with compare/sdcompare_lib/sdexpr.py; missing px / py are the symbolic derivatives of u
+with compare/sdshared/sdexpr.py; missing px / py are the symbolic derivatives of u
 (``sdexpr.derivative``), a missing jump is u on the + face minus u on the − face with the
 signed-zero convention of ``eval_on_face`` (crates/sdcrack-core/src/problem.rs).
 
@@ -70,7 +70,7 @@ import sys
 
 import numpy as np
 
-from . import sdexpr  # the scene's expressions, shared with the references
+from sdshared import sdexpr  # the scene's expressions, shared with the references
 
 from .norms import LastResults, digest
 

@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from . import sdexpr
+from sdshared import sdexpr
 
 GRID = 20  # grid points per direction over Ω's bounding box
 GRID_OFFSET = 0.381966011250105  # 2 − φ: irrational, so that no point falls on a crack line
@@ -304,11 +304,16 @@ def _gradient(u, px, py, ex, pts):
     for key, given, var in (("px", px, "x"), ("py", py, "y")):
         a, ea = bounded(given, pts[:, 0], pts[:, 1])
         b, eb = bounded(sdexpr.derivative(u, var), pts[:, 0], pts[:, 1])
-        i = _first(_differs(a, ROUNDOFF_SAFETY * ea, b, ROUNDOFF_SAFETY * eb))
-        if i is not None:
-            out.append(f"the scene's [exact] {key} is not ∂u/∂{var}: {key} = {_fmt(a[i])}, "
-                       f"∂u/∂{var} = {_fmt(b[i])} at {_at(pts[i])}")
+        out += _mismatch(pts, a, ea, b, eb, lambda x, y: f"the scene's [exact] {key} is not "
+                         f"∂u/∂{var}: {key} = {x}, ∂u/∂{var} = {y}")
     return out
+
+
+def _mismatch(pts, a, ea, b, eb, say):
+    """[] when the values a and b at the points agree within ROUNDOFF_SAFETY × their round-off
+    bounds ea, eb, else the problem `say(a_i, b_i)` (formatted) at the first point i where not."""
+    i = _first(_differs(a, ROUNDOFF_SAFETY * ea, b, ROUNDOFF_SAFETY * eb))
+    return [] if i is None else [f"{say(_fmt(a[i]), _fmt(b[i]))} at {_at(pts[i])}"]
 
 
 def _source(u, f, pts):
@@ -317,21 +322,15 @@ def _source(u, f, pts):
     lap = -(uxx + uyy)
     elap = exx + eyy + U * np.abs(lap)
     fv, ef = bounded(f, pts[:, 0], pts[:, 1])
-    i = _first(_differs(fv, ROUNDOFF_SAFETY * ef, lap, ROUNDOFF_SAFETY * elap))
-    if i is None:
-        return []
-    return [f"the scene's [data] f is not −Δu of its [exact] u (−Δu = f in Ω \\ Γc): f = "
-            f"{_fmt(fv[i])}, −Δu = {_fmt(lap[i])} at {_at(pts[i])}"]
+    return _mismatch(pts, fv, ef, lap, elap, lambda fi, li: "the scene's [data] f is not −Δu of "
+                     f"its [exact] u (−Δu = f in Ω \\ Γc): f = {fi}, −Δu = {li}")
 
 
 def _boundary(u, g, pts):
     gv, eg = bounded(g, pts[:, 0], pts[:, 1])
     uv, eu = bounded(u, pts[:, 0], pts[:, 1])
-    i = _first(_differs(gv, ROUNDOFF_SAFETY * eg, uv, ROUNDOFF_SAFETY * eu))
-    if i is None:
-        return []
-    return [f"the scene's [data] g is not its [exact] u on ∂Ω (u = g on ∂Ω): g = {_fmt(gv[i])}, "
-            f"u = {_fmt(uv[i])} at {_at(pts[i])}"]
+    return _mismatch(pts, gv, eg, uv, eu, lambda gi, ui: "the scene's [data] g is not its "
+                     f"[exact] u on ∂Ω (u = g on ∂Ω): g = {gi}, u = {ui}")
 
 
 def _scene_jump(u, ex, c, nu):

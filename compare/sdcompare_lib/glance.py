@@ -3,7 +3,7 @@
 
 What it measures, per variant (u space × multiplier × p mass × p space), is the u error at the
 finest level where sdcrack and a reference both have one, with the same yardstick as the
-reference checks (yardsticks.reference_inputs):
+reference checks (refyard.reference_inputs):
 
 * with an exact solution, both errors are against it (sdcrack's series; the reference's own
   error recomputed by this tool), so ρ = e_sdcrack / e_ref is "how many times the reference's
@@ -23,10 +23,11 @@ Everything here is derived from the analysis dict `a` of compare/sdcompare; noth
 twice: the verdict does not read this module.
 """
 
-from . import choices, rates, verdict, yardsticks
+from . import choices, rates, refyard, verdict
 from .checks import NOT_RUN
 from .read import REFERENCE_TOOLS as REFERENCES
-from .read import finite_number, variant_label, variant_of, variant_order
+from .read import finite_number
+from .cases import variant_label, variant_of, variant_order
 from .render import REFERENCE_NAMES
 
 # The check rows that judge the δ → 0 limit (Theorem 2.1).
@@ -72,7 +73,7 @@ def reference_series(res, a):
     of the solver's series."""
     out = []
     for tool in _tools(res):
-        yard, _ = yardsticks.reference_inputs(res, a, tool)
+        yard, _ = refyard.reference_inputs(res, a, tool)
         xs = reference_parameters(res, a, tool)
         name = REFERENCE_NAMES[tool]
         label = (f"{name}: its error" if a["exact"] is not None
@@ -190,7 +191,7 @@ def plot_curves(res, a):
 
 def _u_series(res, a, tool):
     """(yardstick {(level, q): e_ref}, the solver's u series against the same solution)."""
-    yard, series = yardsticks.reference_inputs(res, a, tool)
+    yard, series = refyard.reference_inputs(res, a, tool)
     own = {variant_of(s): s for s in a["series"] if s["quantity"] == "u_l2"}
     out = []
     for s in series:

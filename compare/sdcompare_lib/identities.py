@@ -24,7 +24,8 @@ from collections import defaultdict
 
 import numpy as np
 
-from .read import case_key, finite_number, variant_suffix
+from .read import finite_number
+from .cases import case_key, variant_suffix
 from .render import fmt_delta
 
 EPS = np.finfo(float).eps
@@ -108,7 +109,7 @@ def multiplier_identities(cases, fields):
     for c in cases:
         if fields.has_case(c.get("fields_grid")):
             k = case_key(c)
-            groups[(k[0], k[1], k[4], k[5], k[3])][str(c["multiplier"])] = c
+            groups[(k.level, k.u_space, k.p_mass, k.p_space, k.delta)][k.multiplier] = c
     rows, problems = [], []
     for (lvl, u, pm, ps, delta), by_m in sorted(groups.items()):
         states = {m: crack_state(c) for m, c in by_m.items()}

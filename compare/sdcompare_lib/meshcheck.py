@@ -62,8 +62,9 @@ import numpy as np
 
 from . import exact as exact_mod
 from . import crackcut, rates, theory
-from .read import case_key, finite_number, variant_suffix
-from .render import fmt_delta
+from .read import finite_number
+from .cases import case_key, case_order
+from .render import case_text
 
 # summary.json's h and the stored mesh's largest diameter (module docstring).
 H_RTOL = 1e-12
@@ -179,11 +180,6 @@ def _export_levels(res):
     return out
 
 
-def _case_text(c):
-    k = case_key(c)
-    return f"level {k[0]} {k[1]} {k[2]}{variant_suffix(k[4], k[5])} δ={fmt_delta(k[3])}"
-
-
 def _rel(a, b):
     return abs(a - b) / max(abs(a), abs(b)) if max(abs(a), abs(b)) > 0 else 0.0
 
@@ -197,7 +193,7 @@ def h_check(res, a, meshes):
     largest = {}
     problems, worst, n, unmeasured = [], 0.0, 0, []
     bad = {}
-    for c in sorted(res["summary"]["cases"], key=case_key):
+    for c in sorted(res["summary"]["cases"], key=case_order):
         m = meshes.of_case(c)
         if m is None:
             unmeasured.append(c)
@@ -217,7 +213,7 @@ def h_check(res, a, meshes):
             bad.setdefault((int(c["level"]), key), []).append((c, h, H, rel))
     for (lv, key), rows in sorted(bad.items()):
         c, h, H, rel = rows[0]
-        problems.append(f"{_case_text(c)}: summary.json's h = {h!r} but its stored mesh "
+        problems.append(f"{case_text(case_key(c))}: summary.json's h = {h!r} but its stored mesh "
                         f"({key}) has largest triangle diameter {H:.17g} (relative difference "
                         f"{rel:.1e} > {H_RTOL:g}; {len(rows)} case(s) of this mesh)")
     nref = 0
@@ -243,7 +239,7 @@ def h_check(res, a, meshes):
                                  "export to measure h on")
     if unmeasured and n:
         problems.append(f"{len(unmeasured)} case(s) have no stored mesh to measure h on, e.g. "
-                        f"{_case_text(unmeasured[0])}")
+                        f"{case_text(case_key(unmeasured[0]))}")
     a["meshcheck"]["h"] = {"cases": n, "reference_cases": nref,
                            "largest_relative_difference": worst}
     return (label, what + f" ({n} cases, {nref} reference cases; largest difference {worst:.1e})",
@@ -450,7 +446,7 @@ def field_files_check(res, a, meshes):
             "vertices in crack order, on the − face, as the mesh export's crack.txt lists them; "
             "continuous u: one vertex)")
     folder = res["folder"]
-    cases = sorted(res["summary"]["cases"], key=case_key)
+    cases = sorted(res["summary"]["cases"], key=case_order)
     exported = _export_levels(res)
     problems = []
     files = {}
@@ -528,7 +524,7 @@ def field_files_check(res, a, meshes):
                 if not isinstance(rel, str):
                     continue
                 x = xdmf(rel)
-                what_case = f"{rel} ({_case_text(c)})"
+                what_case = f"{rel} ({case_text(case_key(c))})"
                 if x is None:
                     problems.append(f"{what_case}: the field file named in summary.json is missing")
                     continue

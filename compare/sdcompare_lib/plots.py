@@ -18,8 +18,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.text import Text  # noqa: E402
 from matplotlib.ticker import FixedLocator, FuncFormatter, NullFormatter  # noqa: E402
 
-from .read import (DEFAULT_P_MASS, p_mass, p_space, p_space_tag, variant_label,  # noqa: E402
-                   variant_of, variant_order)
+from .cases import (DEFAULT_P_MASS, p_mass, p_space, p_space_tag, variant_label,  # noqa: E402
+                    variant_of, variant_order)
 from .render import MIN_FONT_KEY, REFERENCE_NAMES, fmt_delta  # noqa: E402
 
 DPI = 100
@@ -92,7 +92,7 @@ LABEL_ROOM = 0.15
 def _variant_style(e):
     """(kwargs of plot(), label) of a series / δ-limit / timing entry: colour per u space, p mass
     and p space, marker per multiplier (hollow for continuous u), line style per p mass and p space
-    (PM_STYLE); labels as the tables' (read.variant_label: broken/M1, broken/M1/lumped,
+    (PM_STYLE); labels as the tables' (cases.variant_label: broken/M1, broken/M1/lumped,
     broken/M1/ptangential)."""
     u, m, pm, ps = variant_of(e)
     kw = {"linestyle": PM_STYLE.get((pm, ps), ":"), "marker": MARK.get(m, "x"),

@@ -26,8 +26,8 @@ import os
 
 import numpy as np
 
-from . import exact
-from .sdresults import write_atomic
+from . import cases, exact
+from sdshared.sdresults import write_atomic
 
 FORMAT = "sdcompare-precomputed-1"
 
@@ -208,8 +208,8 @@ def _precompute_solver(folder, read, ex, scene_file):
             if not isinstance(c.get("errors"), dict) or not data.has_case(c.get("fields_grid")):
                 continue
             try:
-                solver_case_errors_h5(data.h5, c["fields_grid"], ex, scene_file, read.p_mass(c),
-                                      read.p_space(c))
+                solver_case_errors_h5(data.h5, c["fields_grid"], ex, scene_file, cases.p_mass(c),
+                                      cases.p_space(c))
                 n += 1
             except exact.ExactError:
                 continue

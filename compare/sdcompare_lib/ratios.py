@@ -64,9 +64,11 @@ import re
 import tomllib
 
 from . import theory
-from .sdresults import write_atomic
-from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, InputError, finite_number, p_mass, p_space,
-                   variant_label, variant_of, variant_order)
+from sdshared.sdresults import write_atomic
+from .read import InputError, finite_number
+from .cases import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, variant_label, variant_of,
+                    variant_order)
+from .refyard import ABS_FLOOR, reference_inputs
 
 # ρ may differ from the recorded ratio by this factor either way (module docstring).
 RATIO_BAND = 1.25
@@ -80,8 +82,6 @@ H_RTOL = 1e-9
 MERGE_RTOL = 2e-3
 # Significant digits of a recorded ratio (a relative rounding of ≤ 5e-5).
 DIGITS = 4
-# Errors at or below this are zero to round-off (λ of a closed crack): no ratio.
-ABS_FLOOR = 1e-12
 
 SETTLE_LABEL = "reference ratio settles"
 RECORDED_LABEL = "recorded reference ratio"
@@ -259,9 +259,7 @@ def ratio_entries(res, a, tool):
     """(reference level or None, entries): one entry per series of the run that converges at the
     references' order (equal_order) and is not a declared expected failure, with ρ per level
     against `tool` (None where an error is missing or zero to round-off)."""
-    from . import yardsticks
-
-    yard, series = yardsticks.reference_inputs(res, a, tool)
+    yard, series = reference_inputs(res, a, tool)
     ref_level = None if a["exact"] is not None else reference_finest(res["refs"][tool])
     hs = level_h(res["summary"]["cases"])
     out = []
@@ -304,16 +302,15 @@ def settling_rows(entries):
 
 
 def settling_problems(rows):
-    out = []
-    for r in rows:
-        if r["ok"]:
-            continue
-        out.append(f"{variant_label(*variant_of(r))} {r['quantity']}: ρ grows from "
-                   f"{r['ratio_from']:.4g} (level {r['from_level']}) to {r['ratio']:.4g} (level "
-                   f"{r['level']}), log change {r['log_change']:.3g} > {r['bound']:.3g} = "
-                   f"{SETTLE_MARGIN:g} × ln(h_{r['from_level']}/h_{r['level']}): sdcrack's rate "
-                   f"lags the references' by {r['rate_lag']:.3g} > {SETTLE_MARGIN:g}")
-    return out
+    return [_settling_problem(r) for r in rows if not r["ok"]]
+
+
+def _settling_problem(r):
+    return (f"{variant_label(*variant_of(r))} {r['quantity']}: ρ grows from "
+            f"{r['ratio_from']:.4g} (level {r['from_level']}) to {r['ratio']:.4g} (level "
+            f"{r['level']}), log change {r['log_change']:.3g} > {r['bound']:.3g} = "
+            f"{SETTLE_MARGIN:g} × ln(h_{r['from_level']}/h_{r['level']}): sdcrack's rate "
+            f"lags the references' by {r['rate_lag']:.3g} > {SETTLE_MARGIN:g}")
 
 
 def _matches(row, entry):
@@ -386,7 +383,7 @@ def recorded_rows(rows, res, a):
 
 def _not_run(row, plan):
     """"p_mass lumped" when the row names a value the run's plan does not run, else None."""
-    from .read import plan_p_masses, plan_p_spaces
+    from .cases import plan_p_masses, plan_p_spaces
 
     runs = {"u_space": plan.get("u_spaces", []), "multiplier": plan.get("multipliers", []),
             "p_mass": plan_p_masses(plan), "p_space": plan_p_spaces(plan)}

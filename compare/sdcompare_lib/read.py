@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import sdexport  # the reader of the mesh export's cracks, shared with the references
+from sdshared import sdexport  # the reader of the mesh export's cracks, shared with the references
+from .cases import DEFAULT_P_SPACE
 
 REFERENCE_TOOLS = ("dolfinx", "freefem")
 
@@ -32,90 +33,6 @@ def load_json(path):
 def finite_number(v):
     """True for an int or float (not a bool) that is finite: a usable error or residual."""
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-# The p masses of `sdcrack run` (summary.json: each case's `p_mass`, the plan's `p_masses`); a case
-# without the key (an sdcrack older than the lumped p mass) is consistent.
-P_MASSES = ("consistent", "lumped")
-DEFAULT_P_MASS = "consistent"
-# The spaces of p (summary.json: each case's `p_space`, the plan's `p_spaces`): the
-# paper's continuous MINI p, or "broken-tangential", whose tangential component has one value per
-# crack face at the interior vertices of a straight crack (p·ν shared; kinks and tips shared). A
-# case without the key (an sdcrack older than the axis) is continuous. The broken-tangential p runs
-# with broken u only: the plan is the product of its lists minus (continuous u, broken-tangential p).
-DEFAULT_P_SPACE = "continuous"
-BROKEN_TANGENTIAL = "broken-tangential"
-P_SPACES = (DEFAULT_P_SPACE, BROKEN_TANGENTIAL)
-# The p space's tag in labels (broken/M1/ptangential), as in the solver's field names
-# (level3-broken-M1-lumped-ptangential-delta0); none for the continuous p.
-P_SPACE_TAG = {DEFAULT_P_SPACE: "", BROKEN_TANGENTIAL: "ptangential"}
-
-
-def p_mass(c):
-    """The case's (or row's) p mass: its `p_mass` ("consistent" when absent)."""
-    v = c.get("p_mass")
-    return DEFAULT_P_MASS if v is None else str(v)
-
-
-def p_space(c):
-    """The case's (or row's) p space: its `p_space` ("continuous" when absent)."""
-    v = c.get("p_space")
-    return DEFAULT_P_SPACE if v is None else str(v)
-
-
-def runs_together(u_space, ps):
-    """Whether sdcrack runs this u space with this p space: a p whose tangential part jumps needs
-    a u that may jump (never continuous u with the broken-tangential p)."""
-    return not (u_space == "continuous" and ps == BROKEN_TANGENTIAL)
-
-
-def p_space_tag(ps):
-    """"ptangential" of the broken-tangential p space, "" of the continuous one."""
-    return P_SPACE_TAG.get(ps, ps)
-
-
-def variant_label(u_space, multiplier, pm=DEFAULT_P_MASS, ps=DEFAULT_P_SPACE):
-    """"broken/M1" (consistent p mass, continuous p: as before either axis existed),
-    "broken/M1/lumped", "broken/M1/ptangential", "broken/M1/lumped/ptangential"."""
-    return "/".join([f"{u_space}/{multiplier}"] + [t for t in ("" if pm == DEFAULT_P_MASS else pm,
-                                                              p_space_tag(ps)) if t])
-
-
-def variant_suffix(pm=DEFAULT_P_MASS, ps=DEFAULT_P_SPACE):
-    """" lumped", " ptangential", " lumped ptangential" after a case's "level L u m" in a problem
-    line; nothing for the consistent p mass and the continuous p."""
-    return "".join(f" {t}" for t in ("" if pm == DEFAULT_P_MASS else pm, p_space_tag(ps)) if t)
-
-
-def variant_of(x):
-    """(u space, multiplier, p mass, p space) of a case or of a series, table or plot row."""
-    return str(x["u_space"]), str(x["multiplier"]), p_mass(x), p_space(x)
-
-
-def variant_order(v):
-    """Sort key of a variant (u, m, p mass, p space): the consistent p mass and the continuous p
-    first, as a run without them lists its variants."""
-    u, m, pm, ps = v
-    return u, m, pm != DEFAULT_P_MASS, pm, ps != DEFAULT_P_SPACE, ps
-
-
-def case_key(c):
-    """(level, u space, multiplier, δ, p mass, p space): the p axes last, so k[:4] reads as
-    before them."""
-    return (int(c["level"]), str(c["u_space"]), str(c["multiplier"]), float(c["delta"]),
-            p_mass(c), p_space(c))
-
-
-def plan_p_masses(plan):
-    """The plan's p masses (["consistent"] for a plan written before the lumped p mass)."""
-    v = plan.get("p_masses") if isinstance(plan, dict) else None
-    return list(v) if isinstance(v, list) else [DEFAULT_P_MASS]
-
-
-def plan_p_spaces(plan):
-    """The plan's p spaces (["continuous"] for a plan written before the p space axis)."""
-    v = plan.get("p_spaces") if isinstance(plan, dict) else None
-    return list(v) if isinstance(v, list) else [DEFAULT_P_SPACE]
 
 
 def without_default_p_space(obj):
@@ -231,7 +148,7 @@ class ExportLevel:
     """One level of the mesh export the references solved on: the cracked mesh (points (N,2),
     tris (T,3)), crack (I,2) the (plus, minus) rows of crack.txt, ranges [(first, n)] its cracks
     (cracks.txt), kind "structured" | "refined" | "graded" (mesh.json;
-    compare/sdcompare_lib/sdexport.py), parents (graded levels: parents.txt)."""
+    compare/sdshared/sdexport.py), parents (graded levels: parents.txt)."""
 
     level: int
     points: np.ndarray

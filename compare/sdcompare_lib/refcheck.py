@@ -43,7 +43,7 @@ load quadrature (F_h ≠ F) and the segments where the exact crack changes from 
 """
 from . import rates, theory
 from .meshcheck import grading
-from .yardsticks import ABS_FLOOR
+from .refyard import ABS_FLOOR
 from .read import finite_number
 from .verdict import mesh_parameter
 
@@ -117,6 +117,16 @@ def regularity(series, a, graded):
     return theory.regularity(rate, True, a.get("gradient_growth"), graded)
 
 
+def _regularities(series, a, graded):
+    """(reference, its series, s, reason) of each reference in name order (regularity)."""
+    return [(tool, s, *regularity(s, a, graded)) for tool, s in sorted(series.items())]
+
+
+# Both checks' problem when no level has what they compare.
+NO_LEVEL = ("could not run: no level with both a reference's recomputed errors and its "
+            "interpolation yardstick")
+
+
 def _not_applicable(res, a):
     """Why neither check applies (no exact solution, no reference), or None."""
     if a.get("exact") is None:
@@ -155,11 +165,9 @@ def orders_check(res, a, series, na):
                                  "log factor at β = 1/2) and the order it leaves is not in the "
                                  "theory table (the interpolation yardstick still applies)")
     if not series:
-        return label, what, ["could not run: no level with both a reference's recomputed errors "
-                             "and its interpolation yardstick"], None
+        return label, what, [NO_LEVEL], None
     problems, measured = [], []
-    for tool, s in sorted(series.items()):
-        reg, reg_reason = regularity(s, a, graded)
+    for tool, s, reg, reg_reason in _regularities(series, a, graded):
         for q in QUANTITIES:
             order = theory.p1_order(q, reg)
             row = judge_orders(tool, q, s, order, reg, reg_reason, g)
@@ -230,11 +238,9 @@ def yardstick_check(res, a, series, na):
     if na:
         return label, what, [], na
     if not series:
-        return label, what, ["could not run: no level with both a reference's recomputed errors "
-                             "and its interpolation yardstick"], None
+        return label, what, [NO_LEVEL], None
     problems, measured = [], []
-    for tool, s in sorted(series.items()):
-        reg, _ = regularity(s, a, graded)
+    for tool, s, reg, _ in _regularities(series, a, graded):
         for q in yardstick_quantities(graded, reg):
             worst = None
             for lv, e, y in zip(s["levels"], s["errors"][q], s["interpolation"][q]):

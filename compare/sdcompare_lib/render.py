@@ -8,7 +8,6 @@ Markdown and HTML walk the sections in one order (_walk); the HTML page's skelet
 are page.py's, shared with the campaign index.
 """
 import base64
-import decimal
 import html
 import json
 import math
@@ -18,8 +17,9 @@ import struct
 import tempfile
 
 from .page import cell_class, page, scroll_table
-from .sdresults import replace_folder
-from .read import DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag
+from sdshared.sdresults import replace_folder
+from .cases import (DEFAULT_P_MASS, DEFAULT_P_SPACE, p_mass, p_space, p_space_tag,
+                    shortest_exponent_form, variant_suffix)
 
 # Tables longer than this are folded (<details>) outside the summary section.
 FOLD_ROWS = 8
@@ -53,11 +53,15 @@ def fmt_delta(d):
         return "–"
     if d == 0:
         return "0"
-    sign, digits, exp = decimal.Decimal(repr(abs(d))).normalize().as_tuple()
-    m = "".join(map(str, digits))
-    e = exp + len(digits) - 1
-    mant = m[0] + ("." + m[1:] if len(m) > 1 else "")
+    mant, e = shortest_exponent_form(abs(d))
     return ("-" if d < 0 else "") + (mant if e == 0 else f"{mant}e{e}")
+
+
+def case_text(k):
+    """"level L u m[ lumped][ ptangential] δ=D" of a case key (cases.CaseKey): how every check
+    names a case."""
+    return (f"level {k.level} {k.u_space} {k.multiplier}{variant_suffix(k.p_mass, k.p_space)} "
+            f"δ={fmt_delta(k.delta)}")
 
 
 def cell(c):
@@ -346,7 +350,7 @@ def threads_text(p):
     """What a reference's provenance `p` says of its BLAS/OpenMP threads (sdresults.PINNED_THREADS):
     pinned to 1, not pinned (which, and that a rerun, pinned, may then differ in the last digits),
     or not recorded."""
-    from .sdresults import PINNED_THREADS, threads_pinned
+    from sdshared.sdresults import PINNED_THREADS, threads_pinned
 
     threads = p.get("threads")
     pinned = threads_pinned(threads)
@@ -427,7 +431,7 @@ def rerun_args(exe, scene_path, scene_name, k, only_delta, rerun_dir=None, refer
     and of tools/cases."""
     import shlex
 
-    from .sdresults import pinned_env_args
+    from sdshared.sdresults import pinned_env_args
 
     args = pinned_env_args() + [exe, "run", scene_path] + ([SOLVER_ONLY] if references else []) \
         + ["--level", str(k["level"]), "--u-space", str(k["u_space"]),

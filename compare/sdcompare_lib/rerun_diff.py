@@ -17,7 +17,7 @@ import sys
 
 import numpy as np
 
-from . import read
+from . import cases, read
 from .read import REFERENCE_TOOLS
 from .render import fmt_delta
 
@@ -103,17 +103,16 @@ def load_summary(folder):
 
 # ---------------------------------------------------------------- summary.json cases
 def case_key(c):
-    """A case's identity, read.case_key's (level, u space, multiplier, δ, p mass, p space), or
-    None for an entry that lacks one."""
+    """A case's identity (cases.CaseKey), or None for an entry that lacks one."""
     try:
-        return read.case_key(c)
+        return cases.case_key(c)
     except (KeyError, TypeError, ValueError):
         return None
 
 
-def case_label(key):
-    level, u, m, delta, pm, ps = key
-    return f"level {level} {u} {m} {pm} {ps} δ {fmt_delta(delta)}"
+def case_label(k):
+    return (f"level {k.level} {k.u_space} {k.multiplier} {k.p_mass} {k.p_space} "
+            f"δ {fmt_delta(k.delta)}")
 
 
 def cases_by_key(summary, folder):

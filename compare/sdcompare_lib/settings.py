@@ -19,14 +19,14 @@ and declare a check that does not apply to it, with a reason ([[verification.not
 """
 import math
 
-from .read import DEFAULT_P_SPACE, P_SPACES, InputError
+from .read import InputError
+from .cases import DEFAULT_P_SPACE, P_MASSES, P_SPACES
 
 DEFAULTS = {"kkt_tolerance": 1e-10, "reference_agreement": 1e-8, "delta_slope_tolerance": 0.1,
             "min_rate": 0.4}
 # Larger is looser for the tolerances, smaller is looser for min_rate.
 _LOOSER = {"kkt_tolerance": 1, "reference_agreement": 1, "delta_slope_tolerance": 1, "min_rate": -1}
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
-P_MASSES = ("consistent", "lumped")
 # The keys of one [[verification.expected_rate]] (tests/python/test_schema.py ties these names
 # to the solver's scene schema, `sdcrack schema`).
 EXPECTED_RATE_KEYS = ("u_space", "multiplier", "p_mass", "p_space", "quantity", "rate", "reason")

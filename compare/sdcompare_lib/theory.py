@@ -62,7 +62,7 @@ import importlib.util
 import os
 import tomllib
 
-from .read import BROKEN_TANGENTIAL, DEFAULT_P_SPACE
+from .cases import BROKEN_TANGENTIAL, DEFAULT_P_SPACE
 
 # The table of expected orders, in the repository's scenes/.
 ORDERS_NAME = "orders.toml"

@@ -9,8 +9,9 @@ import numpy as np
 
 from . import norms, rates, theory
 from .baseline import error_change, rate_change
-from .read import (DEFAULT_P_MASS, DEFAULT_P_SPACE, P_MASSES, P_SPACES, case_key, finite_number,
-                   p_mass, p_space, total_time, variant_label, variant_of, variant_order)
+from .read import finite_number, total_time
+from .cases import (DEFAULT_P_MASS, DEFAULT_P_SPACE, P_MASSES, P_SPACES, case_key, case_order,
+                    p_mass, p_space, variant_label, variant_of, variant_order)
 from .settings import QUANTITIES, expected_failure  # p_x: the paper's mesh-dependent X-norm
 
 # Theorem 4.3 bounds ‖u−u_h‖ + ‖p−p_h‖_X + ‖λ−λ_h‖ together: its rate applies to each of them.
@@ -282,7 +283,7 @@ def _solver_vs_reference(scene, cases, fields, ref, tool):
     grad_f = norms.p1_gradients(fpts, ftris, uf)
     area_f = norms.triangle_areas(fpts, ftris)
     delta_finest = ref_delta(cases)
-    for c in sorted((c for c in cases if fields.has_case(c.get("fields_grid"))), key=case_key):
+    for c in sorted((c for c in cases if fields.has_case(c.get("fields_grid"))), key=case_order):
         lvl = int(c["level"])
         f = fields.case(c["fields_grid"])
         if f["u"] is None or lvl not in meshes or lvl not in ref["u"]:
@@ -409,7 +410,7 @@ def kkt_rows(scene, cases):
 
 def timing_rows(scene, cases):
     rows = []
-    for c in sorted(cases, key=case_key):
+    for c in sorted(cases, key=case_order):
         e = c.get("errors") if isinstance(c.get("errors"), dict) else {}
         rows.append({"scene": scene, "level": int(c["level"]), "u_space": c["u_space"],
                      "multiplier": c["multiplier"], "p_mass": p_mass(c), "p_space": p_space(c),
@@ -632,9 +633,10 @@ def _match(pattern, value):
 def _case_list(k):
     """A case key as written in a baseline flag: [level, u, m, δ], then the p mass when it or the p
     space is not the default, then the p space when it is not continuous."""
-    if k[5] != DEFAULT_P_SPACE:
-        return list(k)
-    return list(k[:4]) if k[4] == DEFAULT_P_MASS else list(k[:5])
+    order = list(k.order())  # [level, u, m, δ, p mass, p space]
+    if k.p_space != DEFAULT_P_SPACE:
+        return order
+    return order[:4] if k.p_mass == DEFAULT_P_MASS else order[:5]
 
 
 def compare_baseline(scene, cases, rate_entries, base_cases, base_rates):

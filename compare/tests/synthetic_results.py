@@ -29,6 +29,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 import fake_export as fe
 from sdcompare_lib import exact, read
+from sdcompare_lib.cases import CaseKey
 
 CRACK = [(-0.5, 0.0), (0.5, 0.0)]
 # smooth on each face, open on the crack ([u] = 2 m³ > 0), tangential ∂u/∂x jumps, ∂u/∂y = 0 on
@@ -110,13 +111,6 @@ def fields_of(ex, u_space, p_space, mesh, side, stall):
     return u, np.column_stack([px, py])
 
 
-def grid_name(level, u_space, multiplier, p_mass, p_space, delta):
-    """The field name the solver writes: the p-mass suffix, then -ptangential."""
-    return (f"level{level}-{u_space}-{multiplier}"
-            + ("" if p_mass == "consistent" else f"-{p_mass}")
-            + ("" if p_space == "continuous" else "-ptangential") + f"-delta{delta:g}")
-
-
 def plan_cases(levels, u_spaces, multipliers, p_masses, p_spaces, deltas):
     """The product of the plan minus (continuous u, broken-tangential p), in the solver's order."""
     return [(lv, u, m, pm, ps, d) for lv in levels for u in u_spaces for m in multipliers
@@ -157,7 +151,8 @@ def write_results(out, name="pspace", solution=OPEN, levels=(0, 1, 2),
                 u, p = u0 + delta * np.cos(pts[:, 1]), p0 * (1 + delta)
                 lam = (lam0 + (stall if u_space == "continuous" else 0.0)) * (1 + 3 * delta)
                 bubble = None if pm == "lumped" else np.zeros((len(tris), 2))
-                grid = grid_name(lv, u_space, m, pm, ps, delta)
+                grid = CaseKey(level=lv, u_space=u_space, multiplier=m, p_mass=pm, p_space=ps,
+                               delta=float(delta)).case_name()
                 g = f5.create_group(f"cases/{grid}")
                 g["mesh"] = h5py.SoftLink(f"/meshes/level{lv}-{u_space}")
                 g["u"], g["p"] = u, np.column_stack([p, 0 * u])

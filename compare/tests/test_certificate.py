@@ -19,8 +19,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "compare"))
 from conftest import run_env, sdcrack_bin
+from scene_text import square_scene
 from sdcompare_lib import certificate as C
-from sdcompare_lib import read
+from sdcompare_lib import cases, read
 
 EPS = np.finfo(float).eps
 # A triangle in general position (no axis-aligned edge), counter-clockwise, and its mirror image.
@@ -113,26 +114,12 @@ def test_loads_boundary_and_crack_operators():
 
 
 # ------------------------------------------------------------------ real results
-SCENE = """name = "cert"
-description = "partly open crack for the certificate's tests"
-[geometry]
-domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
-crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
-[data]
-f = "20*sin(2*pi*x)*sign(y)"
-g = "0.1*x"
-[discretization]
-cells = [4, 4]
-levels = [0, 1]
-u_spaces = ["continuous", "broken"]
-multipliers = ["M0", "M1", "M1star"]
-p_mass = ["consistent", "lumped"]
-p_spaces = ["continuous", "broken-tangential"]
-deltas = [1e-2, 0.0]
-[outputs]
-fields = ["u", "p", "lambda"]
-references = []
-"""
+SCENE = square_scene(
+    "cert", "partly open crack for the certificate's tests",
+    data={"f": '"20*sin(2*pi*x)*sign(y)"', "g": '"0.1*x"'},
+    discretization={"levels": "[0, 1]", "u_spaces": '["continuous", "broken"]',
+                    "multipliers": '["M0", "M1", "M1star"]', "p_mass": '["consistent", "lumped"]',
+                    "p_spaces": '["continuous", "broken-tangential"]', "deltas": "[1e-2, 0.0]"})
 
 
 @pytest.fixture(scope="module")
@@ -179,8 +166,8 @@ def certify(res, which=None, edit=None):
 
 
 def is_case(level, u, m, delta=0.0, pm="consistent", ps="continuous"):
-    return lambda c: (c["level"], c["u_space"], c["multiplier"], c["delta"], read.p_mass(c),
-                      read.p_space(c)) == (level, u, m, delta, pm, ps)
+    return lambda c: (c["level"], c["u_space"], c["multiplier"], c["delta"], cases.p_mass(c),
+                      cases.p_space(c)) == (level, u, m, delta, pm, ps)
 
 
 def test_undamaged_results_pass_with_margin(results):

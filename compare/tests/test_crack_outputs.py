@@ -22,7 +22,7 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
-from scene_text import set_key
+from scene_text import scene_with
 from sdcompare_lib import crackcheck, crackcut, meshcheck, read, settings
 from conftest import run_scene, sdcrack_bin
 
@@ -31,15 +31,10 @@ NEW_CHECKS = ("field files' mesh", "crack outputs", "viewer datasets")
 
 
 def mixed_scene():
-    with open(os.path.join(ROOT, "scenes", "mixed.toml"), encoding="utf-8") as fh:
-        text = fh.read()
-    text = set_key(text, "cells", "[4, 4]")
-    text = set_key(text, "levels", "[0, 1]")
-    text = set_key(text, "multipliers", '["M1"]')
-    text = set_key(text, "p_mass", '["consistent"]')
-    text = set_key(text, "deltas", "[0.0]")
-    text = set_key(text, "fields", '["u", "lambda"]')
-    return set_key(text, "name", '"mixed-crack-outputs"')
+    return scene_with("mixed", ("cells", "[4, 4]"), ("levels", "[0, 1]"),
+                      ("multipliers", '["M1"]'), ("p_mass", '["consistent"]'),
+                      ("deltas", "[0.0]"), ("fields", '["u", "lambda"]'),
+                      ("name", '"mixed-crack-outputs"'))
 
 
 @pytest.fixture(scope="module")

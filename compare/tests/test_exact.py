@@ -17,7 +17,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 from sdcompare_lib import exact as E
 from sdcompare_lib import norms
-from sdcompare_lib import sdexpr
+from sdshared import sdexpr
 
 from scene_text import set_key
 

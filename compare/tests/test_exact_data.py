@@ -23,7 +23,8 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
 import synthetic_results as sr
-from sdcompare_lib import exactdata, sdexpr
+from sdcompare_lib import exactdata
+from sdshared import sdexpr
 
 SCRIPT = os.path.join(os.path.dirname(HERE), "sdcompare")
 BAD = {  # file: (the field named, the words of the problem)

@@ -9,7 +9,7 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
-from sdcompare_lib import glance, yardsticks
+from sdcompare_lib import glance, refyard
 
 LEVELS = [2, 3, 4]
 H = [0.25, 0.125, 0.0625]
@@ -41,7 +41,7 @@ REF = {(lv, "u_l2"): 0.01 * h ** 2 / H[0] ** 2 for lv, h in zip(LEVELS, H)}
 
 @pytest.fixture(autouse=True)
 def reference_errors(monkeypatch):
-    monkeypatch.setattr(yardsticks, "reference_inputs",
+    monkeypatch.setattr(refyard, "reference_inputs",
                         lambda res, a, tool: (dict(REF), list(a["series"])))
 
 
@@ -106,7 +106,7 @@ def test_references_that_differ_are_named_apart(monkeypatch):
 
     def inputs(res, a, tool):
         return (dict(REF) if tool == "dolfinx" else dict(ref_b)), list(a["series"])
-    monkeypatch.setattr(yardsticks, "reference_inputs", inputs)
+    monkeypatch.setattr(refyard, "reference_inputs", inputs)
     text = glance.reference_sentence(glance.summary(results(), analysis(good())))
     assert "1–2× / 0.5–1×" in text and "either reference" not in text.split(";")[0]
 

@@ -285,13 +285,20 @@ def test_a_scene_without_a_recorded_ratio_says_not_applicable(folders, tmp_path)
         "reviewed run: compare/sdcompare RESULTS --record-expectations FILE)")
 
 
+def judged_with_edited_rows(folders, exps, old, new, where):
+    """(rc, report, stderr, edited text) of the good folder judged with a copy of the recorded
+    expectations `exps` in which `old` is replaced by `new` (which must change it), where/exps.toml."""
+    text = open(exps, encoding="utf-8").read()
+    edited = text.replace(old, new)
+    assert edited != text
+    (where / "exps.toml").write_text(edited)
+    return judge(copy_of(folders["good"], where / "judged"), str(where / "exps.toml")) + (edited,)
+
+
 def test_rows_of_another_mesh_or_level_are_skipped_with_the_reason(folders, recorded, tmp_path):
     exps, _ = recorded
-    text = open(exps, encoding="utf-8").read()
-    other_h = text.replace(f"h = {2 * math.sqrt(2) / 32!r}", "h = 0.05")
-    assert other_h != text
-    (tmp_path / "h.toml").write_text(other_h)
-    rc, rep, err = judge(copy_of(folders["good"], tmp_path), str(tmp_path / "h.toml"))
+    rc, rep, err, _ = judged_with_edited_rows(folders, exps, f"h = {2 * math.sqrt(2) / 32!r}",
+                                              "h = 0.05", tmp_path)
     assert rc == 0, err
     assert status(rep)["recorded reference ratio"] == (
         "not applicable: no recorded row applies to this run: the run's level 2 is another mesh "
@@ -318,11 +325,9 @@ def test_a_row_at_a_level_no_run_has_is_skipped_not_refused(folders, recorded, t
     """A row at a level that neither the run nor its scene file has (recorded from a longer run,
     e.g. the nightly's level 5) is skipped with the reason, never an error (issue 42)."""
     exps, _ = recorded
-    text = open(exps, encoding="utf-8").read()
-    far = text.replace("level = 2\nh = ", "level = 7\nh = ")
+    rc, rep, err, far = judged_with_edited_rows(folders, exps, "level = 2\nh = ",
+                                                "level = 7\nh = ", tmp_path)
     assert far.count("level = 7") == 2, far
-    (tmp_path / "far.toml").write_text(far)
-    rc, rep, err = judge(copy_of(folders["good"], tmp_path), str(tmp_path / "far.toml"))
     assert rc == 0, err
     assert status(rep)["recorded reference ratio"] == (
         "not applicable: no recorded row applies to this run: the run has no level 7 (its "
@@ -341,11 +346,8 @@ def test_rows_of_a_variant_the_run_lacks_are_skipped(folders, recorded, tmp_path
     assert 'p_mass = ["consistent"]' in scene
     (where / f"{SCENE}.toml").write_text(scene.replace('p_mass = ["consistent"]',
                                                        'p_mass = ["consistent", "lumped"]'))
-    text = open(exps, encoding="utf-8").read()
-    lumped = text.replace('p_mass = "consistent"', 'p_mass = "lumped"')
-    assert lumped != text
-    (where / "exps.toml").write_text(lumped)
-    rc, rep, err = judge(copy_of(folders["good"], tmp_path), str(where / "exps.toml"))
+    rc, rep, err, _ = judged_with_edited_rows(folders, exps, 'p_mass = "consistent"',
+                                              'p_mass = "lumped"', where)
     assert rc == 0, err
     assert status(rep)["recorded reference ratio"] == (
         "not applicable: no recorded row applies to this run: the run has no p_mass lumped")

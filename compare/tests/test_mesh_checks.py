@@ -29,7 +29,7 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 
-from scene_text import set_key
+from scene_text import scene_with
 from sdcompare_lib import meshcheck
 from conftest import run_env, run_scene, sdcrack_bin
 
@@ -43,28 +43,19 @@ ORDERS = "reference orders"
 
 def graded_scene(beta):
     """open-exact graded towards its tips, small (module docstring)."""
-    with open(os.path.join(ROOT, "scenes", "open-exact.toml"), encoding="utf-8") as fh:
-        text = fh.read()
-    text = set_key(text, "cells", f"[8, 8]\ngrading = {{ beta = {beta}, radius = 0.5 }}")
-    text = set_key(text, "levels", "[0, 1, 2]")
-    text = set_key(text, "u_spaces", '["broken"]')
-    text = set_key(text, "multipliers", '["M1"]')
-    text = set_key(text, "p_mass", '["consistent"]')
-    text = set_key(text, "deltas", "[0.0]")
-    # a name of its own: scenes/expectations.toml's rows of open-exact are not about this scene
-    text = set_key(text, "name", '"open-exact-graded-small"')
+    text = scene_with("open-exact", ("cells", f"[8, 8]\ngrading = {{ beta = {beta}, radius = 0.5 }}"),
+                      ("levels", "[0, 1, 2]"), ("u_spaces", '["broken"]'),
+                      ("multipliers", '["M1"]'), ("p_mass", '["consistent"]'),
+                      ("deltas", "[0.0]"),
+                      # a name of its own: expectations.toml's rows of open-exact are not about it
+                      ("name", '"open-exact-graded-small"'))
     return text.partition(XFAIL)[0]  # its declaration names the continuous u, not run here
 
 
 def mixed_scene():
-    with open(os.path.join(ROOT, "scenes", "mixed.toml"), encoding="utf-8") as fh:
-        text = fh.read()
-    text = set_key(text, "cells", "[4, 4]")
-    text = set_key(text, "levels", "[1, 2, 3]")
-    text = set_key(text, "multipliers", '["M1"]')
-    text = set_key(text, "p_mass", '["consistent"]')
-    text = set_key(text, "name", '"mixed-small"')
-    return set_key(text, "deltas", "[0.0]")
+    return scene_with("mixed", ("cells", "[4, 4]"), ("levels", "[1, 2, 3]"),
+                      ("multipliers", '["M1"]'), ("p_mass", '["consistent"]'),
+                      ("name", '"mixed-small"'), ("deltas", "[0.0]"))
 
 
 @pytest.fixture(scope="module")

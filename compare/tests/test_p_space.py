@@ -19,7 +19,7 @@ import pytest
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 import synthetic_results as sr
-from sdcompare_lib import (checks, exact, norms, plots, precomputed, read, render,
+from sdcompare_lib import (cases, checks, exact, norms, plots, precomputed, read, render,
                            settings, theory, verdict, yardsticks)
 
 SCRIPT = os.path.join(os.path.dirname(HERE), "sdcompare")
@@ -136,17 +136,37 @@ def test_rerun_command_of_a_broken_tangential_case():
 
 def test_case_keys_labels_and_defaults():
     c = {"level": 1, "u_space": "broken", "multiplier": "M0", "delta": 0.0}
-    assert read.case_key(c) == (1, "broken", "M0", 0.0, "consistent", "continuous")
-    assert read.case_key(dict(c, p_space=TANGENTIAL))[5] == TANGENTIAL
-    assert read.variant_label("broken", "M1") == "broken/M1"
-    assert read.variant_label("broken", "M1", "consistent", TANGENTIAL) == "broken/M1/ptangential"
-    assert read.variant_suffix("lumped", TANGENTIAL) == " lumped ptangential"
-    assert read.plan_p_spaces({"levels": []}) == ["continuous"]
+    assert cases.case_key(c) == cases.CaseKey(level=1, u_space="broken", multiplier="M0",
+                                            p_mass="consistent", p_space="continuous", delta=0.0)
+    assert cases.case_key(dict(c, p_space=TANGENTIAL)).p_space == TANGENTIAL
+    assert cases.case_key(dict(c, p_mass="lumped", p_space=TANGENTIAL)).case_name() \
+        == "level1-broken-M0-lumped-ptangential-delta0"
+    assert cases.case_key(dict(c, delta=1e-2)).case_name() == "level1-broken-M0-delta1e-2"
+    assert cases.case_key(dict(c, delta=1.0)).case_name() == "level1-broken-M0-delta1e0"
+    assert cases.variant_label("broken", "M1") == "broken/M1"
+    assert cases.variant_label("broken", "M1", "consistent", TANGENTIAL) == "broken/M1/ptangential"
+    assert cases.variant_suffix("lumped", TANGENTIAL) == " lumped ptangential"
+    assert cases.plan_p_spaces({"levels": []}) == ["continuous"]
     assert settings.scene_p_spaces({}) == ["continuous"]
-    assert not read.runs_together("continuous", TANGENTIAL)
+    assert not cases.runs_together("continuous", TANGENTIAL)
     assert read.without_default_p_space({"a": [{"p_space": "continuous", "x": 1},
                                                {"p_space": TANGENTIAL}]}) == \
         {"a": [{"x": 1}, {"p_space": TANGENTIAL}]}
+
+
+def test_cases_sort_in_the_reports_order_not_the_fields_order():
+    """The reports list cases by level, u, multiplier, δ, then the p axes (CaseKey.order), though
+    the key's fields are in the solver's order (p mass, p space before δ)."""
+    c = {"level": 1, "u_space": "broken", "multiplier": "M0"}
+    lumped_big = dict(c, delta=1.0, p_mass="lumped")
+    consistent_small = dict(c, delta=1e-2, p_mass="consistent")
+    want = [consistent_small, lumped_big]  # δ first: 1e-2 < 1
+    assert sorted([lumped_big, consistent_small], key=cases.case_order) == want
+    assert sorted([cases.case_key(x) for x in (lumped_big, consistent_small)]) \
+        == [cases.case_key(x) for x in want]
+    # positions would sort the other way (consistent < lumped decides first): a key compared
+    # as a plain tuple of its fields fails the order above
+    assert tuple(cases.case_key(lumped_big)) > tuple(cases.case_key(consistent_small))
 
 
 # ------------------------------------------------------------------ (b) completeness

@@ -39,22 +39,23 @@ def installed_sdcompare():
 
 
 def stale_files(installed):
-    """The checkout's sdcompare_lib modules that the installed copy of .venv-pip/ (not the running
+    """The checkout's sdcompare_lib and sdshared modules that the installed copy of .venv-pip/ (not the running
     interpreter's own, which ci/test-pip has just installed) lacks or holds in another version:
     an install older than the checkout judges with older code, which is not what this test is
     about (ci/test-pip reinstalls it before running this file)."""
     if os.path.dirname(installed) == os.path.dirname(sys.executable):
         return []
     import glob
-    lib = os.path.join(ROOT, "compare", "sdcompare_lib")
-    sites = glob.glob(os.path.join(os.path.dirname(os.path.dirname(installed)), "lib",
-                                   "python3*", "site-packages", "sdcompare_lib"))
     out = []
-    for f in sorted(glob.glob(os.path.join(lib, "*.py"))):
-        there = [os.path.join(site, os.path.basename(f)) for site in sites]
-        if not any(os.path.isfile(t) and open(t, "rb").read() == open(f, "rb").read()
-                   for t in there):
-            out.append(os.path.basename(f))
+    for package in ("sdcompare_lib", "sdshared"):
+        lib = os.path.join(ROOT, "compare", package)
+        sites = glob.glob(os.path.join(os.path.dirname(os.path.dirname(installed)), "lib",
+                                       "python3*", "site-packages", package))
+        for f in sorted(glob.glob(os.path.join(lib, "*.py"))):
+            there = [os.path.join(site, os.path.basename(f)) for site in sites]
+            if not any(os.path.isfile(t) and open(t, "rb").read() == open(f, "rb").read()
+                       for t in there):
+                out.append(f"{package}/{os.path.basename(f)}")
     return out
 
 

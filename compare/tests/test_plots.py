@@ -9,7 +9,7 @@ import pytest
 COMPARE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 from sdcompare_lib import plots, render
-from sdcompare_lib.read import BROKEN_TANGENTIAL
+from sdcompare_lib.cases import BROKEN_TANGENTIAL
 
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
 # the width (CSS px) a plot is shown at in an 800 px window, and the smallest text it may show

@@ -35,6 +35,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 import synthetic_results as sr
 from sdcompare_lib import checks, exact, norms, precomputed, read
 from conftest import sdcrack_bin
+from scene_text import square_scene
 
 ROOT = os.path.dirname(os.path.dirname(HERE))
 QUANTITIES = ("u_l2", "p_l2", "p_x", "lambda_l2")
@@ -371,32 +372,12 @@ def test_summary_json_estimates_are_the_solvers_rule_against_a_higher_one(inclin
 # the solver's and this tool's quadratures differ by ~1.7e-7 relative (measured), far above the
 # former bare 1e-8, and the estimates (~1.7e-7 of u's error) leave a tolerance below a forged
 # 1e-6.
-WAVY = """name = "wavy-closed"
-description = "closed crack, smooth non-polynomial u = sin(3 pi x) cos(3 pi y) - y"
-
-[geometry]
-domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
-crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
-
-[data]
-f = "18*pi^2*sin(3*pi*x)*cos(3*pi*y)"
-g = "sin(3*pi*x)*cos(3*pi*y) - y"
-
-[exact]
-u = "sin(3*pi*x)*cos(3*pi*y) - y"
-jump = "0"
-
-[discretization]
-cells = [4, 4]
-levels = [1, 2, 3]
-u_spaces = ["continuous", "broken"]
-multipliers = ["M1"]
-deltas = [0.0]
-
-[outputs]
-fields = ["u", "p", "lambda"]
-references = []
-"""
+WAVY = square_scene(
+    "wavy-closed", "closed crack, smooth non-polynomial u = sin(3 pi x) cos(3 pi y) - y",
+    data={"f": '"18*pi^2*sin(3*pi*x)*cos(3*pi*y)"', "g": '"sin(3*pi*x)*cos(3*pi*y) - y"'},
+    exact={"u": '"sin(3*pi*x)*cos(3*pi*y) - y"', "jump": '"0"'},
+    discretization={"levels": "[1, 2, 3]", "u_spaces": '["continuous", "broken"]',
+                    "multipliers": '["M1"]', "deltas": "[0.0]"})
 
 
 @pytest.fixture(scope="module")

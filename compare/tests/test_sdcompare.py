@@ -711,7 +711,7 @@ def test_the_references_threads_are_said_as_recorded():
     only when every variable of PINNED_THREADS is 1; else which are not, and that its pinned rerun
     may differ; not recorded before issue 42."""
     from sdcompare_lib import render
-    from sdcompare_lib.sdresults import PINNED_THREADS
+    from sdshared.sdresults import PINNED_THREADS
 
     def cores_cell(threads):
         prov = {"tool": "freefem", "cores": 2} | ({} if threads is None else {"threads": threads})

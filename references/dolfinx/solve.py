@@ -13,7 +13,7 @@ python3-dolfinx)".
 
 Reads a folder written by `sdcrack mesh SCENE --out DIR` (scene.json, level{L}/{mesh.json, vertices.txt,
 triangles.txt, crack.txt, cracks.txt, crack_normals.txt, boundary.txt, sides.txt}; the crack files are
-read and checked by compare/sdcompare_lib/sdexport.py, which documents them: any number of polyline
+read and checked by compare/sdshared/sdexport.py, which documents them: any number of polyline
 cracks, each with its two tips; an export without cracks.txt / crack_normals.txt has one crack and the
 scene's single normal) and, per level, solves on the CRACKED mesh (crack vertices except the tips
 duplicated; dolfinx just sees a mesh with slits):
@@ -22,8 +22,8 @@ duplicated; dolfinx just sees a mesh with slits):
     u⁺_j − u⁻_j ≥ 0 at every interior crack node pair j (of every crack),
 
 i.e. the convex QP  min ½uᵀKu − Fᵀu.  K, F are assembled by dolfinx (f as a UFL expression of the scene
-string, translated by compare/sdcompare_lib/sdexpr.py).  Quadrature, shared with the FreeFEM reference so that
-both solve the same discrete problem to round-off: F with compare/sdcompare_lib/sdquad.py's rule (symmetric
+string, translated by compare/sdshared/sdexpr.py).  Quadrature, shared with the FreeFEM reference so that
+both solve the same discrete problem to round-off: F with compare/sdshared/sdquad.py's rule (symmetric
 Xiao–Gimbutas, degree 16, 55 interior points: f is never evaluated on the crack) as a UFL custom rule
 (load_measure), K with the one-point rule (exact for P1); g enters only through its values at the
 boundary vertices.  (With degree 8 here and qf9pT in FreeFEM the two differed by 2.9e-7 on mixed with
@@ -39,7 +39,7 @@ Writes OUT/summary.json ({"scene", "tool": "dolfinx", "provenance", "cases": [{"
 processes: a start-up cost, not part of assembly), "total"}, "errors" (exact scenes only)}]}):
   provenance: {"tool": "dolfinx", "tool_version" (dolfinx.__version__), "python", "numpy", "date_utc",
     "command_line" (sys.argv), "cores",
-    "threads" (the BLAS/OpenMP thread variables it ran with, null where unset)} (compare/sdcompare_lib/sdresults.py: provenance);
+    "threads" (the BLAS/OpenMP thread variables it ran with, null where unset)} (compare/sdshared/sdresults.py: provenance);
   kkt: relative KKT residuals of the QP in the cracked unknowns (kkt_residuals; the definitions of
     crack_qp.edp, modelled on docs/design.md), with λ_j = (K u − F) at the + copy on the active set,
     0 off it, w = u⁺ − u⁻, B the jump operator (‖B‖∞ = 2):
@@ -60,10 +60,10 @@ the FreeFEM reference) and with --fields OUT/fields.h5 + OUT/fields/level{L}.xdm
 with u, and u_exact when the scene has one: at a crack copy exact.u on its face, see side_points) +
 OUT/fields/level{L}.crack.xdmf (the cracks as polylines, segments within each crack; the crack fields
 `jump` = u⁺ − u⁻ and `contact_force` = the nodal multipliers λ_j, 0 off the active set and at the tips,
-named as in every solver's files: compare/sdcompare_lib/sdfields.py, README's field table).  OUT is written atomically (temporary folder, then rename); an
+named as in every solver's files: compare/sdshared/sdfields.py, README's field table).  OUT is written atomically (temporary folder, then rename); an
 existing OUT is an error unless --overwrite.  Errors: one line on stderr; exit status 2 for an
 unsupported dolfinx and for an invalid scene (scene.json malformed, an expression outside the grammar
-of compare/sdcompare_lib/sdexpr.py: no scene text is ever evaluated as code), 1 for any other failure.
+of compare/sdshared/sdexpr.py: no scene text is ever evaluated as code), 1 for any other failure.
 """
 
 import argparse
@@ -76,12 +76,12 @@ from pathlib import Path
 
 import numpy as np
 
-# The shared modules of the package sdcompare_lib (compare/, on PYTHONPATH: see its __init__.py)
-from sdcompare_lib import sdexport  # the crack layout of the export (crack.txt, cracks.txt, crack_normals.txt)
-from sdcompare_lib import sdexpr
-from sdcompare_lib import sdfields
-from sdcompare_lib import sdquad  # the load quadrature shared with the FreeFEM reference
-from sdcompare_lib import sdresults
+# The references' shared modules: the package sdshared (compare/sdshared/; see its __init__.py)
+from sdshared import sdexport  # the crack layout of the export (crack.txt, cracks.txt, crack_normals.txt)
+from sdshared import sdexpr
+from sdshared import sdfields
+from sdshared import sdquad  # the load quadrature shared with the FreeFEM reference
+from sdshared import sdresults
 
 # The dolfinx release series whose API this file uses (0.5.x: the Debian 12 package python3-dolfinx).
 SUPPORTED_DOLFINX = "0.5"
@@ -599,22 +599,11 @@ def jump_error_numpy(xy, layout, jump_h, trees, degree, n):
     fj = sdexpr.to_numpy(trees["exact_jump"]) if trees.get("exact_jump") is not None else None
     fu = sdexpr.to_numpy(trees["exact_u"])
     g, gw = sdquad.gauss01(degree // 2 + 1)
-    segments = layout.segments()
-    points = xy[layout.pairs[:, 0]]
-    normals = sdexport.segment_normals(points, segments)
-    is_tip = ~layout.interior()
-    total = 0.0
-    for (i, j), normal in zip(segments, normals):
-        a, b = points[i], points[j]
-        s, w = tip_facet_rule(is_tip[i], is_tip[j], n) if is_tip[i] or is_tip[j] else (g, gw)
-        X, Y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
-        if fj is not None:
-            je = fj(X, Y)
-        else:
-            je = fu(*sdexpr.on_face(X, Y, normal, 1.0)) - fu(*sdexpr.on_face(X, Y, normal, -1.0))
-        jh = (1 - s) * jump_h[i] + s * jump_h[j]
-        total += float(np.hypot(*(b - a)) * np.sum(w * (jh - je) ** 2))
-    return math.sqrt(total)
+
+    def rule(tip_a, tip_b):
+        return tip_facet_rule(tip_a, tip_b, n) if tip_a or tip_b else (g, gw)
+
+    return math.sqrt(sdexport.jump_error_sq(layout, xy, jump_h, rule, fj, fu))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -4,14 +4,14 @@
 Usage: solve.py MESH_EXPORT_DIR --out OUT [--fields] [--freefem FreeFem++] [--keep-work] [--overwrite]
 
 Reads a mesh export of `sdcrack mesh SCENE --out DIR` (its crack files crack.txt, cracks.txt,
-crack_normals.txt, sides.txt and mesh.json's kind read and checked by compare/sdcompare_lib/sdexport.py,
+crack_normals.txt, sides.txt and mesh.json's kind read and checked by compare/sdshared/sdexport.py,
 which documents them: any number of polyline cracks; an export without cracks.txt has one crack),
 runs FreeFem++ on crack_qp.edp once per level (P1 on the cracked mesh, u = g on Γ, nodal jump
 constraints u⁺ − u⁻ ≥ 0 at the interior nodes of every crack, primal–dual active set), and writes
 OUT/summary.json and OUT/u_level{L}.txt (u at the cracked vertices, %.17g).
 
 Quadrature, shared with the dolfinx reference so that both solve the same discrete problem to round-off:
-the load ∫ f φ_i with compare/sdcompare_lib/sdquad.py's rule (symmetric Xiao–Gimbutas, degree 16, 55 interior
+the load ∫ f φ_i with compare/sdshared/sdquad.py's rule (symmetric Xiao–Gimbutas, degree 16, 55 interior
 points; written into run.edp as loadRuleTable and declared there as a QF2 of the qf11to25 plugin), the
 stiffness with qf1pT (exact for P1); u = g by the P1 interpolant at the boundary vertices (no integral of
 g). With qf9pT for the load (and dolfinx's degree 8) the two references differed by 2.9e-7 on mixed with
@@ -22,7 +22,7 @@ summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h"
   provenance: {"tool": "freefem", "tool_version" (from FreeFem++'s banner, freefem_version; "unknown"
     with a warning if unreadable), "python", "numpy", "date_utc", "command_line" (sys.argv), "cores",
     "threads" (the BLAS/OpenMP thread variables it ran with, null where unset)}
-    (compare/sdcompare_lib/sdresults.py: provenance);
+    (compare/sdshared/sdresults.py: provenance);
   kkt: {"equations", "primal", "dual", "complementarity"}, relative, computed by crack_qp.edp:
     the componentwise backward error max_i |K u − F − Bᵀλ|_i / (|K||u| + |Bᵀλ| + |F|)_i over the free
     rows, max(0, −min w) / (2‖u‖∞), max(0, −min λ) / ‖λ‖∞, max |λ_j w_j| / (‖λ‖∞ 2‖u‖∞) (w = u⁺ − u⁻);
@@ -38,10 +38,10 @@ summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h"
     eval_on_face (crates/sdcrack-core/src/problem.rs) with the segment's normal.
 With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf (u, p) + level{L}.crack.xdmf
 (`jump` = u⁺ − u⁻ and `contact_force` = the nodal multipliers λ_j, 0 off the active set and at the
-tips; compare/sdcompare_lib/sdfields.py, README's field table).
+tips; compare/sdshared/sdfields.py, README's field table).
 OUT is written atomically (a temporary folder, then one rename); an existing OUT is an error unless
 --overwrite is given. Every failure is one line on stderr: exit status 2 for an invalid scene
-(scene.json malformed, an expression outside the grammar of compare/sdcompare_lib/sdexpr.py: no scene
+(scene.json malformed, an expression outside the grammar of compare/sdshared/sdexpr.py: no scene
 text is ever evaluated as code), 1 for any other failure.
 """
 
@@ -61,12 +61,12 @@ EDP_BODY = HERE / "crack_qp.edp"
 FF_LOADPATH_DEFAULT = "/usr/lib/freefem++"
 APT_HINT = "apt-get install -y freefem++ libfreefem++"
 
-# The shared modules of the package sdcompare_lib (compare/, on PYTHONPATH: see its __init__.py)
-from sdcompare_lib import sdexport  # the crack layout of the export (crack.txt, cracks.txt, crack_normals.txt)
-from sdcompare_lib import sdexpr  # the shared translator: parse, to_freefem, to_numpy, derivative
-from sdcompare_lib import sdquad  # the load quadrature shared with the dolfinx reference
-from sdcompare_lib import sdresults  # (standard library only)
-from sdcompare_lib import sdfields  # the field files (fields.h5, XDMF) and p = ∇u_h at the vertices
+# The references' shared modules: the package sdshared (compare/sdshared/; see its __init__.py)
+from sdshared import sdexport  # the crack layout of the export (crack.txt, cracks.txt, crack_normals.txt)
+from sdshared import sdexpr  # the shared translator: parse, to_freefem, to_numpy, derivative
+from sdshared import sdquad  # the load quadrature shared with the dolfinx reference
+from sdshared import sdresults  # (standard library only)
+from sdshared import sdfields  # the field files (fields.h5, XDMF) and p = ∇u_h at the vertices
 
 MAX_ITERATIONS = 100      # linear solves of the active-set method (crack_qp.edp)
 KKT_TOLERANCE = sdresults.KKT_TOLERANCE
@@ -426,23 +426,10 @@ def jump_error_sq(xy, layout, u_h, u_ex, exact, degree, depth):
     exact.jump, else u on each face of the segment (sdexpr.on_face with the segment's normal)."""
     cr = layout.pairs
     jump_h = u_h[cr[:, 0]] - u_h[cr[:, 1]]
-    segments = layout.segments()
-    points = xy[cr[:, 0]]
-    normals = sdexport.segment_normals(points, segments)
-    is_tip = ~layout.interior()
     u_jump = to_numpy("exact.jump", exact["jump"]) if exact.get("jump") else None
-    sl = 0.0
-    for (i, j), normal in zip(segments, normals):
-        a, b = points[i], points[j]
-        s, w = graded_segment_rule(is_tip[i], is_tip[j], degree, depth)
-        X, Y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
-        if u_jump is not None:
-            jx = u_jump(X, Y)
-        else:
-            jx = u_ex(*sdexpr.on_face(X, Y, normal, 1.0)) - u_ex(*sdexpr.on_face(X, Y, normal, -1.0))
-        jh = (1 - s) * jump_h[i] + s * jump_h[j]
-        sl += float(np.hypot(*(b - a)) * np.sum(w * (jh - jx) ** 2))
-    return sl
+    return sdexport.jump_error_sq(
+        layout, xy, jump_h, lambda tip_a, tip_b: graded_segment_rule(tip_a, tip_b, degree, depth),
+        u_jump, u_ex)
 
 
 # ---- driver --------------------------------------------------------------------------------------

@@ -5,7 +5,7 @@ per triangle): structured mesh of [-1,1]² with n×n cells split by SW–NE diag
 -0.5 ≤ x ≤ 0.5 (normal (0, 1)), n = n0·2^level (n0 divisible by 4).
 
 kinked_export, two_cracks_export, refined_export: the polyline-crack format (polyline cracks, several
-cracks, uniformly refined meshes; see the section below and compare/sdcompare_lib/sdexport.py).
+cracks, uniformly refined meshes; see the section below and compare/sdshared/sdexport.py).
 polyline_l2_sq: the exact crack L² norm of a linear function on such a polyline.
 Standard library and numpy only.
 """
@@ -93,7 +93,7 @@ CLOSED_F = "2*pi^2*sin(pi*x)*cos(pi*y)"
 # write_export writes scene.json with "domain", "cracks" (and the legacy "crack" only for one crack
 # of two points), and per level mesh.json with "kind", "coarse_triangles", "n_cracks",
 # crack.txt / cracks.txt / crack_normals.txt for the cracks in scene order, and sides.txt with one
-# value per triangle corner (compare/sdcompare_lib/sdexport.py documents the formats). The scenarios:
+# value per triangle corner (compare/sdshared/sdexport.py documents the formats). The scenarios:
 # kinked_export (a kink on a structured grid), two_cracks_export (that kink and a straight crack),
 # refined_export (a perturbed coarse triangulation refined uniformly with the 4t + c numbering).
 

@@ -1,10 +1,10 @@
-"""Writes expr_cases.json: values of the Python translator (compare/sdcompare_lib/sdexpr.py) at
+"""Writes expr_cases.json: values of the Python translator (compare/sdshared/sdexpr.py) at
 random points, crack faces (y = +0.0 / -0.0) included (non-finite values as the strings
 'inf', '-inf', 'nan'), and its parse errors. The Rust test
 tests/expr_crosscheck.rs evaluates the same strings with crates/sdcrack-core/src/expr.rs and must agree, and
 test_expr_cases.py checks that the Python back-ends still give these values. Regenerate with
-`PYTHONPATH=compare /usr/bin/python3 references/tests/make_expr_cases.py` after changing the
-grammar (the package sdcompare_lib is in compare/)."""
+`.venv/bin/python references/tests/make_expr_cases.py` after changing the grammar
+(the checkout's Python, which ci/setup gives the package sdshared)."""
 
 import json
 import math
@@ -12,7 +12,7 @@ import pathlib
 import random
 
 HERE = pathlib.Path(__file__).resolve().parent
-from sdcompare_lib.sdexpr import ExprError, evaluate, parse
+from sdshared.sdexpr import ExprError, evaluate, parse
 
 EXPRESSIONS = [
     "20*sin(2*pi*x)*sign(y)",

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sdcompare_lib import sdfields
-from sdcompare_lib import sdresults
+from sdshared import sdfields
+from sdshared import sdresults
 
 # The references' crack fields, named as in every solver's files (README's field table).
 CRACK_FIELDS = {"jump", "contact_force"}

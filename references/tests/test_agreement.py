@@ -11,7 +11,7 @@ relative (or to 1e-14 absolute, for an error that is round-off, e.g. lambda_l2 o
 quadratures (FreeFEM script: geometric grading toward the tips in numpy; dolfinx: UFL forms with
 Duffy-σ² tip rules), and the fields agree to ~1e-14 (measured: <= 2.1e-14 relative).
 
-Both references assemble the load with the same rule (compare/sdcompare_lib/sdquad.py), so they solve the
+Both references assemble the load with the same rule (compare/sdshared/sdquad.py), so they solve the
 same discrete problem to round-off even on coarse meshes, where the integrals of a non-polynomial f
 depend on the rule: test_references_agree_to_roundoff_on_coarse_meshes checks
 max |u_dolfinx - u_freefem| <= 1e-12 (absolute; max |u| is 0.3-0.7) on mixed at levels 0-1 and on a

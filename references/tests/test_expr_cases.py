@@ -7,7 +7,7 @@ import pathlib
 import pytest
 
 HERE = pathlib.Path(__file__).resolve().parent
-from sdcompare_lib.sdexpr import evaluate, parse, to_numpy
+from sdshared.sdexpr import evaluate, parse, to_numpy
 
 CASES = json.loads((HERE / "expr_cases.json").read_text())
 

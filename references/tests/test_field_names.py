@@ -7,7 +7,7 @@ and meshio alike."""
 import numpy as np
 import pytest
 
-from sdcompare_lib import sdfields
+from sdshared import sdfields
 
 
 def field_set(crack_fields):

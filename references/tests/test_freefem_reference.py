@@ -17,7 +17,7 @@ import pytest
 from conftest import run_env
 from fake_export import CLOSED_U, OPEN_U, write_fake_export
 from output_checks import assert_fields_readable, assert_provenance, load_module
-from sdcompare_lib.sdfields import crack_field
+from sdshared.sdfields import crack_field
 
 HERE = Path(__file__).resolve().parent
 SOLVE = HERE.parent / "freefem" / "solve.py"

@@ -1,4 +1,4 @@
-"""The load rule shared by the two references (compare/sdcompare_lib/sdquad.py) and its use by each.
+"""The load rule shared by the two references (compare/sdshared/sdquad.py) and its use by each.
 
 The rule: exact to degree 16, fully symmetric (so the physical points do not depend on how a tool
 orders a cell's vertices), interior points with positive weights, basix's Xiao–Gimbutas rule.
@@ -20,8 +20,8 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 REFS = HERE.parent
-from sdcompare_lib import sdexpr
-from sdcompare_lib import sdquad
+from sdshared import sdexpr
+from sdshared import sdquad
 from output_checks import load_module
 
 

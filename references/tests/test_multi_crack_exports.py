@@ -3,7 +3,7 @@
 Fake exports (tests/fake_export.py): a kinked crack on a structured grid (grid line, then a cell
 diagonal), two cracks (that kink and a straight one), two parallel cracks one cell apart, and a
 "refined" mesh (a perturbed coarse triangulation refined uniformly, triangle 4t + c in t). On each:
-compare/sdcompare_lib/sdexport.py reads and checks the crack files (one-line errors naming the file and
+compare/sdshared/sdexport.py reads and checks the crack files (one-line errors naming the file and
 the crack); both references solve with partial contact and agree to <= 1e-8 at every vertex; a smooth
 exact u whose ∂u/∂ν < 0 on every segment (so that every crack node closes and u is also the limit of
 the discrete contact problem) converges at the P1 rates (u: >= 1.8, ∇u: >= 0.9; measured 1.97, 0.99);
@@ -23,8 +23,8 @@ import pytest
 
 HERE = Path(__file__).resolve().parent
 import fake_export as fe
-from sdcompare_lib import sdexport
-from sdcompare_lib import sdexpr
+from sdshared import sdexport
+from sdshared import sdexpr
 from output_checks import assert_fields_readable, load_module
 
 

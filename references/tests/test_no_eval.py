@@ -1,4 +1,4 @@
-"""Scene text is parsed by the grammar of compare/sdcompare_lib/sdexpr.py, never evaluated as code.
+"""Scene text is parsed by the grammar of compare/sdshared/sdexpr.py, never evaluated as code.
 
 Hostile expressions (attribute access, dunder names, calls outside the grammar, string literals,
 Python-only syntax, FreeFEM statements) fed to every Python entry point that takes an expression
@@ -26,7 +26,7 @@ np = pytest.importorskip("numpy")
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 from sdcompare_lib import exact as sdexact
-from sdcompare_lib import sdexpr
+from sdshared import sdexpr
 from output_checks import load_module
 from conftest import run_env
 from fake_export import write_fake_export

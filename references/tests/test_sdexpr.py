@@ -1,11 +1,11 @@
-"""Tests of compare/sdcompare_lib/sdexpr.py (run: /usr/bin/python3 -m pytest references/tests)."""
+"""Tests of compare/sdshared/sdexpr.py (run: /usr/bin/python3 -m pytest references/tests)."""
 
 import math
 
 import pytest
 
-from sdcompare_lib import sdexpr
-from sdcompare_lib.sdexpr import ExprError, evaluate, parse, to_freefem, to_numpy
+from sdshared import sdexpr
+from sdshared.sdexpr import ExprError, evaluate, parse, to_freefem, to_numpy
 
 np = pytest.importorskip("numpy")
 

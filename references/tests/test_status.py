@@ -1,4 +1,4 @@
-"""The case status both references write (compare/sdcompare_lib/sdresults.py): "converged" only when the
+"""The case status both references write (compare/sdshared/sdresults.py): "converged" only when the
 QP solver reported success and every KKT residual is within the tolerance; any damaged residual,
 missing or NaN residual, or solver failure gives "not_converged: <reasons>".
 
@@ -9,7 +9,7 @@ import math
 
 import pytest
 
-from sdcompare_lib import sdresults
+from sdshared import sdresults
 
 GOOD = {"equations": 2e-16, "primal": 0.0, "dual": 0.0, "complementarity": 1e-17}
 

@@ -43,7 +43,7 @@ def cases(*scenes, cwd=ROOT):
 def command_words(cmd):
     """The words of a rerun command after its prefix `env OMP_NUM_THREADS=1 ...` (the campaign's
     BLAS/OpenMP threads, sdresults.PINNED_THREADS), which it must start with."""
-    from sdcompare_lib.sdresults import pinned_env_args
+    from sdshared.sdresults import pinned_env_args
 
     words, pin = cmd.split(), pinned_env_args()
     assert words[:len(pin)] == pin, cmd

@@ -333,7 +333,7 @@ def test_a_rerun_asked_to_rerun_the_references_gives_them_back_bit_for_bit(
     assert out == (f"identical: {sum(n.values())} datasets, 2 cases\n"
                    "references: dolfinx, freefem rerun, compared\n")
     # their provenance records the pinned threads
-    from sdcompare_lib.sdresults import threads_pinned
+    from sdshared.sdresults import threads_pinned
 
     for tool in ("dolfinx", "freefem"):
         prov = json.loads((rerun / tool / "summary.json").read_text())["provenance"]

@@ -16,7 +16,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 from conftest import sdcrack_bin
-from sdcompare_lib import read, settings
+from sdcompare_lib import cases, settings
 
 SETTINGS_SOURCE = pathlib.Path(settings.__file__).read_text(encoding="utf-8")
 
@@ -61,8 +61,28 @@ def test_verification_keys_are_the_solvers(schema):
 
 def test_names_of_p_masses_and_p_spaces_are_the_solvers(schema):
     discretization = keys(schema, "discretization")
-    assert tuple(discretization["p_mass"]["values"]) == settings.P_MASSES
-    assert tuple(discretization["p_spaces"]["values"]) == read.P_SPACES
+    assert tuple(discretization["p_mass"]["values"]) == cases.P_MASSES
+    assert tuple(discretization["p_spaces"]["values"]) == cases.P_SPACES
+
+
+def test_case_key_is_the_solvers(schema):
+    """cases.CaseKey's fields are the solver's case axes in its order (`sdcrack schema`'s
+    "case_key": [{"axis", "values" (the names; [] for a number), "default"}]), the names of each
+    named axis those the compare tool knows, and its defaults the compare tool's."""
+    axes = schema["case_key"]
+    assert tuple(a["axis"] for a in axes) == cases.CaseKey._fields
+    by_axis = {a["axis"]: a for a in axes}
+    assert by_axis["level"]["values"] == [] and by_axis["delta"]["values"] == []
+    assert tuple(by_axis["p_mass"]["values"]) == cases.P_MASSES
+    assert tuple(by_axis["p_space"]["values"]) == cases.P_SPACES
+    assert by_axis["p_mass"]["default"] == cases.DEFAULT_P_MASS
+    assert by_axis["p_space"]["default"] == cases.DEFAULT_P_SPACE
+    # a case of summary.json without an axis that has a default reads as that default
+    case = {a["axis"]: a["values"][0] if a["values"] else 0 for a in axes}
+    for a in axes:
+        if a["default"] is not None:
+            absent = {k: v for k, v in case.items() if k != a["axis"]}
+            assert getattr(cases.case_key(absent), a["axis"]) == a["default"], a["axis"]
 
 
 def test_every_scene_key_settings_reads_is_in_the_schema(schema):

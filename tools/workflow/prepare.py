@@ -34,7 +34,7 @@ import subprocess
 import sys
 import tomllib
 
-from sdcompare_lib.sdresults import write_atomic
+from sdshared.sdresults import write_atomic
 
 RESERVED = {"inputs", "shards", "checks", "logs", "benchmarks", "index.html", "index.json"}
 NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._+-]*$")

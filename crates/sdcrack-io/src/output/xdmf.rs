@@ -19,7 +19,7 @@
 //! the solver makes one series per (level, u space, multiplier, p mass), whose steps are the δ
 //! sweep in the order solved (δ decreasing, so the slider walks δ → 0).
 //!
-//! The convention, the same in the reference scripts' fields (compare/sdcompare_lib/sdfields.py):
+//! The convention, the same in the reference scripts' fields (compare/sdshared/sdfields.py):
 //! a file `NAME.xdmf` holds one state, a single grid, which `meshio.read` and ParaView read;
 //! a file `NAME.series.xdmf` holds a temporal collection, which `meshio.xdmf.TimeSeriesReader`
 //! and ParaView read. No one file serves both meshio readers: `meshio.read` accepts exactly one

@@ -45,6 +45,8 @@ from pathlib import Path
 
 import numpy as np
 
+from . import sdexpr
+
 KINDS = ("structured", "refined", "graded")
 DEFAULT_KIND = "structured"
 NORMAL_TOLERANCE = 1e-9  # crack_normals.txt against the normals computed from the nodes
@@ -98,6 +100,30 @@ def segment_normals(points, segments):
     d = points[segments[:, 1]] - points[segments[:, 0]]
     length = np.hypot(d[:, 0], d[:, 1])
     return np.column_stack([-d[:, 1], d[:, 0]]) / length[:, None]
+
+
+def jump_error_sq(layout, xy, jump_h, rule, exact_jump=None, exact_u=None):
+    """Σ over the crack segments of ∫ ([u_h] − [u])² ds, the references' crack-jump error squared:
+    [u_h] linear between the segment's crack-node values `jump_h`; [u] = exact_jump(X, Y), else
+    exact_u on each face of the segment (sdexpr.on_face with the segment's normal); `rule(tip_a,
+    tip_b)` gives the segment's points s ∈ [0, 1] and weights (whether each end is a tip)."""
+    segments = layout.segments()
+    points = xy[layout.pairs[:, 0]]
+    normals = segment_normals(points, segments)
+    is_tip = ~layout.interior()
+    total = 0.0
+    for (i, j), normal in zip(segments, normals):
+        a, b = points[i], points[j]
+        s, w = rule(is_tip[i], is_tip[j])
+        X, Y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
+        if exact_jump is not None:
+            je = exact_jump(X, Y)
+        else:
+            je = exact_u(*sdexpr.on_face(X, Y, normal, 1.0)) \
+                - exact_u(*sdexpr.on_face(X, Y, normal, -1.0))
+        jh = (1 - s) * jump_h[i] + s * jump_h[j]
+        total += float(np.hypot(*(b - a)) * np.sum(w * (jh - je) ** 2))
+    return total
 
 
 def node_normals(points, ranges):

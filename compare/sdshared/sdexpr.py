@@ -187,17 +187,17 @@ class _Parser:
         self.depth -= 1
 
     def expr(self):
-        node = self.term()
-        while self.peek().kind in ("+", "-"):
-            op = self.advance().kind
-            node = (op, node, self.term())
-        return node
+        return self.left_associative(("+", "-"), self.term)
 
     def term(self):
-        node = self.unary()
-        while self.peek().kind in ("*", "/"):
+        return self.left_associative(("*", "/"), self.unary)
+
+    def left_associative(self, ops, operand):
+        """operand (op operand)* for op in `ops`, grouped to the left: a − b − c = (a − b) − c."""
+        node = operand()
+        while self.peek().kind in ops:
             op = self.advance().kind
-            node = (op, node, self.unary())
+            node = (op, node, operand())
         return node
 
     def unary(self):
@@ -328,7 +328,7 @@ def parse(src):
     if src.strip() == "":
         raise ExprError("empty expression", 1)
     p = _Parser(_lex(src))
-    # MAX_DEPTH levels need ~6 Python frames each: make sure the limit check fires first.
+    # MAX_DEPTH levels need ~7 Python frames each: make sure the limit check fires first.
     old_limit = sys.getrecursionlimit()
     if old_limit < 20 * MAX_DEPTH:
         sys.setrecursionlimit(20 * MAX_DEPTH)
