@@ -36,7 +36,7 @@ FORMATS = {"toml", "clap", "hdf5-metno", "hdf5-metno-sys", "serde_json", "indica
 MODULES = {
     "sdcrack-core": {"problem", "case", "expr", "fe", "mesh", "geometry", "assembly", "linalg", "ordering",
                      "contact", "multiplier", "krylov", "norms", "scene", "study"},
-    "sdcrack-io": {"scene", "output", "plain", "did_you_mean", "one_line"},
+    "sdcrack-io": {"scene_file", "output", "plain", "did_you_mean", "one_line"},
     "sdcrack": {"cli", "bench", "references", "main"},
 }
 

@@ -1,18 +1,18 @@
-"""The modules of the scene format (crates/sdcrack-io/src/scene/*.rs) import one another without a
+"""The modules of the scene format (crates/sdcrack-io/src/scene_file/*.rs) import one another without a
 cycle: the serde structs (raw.rs) are the leaf every other part reads, the schema is derived from
 them, validation and messages sit on top. A cycle (raw → verification → schema → raw, as it was
 when the `[verification]` structs lived in verification.rs) means no module can be read, tested or
 moved without the others; this test states the graph, as test_layout.py states the crate graph.
 
-An edge A → B is a `use super::B…` / `use crate::scene::B…` of module A, or a path
-`super::B::…` / `crate::scene::B::…` in its code (comments left out), where B is a sibling
-module. The parent (mod.rs) is not a node: it declares the modules and re-exports; what a child
+An edge A → B is a `use super::B…` / `use crate::scene_file::B…` of module A, or a path
+`super::B::…` / `crate::scene_file::B::…` in its code (comments left out), where B is a sibling
+module. The parent (scene_file.rs) is not a node: it declares the modules and re-exports; what a child
 takes from it is the shared types' business (issue 44 item 4), not an import between parts."""
 
 import pathlib
 import re
 
-SCENE = pathlib.Path(__file__).resolve().parents[2] / "crates" / "sdcrack-io" / "src" / "scene"
+SCENE = pathlib.Path(__file__).resolve().parents[2] / "crates" / "sdcrack-io" / "src" / "scene_file"
 
 
 def code_of(text):
@@ -23,7 +23,7 @@ def code_of(text):
 def imports(code, modules):
     """The sibling modules that the Rust `code` of one module names."""
     found = set()
-    prefix = r"(?:super|crate::scene)::"
+    prefix = r"(?:super|crate::scene_file)::"
     for group in re.findall(prefix + r"\{([^}]*)\}", code):
         # `use super::{raw::X, schema::Y, Z}`: the first segment of each item
         found |= {item.strip().split("::")[0] for item in group.split(",")}
@@ -82,7 +82,7 @@ def test_a_cycle_is_found():
         "mod": "mod raw; mod schema; mod verification;",
         "raw": "use super::verification::VerificationToml;",
         "verification": "use super::{schema::P_MASSES, SceneError};",
-        "schema": "fn f() { let s = crate::scene::raw::SceneToml::default(); }",
+        "schema": "fn f() { let s = crate::scene_file::raw::SceneToml::default(); }",
     }
     edges = graph(files)
     assert edges == {"raw": {"verification"}, "verification": {"schema"}, "schema": {"raw"}}
