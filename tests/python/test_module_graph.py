@@ -16,9 +16,8 @@ Unit tests are exempt: a `#[cfg(test)]` module named `tests` or `testing` (a fil
 block) may `use super::*`, the Rust idiom for white-box tests, and so may a module declared with
 `#[cfg(test)]` under any name. Comments and doc links do not count.
 
-The core is held to both rules (its `scene` folder reported apart on the first, see
-SCENE_PENDING); sdcrack-io is checked and reported the same way, its verdict marked
-expected-to-fail (non-strict) until its folders are brought to the same layout."""
+The core is held to both rules; sdcrack-io is checked and reported the same way, its verdict
+marked expected-to-fail (non-strict) until its folders are brought to the same layout."""
 
 import pathlib
 import re
@@ -283,19 +282,15 @@ def within(findings, folders_, pending=frozenset()):
     return [line for line in findings if top(line) in folders_]
 
 
-# The core's scene folder is laid out by another part of issue 44 at the same time: its case
-# reports, and passes once that part lands (non-strict: XPASS then, and the mark is to go).
-SCENE_PENDING = {"scene"}
 LATER = pytest.mark.xfail(strict=False, reason="laid out by another part of issue 44")
 
 
 @pytest.mark.parametrize(("crate", "part"), [
     pytest.param("sdcrack-core", None, id="core"),
-    pytest.param("sdcrack-core", SCENE_PENDING, id="core-scene", marks=LATER),
     pytest.param("sdcrack-io", None, id="io", marks=LATER)])
 def test_no_child_module_imports_its_parent(crate, part):
     found = back_references(read_crate(CRATES[crate]))
-    assert within(found, part, SCENE_PENDING if crate == "sdcrack-core" else ()) == []
+    assert within(found, part, ()) == []
 
 
 @pytest.mark.parametrize("crate", [pytest.param("sdcrack-core", id="core"),

@@ -27,11 +27,11 @@
 //! points themselves for the jump and the contact conditions. A point where a value is not finite
 //! (a singular derivative) is skipped: NaN data are refused elsewhere, at the quadrature points.
 
-use super::KeyPath;
+use super::key_path::KeyPath;
+use super::validated::Scene;
 use crate::expr::Var;
 use crate::geometry::{point_in_polygon, Inside};
 use crate::problem::{face_point, Exact};
-use crate::scene::Scene;
 
 /// Grid points per direction over Ω's bounding box.
 pub const GRID: usize = 20;
