@@ -230,18 +230,9 @@ impl CaseKey {
 impl std::fmt::Display for CaseKey {
     /// The case in words, for messages: `level 2 broken M1 lumped continuous p δ = 0.01`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let CaseKey {
-            level,
-            u_space,
-            multiplier,
-            p_mass,
-            p_space,
-            delta,
-        } = self;
-        write!(
-            f,
-            "level {level} {u_space} {multiplier} {p_mass} {p_space} p δ = {delta}"
-        )
+        let k = self;
+        let (level, u, m, pm, ps) = (k.level, k.u_space, k.multiplier, k.p_mass, k.p_space);
+        write!(f, "level {level} {u} {m} {pm} {ps} p δ = {}", k.delta)
     }
 }
 
