@@ -7,7 +7,7 @@
   docs/design.md; the "field files' mesh" check holds every corner of the + face to it, from the
   scene's polylines) and u⁻ at its − copy. At a tip and on the continuous u's mesh the node has
   one vertex, so the jump is 0. Exact, bit for bit: the solver subtracts the same two float64
-  values (crates/sdcrack-io/src/output/mod.rs), and IEEE 754 rounds a difference correctly, so
+  values (crates/sdcrack-io/src/output.rs), and IEEE 754 rounds a difference correctly, so
   this tool's subtraction gives the same bits.
 * **M1's λ_h against the jump, where the crack opens** (broken u). There is NO discrete identity
   λ_h = [u_h]: the second equation of the method tested with q ∈ X_h and integrated by parts on
@@ -414,7 +414,7 @@ def _xdmf_files(res):
 
 def _attribute_links(res, problems):
     """Every XDMF attribute NAME of grid G points at /cases/G/NAME of its folder's fields.h5,
-    which holds it: the writers' layout (crates/sdcrack-io/src/output/xdmf/mod.rs, sdfields.py),
+    which holds it: the writers' layout (crates/sdcrack-io/src/output/xdmf.rs, sdfields.py),
     so that what a viewer labels NAME is the dataset the checks read under that name."""
     import h5py
 
