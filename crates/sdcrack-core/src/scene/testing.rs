@@ -4,7 +4,11 @@
 //! generator for the whole workspace, so a failure reproduces.)
 
 use super::*;
-use crate::problem::{MultiplierSpace, PMass, PSpace, Rectangle, USpace};
+use crate::case::CaseAxes;
+use crate::expr::Expr;
+use crate::problem::{
+    Domain, Exact, Meshing, MultiplierSpace, PMass, PSpace, Polyline, Rectangle, USpace,
+};
 
 /// A scene on (−1, 1)² with the crack [−0.5, 0.5] × {0}, level-0 cells [8, 8], source `f`,
 /// Dirichlet data `g` and, if given, the exact solution (u, \[u\]) — the shape of
@@ -35,7 +39,7 @@ pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -
         f: Expr::parse(f).unwrap(),
         g: Expr::parse(g).unwrap(),
         exact,
-        axes: super::CaseAxes {
+        axes: CaseAxes {
             levels: vec![0, 1, 2, 3, 4],
             u_spaces: vec![USpace::Continuous, USpace::Broken],
             multipliers: vec![
