@@ -414,7 +414,7 @@ def _xdmf_files(res):
 
 def _attribute_links(res, problems):
     """Every XDMF attribute NAME of grid G points at /cases/G/NAME of its folder's fields.h5,
-    which holds it: the writers' layout (crates/sdcrack-io/src/output/xdmf/mod.rs, sdfields.py),
+    which holds it: the writers' layout (crates/sdcrack-io/src/output/xdmf.rs, sdfields.py),
     so that what a viewer labels NAME is the dataset the checks read under that name."""
     import h5py
 
