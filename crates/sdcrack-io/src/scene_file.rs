@@ -13,6 +13,12 @@
 //! on the mesh (crack on mesh lines, inside Ω) is checked by [`sdcrack_core::mesh`]
 //! ([`LoadedScene::mesh_error`] names the crack). Everything downstream works on the validated
 //! [`Scene`], never on raw TOML.
+//! The errors (`error`) and the limits (`limits`) are the parts' common ground; reading a
+//! scene, from its text to the validated scene, is `load`.
+//!
+//! [`Scene`]: sdcrack_core::scene::Scene
+//! [`KeyPath`]: sdcrack_core::scene::KeyPath
+//! [`Expr`]: sdcrack_core::expr::Expr
 
 mod document;
 mod error;
