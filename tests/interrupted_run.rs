@@ -1,7 +1,7 @@
 //! A run killed with SIGKILL (no clean-up possible) while it solves, and again while it writes its
 //! field files: earlier results in the same `--out` stay byte for byte as they were, nothing
 //! appears under the killed run's final name (only its staging folder `OUT/.NAME.partial-PID`
-//! remains, see crates/sdcrack-io/src/output/mod.rs), and a later run to the same final name
+//! remains, see crates/sdcrack-io/src/output.rs), and a later run to the same final name
 //! succeeds without touching that leftover.
 
 mod common;
