@@ -7,7 +7,7 @@
   docs/design.md; the "field files' mesh" check holds every corner of the + face to it, from the
   scene's polylines) and u⁻ at its − copy. At a tip and on the continuous u's mesh the node has
   one vertex, so the jump is 0. Exact, bit for bit: the solver subtracts the same two float64
-  values (crates/sdcrack-io/src/output.rs), and IEEE 754 rounds a difference correctly, so
+  values (crates/sdcrack-io/src/output/run.rs), and IEEE 754 rounds a difference correctly, so
   this tool's subtraction gives the same bits.
 * **M1's λ_h against the jump, where the crack opens** (broken u). There is NO discrete identity
   λ_h = [u_h]: the second equation of the method tested with q ∈ X_h and integrated by parts on

@@ -6,8 +6,8 @@ moved without the others; this test states the graph, as test_layout.py states t
 
 An edge A → B is a `use super::B…` / `use crate::scene_file::B…` of module A, or a path
 `super::B::…` / `crate::scene_file::B::…` in its code (comments left out), where B is a sibling
-module. The parent (scene_file.rs) is not a node: it declares the modules and re-exports; what a child
-takes from it is the shared types' business (issue 44 item 4), not an import between parts."""
+module. The parent (scene_file.rs) is not a node: it declares the modules and re-exports; that no child
+takes anything from it (the shared types live in error.rs, limits.rs, …) is test_module_graph.py's."""
 
 import pathlib
 import re

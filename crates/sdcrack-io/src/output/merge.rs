@@ -25,8 +25,11 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
+use super::atomic::atomic_write;
+use super::results_dir::{
+    recomputation_file, ResultsDir, ResultsError, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM,
+};
 use super::summary::{CaseSummary, Provenance, ShardRecord, Summary};
-use super::{atomic_write, ResultsDir, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
 use crate::scene_file::TomlScene;
 use sdcrack_core::case::{CaseAxes, CaseKey};
 use sdcrack_core::scene::Scene;
@@ -47,7 +50,7 @@ pub enum MergeError {
     Incomplete(String),
     /// The merged folder cannot be created (it exists, or its parent cannot be written).
     #[error(transparent)]
-    Results(#[from] super::ResultsError),
+    Results(#[from] ResultsError),
     /// Writing the merged folder failed (nothing is left under the final name).
     #[error("cannot write {path}: {reason}")]
     Write {
@@ -238,7 +241,7 @@ pub fn merge_shards(
         all_converged: not_converged == 0,
         wall_s: solver.iter().map(|(_, s)| s.wall_s).sum(),
         fields_write_s,
-        recomputation_file: super::recomputation_file(&scene.fields),
+        recomputation_file: recomputation_file(&scene.fields),
         cases,
         shards: Some(shard_records(&solver)),
         ..lead.clone()

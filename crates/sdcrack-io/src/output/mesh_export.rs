@@ -218,8 +218,8 @@ pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBu
         _ => PathBuf::from("."),
     };
     std::fs::create_dir_all(&parent).map_err(io(&parent))?;
-    let tmp = super::beside(out, "partial");
-    super::write_then_rename(out, &tmp, io(out), |tmp| {
+    let tmp = super::atomic::beside(out, "partial");
+    super::atomic::write_then_rename(out, &tmp, io(out), |tmp| {
         std::fs::create_dir(tmp).map_err(io(tmp))?;
         let mut json = scene_json(scene);
         json["levels"] = serde_json::json!(levels);

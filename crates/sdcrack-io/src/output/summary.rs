@@ -107,7 +107,7 @@ impl Summary {
             all_converged: study.cases.iter().all(|c| c.converged),
             wall_s,
             fields_write_s,
-            recomputation_file: super::recomputation_file(&scene.fields),
+            recomputation_file: super::results_dir::recomputation_file(&scene.fields),
             coarse_mesh: study.coarse_mesh.clone(),
             cases: (study.cases.iter())
                 .map(|c| CaseSummary::from_case(c, with_fields))
@@ -125,7 +125,7 @@ impl Summary {
     /// Writes the summary to `path` (pretty JSON, keys in the order of the struct), atomically.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let text = serde_json::to_string_pretty(self).map_err(std::io::Error::other)?;
-        super::atomic_write(path, text.as_bytes())
+        super::atomic::atomic_write(path, text.as_bytes())
     }
 }
 
@@ -340,11 +340,11 @@ impl CaseSummary {
             fields_grid: c.key.case_name(),
             fields_series: with_series.then(|| {
                 let file = super::xdmf::series_file(&c.key.series_name(), "");
-                format!("{}/{file}", super::FIELDS_STEM)
+                format!("{}/{file}", super::results_dir::FIELDS_STEM)
             }),
             fields_state: with_series.then(|| {
                 let file = super::xdmf::state_file(&c.key.case_name(), "");
-                format!("{}/{file}", super::FIELDS_STEM)
+                format!("{}/{file}", super::results_dir::FIELDS_STEM)
             }),
         }
     }

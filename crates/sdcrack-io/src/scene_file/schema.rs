@@ -16,11 +16,13 @@ use serde::de::{self, value::Error, DeserializeSeed, IntoDeserializer, MapAccess
 use serde::{Deserialize, Serialize};
 
 use super::raw::SceneToml;
-use super::KNOWN_REFERENCES;
 use sdcrack_core::case::{AxisSchema, CaseKey};
 use sdcrack_core::norms::Quantity;
 use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use sdcrack_core::scene::verification::NOT_APPLICABLE_CHECKS;
+
+/// Reference tools the project knows how to run.
+pub const KNOWN_REFERENCES: [&str; 2] = ["dolfinx", "freefem"];
 
 /// What a key's value is, as its struct field declares it (an `Option` is its content).
 #[derive(Clone, Debug, PartialEq)]

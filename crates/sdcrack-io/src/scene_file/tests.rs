@@ -6,6 +6,7 @@ use super::schema::{schema, Kind, ALLOWED, WORDS};
 use super::toml_error::{header_before, key_on_line};
 use super::*;
 use sdcrack_core::scene::{check_level, estimated_memory_bytes, Level0Size, MAX_LEVEL};
+use sdcrack_core::scene::{KeyPath, Scene};
 
 /// The key path written `a.b[1].c` (for the tests' literals).
 fn path(written: &str) -> KeyPath {

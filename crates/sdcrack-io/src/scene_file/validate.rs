@@ -6,9 +6,10 @@
 
 use std::path::Path;
 
+use super::error::{CrackName, KeyRole, SceneError};
+use super::limits::MAX_CELLS;
 use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
-use super::schema::FIELDS;
-use super::{CrackName, KeyRole, SceneError, KNOWN_REFERENCES, MAX_CELLS};
+use super::schema::{FIELDS, KNOWN_REFERENCES};
 use crate::did_you_mean::suggest;
 use sdcrack_core::case::CaseAxes;
 use sdcrack_core::expr::{Expr, Var};

@@ -37,8 +37,9 @@ use sdcrack_core::case::CasePattern;
 use sdcrack_core::norms::Quantity;
 use sdcrack_core::problem::{PMass, PSpace};
 
+use super::error::SceneError;
 use super::raw::{ExpectedRateToml, NotApplicableToml, VerificationToml};
-use super::{suggest, SceneError};
+use crate::did_you_mean::suggest;
 use sdcrack_core::problem::{MultiplierSpace, USpace};
 use sdcrack_core::scene::KeyPath;
 

@@ -2,7 +2,7 @@
 //! `DataItem`s pointing into the HDF5 file, and attributes (the layout is described in the
 //! parent module). Pure text: nothing here touches a file.
 
-use super::{CaseFields, Centering, MeshData, Meta};
+use super::data::{CaseFields, Centering, MeshData, Meta};
 
 fn xml_escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());

@@ -1,0 +1,158 @@
+//! A run's files in its results folder: the scene's copy, `summary.json` and the field files.
+
+use std::path::{Path, PathBuf};
+
+use super::atomic::atomic_write;
+use super::results_dir::{FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM};
+use super::{summary, xdmf};
+
+/// Errors while writing a run's files.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// summary.json could not be written.
+    #[error("cannot write {path}: {reason}")]
+    Io {
+        /// File concerned.
+        path: PathBuf,
+        /// Reason.
+        reason: String,
+    },
+    /// The field files (`fields.h5`, `fields/`, `verification.h5`) could not be written.
+    #[error("cannot write field files: {0}")]
+    Fields(#[from] xdmf::OutputError),
+}
+/// Writes `scene.toml` (the scene's text byte for byte), `summary.json` (with `provenance`),
+/// when the scene asks for fields `fields.h5` + the series `fields/*.xdmf` with those fields, and
+/// when it does not ask for all of u, p and λ `verification.h5` with all of them, into `dir`.
+pub fn write_run(
+    dir: &Path,
+    loaded: &crate::scene_file::LoadedScene,
+    plan: &sdcrack_core::study::CasePlan,
+    study: &sdcrack_core::study::StudyResult,
+    wall_s: f64,
+    provenance: &summary::Provenance,
+) -> Result<(), WriteError> {
+    let scene = &loaded.scene;
+    let copy = dir.join(SCENE_COPY);
+    atomic_write(&copy, loaded.text.as_bytes()).map_err(|e| WriteError::Io {
+        path: copy,
+        reason: e.to_string(),
+    })?;
+    if let Some(msh) = study.coarse_mesh.as_ref().and_then(|c| c.msh_text.as_ref()) {
+        let path = dir.join("coarse.msh");
+        atomic_write(&path, msh.as_bytes()).map_err(|e| WriteError::Io {
+            path,
+            reason: e.to_string(),
+        })?;
+    }
+    let t0 = std::time::Instant::now();
+    write_fields(dir, scene, study)?;
+    let fields_write_s = t0.elapsed().as_secs_f64();
+    let summary = summary::Summary::of_run(scene, plan, study, wall_s, fields_write_s, provenance);
+    let path = dir.join("summary.json");
+    summary.write(&path).map_err(|e| WriteError::Io {
+        path,
+        reason: e.to_string(),
+    })
+}
+
+/// Writes `fields.h5` + `fields/` with the fields the scene lists (none when it lists none) and,
+/// unless it lists u, p and λ, `verification.h5` with all of them.
+fn write_fields(
+    dir: &Path,
+    scene: &sdcrack_core::scene::Scene,
+    study: &sdcrack_core::study::StudyResult,
+) -> Result<(), WriteError> {
+    let (meshes, all) = field_data(study);
+    if scene.fields.is_complete() {
+        xdmf::write_fields(dir, FIELDS_STEM, &meshes, &all)?;
+        return Ok(());
+    }
+    if !scene.fields.is_empty() {
+        let wanted: Vec<xdmf::CaseFields> =
+            all.iter().map(|c| restrict(c, &scene.fields)).collect();
+        xdmf::write_fields(dir, FIELDS_STEM, &meshes, &wanted)?;
+    }
+    xdmf::write_h5_only(dir, VERIFICATION_STEM, &meshes, &all)?;
+    Ok(())
+}
+
+/// The meshes and every case's fields, all quantities: u, p, its bubbles (consistent p mass
+/// only: the lumped p has none), λ and the jump [u_h] = u⁺ − u⁻ at the crack nodes.
+fn field_data(
+    study: &sdcrack_core::study::StudyResult,
+) -> (Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>) {
+    use sdcrack_core::multiplier::CrackField;
+    use xdmf::Meta;
+    let meshes: Vec<xdmf::MeshData> = study
+        .meshes
+        .iter()
+        .map(|m| xdmf::MeshData {
+            key: m.key.name(),
+            points: m.points.clone(),
+            triangles: m.triangles.clone(),
+        })
+        .collect();
+    let cases: Vec<xdmf::CaseFields> = study
+        .cases
+        .iter()
+        .filter_map(|c| {
+            let f = c.fields.as_ref()?;
+            let record = (study.meshes.iter()).position(|m| m.key == c.key.mesh());
+            let (crack_points, crack_segments) = record
+                .map(|i| {
+                    let m = &study.meshes[i];
+                    (m.crack_points.clone(), m.crack_segments.clone())
+                })
+                .unwrap_or_default();
+            let jump = record.filter(|_| !crack_points.is_empty()).map(|i| {
+                (study.meshes[i].crack_dofs.iter())
+                    .map(|&(p, m)| f.u[p] - f.u[m])
+                    .collect()
+            });
+            Some(xdmf::CaseFields {
+                name: c.key.case_name(),
+                mesh_key: c.key.mesh().name(),
+                u: Some(f.u.clone()),
+                p: Some(f.p.clone()),
+                // the lumped p mass has no bubble: no p_bubble dataset
+                p_bubble: (!f.p_bubble.is_empty()).then(|| f.p_bubble.clone()),
+                crack_points,
+                crack_segments,
+                lambda: Some(match &f.lambda {
+                    CrackField::PerSegment(v) => (xdmf::Centering::Cell, v.clone()),
+                    CrackField::PerNode(v) => (xdmf::Centering::Node, v.clone()),
+                }),
+                jump,
+                series: c.key.series_name(),
+                // the case's group attributes: summary.json's entries of its key
+                metadata: (summary::SizedKey { key: c.key, h: c.h }
+                    .entries()
+                    .into_iter())
+                .map(|(name, value)| (name.to_string(), Meta::from(value)))
+                .collect(),
+                constants: vec![("delta".into(), c.key.delta)],
+            })
+        })
+        .collect();
+    (meshes, cases)
+}
+
+/// `case` with only the quantities of `fields` (p's bubbles go with p).
+fn restrict(case: &xdmf::CaseFields, fields: &sdcrack_core::scene::FieldSet) -> xdmf::CaseFields {
+    xdmf::CaseFields {
+        name: case.name.clone(),
+        mesh_key: case.mesh_key.clone(),
+        u: fields.u.then(|| case.u.clone()).flatten(),
+        p: fields.p.then(|| case.p.clone()).flatten(),
+        p_bubble: fields.p.then(|| case.p_bubble.clone()).flatten(),
+        crack_points: case.crack_points.clone(),
+        crack_segments: case.crack_segments.clone(),
+        lambda: fields.lambda.then(|| case.lambda.clone()).flatten(),
+        // the crack's own jump, whatever is listed: in every crack file, as in the references'
+        jump: case.jump.clone(),
+        series: case.series.clone(),
+        metadata: case.metadata.clone(),
+        constants: case.constants.clone(),
+    }
+}
