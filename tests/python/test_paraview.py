@@ -231,6 +231,13 @@ def setup_installs(tmp_path, *args, pvpython=False):
         f.chmod(0o755)
     (root / ".venv-workflow" / "bin").mkdir(parents=True)
     (root / ".venv-workflow" / "bin" / "snakemake").symlink_to(pathlib.Path(path) / "snakemake")
+    # and the checkout's venv .venv/, already made: a python that runs and names its site folder
+    (root / ".venv" / "bin").mkdir(parents=True)
+    (root / ".venv" / "site").mkdir()
+    (root / ".venv" / "pyvenv.cfg").write_text("include-system-site-packages = true\n")
+    venv_python = root / ".venv" / "bin" / "python"
+    venv_python.write_text(f"#!/bin/sh\necho {root / '.venv' / 'site'}\n")
+    venv_python.chmod(0o755)
     p = subprocess.run([str(root / "ci" / "setup"), *args], capture_output=True, text=True,
                        timeout=60, env={"PATH": path, "HOME": str(root)})
     assert p.returncode == 0, p.stdout + p.stderr

@@ -2,9 +2,9 @@
 fields/<series>.series.xdmf and the one-state files fields/<case>.xdmf).
 
 The folder is the one written by the Rust test
-`output::xdmf::tests::fixture_for_python_and_h5_readback` with SDCRACK_FIELDS_DIR set:
+`output::xdmf::write::tests::fixture_for_python_and_h5_readback` with SDCRACK_FIELDS_DIR set:
 
-    SDCRACK_FIELDS_DIR=/tmp/fields cargo test --lib xdmf::tests::fixture_for_python
+    SDCRACK_FIELDS_DIR=/tmp/fields cargo test --lib xdmf::write::tests::fixture_for_python
     SDCRACK_FIELDS_DIR=/tmp/fields /usr/bin/python3 -m pytest tests/python/test_xdmf_readback.py
 
 The tests are skipped when SDCRACK_FIELDS_DIR is unset. The expected values are recomputed here
