@@ -9,6 +9,7 @@ import pathlib
 
 import sdcompare_lib
 import sdshared
+from graphs import find_cycle
 
 PACKAGES = {"sdcompare_lib": pathlib.Path(sdcompare_lib.__file__).parent,
             "sdshared": pathlib.Path(sdshared.__file__).parent}
@@ -40,30 +41,6 @@ def import_graph(folder, package):
     """{module: the package's modules it imports} of the package in `folder`."""
     files = {p.stem: p for p in folder.glob("*.py")}
     return {m: imported_modules(p, package, set(files)) - {m} for m, p in files.items()}
-
-
-def find_cycle(graph):
-    """One import cycle of `graph` as a list [a, b, …, a], or None (depth-first search)."""
-    state = {}  # 1: on the current path, 2: done
-
-    def visit(m, path):
-        state[m] = 1
-        for n in sorted(graph[m]):
-            if state.get(n) == 1:
-                return path[path.index(n):] + [n]
-            if n not in state:
-                found = visit(n, path + [n])
-                if found:
-                    return found
-        state[m] = 2
-        return None
-
-    for m in sorted(graph):
-        if m not in state:
-            found = visit(m, [m])
-            if found:
-                return found
-    return None
 
 
 def test_the_packages_have_no_import_cycle():

@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 
 import pytest
 
+from graphs import find_cycle
+
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 CRATES = {
     "sdcrack-core": ROOT / "crates" / "sdcrack-core" / "src",
@@ -241,26 +243,11 @@ def folder_graph(modules, folder):
 
 
 def cycle(edges):
-    """One cycle of the directed graph `edges` as a list of nodes, or None."""
+    """One cycle of the directed graph `edges` (pairs) as a list of nodes, or None."""
     graph = {}
     for a, b in edges:
         graph.setdefault(a, []).append(b)
-    state = {}
-
-    def walk(node, stack):
-        state[node] = "open"
-        for nxt in sorted(graph.get(node, [])):
-            if state.get(nxt) == "open":
-                return stack[stack.index(nxt):] + [nxt]
-            if nxt not in state and (found := walk(nxt, stack + [nxt])):
-                return found
-        state[node] = "done"
-        return None
-
-    for start in sorted(graph):
-        if start not in state and (found := walk(start, [start])):
-            return found
-    return None
+    return find_cycle(graph)
 
 
 def cycles(modules):

@@ -12,6 +12,8 @@ takes anything from it (the shared types live in error.rs, limits.rs, …) is te
 import pathlib
 import re
 
+from graphs import find_cycle
+
 SCENE = pathlib.Path(__file__).resolve().parents[2] / "crates" / "sdcrack-io" / "src" / "scene_file"
 
 
@@ -39,26 +41,7 @@ def graph(files):
 
 def cycle(edges):
     """One import cycle of `edges` as a list of modules (first = last), or None."""
-    state = {}
-
-    def visit(node, path):
-        state[node] = "open"
-        for nxt in sorted(edges[node]):
-            if state.get(nxt) == "open":
-                return path[path.index(nxt):] + [nxt]
-            if nxt not in state:
-                found = visit(nxt, path + [nxt])
-                if found:
-                    return found
-        state[node] = "done"
-        return None
-
-    for start in sorted(edges):
-        if start not in state:
-            found = visit(start, [start])
-            if found:
-                return found
-    return None
+    return find_cycle(edges)
 
 
 def scene_files():
