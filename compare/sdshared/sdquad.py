@@ -75,3 +75,15 @@ def gauss01(n):
     references' error quadratures."""
     g, w = np.polynomial.legendre.leggauss(n)
     return (g + 1) / 2, w / 2
+
+
+# The edge rule of the elastic references' traction load ∫_e t·φ_i ds (docs/elasticity.md): 10-point
+# Gauss–Legendre, exact to degree 19 on each boundary edge, all points interior to the edge (a kink
+# of t at a corner of Ω is never evaluated).
+EDGE_POINTS = 10
+
+
+def edge_rule():
+    """(points, weights) of the traction rule on [0, 1]: EDGE_POINTS Gauss–Legendre points, weights
+    summing to 1 (multiply by the edge's length)."""
+    return gauss01(EDGE_POINTS)

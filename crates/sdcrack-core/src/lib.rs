@@ -20,6 +20,7 @@
 
 pub mod assembly;
 pub mod case;
+pub mod elasticity;
 pub mod contact;
 pub mod expr;
 pub mod fe;

@@ -1,0 +1,170 @@
+//! The elastic problem kind's data (issue 45): a 2-D linear elastic body Ω \ Γc whose crack faces
+//! may open, slide or press on each other without friction,
+//!
+//!     −div σ(u) = f in Ω \ Γc,   σ(u) = λ tr ε(u) I + 2μ ε(u),
+//!     u = g on the Dirichlet parts of ∂Ω,   σn = t on the traction parts,
+//!     [u·ν] ≥ 0,  σ_νν ≤ 0,  σ_νν [u·ν] = 0,  σ_ντ = 0,  [σν] = 0   on Γc,
+//!
+//! with [v] = v⁺ − v⁻ and ν the crack's normal pointing into its + face (docs/scenes.md).
+//! This module owns the material ([`Material`]: plane strain or plane stress, from (E, ν) or
+//! (λ, μ)), the loads ([`ElasticData`]: f, g, the tractions on named boundary parts, the fixed
+//! points that remove rigid modes) and the exact fields ([`ElasticExact`]). The scene parser
+//! (sdcrack-io) reads and validates them; the maths (references, compare tool, and the
+//! smooth-domain solver of issue 46) take them from here.
+
+use crate::expr::Expr;
+
+/// Plane strain (ε_zz = 0) or plane stress (σ_zz = 0).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum PlaneModel {
+    /// ε_zz = 0: the in-plane law with the 3-D Lamé constants.
+    #[default]
+    Strain,
+    /// σ_zz = 0: the in-plane law with λ* = 2λμ/(λ + 2μ).
+    Stress,
+}
+
+crate::scene_names!(PlaneModel { Strain => "strain", Stress => "stress" });
+
+/// An isotropic material in the plane: the 3-D Lamé constants and the plane model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// The 3-D first Lamé constant λ.
+    pub lambda: f64,
+    /// The shear modulus μ > 0.
+    pub mu: f64,
+    /// Plane strain or plane stress.
+    pub plane: PlaneModel,
+}
+
+impl Material {
+    /// The material of Young's modulus E and Poisson's ratio ν:
+    /// λ = Eν/((1 + ν)(1 − 2ν)), μ = E/(2(1 + ν)).
+    pub fn from_young_poisson(e: f64, nu: f64, plane: PlaneModel) -> Material {
+        Material {
+            lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+            mu: e / (2.0 * (1.0 + nu)),
+            plane,
+        }
+    }
+
+    /// The λ of the in-plane law σ = λ_in tr ε I + 2μ ε: λ in plane strain, 2λμ/(λ + 2μ) in
+    /// plane stress.
+    pub fn lambda_in_plane(&self) -> f64 {
+        match self.plane {
+            PlaneModel::Strain => self.lambda,
+            PlaneModel::Stress => 2.0 * self.lambda * self.mu / (self.lambda + 2.0 * self.mu),
+        }
+    }
+
+    /// Poisson's ratio ν = λ/(2(λ + μ)) of the 3-D constants.
+    pub fn poisson(&self) -> f64 {
+        self.lambda / (2.0 * (self.lambda + self.mu))
+    }
+
+    /// Kolosov's constant κ: 3 − 4ν in plane strain, (3 − ν)/(1 + ν) in plane stress.
+    pub fn kolosov(&self) -> f64 {
+        let nu = self.poisson();
+        match self.plane {
+            PlaneModel::Strain => 3.0 - 4.0 * nu,
+            PlaneModel::Stress => (3.0 - nu) / (1.0 + nu),
+        }
+    }
+
+    /// E′ of Irwin's relation G = K²/E′: E/(1 − ν²) in plane strain, E in plane stress.
+    pub fn e_prime(&self) -> f64 {
+        let nu = self.poisson();
+        let e = 2.0 * self.mu * (1.0 + nu);
+        match self.plane {
+            PlaneModel::Strain => e / (1.0 - nu * nu),
+            PlaneModel::Stress => e,
+        }
+    }
+}
+
+/// A named part of ∂Ω: a side of a rectangle (`left`, `right`, `bottom`, `top`) or an edge of a
+/// polygon (`edge1` … `edgeN`, edge k from vertex k to vertex k + 1, 1-based, the last one back to
+/// the first vertex).
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BoundaryPart(pub String);
+
+/// A traction t = σn prescribed on a boundary part (n the outward normal of Ω).
+#[derive(Clone, Debug)]
+pub struct Traction {
+    /// The part of ∂Ω it acts on.
+    pub part: BoundaryPart,
+    /// t_x, t_y as expressions of (x, y).
+    pub t: [Expr; 2],
+}
+
+/// Displacement components held at zero at a corner of Ω (removes rigid modes where the
+/// boundary is all traction).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FixedPoint {
+    /// The corner of Ω (a mesh vertex on every level).
+    pub point: [f64; 2],
+    /// Which components are held: `[u_x, u_y]`.
+    pub components: [bool; 2],
+}
+
+/// A stress intensity factor pair at one crack tip, in the tip's frame (docs/scenes.md: e₁ points
+/// ahead of the tip, out of the crack; e₂ is e₁ turned by +90°).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TipSif {
+    /// Mode I, K_I.
+    pub k1: f64,
+    /// Mode II, K_II.
+    pub k2: f64,
+}
+
+/// The exact fields of an elastic scene.
+#[derive(Clone, Debug)]
+pub struct ElasticExact {
+    /// u_x, u_y.
+    pub u: [Expr; 2],
+    /// σ_xx, σ_yy, σ_xy (given, or Hooke's law of the symbolic derivatives of u).
+    pub stress: [Expr; 3],
+    /// [u·ν] on Γc, when given (otherwise from u on each face).
+    pub opening: Option<Expr>,
+    /// [u·τ] on Γc (τ = ν turned by −90°, the crack's direction), when given.
+    pub slip: Option<Expr>,
+    /// The contact pressure −σ_νν on Γc, when given (otherwise from the stress).
+    pub pressure: Option<Expr>,
+    /// (K_I, K_II) per crack tip, in the tips' order (each crack's first-point tip, then its
+    /// last-point tip; a crack end on ∂Ω is a mouth, not a tip). Empty when not given.
+    pub sif: Vec<TipSif>,
+}
+
+/// The data of an elastic scene.
+#[derive(Clone, Debug)]
+pub struct ElasticData {
+    /// The material.
+    pub material: Material,
+    /// f_x, f_y.
+    pub f: [Expr; 2],
+    /// g_x, g_y on every boundary part without a traction (`None` when every part has one).
+    pub g: Option<[Expr; 2]>,
+    /// The tractions, one per part that has one.
+    pub tractions: Vec<Traction>,
+    /// Fixed points (only with an all-traction boundary).
+    pub fixed: Vec<FixedPoint>,
+    /// The exact fields, if the scene has them.
+    pub exact: Option<ElasticExact>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn young_poisson_round_trip_and_constants() {
+        let m = Material::from_young_poisson(1.0, 0.3, PlaneModel::Strain);
+        assert!((m.poisson() - 0.3).abs() < 1e-15);
+        assert!((m.kolosov() - 1.8).abs() < 1e-15);
+        assert!((m.e_prime() - 1.0 / 0.91).abs() < 1e-14);
+        let s = Material { plane: PlaneModel::Stress, ..m };
+        assert!((s.kolosov() - 2.7 / 1.3).abs() < 1e-14);
+        // Plane stress: λ* = 2λμ/(λ + 2μ) = Eν/(1 − ν²).
+        assert!((s.lambda_in_plane() - 0.3 / 0.91).abs() < 1e-14);
+    }
+}
