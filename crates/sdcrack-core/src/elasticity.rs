@@ -12,7 +12,7 @@
 //! (sdcrack-io) reads and validates them; the maths (references, compare tool, and the
 //! smooth-domain solver of issue 46) take them from here.
 
-use crate::expr::Expr;
+use crate::expr::{Expr, Var};
 
 /// Plane strain (ε_zz = 0) or plane stress (σ_zz = 0).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -152,6 +152,26 @@ pub struct ElasticData {
     pub exact: Option<ElasticExact>,
 }
 
+/// Hooke's law of the symbolic derivatives of u: (σ_xx, σ_yy, σ_xy) with
+/// σ = λ_in tr ε(u) I + 2μ ε(u) ([`Material::lambda_in_plane`]). Built as text from the
+/// derivatives' infix forms and parsed back (the expression language has no combinators), so the
+/// result prints as a scene expression.
+pub fn hooke_stress(u: &[Expr; 2], m: &Material) -> [Expr; 3] {
+    let d = |c: usize, v: Var| format!("({})", u[c].derivative(v).to_string_infix());
+    let (ux_x, uy_y) = (d(0, Var::X), d(1, Var::Y));
+    let (ux_y, uy_x) = (d(0, Var::Y), d(1, Var::X));
+    let (lam, mu) = (m.lambda_in_plane(), m.mu);
+    let trace = format!("{lam} * ({ux_x} + {uy_y})");
+    let texts = [
+        format!("{trace} + 2 * {mu} * {ux_x}"),
+        format!("{trace} + 2 * {mu} * {uy_y}"),
+        format!("{mu} * ({ux_y} + {uy_x})"),
+    ];
+    texts.map(|t| {
+        Expr::parse(&t).expect("derivatives of a parsed expression print as parsable text")
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -162,9 +182,32 @@ mod tests {
         assert!((m.poisson() - 0.3).abs() < 1e-15);
         assert!((m.kolosov() - 1.8).abs() < 1e-15);
         assert!((m.e_prime() - 1.0 / 0.91).abs() < 1e-14);
-        let s = Material { plane: PlaneModel::Stress, ..m };
+        let s = Material {
+            plane: PlaneModel::Stress,
+            ..m
+        };
         assert!((s.kolosov() - 2.7 / 1.3).abs() < 1e-14);
         // Plane stress: λ* = 2λμ/(λ + 2μ) = Eν/(1 − ν²).
         assert!((s.lambda_in_plane() - 0.3 / 0.91).abs() < 1e-14);
+    }
+
+    #[test]
+    fn hooke_stress_of_a_quadratic_field() {
+        // u = (x² y, x − y²): ε_xx = 2xy, ε_yy = −2y, ε_xy = (x² + 1)/2.
+        let u = [
+            Expr::parse("x^2*y").unwrap(),
+            Expr::parse("x - y^2").unwrap(),
+        ];
+        let m = Material {
+            lambda: 2.0,
+            mu: 0.5,
+            plane: PlaneModel::Strain,
+        };
+        let [sxx, syy, sxy] = hooke_stress(&u, &m);
+        let (x, y) = (0.3, -0.7);
+        let tr = 2.0 * x * y - 2.0 * y;
+        assert!((sxx.eval(x, y) - (2.0 * tr + 2.0 * x * y)).abs() < 1e-14);
+        assert!((syy.eval(x, y) - (2.0 * tr - 2.0 * y)).abs() < 1e-14);
+        assert!((sxy.eval(x, y) - 0.5 * (x * x + 1.0)).abs() < 1e-14);
     }
 }

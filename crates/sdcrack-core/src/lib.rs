@@ -20,8 +20,8 @@
 
 pub mod assembly;
 pub mod case;
-pub mod elasticity;
 pub mod contact;
+pub mod elasticity;
 pub mod expr;
 pub mod fe;
 pub mod geometry;
