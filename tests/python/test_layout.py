@@ -34,7 +34,7 @@ MANIFESTS = {
 FORMATS = {"toml", "clap", "hdf5-metno", "hdf5-metno-sys", "serde_json", "indicatif", "humantime"}
 # The modules of each crate (file or folder names under its src/).
 MODULES = {
-    "sdcrack-core": {"problem", "case", "expr", "fe", "mesh", "geometry", "assembly", "linalg", "ordering",
+    "sdcrack-core": {"problem", "elasticity", "case", "expr", "fe", "mesh", "geometry", "assembly", "linalg", "ordering",
                      "contact", "multiplier", "krylov", "norms", "scene", "study"},
     "sdcrack-io": {"scene_file", "output", "plain", "did_you_mean", "one_line"},
     "sdcrack": {"cli", "bench", "references", "main"},
