@@ -618,6 +618,8 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
 
     export, out = Path(export), Path(out)
     scene = read_scene(export)
+    if "problem" in scene:  # the elastic problem (docs/elasticity.md); absent: the scalar one
+        return run_elastic(export, out, scene, fields, overwrite)
     trees = {"f": parse_expr(scene, "f", scene["f"]), "g": parse_expr(scene, "g", scene["g"])}
     exact = scene.get("exact") or None
     if exact is not None:
@@ -650,6 +652,32 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
             sdfields.write_fields(tmp, field_sets, "dolfinx")
         summary = sdresults.write_summary(tmp, scene["name"], "dolfinx", cases, tool_version=dolfinx.__version__)
     return summary
+
+
+def run_elastic(export, out, scene, fields, overwrite):
+    """The elastic problem: references/dolfinx/elasticity.py (loaded from this file's folder, which
+    need not be on sys.path), given the pieces of this file it shares with the scalar problem: the
+    face rule of the Dirichlet data (side_points), the load rule (load_measure) and the active set's
+    and KKT's constants. Its errors become SceneError (an invalid scene: exit 2) or SolveError."""
+    import importlib.util
+    import types
+
+    import dolfinx
+
+    spec = importlib.util.spec_from_file_location("sdcrack_dolfinx_elasticity",
+                                                  Path(__file__).resolve().with_name("elasticity.py"))
+    elastic = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(elastic)
+    shared = types.SimpleNamespace(
+        side_points=side_points, load_measure=load_measure, NORM_FFCX=NORM_FFCX,
+        STIFFNESS_DEGREE=STIFFNESS_DEGREE, ACTIVITY_TOL=ACTIVITY_TOL, MAX_ITER=MAX_ITER,
+        KKT_TOLERANCE=KKT_TOLERANCE, tool_version=dolfinx.__version__)
+    try:
+        return elastic.run(export, out, scene, fields, overwrite, shared)
+    except elastic.InvalidInput as e:
+        raise SceneError(str(e)) from None
+    except elastic.Failure as e:
+        raise SolveError(str(e)) from None
 
 
 def main(argv=None):
