@@ -208,7 +208,7 @@ def closed_run(tmp_path_factory):
     d = tmp_path_factory.mktemp("closed")
     exact, f = ef.closed_slip(MATERIAL)
     exp = elastic_export(d / "export", "closed-slip", MATERIAL, f, g=[exact["ux"], exact["uy"]], exact=exact)
-    return exact, exp, solve.run(exp, d / "out"), d / "out"
+    return exact, exp, solve.run(exp, d / "out", fields=True), d / "out"
 
 
 def test_closed_slip_stays_closed_and_slides(closed_run):
@@ -240,6 +240,26 @@ def test_closed_slip_stays_closed_and_slides(closed_run):
     assert 0.9 <= r[0] < r[1] <= 1.05, (u_errors, r)
     r = rates(slip_errors, hs)
     assert 0.55 <= r[0] < r[1] <= 1.05 and 0.2 < slip_errors[0] < 0.3, (slip_errors, r)
+
+
+def test_stress_field_is_hookes_law_of_u(closed_run):
+    """fields.h5's cell stress against the in-plane law of u_h's gradients, computed here from the
+    corners of each triangle (a field with shear: σ_xy ≠ 0)."""
+    h5py = pytest.importorskip("h5py")
+    _, exp, summary, out = closed_run
+    lam, mu = MATERIAL["lambda_in_plane"], MATERIAL["mu"]
+    for case in summary["cases"]:
+        lv = read_export(exp, case["level"])
+        u, _ = read_case(out, case["level"])
+        corners, values = lv["xy"][lv["tri"]], u[lv["tri"]]  # (T, 3, 2)
+        # ∇u on each triangle: solve [p1 − p0; p2 − p0] G = [u1 − u0; u2 − u0]
+        G = np.linalg.solve(corners[:, 1:] - corners[:, :1], values[:, 1:] - values[:, :1])  # G[d, c] = ∂_d u_c
+        exx, eyy, exy = G[:, 0, 0], G[:, 1, 1], (G[:, 0, 1] + G[:, 1, 0]) / 2
+        expect = np.column_stack([lam * (exx + eyy) + 2 * mu * exx, lam * (exx + eyy) + 2 * mu * eyy, 2 * mu * exy])
+        with h5py.File(out / "fields.h5", "r") as h5:
+            stress = h5[f"cases/level{case['level']}/stress"][()]
+        assert np.abs(expect[:, 2]).max() > 0.1  # the check sees the shear
+        assert np.abs(stress - expect).max() <= 1e-12 * np.abs(expect).max()
 
 
 def test_getfem_traction_scene_converges(tmp_path):
