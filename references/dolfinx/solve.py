@@ -1,5 +1,9 @@
 """dolfinx 0.5.2 reference solver for the sdcrack reference problem (docs/design.md).
 
+An export whose scene.json has a "problem" (an elastic scene, docs/elasticity.md) is solved by
+references/dolfinx/elasticity.py (run_elastic; its documentation says how); everything below is
+the scalar problem, the one solved when scene.json has no "problem".
+
 Usage:  /usr/bin/python3 references/dolfinx/solve.py MESH_EXPORT_DIR --out OUT [--fields] [--overwrite]
 
 `solve.py --check-install` runs the version check below alone (exit 0, or 2 with its one line): what

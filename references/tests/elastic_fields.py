@@ -16,12 +16,15 @@ def num(v):
     return f"({float(v)!r})"
 
 
-def patch(m):
-    """u with σ_xx = σ_xy = 0, σ_yy = −1 (in-plane law): ε_xx = λ*/(4μ(λ* + μ)),
-    ε_yy = −(λ* + 2μ)/(4μ(λ* + μ))."""
+def patch(m, sxx=0.0, shift=(0.0, 0.0)):
+    """u with the uniform stress σ = (sxx, −1, 0) (in-plane law: tr ε = (σ_xx + σ_yy)/(2(λ* + μ)),
+    ε_ii = (σ_ii − λ* tr ε)/(2μ)), u = (ε_xx (x + shift_x), ε_yy (y + shift_y)): σ_xy = 0 on any
+    crack along y = 0, which a frictionless crack transmits exactly."""
     lam, mu = m["lambda_in_plane"], m["mu"]
-    exx, eyy = lam / (4 * mu * (lam + mu)), -(lam + 2 * mu) / (4 * mu * (lam + mu))
-    return {"ux": f"{num(exx)}*x", "uy": f"{num(eyy)}*y", "sxx": "0", "syy": "-1", "sxy": "0"}
+    tr = (sxx - 1.0) / (2 * (lam + mu))
+    exx, eyy = (sxx - lam * tr) / (2 * mu), (-1.0 - lam * tr) / (2 * mu)
+    return {"ux": f"{num(exx)}*(x + {num(shift[0])})", "uy": f"{num(eyy)}*(y + {num(shift[1])})",
+            "sxx": num(sxx), "syy": "-1", "sxy": "0"}
 
 
 R = "sqrt(x^2 + y^2)"

@@ -153,6 +153,31 @@ def test_patch_test_is_exact_and_fully_closed(patch_runs, kind):
         assert np.abs(crack[pairs, :2]).max() <= ROUND_OFF and (crack[tips] == 0).all()
 
 
+def test_traction_patch_test_is_exact(tmp_path):
+    """The uniform stress σ = (½, −1, 0) by tractions on all four sides (t = σn) and fixed points
+    (u = 0 at (−1, −1), u_y = 0 at (1, −1)): u = (ε_xx (x + 1), ε_yy (y + 1)) exactly, the edge
+    crack closed along its whole length, its mouth on the traction side a constrained pair too."""
+    exact = ef.patch(MATERIAL, sxx=0.5, shift=(1.0, 1.0))
+    tractions = {"left": ["-0.5", "0"], "right": ["0.5", "0"], "bottom": ["0", "1"], "top": ["0", "-1"]}
+    fixed = [{"point": [-1.0, -1.0], "components": ["x", "y"]}, {"point": [1.0, -1.0], "components": ["y"]}]
+    exp = elastic_export(tmp_path / "export", "traction-patch", MATERIAL, ["0", "0"], tractions=tractions,
+                         fixed=fixed, exact=exact, levels=(0, 1))
+    summary = solve.run(exp, tmp_path / "out")
+    for case in summary["cases"]:
+        assert_kkt(case)
+        lv = read_export(exp, case["level"])
+        u, crack = read_case(tmp_path / "out", case["level"])
+        xy = lv["xy"]
+        ue = np.column_stack([sdexpr.to_numpy(sdexpr.parse(exact[k]))(xy[:, 0], xy[:, 1]) for k in ("ux", "uy")])
+        assert np.abs(u - ue).max() <= ROUND_OFF
+        pairs = list(range(len(crack) - 1))  # every row but the tip, the mouth (row 0) included
+        assert case["active"] == len(pairs) and (crack[pairs, 3] == 1).all()
+        h = 2.0 / (8 * 2 ** case["level"])
+        m = np.full(len(pairs), h)
+        m[0] = h / 2  # the mouth has one segment
+        assert np.abs(crack[pairs, 2] / m - 1.0).max() <= ROUND_OFF
+
+
 def test_patch_fields_files(patch_runs):
     h5py = pytest.importorskip("h5py")
     meshio = pytest.importorskip("meshio")
