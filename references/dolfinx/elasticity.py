@@ -126,7 +126,9 @@ def _table(path, dtype, ncols):
 
 def read_cracks(path, n_rows):
     """cracks.txt of an elastic export: [(first, n, tip_first, tip_last)]; two columns (first n)
-    mean both ends are tips. The ranges must follow each other and cover crack.txt's rows."""
+    mean both ends are tips. The ranges must follow each other and cover crack.txt's rows (the
+    rule of sdexport.read_ranges, which reads two columns only: read here until sdexport reads the
+    tip flags)."""
     path = Path(path)
     if not path.exists():
         raise Failure(f"missing file {path}")

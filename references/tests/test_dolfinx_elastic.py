@@ -352,3 +352,23 @@ def test_malformed_scene_is_refused_in_one_line(tmp_path, bad):
     assert {"unknown part": "middle", "g missing": "g is missing", "rigid modes": "rigid modes",
             "mu": "mu > 0"}[bad] in r.stderr
     assert not out.exists()
+
+
+@pytest.mark.parametrize("bad", ["mouth not doubled", "tip flag"])
+def test_malformed_export_is_refused(tmp_path, bad):
+    """A malformed export (as for the scalar script: exit status 1, SolveError, one line), nothing
+    written."""
+    exact = ef.patch(MATERIAL)
+    exp = elastic_export(tmp_path / "export", "bad", MATERIAL, ["0", "0"], g=[exact["ux"], exact["uy"]], levels=(0,))
+    d = exp / "level0"
+    if bad == "mouth not doubled":
+        crack = np.loadtxt(d / "crack.txt", dtype=int)
+        crack[0, 1] = crack[0, 0]
+        np.savetxt(d / "crack.txt", crack, fmt="%d")
+        expect = "its mouth at row 0 needs two copies"
+    else:
+        (d / "cracks.txt").write_text("0 9 2 1\n")
+        expect = "tip flags must be 0"
+    with pytest.raises(solve.SolveError, match=expect) as info:
+        solve.run(exp, tmp_path / "out")
+    assert "\n" not in str(info.value) and not (tmp_path / "out").exists()
