@@ -1,5 +1,9 @@
 """dolfinx 0.5.2 reference solver for the sdcrack reference problem (docs/design.md).
 
+An export whose scene.json has a "problem" (an elastic scene, docs/elasticity.md) is solved by
+references/dolfinx/elasticity.py (run_elastic; its documentation says how); everything below is
+the scalar problem, the one solved when scene.json has no "problem".
+
 Usage:  /usr/bin/python3 references/dolfinx/solve.py MESH_EXPORT_DIR --out OUT [--fields] [--overwrite]
 
 `solve.py --check-install` runs the version check below alone (exit 0, or 2 with its one line): what
@@ -618,6 +622,8 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
 
     export, out = Path(export), Path(out)
     scene = read_scene(export)
+    if "problem" in scene:  # the elastic problem (docs/elasticity.md); absent: the scalar one
+        return run_elastic(export, out, scene, fields, overwrite)
     trees = {"f": parse_expr(scene, "f", scene["f"]), "g": parse_expr(scene, "g", scene["g"])}
     exact = scene.get("exact") or None
     if exact is not None:
@@ -650,6 +656,32 @@ def run(export, out, fields=False, overwrite=False, quadrature=None):
             sdfields.write_fields(tmp, field_sets, "dolfinx")
         summary = sdresults.write_summary(tmp, scene["name"], "dolfinx", cases, tool_version=dolfinx.__version__)
     return summary
+
+
+def run_elastic(export, out, scene, fields, overwrite):
+    """The elastic problem: references/dolfinx/elasticity.py (loaded from this file's folder, which
+    need not be on sys.path), given the pieces of this file it shares with the scalar problem: the
+    face rule of the Dirichlet data (side_points), the load rule (load_measure) and the active set's
+    and KKT's constants. Its errors become SceneError (an invalid scene: exit 2) or SolveError."""
+    import importlib.util
+    import types
+
+    import dolfinx
+
+    spec = importlib.util.spec_from_file_location("sdcrack_dolfinx_elasticity",
+                                                  Path(__file__).resolve().with_name("elasticity.py"))
+    elastic = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(elastic)
+    shared = types.SimpleNamespace(
+        side_points=side_points, load_measure=load_measure, NORM_FFCX=NORM_FFCX,
+        STIFFNESS_DEGREE=STIFFNESS_DEGREE, ACTIVITY_TOL=ACTIVITY_TOL, MAX_ITER=MAX_ITER,
+        KKT_TOLERANCE=KKT_TOLERANCE, tool_version=dolfinx.__version__)
+    try:
+        return elastic.run(export, out, scene, fields, overwrite, shared)
+    except elastic.InvalidInput as e:
+        raise SceneError(str(e)) from None
+    except elastic.Failure as e:
+        raise SolveError(str(e)) from None
 
 
 def main(argv=None):
