@@ -286,16 +286,22 @@ def _boundary_edges(tri):
     return uniq[count == 1]
 
 
-def _check_p1_ring(loc, tri, q, r_out, tip):
-    """The ring's assumptions on the mesh: the tip is a vertex whose triangles have q = 1, and every
-    boundary edge that q_h touches lies on the crack's line behind the tip."""
+def _weight_p1(loc, tri, r_in, r_out, tip):
+    """q at the vertices: the plateau, and 1 on every vertex of the triangles at the tip (so that
+    ∇q_h = 0 where Williams' fields are singular, whatever r_in is to the mesh: the identity holds
+    for any such q). The tip must be a vertex."""
     dist = np.hypot(loc[:, 0], loc[:, 1])
     at_tip = dist <= ON_LINE_TOL * r_out
     if not at_tip.any():
         raise ValueError(f"sif_p1: the tip {list(tip)} is not a vertex of the mesh")
-    touching = at_tip[tri].any(axis=1)
-    if not np.all(q[tri[touching]] == 1.0):
-        raise ValueError("sif_p1: r_in is smaller than the triangles at the tip (q must be 1 on them)")
+    q = plateau(dist, r_in, r_out)
+    q[tri[at_tip[tri].any(axis=1)].ravel()] = 1.0
+    return q
+
+
+def _check_p1_ring(loc, tri, q, r_out, tip):
+    """The ring's assumption on the mesh: every boundary edge that q_h touches lies on the crack's
+    line behind the tip."""
     on_line = (np.abs(loc[:, 1]) <= ON_LINE_TOL * r_out) & (loc[:, 0] <= ON_LINE_TOL * r_out)
     edges = _boundary_edges(tri)
     bad = (q[edges] > 0.0).any(axis=1) & ~on_line[edges].all(axis=1)
@@ -329,10 +335,10 @@ def _face_term_p1(loc, on_line, q, r_in, r_out, face_pressure, tip, rot, materia
 def sif_p1(xy, tri, u, material, tip, e1, r_in, r_out, face_pressure=None, body_force=None):
     """(K_I, K_II) at `tip` of a vector P1 field u (n, 2) on the cracked triangulation (xy (n, 2),
     tri (m, 3); the tip a vertex, the crack's faces boundary edges of the mesh). q_h is the P1
-    interpolant of the plateau weight; face_pressure and body_force as for `sif_exact` (see
-    `pressure_along_crack` for a pressure from nodal values). The disc r < r_out must meet the
-    mesh's boundary only along the tip's crack line (checked: ValueError), and the triangles at the
-    tip must lie within r_in (checked)."""
+    interpolant of the plateau weight, set to 1 on the triangles at the tip (whatever r_in);
+    face_pressure and body_force as for `sif_exact` (see `pressure_along_crack` for a pressure from
+    nodal values). The disc r < r_out (and the triangles at the tip) must meet the mesh's boundary
+    only along the tip's crack line (checked: ValueError)."""
     _check_ring(r_in, r_out)
     lam, mu, kappa, e_prime = _lame(material)
     xy = np.asarray(xy, dtype=float)
@@ -341,7 +347,7 @@ def sif_p1(xy, tri, u, material, tip, e1, r_in, r_out, face_pressure=None, body_
     tip = np.asarray(tip, dtype=float)
     rot = tip_frame(e1)
     loc = (xy - tip) @ rot.T
-    q = plateau(np.hypot(loc[:, 0], loc[:, 1]), r_in, r_out)
+    q = _weight_p1(loc, tri, r_in, r_out, tip)
     on_line = _check_p1_ring(loc, tri, q, r_out, tip)
     active = (q[tri] > 0.0).any(axis=1)
     t, qt = tri[active], q[tri[active]]
