@@ -70,7 +70,8 @@ def elastic_constants(lambda_in_plane, mu):
     lam = float(lambda_in_plane)
     mu = float(mu)
     if not mu > 0.0 or not lam + mu > 0.0:
-        raise ValueError(f"material: need mu > 0 and lambda + mu > 0, got lambda = {lam}, mu = {mu}")
+        raise ValueError(f"material: need mu > 0 and lambda + mu > 0, got lambda = {lam}, "
+                         f"mu = {mu}")
     return (lam + 3.0 * mu) / (lam + mu), 4.0 * mu * (lam + mu) / (lam + 2.0 * mu)
 
 
@@ -215,7 +216,7 @@ def sif_exact(grad_u, stress, material, tip, e1, r_in, r_out, face_pressure=None
     body_force(x, y) → (f_x, f_y) (None: f = 0). e1 is the tip frame's e₁; the disc r < r_out must
     lie in the body and meet no other crack, the crack straight along −e₁ within it."""
     _check_ring(r_in, r_out)
-    lam, mu, kappa, e_prime = _lame(material)
+    lam, mu, _, e_prime = _lame(material)
     tip = np.asarray(tip, dtype=float)
     rot = tip_frame(e1)
     # (1) on the ring, q′ = −1/(r_out − r_in) radially.
@@ -300,8 +301,10 @@ def _weight_p1(loc, tri, r_in, r_out, tip):
 
 
 def _check_p1_ring(loc, tri, q, r_out, tip):
-    """The ring's assumption on the mesh: every boundary edge that q_h touches lies on the crack's
-    line behind the tip."""
+    """The ring's assumptions on the mesh: every boundary edge that q_h touches lies on the crack's
+    line behind the tip, and every vertex of that line where q_h > 0 is on the crack's faces (a
+    boundary edge): the disc does not reach past the crack's other end. Returns the faces'
+    vertices (a mask)."""
     on_line = (np.abs(loc[:, 1]) <= ON_LINE_TOL * r_out) & (loc[:, 0] <= ON_LINE_TOL * r_out)
     edges = _boundary_edges(tri)
     bad = (q[edges] > 0.0).any(axis=1) & ~on_line[edges].all(axis=1)
@@ -309,10 +312,16 @@ def _check_p1_ring(loc, tri, q, r_out, tip):
         v = edges[bad][0]
         raise ValueError(f"sif_p1: the disc r < r_out = {r_out} around the tip {list(tip)} meets a "
                          f"boundary or crack edge off the tip's crack line (vertices {v.tolist()})")
-    return on_line
+    on_face = np.zeros(len(loc), dtype=bool)
+    on_face[edges[on_line[edges].all(axis=1)].ravel()] = True
+    past = on_line & ~on_face & (q > 0.0)
+    if past.any():
+        raise ValueError(f"sif_p1: the disc r < r_out = {r_out} around the tip {list(tip)} reaches "
+                         f"past the crack's other end (vertex {int(np.argmax(past))})")
+    return on_face
 
 
-def _face_term_p1(loc, on_line, q, r_in, r_out, face_pressure, tip, rot, material):
+def _face_term_p1(loc, on_line, q, face_pressure, tip, rot, material):
     """(3) with q_h and p piecewise linear between the crack's vertices behind the tip."""
     dist = -loc[on_line, 0]
     qs = q[on_line]
@@ -340,7 +349,7 @@ def sif_p1(xy, tri, u, material, tip, e1, r_in, r_out, face_pressure=None, body_
     nodal values). The disc r < r_out (and the triangles at the tip) must meet the mesh's boundary
     only along the tip's crack line (checked: ValueError)."""
     _check_ring(r_in, r_out)
-    lam, mu, kappa, e_prime = _lame(material)
+    lam, mu, _, e_prime = _lame(material)
     xy = np.asarray(xy, dtype=float)
     tri = np.asarray(tri, dtype=np.int64)
     u = np.asarray(u, dtype=float)
@@ -388,6 +397,6 @@ def sif_p1(xy, tri, u, material, tip, e1, r_in, r_out, face_pressure=None, body_
             total -= np.sum(w * qq.T * np.einsum("tqi,tqi->tq", f, ga[..., :, 0]))
         integrals.append(total)
     if face_pressure is not None:
-        face = _face_term_p1(loc, on_line, q, r_in, r_out, face_pressure, tip, rot, material)
+        face = _face_term_p1(loc, on_line, q, face_pressure, tip, rot, material)
         integrals = [a + b for a, b in zip(integrals, face)]
     return _k_from_integrals(integrals, e_prime)
