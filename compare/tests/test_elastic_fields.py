@@ -257,7 +257,8 @@ def test_williams_scenes_are_sif_py_williams_fields():
     assert close(fld.u[0](x, y), uc[0] + w2[:, 0]) and close(fld.u[1](x, y), uc[1] + w2[:, 1])
 
 
-@pytest.mark.parametrize("base", ["elastic-williams-open", "elastic-closed-slip", "elastic-griffith"])
+@pytest.mark.parametrize("base", ["elastic-williams-open", "elastic-closed-slip",
+                                  "elastic-griffith"])
 def test_graded_twins_differ_only_in_the_grading(base):
     a, b = load(base), load(base + "-graded")
     assert b["discretization"].pop("grading") == {"beta": 0.4, "radius": 0.25}
@@ -289,7 +290,8 @@ def test_getfem_scene_is_getfems_set_up():
     y = np.linspace(-0.5, 0.5, 11)
     tr = scene["data"]["traction"]
     for part, nx in (("left", -1.0), ("right", 1.0)):
-        assert close(fn(tr[part][0])(0 * y + (0.0 if nx < 0 else 1.0), y), 0.4 * np.sin(2 * np.pi * y) * nx)
+        x = 0 * y + (0.0 if nx < 0 else 1.0)
+        assert close(fn(tr[part][0])(x, y), 0.4 * np.sin(2 * np.pi * y) * nx)
         assert fn(tr[part][1])(0 * y, y).tolist() == [0.0] * 11
     for part in ("bottom", "top"):
         assert tr[part] == ["0", "0"]
