@@ -450,9 +450,9 @@ def test_the_band_fails_a_1_7_slip_and_holds_the_measured_drift():
 
 
 def test_the_repository_rows_validate_against_their_scenes():
-    """scenes/expectations.toml records every repository scene with references: the exact ones at
-    level 4 against the exact solution, the others at level 3 against the references' level 4;
-    every row names a series its scene runs."""
+    """scenes/expectations.toml records every scalar repository scene with references: the exact
+    ones at level 4 against the exact solution, the others at level 3 against the references'
+    level 4; every row names a series its scene runs."""
     import glob
     import tomllib
 
@@ -465,7 +465,9 @@ def test_the_repository_rows_validate_against_their_scenes():
             continue
         with open(f, "rb") as fh:
             sf = tomllib.load(fh)
-        if sf.get("outputs", {}).get("references"):
+        # the elastic scenes (issue 45) have no smooth-domain solver yet (issue 46): no ratio to record
+        elastic = sf.get("problem", {}).get("kind") == "elasticity"
+        if sf.get("outputs", {}).get("references") and not elastic:
             with_references.add(sf["name"])
     assert scenes == with_references and len(scenes) == 18
 
