@@ -4,7 +4,8 @@ ParaView, meshio and the compare tool read solver and references alike.
 
     fields.h5   /meshes/level{L}/points (N,3)   /meshes/level{L}/triangles (T,3) int64
                 /cases/level{L}/<point field>   scalar (N,) or vector (N,3): u, and p = ∇u_h at the
-                vertices (vertex_gradient) in both references
+                vertices (vertex_gradient) in both references; the elastic references' u (N,3)
+                with u_z = 0, and their cell field `stress` (T,3) = (σ_xx, σ_yy, σ_xy) of u_h
                 /cases/level{L}/crack/points (I,3)  /crack/segments (S,2)  /crack/<crack field> (I,)
                 (the crack nodes of every crack in crack.txt's row order; segments: the row pairs
                 [k, k+1] within each crack, none joining two cracks, S = I − number of cracks); the
@@ -48,6 +49,16 @@ def crack_field(fields, name):
     raise KeyError(f"no crack field {' or '.join(map(repr, tried))} (have {', '.join(sorted(fields))})")
 
 
+def triangle_gradient(xy, tri, u):
+    """(∂x u_h, ∂y u_h), each (T,), per triangle of the P1 function u_h with vertex values u:
+    [e1; e2] ∇u_h = [u1 − u0; u2 − u0] with e1, e2 the triangle's edges from its corner 0."""
+    p0, p1, p2 = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
+    e1, e2 = p1 - p0, p2 - p0
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    d1, d2 = u[tri[:, 1]] - u[tri[:, 0]], u[tri[:, 2]] - u[tri[:, 0]]
+    return (d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det
+
+
 def vertex_gradient(xy, tri, u):
     """p = ∇u_h at the cracked vertices (N, 2), the point field `p` of both references: the
     area-weighted mean of the constant triangle gradients of the P1 u_h (each copy of a crack vertex
@@ -55,8 +66,7 @@ def vertex_gradient(xy, tri, u):
     p0, p1, p2 = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
     e1, e2 = p1 - p0, p2 - p0
     det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    d1, d2 = u[tri[:, 1]] - u[tri[:, 0]], u[tri[:, 2]] - u[tri[:, 0]]
-    g = np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det])
+    g = np.column_stack(triangle_gradient(xy, tri, u))
     area = np.abs(det) / 2
     acc, wsum = np.zeros((len(xy), 2)), np.zeros(len(xy))
     for k in range(3):
@@ -79,16 +89,18 @@ def _attribute(h5name, name, n, path, values, center="Node"):
             f"{_item(h5name, dims, 'Float', path)}</Attribute>")
 
 
-def _grid(h5name, grid, topology, cells, cells_path, n, points_path, fields, fields_path):
+def _grid(h5name, grid, topology, cells, cells_path, n, points_path, fields, fields_path, cell_fields=None):
     """One XDMF <Grid> named `grid`: `cells` (count, nodes per cell) of `topology` at the HDF5 path
-    cells_path, n points (3 coordinates) at points_path, and one node-centred attribute per
-    entry of `fields`, at fields_path/<key>."""
+    cells_path, n points (3 coordinates) at points_path, one node-centred attribute per
+    entry of `fields` and one cell-centred attribute per entry of `cell_fields`, at fields_path/<key>."""
     parts = [f'<Grid Name="{grid}" GridType="Uniform">',
              f'<Topology TopologyType="{topology}" NumberOfElements="{cells[0]}" NodesPerElement="{cells[1]}">'
              f"{_item(h5name, cells, 'Int', cells_path)}</Topology>",
              f'<Geometry GeometryType="XYZ">{_item(h5name, (n, 3), "Float", points_path)}</Geometry>']
     for key, values in fields.items():
         parts.append(_attribute(h5name, key, n, f"{fields_path}/{key}", np.asarray(values)))
+    for key, values in (cell_fields or {}).items():
+        parts.append(_attribute(h5name, key, cells[0], f"{fields_path}/{key}", np.asarray(values), "Cell"))
     return "\n".join(parts + ["</Grid>"])
 
 
@@ -96,7 +108,7 @@ def _mesh_grid(h5name, level, fs):
     """The grid of a level's mesh (triangles) with its point fields."""
     name = f"level{level}"
     return _grid(h5name, name, "Triangle", (len(fs["tri"]), 3), f"/meshes/{name}/triangles",
-                 len(fs["xy"]), f"/meshes/{name}/points", fs["point"], f"/cases/{name}")
+                 len(fs["xy"]), f"/meshes/{name}/points", fs["point"], f"/cases/{name}", fs.get("cell"))
 
 
 def _segments(fs):
@@ -127,6 +139,8 @@ def write_fields(folder, field_sets, tool):
     field_sets: [(level, {"xy": (N,2), "tri": (T,3), "crack": (I,2) (+, −) vertex pairs (crack.txt),
                           "segments": (S,2) row pairs within each crack (optional: absent, the
                           rows form one crack), "point": {name: (N,) or (N,2)},
+                          "cell": {name: (T,) or (T,3)} (optional: cell fields, e.g. the elastic
+                          references' stress (σ_xx, σ_yy, σ_xy)),
                           "crack_fields": {name: (I,)}, "h": mesh size (optional)})]."""
     import h5py
 
@@ -150,6 +164,8 @@ def write_fields(folder, field_sets, tool):
             put(f"/meshes/{name}/triangles", np.asarray(fs["tri"], dtype=np.int64))
             for key, values in fs["point"].items():
                 put(f"/cases/{name}/{key}", values)
+            for key, values in (fs.get("cell") or {}).items():
+                put(f"/cases/{name}/{key}", np.asarray(values, dtype=float))
             crack = np.asarray(fs["crack"])
             put(f"/cases/{name}/crack/points", _pad3(np.asarray(fs["xy"])[crack[:, 0]]))
             put(f"/cases/{name}/crack/segments", _segments(fs))

@@ -123,10 +123,14 @@ def provenance(tool, tool_version):
             "threads": threads_of(os.environ)}
 
 
-def write_summary(folder, scene, tool, cases, tool_version):
-    """folder/summary.json = {"scene", "tool", "provenance" (see `provenance`; date = now), "cases"};
-    returns the dict."""
-    summary = {"scene": scene, "tool": tool, "provenance": provenance(tool, tool_version), "cases": cases}
+def write_summary(folder, scene, tool, cases, tool_version, problem=None):
+    """folder/summary.json = {"scene", "tool", "provenance" (see `provenance`; date = now), "cases"},
+    with "problem" after "tool" when given (the elastic references: "elasticity"; a scalar summary
+    has none); returns the dict."""
+    summary = {"scene": scene, "tool": tool}
+    if problem is not None:
+        summary["problem"] = problem
+    summary.update({"provenance": provenance(tool, tool_version), "cases": cases})
     (Path(folder) / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
 
