@@ -277,7 +277,7 @@ def write_text(path, table):
 
 def read_level(base, export, level, parts_of_scene):
     """solve.read_level plus boundary_edges.txt ("edges") and mesh.json's boundary_parts ("parts")."""
-    lv = base.read_level(export, level)
+    lv = base.read_level(export, level, mouths=True)
     parts = lv["meta"].get("boundary_parts")
     d = Path(export) / f"level{level}"
     if not (isinstance(parts, list) and parts and all(isinstance(p, str) for p in parts)):

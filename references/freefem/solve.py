@@ -120,11 +120,12 @@ def _load(path, dtype, cols):
     return a
 
 
-def read_level(export, level, default_normal=None):
+def read_level(export, level, default_normal=None, mouths=False):
     """One level of the export: {"meta" (mesh.json), "kind", "xy_uncut", "tri_uncut", "xy", "tri",
     "crack" (crack.txt), "layout" (sdexport.CrackLayout: cracks, tips, segments, nodal normals),
     "boundary"}; `default_normal`: the scene's single normal, for an export without
-    crack_normals.txt (else mesh.json's "normal", else the normals computed from the nodes)."""
+    crack_normals.txt (else mesh.json's "normal", else the normals computed from the nodes);
+    `mouths`: an elastic export, whose boundary.txt holds both copies of a mouth."""
     d = Path(export) / f"level{level}"
     if not d.is_dir():
         raise SolveError(f"missing level folder {d}")
@@ -154,7 +155,7 @@ def read_level(export, level, default_normal=None):
         raise SolveError(f"{d}: the first n_uncut cracked vertices differ from the uncut vertices")
     if lv["tri"].min() < 0 or lv["tri"].max() >= n or lv["tri_uncut"].max() >= nu:
         raise SolveError(f"{d}: triangle vertex index out of range")
-    if len(lv["boundary"]) and lv["boundary"].max() >= nu:
+    if len(lv["boundary"]) and lv["boundary"].max() >= (n if mouths else nu):
         raise SolveError(f"{d}: boundary vertex is a crack copy")
     return lv
 
