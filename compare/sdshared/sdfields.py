@@ -4,8 +4,8 @@ ParaView, meshio and the compare tool read solver and references alike.
 
     fields.h5   /meshes/level{L}/points (N,3)   /meshes/level{L}/triangles (T,3) int64
                 /cases/level{L}/<point field>   scalar (N,) or vector (N,3): u, and p = ∇u_h at the
-                vertices (vertex_gradient) in both references; the elastic references' u (N,3)
-                with u_z = 0, and their cell field `stress` (T,3) = (σ_xx, σ_yy, σ_xy) of u_h
+                vertices (vertex_gradient) in both references; the elastic references (docs/
+                elasticity.md): u (N,3) with u_z = 0, and the cell field stress (T,3)
                 /cases/level{L}/crack/points (I,3)  /crack/segments (S,2)  /crack/<crack field> (I,)
                 (the crack nodes of every crack in crack.txt's row order; segments: the row pairs
                 [k, k+1] within each crack, none joining two cracks, S = I − number of cracks); the
@@ -49,30 +49,32 @@ def crack_field(fields, name):
     raise KeyError(f"no crack field {' or '.join(map(repr, tried))} (have {', '.join(sorted(fields))})")
 
 
-def triangle_gradient(xy, tri, u):
-    """(∂x u_h, ∂y u_h), each (T,), per triangle of the P1 function u_h with vertex values u:
-    [e1; e2] ∇u_h = [u1 − u0; u2 − u0] with e1, e2 the triangle's edges from its corner 0."""
-    p0, p1, p2 = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
-    e1, e2 = p1 - p0, p2 - p0
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    d1, d2 = u[tri[:, 1]] - u[tri[:, 0]], u[tri[:, 2]] - u[tri[:, 0]]
-    return (d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det
-
-
 def vertex_gradient(xy, tri, u):
     """p = ∇u_h at the cracked vertices (N, 2), the point field `p` of both references: the
     area-weighted mean of the constant triangle gradients of the P1 u_h (each copy of a crack vertex
     averages its own face's triangles)."""
-    p0, p1, p2 = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
-    e1, e2 = p1 - p0, p2 - p0
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    g = np.column_stack(triangle_gradient(xy, tri, u))
+    g, det = _gradients_and_det(xy, tri, u)
     area = np.abs(det) / 2
     acc, wsum = np.zeros((len(xy), 2)), np.zeros(len(xy))
     for k in range(3):
         np.add.at(acc, tri[:, k], g * area[:, None])
         np.add.at(wsum, tri[:, k], area)
     return acc / np.maximum(wsum, 1e-300)[:, None]
+
+
+def triangle_gradients(xy, tri, u):
+    """(T, 2) the constant gradient of the P1 field u (N,) on each triangle."""
+    return _gradients_and_det(xy, tri, u)[0]
+
+
+def _gradients_and_det(xy, tri, u):
+    """The triangles' P1 gradients of u (T, 2) and the determinants of their edge vectors (T,)."""
+    p0, p1, p2 = xy[tri[:, 0]], xy[tri[:, 1]], xy[tri[:, 2]]
+    e1, e2 = p1 - p0, p2 - p0
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    d1, d2 = u[tri[:, 1]] - u[tri[:, 0]], u[tri[:, 2]] - u[tri[:, 0]]
+    g = np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (-d1 * e2[:, 0] + d2 * e1[:, 0]) / det])
+    return g, det
 
 
 def _item(h5name, dims, kind, path):
@@ -91,8 +93,8 @@ def _attribute(h5name, name, n, path, values, center="Node"):
 
 def _grid(h5name, grid, topology, cells, cells_path, n, points_path, fields, fields_path, cell_fields=None):
     """One XDMF <Grid> named `grid`: `cells` (count, nodes per cell) of `topology` at the HDF5 path
-    cells_path, n points (3 coordinates) at points_path, one node-centred attribute per
-    entry of `fields` and one cell-centred attribute per entry of `cell_fields`, at fields_path/<key>."""
+    cells_path, n points (3 coordinates) at points_path, one node-centred attribute per entry of
+    `fields` and one cell-centred attribute per entry of `cell_fields`, at fields_path/<key>."""
     parts = [f'<Grid Name="{grid}" GridType="Uniform">',
              f'<Topology TopologyType="{topology}" NumberOfElements="{cells[0]}" NodesPerElement="{cells[1]}">'
              f"{_item(h5name, cells, 'Int', cells_path)}</Topology>",
@@ -139,8 +141,8 @@ def write_fields(folder, field_sets, tool):
     field_sets: [(level, {"xy": (N,2), "tri": (T,3), "crack": (I,2) (+, −) vertex pairs (crack.txt),
                           "segments": (S,2) row pairs within each crack (optional: absent, the
                           rows form one crack), "point": {name: (N,) or (N,2)},
-                          "cell": {name: (T,) or (T,3)} (optional: cell fields, e.g. the elastic
-                          references' stress (σ_xx, σ_yy, σ_xy)),
+                          "cell": {name: (T,) or (T,3)} (optional: per triangle, e.g. the elastic
+                          references' stress (σ_xx, σ_yy, σ_xy); Center="Cell" in the XDMF),
                           "crack_fields": {name: (I,)}, "h": mesh size (optional)})]."""
     import h5py
 

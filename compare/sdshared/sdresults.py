@@ -124,13 +124,13 @@ def provenance(tool, tool_version):
 
 
 def write_summary(folder, scene, tool, cases, tool_version, problem=None):
-    """folder/summary.json = {"scene", "tool", "provenance" (see `provenance`; date = now), "cases"},
-    with "problem" after "tool" when given (the elastic references: "elasticity"; a scalar summary
-    has none); returns the dict."""
+    """folder/summary.json = {"scene", "tool", ["problem",] "provenance" (see `provenance`; date =
+    now), "cases"}; returns the dict. `problem`: the problem kind of an elastic scene
+    ("elasticity", docs/elasticity.md), absent for the scalar problem (None)."""
     summary = {"scene": scene, "tool": tool}
     if problem is not None:
         summary["problem"] = problem
-    summary.update({"provenance": provenance(tool, tool_version), "cases": cases})
+    summary |= {"provenance": provenance(tool, tool_version), "cases": cases}
     (Path(folder) / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     return summary
 

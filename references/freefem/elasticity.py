@@ -263,7 +263,7 @@ def crack_table(layout, u, rows, lam, active):
 
 def cell_stress(xy, tri, u, lam, mu):
     """(T, 3) σ(u_h) = (σ_xx, σ_yy, σ_xy) per triangle of the P1 field u (n, 2), σ = λ* tr ε I + 2μ ε."""
-    (ux_x, ux_y), (uy_x, uy_y) = (sdfields.triangle_gradient(xy, tri, u[:, c]) for c in (0, 1))
+    (ux_x, ux_y), (uy_x, uy_y) = (sdfields.triangle_gradients(xy, tri, u[:, c]).T for c in (0, 1))
     trace = lam * (ux_x + uy_y)
     return np.column_stack([trace + 2 * mu * ux_x, trace + 2 * mu * uy_y, mu * (ux_y + uy_x)])
 
