@@ -3,7 +3,8 @@
 outputs: their exact fields as scene-grammar strings, checked numerically in
 test_freefem_elasticity.py before any reference is judged by them.
 
-    patch_export        uniform compression σ_yy = −1 across an interior or an edge crack
+    patch_export        uniform compression σ_yy = −1 across an interior or an edge crack, by Dirichlet
+                        data or by tractions and fixed points
     williams_export     Williams' edge crack y = 0, x ≤ 0 of (−1, 1)², mode I (K_I > 0, open) and/or mode II
     closed_slip_export  u_C + K_II mode II with f = −div σ(u_C): closed everywhere, slip ~ √r
     getfem_export       GetFEM's xfem_stab_unilat_contact set-up: traction and fixed points only
@@ -40,13 +41,26 @@ def patch_strain(problem):
     return lam / d, -(lam + 2 * mu) / d
 
 
-def patch_export(out, plane="strain", crack=INTERIOR_CRACK, levels=(0, 1)):
+# the patch under tractions: t = σn = (0, ±1) on the bottom and top, 0 on the sides; the rigid modes
+# held at the corners (1, −1) (both components) and (1, 1) (x), where the exact field vanishes
+PATCH_TRACTIONS = {"left": ["0", "0"], "right": ["0", "0"], "bottom": ["0", "1"], "top": ["0", "-1"]}
+PATCH_FIXED = [{"point": [1.0, -1.0], "components": ["x", "y"]}, {"point": [1.0, 1.0], "components": ["x"]}]
+
+
+def patch_export(out, plane="strain", crack=INTERIOR_CRACK, levels=(0, 1), tractions=False):
+    """u = (ε_xx x, ε_yy y) with u = g on ∂Ω, or with `tractions` u = (ε_xx (x − 1), ε_yy (y + 1))
+    under PATCH_TRACTIONS and PATCH_FIXED (an edge crack's mouth is then a constrained pair)."""
     problem = material(**STEEL, plane=plane)
     exx, eyy = patch_strain(problem)
-    u = [f"{r(exx)}*x", f"{r(eyy)}*y"]
+    if tractions:
+        u = [f"{r(exx)}*(x - 1)", f"{r(eyy)}*(y + 1)"]
+        loads = {"g": None, "tractions": PATCH_TRACTIONS, "fixed": PATCH_FIXED}
+    else:
+        u = [f"{r(exx)}*x", f"{r(eyy)}*y"]
+        loads = {"g": u}
     exact = {"ux": u[0], "uy": u[1], "sxx": "0", "syy": "-1", "sxy": "0", "opening": "0", "pressure": "1"}
-    return elastic_export(out, f"patch-{plane}", problem, ["0", "0"], g=u, exact=exact, levels=levels,
-                          crack=crack)
+    return elastic_export(out, f"patch-{plane}", problem, ["0", "0"], exact=exact, levels=levels,
+                          crack=crack, **loads)
 
 
 # ---- Williams' edge crack ------------------------------------------------------------------------
