@@ -1,7 +1,7 @@
 """The two elastic references solve the same discrete problem (docs/elasticity.md, issue 45 item 2):
 dolfinx (references/dolfinx/elasticity.py) and FreeFEM (references/freefem/elasticity.py) on every
 scene of elastic_scenes.py, levels 0–2, agree in u to ≤ 1e-9 relative (‖u_F − u_D‖∞ / ‖u_F‖∞, the
-acceptance target of issue 45; measured ≤ 7.2e-14 on these levels, 4.1e-13 on GetFEM's level 3), with
+acceptance target of issue 45; measured ≤ 3.6e-13 on these levels, 4.1e-13 on GetFEM's level 3), with
 identical active sets, the same number of active-set solves, and the contact forces, openings and
 slips equal to 1e-9 of their largest value. Skipped without FreeFem++, without dolfinx, or in a
 checkout without the dolfinx reference's elastic path.
