@@ -36,6 +36,9 @@ summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h"
     (over the segments within each crack), ∇u from exact.px/py, else sdexpr's symbolic derivative of
     exact.u; [u] from exact.jump, else u on each face of a segment by the signed-zero rule of
     eval_on_face (crates/sdcrack-core/src/problem.rs) with the segment's normal.
+An export whose scene.json has a "problem" (kind "elasticity", docs/elasticity.md) is solved by the
+elastic path instead, elasticity.py + elastic_qp.edp (elasticity_module), with the outputs of
+docs/elasticity.md; a scene without one takes this scalar path, unchanged.
 With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf (u, p) + level{L}.crack.xdmf
 (`jump` = u⁺ − u⁻ and `contact_force` = the nodal multipliers λ_j, 0 off the active set and at the
 tips; compare/sdshared/sdfields.py, README's field table).
