@@ -329,3 +329,33 @@ def test_a_malformed_elastic_scene_is_refused_in_one_line_and_nothing_is_written
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("solve.py: error: ") and message in lines[0], p.stderr
     assert not out.exists() and [q.name for q in tmp_path.iterdir()] == ["export"]
+
+
+# ---- sdexport reads mouths ------------------------------------------------------------------------------
+
+def test_sdexport_reads_an_edge_cracks_mouth_and_refuses_a_mouth_without_copies(tmp_path):
+    """cracks.txt's tip flags: the mouth (row 0 of the edge crack) is doubled, in interior() and not
+    a tip; the last row is the tip; a mouth row with plus == minus and a flag other than 0/1 are
+    refused in one line naming the file; a two-column cracks.txt still means two tips."""
+    from sdshared import sdexport
+
+    export = S.patch_export(tmp_path / "export", crack=S.EDGE_CRACK, levels=(0,))
+    d = export / "level0"
+    xy = np.loadtxt(d / "vertices.txt")
+    layout = sdexport.read_layout(d, xy, len(xy))
+    assert layout.ends == [(False, True)] and layout.tip_rows().tolist() == [len(layout.pairs) - 1]
+    assert layout.interior().tolist() == [True] * (len(layout.pairs) - 1) + [False]
+    assert layout.tip_vertices().tolist() == [layout.pairs[-1, 0]]
+    first, n, _, _ = np.loadtxt(d / "cracks.txt", dtype=np.int64)
+    (d / "cracks.txt").write_text(f"{first} {n} 2 1\n")
+    with pytest.raises(sdexport.ExportError, match="tip flags"):
+        sdexport.read_layout(d, xy, len(xy))
+    (d / "cracks.txt").write_text(f"{first} {n}\n")   # both ends tips: the mouth's row is not one
+    with pytest.raises(sdexport.ExportError, match="its tip at row 0 has plus"):
+        sdexport.read_layout(d, xy, len(xy))
+    pairs = np.loadtxt(d / "crack.txt", dtype=np.int64)
+    pairs[0, 1] = pairs[0, 0]
+    np.savetxt(d / "crack.txt", pairs, fmt="%d")
+    (d / "cracks.txt").write_text(f"{first} {n} 0 1\n")
+    with pytest.raises(sdexport.ExportError, match="its mouth at row 0 has plus == minus"):
+        sdexport.read_layout(d, xy, len(xy))
