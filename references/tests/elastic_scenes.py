@@ -5,6 +5,7 @@ test_freefem_elasticity.py before any reference is judged by them.
 
     patch_export        uniform compression σ_yy = −1 across an interior or an edge crack, by Dirichlet
                         data or by tractions and fixed points
+    diagonal_patch_export  unit pressure across a crack along the cells' diagonals (ν = (−1, 1)/√2)
     williams_export     Williams' edge crack y = 0, x ≤ 0 of (−1, 1)², mode I (K_I > 0, open) and/or mode II
     closed_slip_export  u_C + K_II mode II with f = −div σ(u_C): closed everywhere, slip ~ √r
     getfem_export       GetFEM's xfem_stab_unilat_contact set-up: traction and fixed points only
@@ -61,6 +62,28 @@ def patch_export(out, plane="strain", crack=INTERIOR_CRACK, levels=(0, 1), tract
     exact = {"ux": u[0], "uy": u[1], "sxx": "0", "syy": "-1", "sxy": "0", "opening": "0", "pressure": "1"}
     return elastic_export(out, f"patch-{plane}", problem, ["0", "0"], exact=exact, levels=levels,
                           crack=crack, **loads)
+
+
+DIAGONAL_CRACK = ((-0.5, -0.5), (0.5, 0.5))  # along the cells' SW–NE diagonals: ν = (−1, 1)/√2
+
+
+def diagonal_patch_strain(problem):
+    """(ε_xx, ε_yy, ε_xy) of σ = −ν⊗ν, ν = (−1, 1)/√2 (σ_xx = σ_yy = −½, σ_xy = ½: unit pressure on
+    the diagonal crack): ε = (σ − λ*/(2(λ* + μ)) tr σ I)/(2μ), tr σ = −1."""
+    lam, mu = problem["lambda_in_plane"], problem["mu"]
+    e = (-0.5 + lam / (2 * (lam + mu))) / (2 * mu)
+    return e, e, 0.5 / (2 * mu)
+
+
+def diagonal_patch_export(out, levels=(0, 1)):
+    """u = ε x (ε symmetric: no rotation) with u = g on ∂Ω across the diagonal crack."""
+    problem = material(**STEEL)
+    exx, eyy, exy = diagonal_patch_strain(problem)
+    u = [f"{r(exx)}*x + {r(exy)}*y", f"{r(exy)}*x + {r(eyy)}*y"]
+    exact = {"ux": u[0], "uy": u[1], "sxx": "-0.5", "syy": "-0.5", "sxy": "0.5", "opening": "0",
+             "pressure": "1"}
+    return elastic_export(out, "patch-diagonal", problem, ["0", "0"], g=u, exact=exact, levels=levels,
+                          crack=DIAGONAL_CRACK)
 
 
 # ---- Williams' edge crack ------------------------------------------------------------------------

@@ -38,6 +38,7 @@ SCENES = {
     "patch": lambda d: S.patch_export(d, levels=(0, 1, 2)),
     "patch-edge-stress": lambda d: S.patch_export(d, plane="stress", crack=S.EDGE_CRACK, levels=(0, 1, 2)),
     "patch-edge-tractions": lambda d: S.patch_export(d, crack=S.EDGE_CRACK, levels=(0, 1, 2), tractions=True),
+    "patch-diagonal": lambda d: S.diagonal_patch_export(d, levels=(0, 1, 2)),
     "williams-mixed": lambda d: S.williams_export(d, k1=1.0, k2=0.5, levels=(0, 1, 2)),
     "closed-slip": lambda d: S.closed_slip_export(d, levels=(0, 1, 2)),
     "getfem": lambda d: S.getfem_export(d, levels=(0, 1, 2)),

@@ -136,18 +136,31 @@ def test_williams_and_closed_fields_satisfy_hooke_equilibrium_and_the_crack_cond
     assert ev(stress[1], line, 0 * line).max() < -0.33
 
 
+def test_diagonal_patch_field_is_unit_pressure_on_the_diagonal():
+    problem = S.material(**S.STEEL)
+    exx, eyy, exy = S.diagonal_patch_strain(problem)
+    lam, mu = problem["lambda_in_plane"], problem["mu"]
+    sigma = np.array([[lam * (exx + eyy) + 2 * mu * exx, 2 * mu * exy],
+                      [2 * mu * exy, lam * (exx + eyy) + 2 * mu * eyy]])
+    nu = np.array([-1.0, 1.0]) / math.sqrt(2)
+    assert np.allclose(sigma, -np.outer(nu, nu), rtol=0, atol=1e-15)
+
+
 # ---- the patch test ------------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("plane,crack,tractions", [
     ("strain", S.INTERIOR_CRACK, False), ("stress", S.INTERIOR_CRACK, False), ("strain", S.EDGE_CRACK, False),
-    ("strain", S.EDGE_CRACK, True)], ids=["strain", "stress", "edge-crack", "edge-crack-tractions"])
+    ("strain", S.EDGE_CRACK, True), ("strain", S.DIAGONAL_CRACK, False)],
+    ids=["strain", "stress", "edge-crack", "edge-crack-tractions", "diagonal"])
 def test_patch_test_is_exact_with_every_pair_in_contact(tmp_path, plane, crack, tractions):
     """Uniform compression σ_yy = −1 across the crack: P1 holds it exactly, so u = the exact field to
     round-off (≤ 1e-10; measured ≤ 7e-16), every constrained pair active and the nodal pressure
-    λ_j/m_j = 1 (measured to 1e-15). The edge crack's mouth is Dirichlet under g and carries no
+    λ_j/m_j = 1 (measured to 1e-15); along the cells' diagonals too (ν = (−1, 1)/√2: the change of
+    variables with both components of ν and τ). The edge crack's mouth is Dirichlet under g and carries no
     constraint; under tractions and fixed points it is a constrained pair like the others (its m_j
     half its one segment)."""
-    export = S.patch_export(tmp_path / "export", plane=plane, crack=crack, tractions=tractions)
+    export = (S.diagonal_patch_export(tmp_path / "export") if crack == S.DIAGONAL_CRACK else
+              S.patch_export(tmp_path / "export", plane=plane, crack=crack, tractions=tractions))
     out = tmp_path / "out"
     summary = solved(export, out)
     exact = S.scene(export)["exact"]
