@@ -11,8 +11,11 @@ which has one straight crack on a structured grid):
                                          crack (its first and last row) have plus == minus, every other
                                          node plus != minus.
     cracks.txt         first n           per crack: crack c is rows first..first+n−1 of crack.txt, n ≥ 2,
-                                         the cracks in order and together covering every row.
-                                         Absent: one crack made of all rows.
+                       [tip_first         the cracks in order and together covering every row.
+                        tip_last]        Absent: one crack made of all rows. Elastic exports
+                                         (docs/elasticity.md) may add two columns: 1 = that end is
+                                         a tip, 0 = a mouth (an end on ∂Ω, doubled like an interior
+                                         node: plus != minus); two columns mean both ends are tips.
     crack_normals.txt  nx ny             per row of crack.txt: the unit normal ν at the node. A segment's
                                          normal is its direction (node k → k+1) turned by +90°; at an
                                          interior node the normalised length-weighted mean
@@ -59,26 +62,31 @@ class ExportError(ValueError):
 @dataclass
 class CrackLayout:
     """The cracks of one level: pairs (I, 2) = crack.txt, ranges [(first, n)] per crack (rows
-    first..first+n−1), normals (I, 2) the unit normal ν at each row."""
+    first..first+n−1), normals (I, 2) the unit normal ν at each row, ends [(tip_first, tip_last)]
+    per crack (None: every end a tip; False: a mouth, cracks.txt's tip flags)."""
 
     pairs: np.ndarray
     ranges: list
     normals: np.ndarray
+    ends: list = None
 
     @property
     def n_cracks(self):
         return len(self.ranges)
 
     def tip_rows(self):
-        """(2·cracks,) the rows of the tips: each crack's first and last row, in crack order."""
-        return np.array([r for first, n in self.ranges for r in (first, first + n - 1)], dtype=np.int64)
+        """The rows of the tips: each crack's first and last row, in crack order, its mouths left out
+        (2·cracks rows when no crack has a mouth)."""
+        ends = self.ends or [(True, True)] * len(self.ranges)
+        return np.array([r for (first, n), tips in zip(self.ranges, ends)
+                         for r, tip in zip((first, first + n - 1), tips) if tip], dtype=np.int64)
 
     def tip_vertices(self):
         """The cracked-mesh vertices of all tips (a tip's plus == minus)."""
         return self.pairs[self.tip_rows(), 0]
 
     def interior(self):
-        """(I,) bool: rows that are not tips (their nodes have a + and a − copy)."""
+        """(I,) bool: rows that are not tips (their nodes have a + and a − copy; mouths included)."""
         mask = np.ones(len(self.pairs), dtype=bool)
         mask[self.tip_rows()] = False
         return mask
@@ -158,16 +166,28 @@ def load_table(path, dtype, ncols):
 def read_ranges(path, n_rows):
     """[(first, n)] of cracks.txt at `path` for a crack.txt of `n_rows` rows ([(0, n_rows)] when the
     file is absent): the cracks must follow each other from row 0 and cover every row."""
+    return read_cracks(path, n_rows)[0]
+
+
+def read_cracks(path, n_rows):
+    """([(first, n)], [(tip_first, tip_last)]) of cracks.txt at `path` (read_ranges), the tip flags
+    from its optional third and fourth columns (absent: every end a tip)."""
     path = Path(path)
     if not path.exists():
         if n_rows < 2:
             raise ExportError(f"{path.parent / 'crack.txt'}: {n_rows} row(s), a crack needs at least its 2 tips")
-        return [(0, int(n_rows))]
-    table = load_table(path, np.int64, 2)
+        return [(0, int(n_rows))], [(True, True)]
+    try:
+        table = load_table(path, np.int64, 2)
+    except ExportError:
+        table = load_table(path, np.int64, 4)
+        if not np.isin(table[:, 2:], (0, 1)).all():
+            raise ExportError(f"{path}: the tip flags (columns 3 and 4) must be 0 (a mouth) or 1 (a tip)") from None
     if len(table) == 0:
         raise ExportError(f"{path}: no crack listed")
+    ends = [(True, True)] * len(table) if table.shape[1] == 2 else [(bool(a), bool(b)) for a, b in table[:, 2:]]
     ranges, expected = [], 0
-    for c, (first, n) in enumerate(table.tolist()):
+    for c, (first, n) in enumerate(table[:, :2].tolist()):
         if first != expected:
             raise ExportError(f"{path}: crack {c} starts at row {first} of crack.txt, expected {expected} "
                               "(the cracks' rows must follow each other)")
@@ -177,18 +197,25 @@ def read_ranges(path, n_rows):
         expected = first + n
     if expected != n_rows:
         raise ExportError(f"{path}: the cracks cover rows 0..{expected - 1}, but crack.txt has {n_rows} rows")
-    return ranges
+    return ranges, ends
 
 
-def check_pairs(path, pairs, ranges, n_vertices, copies=True):
+def check_pairs(path, pairs, ranges, n_vertices, copies=True, ends=None):
     """crack.txt's rows against the ranges: indices in range, each crack's tips with plus == minus and,
-    with `copies`, its interior nodes with plus != minus (the cracked mesh of a solver; a field on a
-    mesh without copies, where every row has plus == minus, is read with copies=False)."""
+    with `copies`, its interior nodes and mouths with plus != minus (the cracked mesh of a solver; a
+    field on a mesh without copies, where every row has plus == minus, is read with copies=False);
+    `ends`: the tip flags of read_cracks (None: every end a tip)."""
     if pairs.size and (pairs.min() < 0 or pairs.max() >= n_vertices):
         raise ExportError(f"{path}: vertex index out of range 0..{n_vertices - 1}")
     for c, (first, n) in enumerate(ranges):
         last = first + n - 1
-        for row in (first, last):
+        tips = ends[c] if ends is not None else (True, True)
+        for row, tip in zip((first, last), tips):
+            if not tip:
+                if copies and pairs[row, 0] == pairs[row, 1]:
+                    raise ExportError(f"{path}: crack {c} (rows {first}..{last}): its mouth at row {row} "
+                                      "has plus == minus (a mouth needs two copies)")
+                continue
             if pairs[row, 0] != pairs[row, 1]:
                 raise ExportError(f"{path}: crack {c} (rows {first}..{last}): its tip at row {row} has "
                                   f"plus {pairs[row, 0]} != minus {pairs[row, 1]}")
@@ -245,12 +272,13 @@ def read_layout(level_dir, points, n_vertices, default_normal=None, copies=True)
     `copies`: see check_pairs."""
     d = Path(level_dir)
     pairs = load_table(d / "crack.txt", np.int64, 2)
-    ranges = read_ranges(d / "cracks.txt", len(pairs))
-    check_pairs(d / "crack.txt", pairs, ranges, n_vertices, copies)
+    ranges, ends = read_cracks(d / "cracks.txt", len(pairs))
+    check_pairs(d / "crack.txt", pairs, ranges, n_vertices, copies, ends)
     nodes = np.asarray(points, dtype=float)[pairs[:, 0], :2]
     check_segments(d / "crack.txt", nodes, ranges)
     normals = read_normals(d / "crack_normals.txt", nodes, ranges, default_normal)
-    return CrackLayout(pairs=pairs, ranges=ranges, normals=normals)
+    has_mouth = not all(a and b for a, b in ends)
+    return CrackLayout(pairs=pairs, ranges=ranges, normals=normals, ends=ends if has_mouth else None)
 
 
 def read_sides(path, triangles, layout):

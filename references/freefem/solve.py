@@ -36,6 +36,9 @@ summary.json: {"scene", "tool": "freefem", "provenance", "cases": [{"level", "h"
     (over the segments within each crack), ∇u from exact.px/py, else sdexpr's symbolic derivative of
     exact.u; [u] from exact.jump, else u on each face of a segment by the signed-zero rule of
     eval_on_face (crates/sdcrack-core/src/problem.rs) with the segment's normal.
+An export whose scene.json has a "problem" (kind "elasticity", docs/elasticity.md) is solved by the
+elastic path instead, elasticity.py + elastic_qp.edp (elasticity_module), with the outputs of
+docs/elasticity.md; a scene without one takes this scalar path, unchanged.
 With --fields also OUT/fields.h5 and, per level, OUT/fields/level{L}.xdmf (u, p) + level{L}.crack.xdmf
 (`jump` = u⁺ − u⁻ and `contact_force` = the nodal multipliers λ_j, 0 off the active set and at the
 tips; compare/sdshared/sdfields.py, README's field table).
@@ -120,11 +123,12 @@ def _load(path, dtype, cols):
     return a
 
 
-def read_level(export, level, default_normal=None):
+def read_level(export, level, default_normal=None, mouths=False):
     """One level of the export: {"meta" (mesh.json), "kind", "xy_uncut", "tri_uncut", "xy", "tri",
     "crack" (crack.txt), "layout" (sdexport.CrackLayout: cracks, tips, segments, nodal normals),
     "boundary"}; `default_normal`: the scene's single normal, for an export without
-    crack_normals.txt (else mesh.json's "normal", else the normals computed from the nodes)."""
+    crack_normals.txt (else mesh.json's "normal", else the normals computed from the nodes);
+    `mouths`: an elastic export, whose boundary.txt holds both copies of a mouth."""
     d = Path(export) / f"level{level}"
     if not d.is_dir():
         raise SolveError(f"missing level folder {d}")
@@ -154,7 +158,7 @@ def read_level(export, level, default_normal=None):
         raise SolveError(f"{d}: the first n_uncut cracked vertices differ from the uncut vertices")
     if lv["tri"].min() < 0 or lv["tri"].max() >= n or lv["tri_uncut"].max() >= nu:
         raise SolveError(f"{d}: triangle vertex index out of range")
-    if len(lv["boundary"]) and lv["boundary"].max() >= nu:
+    if len(lv["boundary"]) and lv["boundary"].max() >= (n if mouths else nu):
         raise SolveError(f"{d}: boundary vertex is a crack copy")
     return lv
 
@@ -434,6 +438,20 @@ def jump_error_sq(xy, layout, u_h, u_ex, exact, degree, depth):
 
 # ---- driver --------------------------------------------------------------------------------------
 
+def elasticity_module():
+    """elasticity.py beside this file, the elastic path (imported by its path: solve.py runs as a
+    script, and the tests load it by path under names of their own)."""
+    import importlib.util
+
+    name = "freefem_elasticity"
+    if name not in sys.modules:
+        spec = importlib.util.spec_from_file_location(name, HERE / "elasticity.py")
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        sys.modules[name] = module
+    return sys.modules[name]
+
+
 def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fields=False):
     export, out = Path(export), Path(out)
     exe = freefem_binary(freefem)
@@ -442,6 +460,12 @@ def solve(export, out, freefem="FreeFem++", keep_work=False, overwrite=False, fi
         raise SolveError(f"missing {scene_path} (expected an `sdcrack mesh SCENE --out DIR` export)")
     try:
         scene = json.loads(scene_path.read_text())
+    except (ValueError, TypeError) as e:
+        raise SceneError(f"{scene_path}: malformed scene ({e})")
+    if isinstance(scene, dict) and scene.get("problem") is not None:  # docs/elasticity.md
+        return elasticity_module().solve(sys.modules[__name__], export, out, scene, scene_path, exe, keep_work,
+                                overwrite, fields)
+    try:
         name, f_src, g_src = scene["name"], scene["f"], scene["g"]
         levels, exact = scene["levels"], scene.get("exact")
         sdexport.scene_cracks(scene, scene_path)  # "cracks", or the old single "crack"
