@@ -1,0 +1,446 @@
+"""The verdict on an elastic scene's results folder (docs/elasticity.md): the references judged
+against the exact fields (recomputed here from their stored u and crack files), against each other,
+and, without [exact], against their finest level. compare/sdcompare dispatches here when
+summary.json says "problem": "elasticity"; the report's sections are elastic_report.py's.
+
+Checks (each a list of problems; a check that does not apply says why):
+
+* completeness: every level of the scene copy's [discretization] levels has a case of every
+  reference its [outputs] references ask for (default both), and every summary names the scene.
+* reference status: each case's status is "converged" and its KKT residuals are numbers
+  ≤ KKT_TOLERANCE (the scalar references' tolerance).
+* crack outputs: each reference's crack file against its own u: opening and slip equal
+  (u⁺ − u⁻)·ν_j and ·τ_j to CRACK_ROUNDOFF × ‖u‖∞ (one subtraction and one dot product in either
+  code: a few ulps), the tips' rows 0, the active rows closed (|opening| within the same
+  round-off) with a force ≥ −tol, the other rows with force 0 and opening ≥ −tol, tol =
+  KKT_TOLERANCE · max(1, ‖λ‖∞, ‖w‖∞) (the active-set method's own stopping scale).
+* reference agreement (two references): per level max |u_a − u_b| ≤ U_AGREEMENT · ‖u‖∞, the
+  same active flags at every row, the same SIFs to SIF_AGREEMENT · max |K| of the tip.
+* series (with [exact]): each reference's errors per level and their rates against
+  elastic_theory's orders, by rates.series_judgement (the scalar tool's rule: judged on the last
+  two steps; fewer than three levels, or a rate still rising, cannot be judged yet).
+* active set (with [exact]): a row whose reference flag differs from the exact contact status
+  (closed: exact opening ≤ elastic_exact.CONTACT_TOL × max |u| on Γc) lies within FRONT_REACH rows
+  of a row where the exact status changes along the crack (the discrete front may sit one cell
+  off); anywhere else it is a problem. The mismatch length Σ m_j over the differing rows is printed.
+"""
+import math
+
+import numpy as np
+
+from . import elastic_exact, elastic_read, elastic_theory, rates, render, theory, verdict
+from .exact import ExactError, Quadrature
+
+KKT_TOLERANCE = 1e-10
+# The two references solve the same discrete problem by the same active-set method to a stopping
+# tolerance 1e-12 of the problem's scale: the issue's agreement target (1e-9 relative in u,
+# identical active sets, SIFs to 1e-8).
+U_AGREEMENT = 1e-9
+SIF_AGREEMENT = 1e-8
+# 64 ε: the references compute the opening by one subtraction and one dot product; 64 ulps of
+# ‖u‖∞ cover both codes' orders of operations with room, and a wrong copy or sign is O(‖u‖).
+CRACK_ROUNDOFF = 64 * np.finfo(float).eps
+# Rows on either side of an exact contact front where a reference's flag may differ from the
+# exact status: the exact opening grows as d^{3/2} and the pressure as d^{1/2} away from the
+# front, below the discretisation error within one cell of it.
+FRONT_REACH = 1
+QUANTITIES = ("u_l2", "u_h1", "sigma_l2", "opening_l2", "slip_l2")
+CHECKS = ("completeness", "reference status", "crack outputs", "reference agreement", "series",
+          "active set", "SIF")
+
+
+def mesh_parameter(level, graded):
+    """h (the largest triangle diameter) of a level, or N^{-1/2} on graded meshes (N = 2 × the
+    cracked mesh's vertices)."""
+    if graded:
+        return (2.0 * len(level.points)) ** -0.5
+    X = level.points[level.triangles]
+    return float(max(np.hypot(*(X[:, i] - X[:, (i + 1) % 3]).T).max() for i in range(3)))
+
+
+# ------------------------------------------------------------------------------ the checks
+
+def completeness(res):
+    probs = []
+    sf = res["scene_file"]
+    asked = (sf.get("outputs") or {}).get("references", list(elastic_read.REFERENCE_TOOLS))
+    levels = sorted(res["levels"])
+    for tool in asked:
+        if tool not in res["refs"]:
+            probs.append(f"the scene asks for {tool}, but the folder has no {tool}/summary.json")
+            continue
+        summary, by_level = res["refs"][tool]
+        missing = [L for L in levels if L not in by_level]
+        if missing:
+            probs.append(f"{tool} has no case at level(s) {', '.join(map(str, missing))}")
+        if summary.get("scene") != res["scene"]:
+            probs.append(f"{tool}/summary.json names scene {summary.get('scene')!r}, the folder "
+                         f"{res['scene']!r}")
+    if sf.get("name") != res["scene"]:
+        probs.append(f"scene.toml names {sf.get('name')!r}, summary.json {res['scene']!r}")
+    return probs
+
+
+def reference_status(res):
+    probs = []
+    for tool, (_, by_level) in sorted(res["refs"].items()):
+        for L, r in sorted(by_level.items()):
+            c = r.case
+            if c.get("status") != "converged":
+                probs.append(f"{tool} level {L}: status {c.get('status')!r}, not 'converged'")
+            kkt = c.get("kkt")
+            for k in ("equations", "primal", "dual", "complementarity"):
+                v = kkt.get(k) if isinstance(kkt, dict) else None
+                if not (isinstance(v, (int, float)) and math.isfinite(v) and v <= KKT_TOLERANCE):
+                    probs.append(f"{tool} level {L}: KKT {k} {render.fmt(v)} not a number "
+                                 f"≤ {KKT_TOLERANCE:g}")
+    return probs
+
+
+def crack_output_problems(tool, L, level, ref):
+    """The crack file of one reference level against its own u (module documentation)."""
+    u, crack = ref.u, ref.crack
+    j = u[level.pairs[:, 0]] - u[level.pairs[:, 1]]
+    nu = level.normals
+    opening = j[:, 0] * nu[:, 0] + j[:, 1] * nu[:, 1]
+    slip = j[:, 0] * nu[:, 1] - j[:, 1] * nu[:, 0]
+    roundoff = CRACK_ROUNDOFF * max(float(np.abs(u).max(initial=0.0)), np.finfo(float).tiny)
+    probs = []
+    for name, mine, col in (("opening", opening, 0), ("slip", slip, 1)):
+        d = np.abs(crack[:, col] - mine)
+        if d.max(initial=0.0) > roundoff:
+            k = int(d.argmax())
+            probs.append(f"{tool} level {L}: row {k}'s {name} {crack[k, col]:.17g} differs from "
+                         f"(u⁺ − u⁻)·{'ν' if col == 0 else 'τ'} = {mine[k]:.17g} of its u (by "
+                         f"{d[k]:.2e} > {roundoff:.2e})")
+    tips = level.tip_rows()
+    if np.abs(crack[tips]).max(initial=0.0) != 0.0:
+        probs.append(f"{tool} level {L}: a tip's row is not 0 0 0 0")
+    force, active = crack[:, 2], crack[:, 3]
+    if not np.isin(active, (0.0, 1.0)).all():
+        probs.append(f"{tool} level {L}: an active flag is neither 0 nor 1")
+        return probs
+    tol = KKT_TOLERANCE * max(1.0, float(np.abs(force).max(initial=0.0)),
+                              float(np.abs(crack[:, 0]).max(initial=0.0)))
+    on, off = active == 1.0, active == 0.0
+    for what, bad in (
+            ("active but open", on & (np.abs(crack[:, 0]) > roundoff)),
+            ("active with a negative contact force", on & (force < -tol)),
+            ("inactive with a contact force", off & (np.abs(force) > tol)),
+            ("inactive and interpenetrating", off & (crack[:, 0] < -tol))):
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            probs.append(f"{tool} level {L}: {int(bad.sum())} row(s) {what} (first row {k}: "
+                         f"opening {crack[k, 0]:.3e}, force {force[k]:.3e}, tolerance "
+                         f"{tol:.1e})")
+    return probs
+
+
+def crack_outputs(res):
+    return [p for tool, (_, by_level) in sorted(res["refs"].items())
+            for L, r in sorted(by_level.items())
+            for p in crack_output_problems(tool, L, res["levels"][L], r)]
+
+
+def agreement(res, sifs):
+    """(rows, problems) of the two references per level."""
+    tools = sorted(res["refs"])
+    if len(tools) < 2:
+        return [], []
+    a, b = tools[:2]
+    rows, probs = [], []
+    for L in sorted(res["levels"]):
+        ra, rb = res["refs"][a][1].get(L), res["refs"][b][1].get(L)
+        if ra is None or rb is None:
+            continue
+        scale = max(float(np.abs(ra.u).max(initial=0.0)), float(np.abs(rb.u).max(initial=0.0)))
+        du = float(np.abs(ra.u - rb.u).max(initial=0.0))
+        rel = du / scale if scale > 0 else du
+        flags = int(np.sum(ra.crack[:, 3] != rb.crack[:, 3]))
+        sif_rel = None
+        ka, kb = sifs.get((a, L)), sifs.get((b, L))
+        if ka is not None and kb is not None:
+            sif_rel = max((max(abs(x[0] - y[0]), abs(x[1] - y[1]))
+                           / max(abs(x[0]), abs(x[1]), abs(y[0]), abs(y[1]), np.finfo(float).tiny))
+                          for x, y in zip(ka, kb)) if ka else 0.0
+        rows.append({"level": L, "u_rel": rel, "flags_differ": flags, "sif_rel": sif_rel})
+        if rel > U_AGREEMENT:
+            probs.append(f"level {L}: {a} and {b} differ in u by {rel:.2e} of ‖u‖∞ "
+                         f"(> {U_AGREEMENT:g})")
+        if flags:
+            probs.append(f"level {L}: {a} and {b} differ in {flags} active flag(s)")
+        if sif_rel is not None and sif_rel > SIF_AGREEMENT:
+            probs.append(f"level {L}: {a} and {b} differ in a SIF by {sif_rel:.2e} of the tip's "
+                         f"largest |K| (> {SIF_AGREEMENT:g})")
+    return rows, probs
+
+
+# ------------------------------------------------------------------------------ exact errors
+
+def exact_errors(res, ex, graded):
+    """{(tool, L): errors}, {L: interpolation errors}, {L: CrackExact}, per-level h."""
+    material = res["mesh_scene"]["problem"]
+    errors, interp, crack_exact, h = {}, {}, {}, {}
+    quad = Quadrature()
+    for L, level in sorted(res["levels"].items()):
+        h[L] = mesh_parameter(level, graded)
+        batches = elastic_exact.domain_quadrature(level, ex, quad)
+        interp[L] = elastic_exact.interpolation_errors(batches, level, ex, material)
+        ce = crack_exact[L] = elastic_exact.CrackExact(level, ex, quad)
+        for tool, (_, by_level) in res["refs"].items():
+            r = by_level.get(L)
+            if r is None:
+                continue
+            e = elastic_exact.field_errors(batches, level, r.u, material)
+            e.update(ce.jump_errors(*ce.nodal_jumps(r.u)))
+            e["pressure_l2"] = ce.pressure_error(r.crack[:, 2])
+            errors[(tool, L)] = e
+    return errors, interp, crack_exact, h
+
+
+def regularity(interp, h, graded):
+    lv = sorted(interp)
+    rate = (rates.rate(h[lv[-2]], interp[lv[-2]]["u_h1"], h[lv[-1]], interp[lv[-1]]["u_h1"])
+            if len(lv) >= 2 else None)
+    return theory.regularity(rate, True, None, graded)
+
+
+def series(res, errors, sif_errors, h, s):
+    """One series per reference and judged quantity (the SIF errors per tip and factor too)."""
+    out = []
+    for tool in sorted(res["refs"]):
+        names = list(QUANTITIES) + sorted({q for (t, _, q) in sif_errors if t == tool})
+        for q in names:
+            pts = [(L, h[L], errors[(tool, L)][q] if q in QUANTITIES else sif_errors[(tool, L, q)])
+                   for L in sorted(res["levels"])
+                   if (tool, L) in errors and (q in QUANTITIES or (tool, L, q) in sif_errors)]
+            levels, hs, es = [p[0] for p in pts], [p[1] for p in pts], [p[2] for p in pts]
+            order, reason = elastic_theory.expected_order(q, s)
+            t = elastic_theory.threshold(order)
+            status, why, up_to = rates.series_judgement(hs, es, levels, t)
+            out.append({"tool": tool, "quantity": q, "levels": levels, "h": hs, "errors": es,
+                        "rates": rates.successive_rates(hs, es), "expected": order,
+                        "threshold": t, "order_reason": reason, "status": status,
+                        "reason": why, "run_levels_up_to": up_to})
+    return out
+
+
+def exact_fronts(level, ce):
+    """Rows (of crack.txt) beside which the exact contact status changes, per crack."""
+    closed = dict(zip(ce.rows.tolist(), ce.closed.tolist()))
+    near = set()
+    for first, n in level.ranges:
+        rows = [r for r in range(first, first + n) if r in closed]
+        for r0, r1 in zip(rows, rows[1:]):
+            if closed[r0] != closed[r1]:
+                near |= set(range(r0 - FRONT_REACH, r1 + FRONT_REACH + 1))
+    return near
+
+
+def discrete_fronts(level, flags):
+    """The points on the crack where a reference's active flags change (midpoints of the
+    segments whose ends differ), crack by crack."""
+    c = level.nodes()
+    keep = level.pair_rows()
+    keep[level.mouth_rows()] = False
+    out = []
+    for first, n in level.ranges:
+        rows = [r for r in range(first, first + n) if keep[r]]
+        for r0, r1 in zip(rows, rows[1:]):
+            if flags[r0] != flags[r1]:
+                out.append(tuple(float(v) for v in 0.5 * (c[r0] + c[r1])))
+    return out
+
+
+def active_set(res, crack_exact):
+    """(rows, problems): per reference and level the mismatch length and the rows outside the
+    exact front's reach."""
+    rows, probs = [], []
+    for tool, (_, by_level) in sorted(res["refs"].items()):
+        for L, r in sorted(by_level.items()):
+            level, ce = res["levels"][L], crack_exact[L]
+            keep = ce.judged_rows()
+            flags = r.crack[ce.rows, 3] == 1.0
+            differ = (flags != ce.closed) & keep
+            m = level.nodal_measure()[ce.rows]
+            near = exact_fronts(level, ce)
+            far = [int(row) for row in ce.rows[differ] if int(row) not in near]
+            rows.append({"tool": tool, "level": L, "mismatch_rows": int(differ.sum()),
+                         "mismatch_length": float(m[differ].sum()), "far_rows": len(far),
+                         "exact_closed_rows": int((ce.closed & keep).sum()),
+                         "reference_active_rows": int((flags & keep).sum())})
+            if far:
+                probs.append(f"{tool} level {L}: {len(far)} row(s) flagged "
+                             f"{'active' if flags[list(ce.rows).index(far[0])] else 'open'} "
+                             f"against the exact contact status, farther than {FRONT_REACH} "
+                             f"row(s) from any exact front (first row {far[0]})")
+    return rows, probs
+
+
+def fronts(res):
+    """Per reference and level the discrete contact fronts."""
+    return [{"tool": tool, "level": L,
+             "fronts": discrete_fronts(res["levels"][L], r.crack[:, 3] == 1.0)}
+            for tool, (_, by_level) in sorted(res["refs"].items())
+            for L, r in sorted(by_level.items())]
+
+
+# ------------------------------------------------------------------------------ SIFs
+
+def sif_ring(level):
+    """(r_in, r_out) per tip: a quarter and a half of the distance R from the tip to the nearest
+    point of the outer boundary or of another crack (the geometry's, the same at every level), so
+    the ring holds no other singularity and no boundary."""
+    from .exact import _point_segment_distance, boundary_edges
+
+    P = level.points
+    edges = boundary_edges(level.triangles, P)
+    on_crack = np.zeros(len(P), dtype=bool)
+    on_crack[level.pairs.ravel()] = True
+    outer = edges[~(on_crack[edges[:, 0]] & on_crack[edges[:, 1]])]
+    nodes = level.nodes()
+    out = []
+    for k, (tip, _) in enumerate(level.tip_frames()):
+        R = float(_point_segment_distance(tip, P[outer[:, 0]], P[outer[:, 1]]).min())
+        first, n = level.ranges[_crack_of_tip(level, k)]
+        rest = np.delete(nodes, np.arange(first, first + n), axis=0)
+        if len(rest):
+            R = min(R, float(np.hypot(*(rest - tip).T).min()))
+        out.append((0.25 * R, 0.5 * R))
+    return out
+
+
+def _crack_of_tip(level, k):
+    i = 0
+    for c, (tf, tl) in enumerate(level.tip_ends):
+        for is_tip in (tf, tl):
+            if is_tip:
+                if i == k:
+                    return c
+                i += 1
+    raise IndexError(k)
+
+
+def compute_sifs(res):
+    """({(tool, L): [(K_I, K_II) per tip]}, why not computed or None)."""
+    try:
+        from . import sif
+    except ImportError:
+        return {}, "compare/sdcompare_lib/sif.py (the interaction integral) is not in this checkout"
+    material = res["mesh_scene"]["problem"]
+    out = {}
+    for L, level in sorted(res["levels"].items()):
+        rings = sif_ring(level)
+        frames = level.tip_frames()
+        for tool, (_, by_level) in res["refs"].items():
+            r = by_level.get(L)
+            if r is None:
+                continue
+            out[(tool, L)] = [tuple(float(v) for v in sif.sif_p1(
+                level.points, level.triangles, r.u, material, tip, e1, r_in, r_out))
+                for (tip, e1), (r_in, r_out) in zip(frames, rings)]
+    return out, None
+
+
+def sif_errors(sifs, exact_sif):
+    """{(tool, L, "K_I tip k" / "K_II tip k"): |K_h − K|} against the scene's exact SIFs."""
+    out = {}
+    if not exact_sif:
+        return out
+    for (tool, L), ks in sifs.items():
+        for k, (kh, ke) in enumerate(zip(ks, exact_sif)):
+            out[(tool, L, f"K_I tip {k + 1}")] = abs(kh[0] - ke[0])
+            out[(tool, L, f"K_II tip {k + 1}")] = abs(kh[1] - ke[1])
+    return out
+
+
+# ------------------------------------------------------------------------------ analysis
+
+def analyse(res):
+    """The analysis dict the report and the verdict read."""
+    ms = res["mesh_scene"]
+    has_exact = isinstance(ms.get("exact"), dict)
+    graded = any(lv.kind == "graded" for lv in res["levels"].values())
+    a = {"scene": res["scene"], "has_exact": has_exact, "graded": graded,
+         "levels": sorted(res["levels"]), "tools": sorted(res["refs"])}
+    checks = []
+    checks.append(("completeness", "every level of the scene has a case of every reference it "
+                   "asks for, and every summary names the scene", completeness(res), None))
+    checks.append(("reference status", f"every reference case converged with KKT residuals "
+                   f"≤ {KKT_TOLERANCE:g}", reference_status(res),
+                   None if res["refs"] else "no reference in the folder"))
+    checks.append(("crack outputs", "each reference's opening and slip are those of its own u to "
+                   f"{CRACK_ROUNDOFF:.1e} ‖u‖∞, tips 0, active rows closed with a force ≥ 0, the "
+                   "others free of force", crack_outputs(res),
+                   None if res["refs"] else "no reference in the folder"))
+    sifs, a["sif_missing"] = compute_sifs(res)
+    a["sifs"] = {f"{t} {L}": v for (t, L), v in sifs.items()}
+    a["sif_by_key"] = sifs
+    a["agreement"], agree_probs = agreement(res, sifs)
+    checks.append(("reference agreement", f"the two references' u within {U_AGREEMENT:g} of ‖u‖∞, "
+                   f"the same active flags and SIFs within {SIF_AGREEMENT:g} at every level",
+                   agree_probs, None if len(res["refs"]) >= 2 else
+                   f"{len(res['refs'])} reference(s) in the folder: nothing to compare"))
+    a["fronts"] = fronts(res)
+    a["undecided"] = {}
+    if has_exact:
+        try:
+            ex = elastic_exact.ElasticExact(ms["exact"], ms["problem"])
+        except ExactError as exc:
+            raise elastic_read.InputError(f"{res['folder']}/mesh/scene.json: {exc}")
+        a["errors"], a["interpolation"], crack_exact, a["h"] = exact_errors(res, ex, graded)
+        a["s"], a["s_reason"] = regularity(a["interpolation"], a["h"], graded)
+        a["sif_errors"] = sif_errors(sifs, ms["exact"].get("sif"))
+        a["series"] = series(res, a["errors"], a["sif_errors"], a["h"], a["s"])
+        bad = [f"{s['tool']} {s['quantity']}: {s['reason']}" for s in a["series"]
+               if s["status"] == "does not converge"]
+        pending = [f"{s['tool']} {s['quantity']}: {s['reason']}" for s in a["series"]
+                   if s["status"] == "inconclusive"]
+        a["undecided"]["series"] = pending
+        checks.append(("series", "every reference's series converges at the order "
+                       "elastic_theory gives for its regularity (the scalar tool's rule)",
+                       bad, None))
+        a["active_set"], active_probs = active_set(res, crack_exact)
+        checks.append(("active set", "every reference's active flag equals the exact contact "
+                       f"status except within {FRONT_REACH} row(s) of an exact front",
+                       active_probs, None))
+    else:
+        a["errors"], a["series"], a["active_set"], a["h"] = {}, [], [], {
+            L: mesh_parameter(lv, graded) for L, lv in res["levels"].items()}
+        why = "no [exact] in the scene: the references are compared with each other and with their finest level"
+        checks.append(("series", "", [], why))
+        checks.append(("active set", "", [], why))
+    sif_na = (a["sif_missing"] if a["sif_missing"] else
+              None if (has_exact and ms["exact"].get("sif")) else
+              "no exact SIFs in the scene: the SIFs are printed and compared between the references")
+    checks.append(("SIF", "the SIF errors are judged as series (above)", [], sif_na))
+    a["finest"] = finest_distances(res, a, sifs)
+    a["checks"] = checks
+    a["verdict"], a["reasons"] = verdict.decide(
+        [(label, p) for label, _, p, _ in checks],
+        [(k, v) for k, v in a["undecided"].items() if v])
+    ups = [s["run_levels_up_to"] for s in a["series"] if s["status"] == "inconclusive"
+           and s["run_levels_up_to"] is not None]
+    a["run_levels_up_to"] = max(ups) if ups and a["verdict"] == "INCONCLUSIVE" else None
+    return a
+
+
+def finest_distances(res, a, sifs):
+    """Per reference and level: the distance of its SIFs and contact fronts to its finest level's
+    (printed for every scene; the only measure of convergence without [exact])."""
+    rows = []
+    fr = {(f["tool"], f["level"]): f["fronts"] for f in a["fronts"]}
+    for tool, (_, by_level) in sorted(res["refs"].items()):
+        if not by_level:
+            continue
+        top = max(by_level)
+        for L in sorted(by_level):
+            ks, kf = sifs.get((tool, L)), sifs.get((tool, top))
+            dk = (max(max(abs(x[0] - y[0]), abs(x[1] - y[1])) for x, y in zip(ks, kf))
+                  if ks and kf else None)
+            f0, f1 = fr.get((tool, L), []), fr.get((tool, top), [])
+            df = (max(math.hypot(p[0] - q[0], p[1] - q[1]) for p, q in zip(f0, f1))
+                  if f0 and f1 and len(f0) == len(f1) else None)
+            rows.append({"tool": tool, "level": L, "finest": top, "sif_distance": dk,
+                         "front_distance": df, "fronts": len(f0)})
+    return rows
