@@ -10,16 +10,11 @@ form (the tests check them against Hooke's law of the symbolic derivatives of u)
 """
 import json
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
-
-ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "references" / "tests"))
-sys.path.insert(0, str(ROOT / "compare"))
-from fake_export import structured_level  # noqa: E402
-from sdshared import sdexpr  # noqa: E402
+from fake_export import structured_level  # references/tests (pyproject's pytest pythonpath)
+from sdshared import sdexpr
 
 E, NU = 1.0, 0.3
 MU = E / (2 * (1 + NU))
