@@ -126,6 +126,11 @@ def test_a_correct_folder_passes_and_reports(tmp_path):
     assert by[("dolfinx", "u_h1")]["expected"] == 0.5 and by[("dolfinx", "u_l2")]["expected"] == 1
     assert by[("freefem", "opening_l2")]["expected"] == 0.75
     assert all(s["status"] == "converges" for s in rep["series"])
+    # the SIFs: level 0 too coarse for the ring (said so), K_I → 1 and K_II → 0 at the finest
+    assert by[("freefem", "K_I tip 1")]["levels"] == [1, 2, 3]
+    assert by[("freefem", "K_I tip 1")]["errors"][-1] < 1e-5
+    assert by[("freefem", "K_II tip 1")]["errors"][-1] < 1e-5
+    assert [(s["tool"], s["level"]) for s in rep["sif_skipped"]] == [("dolfinx", 0), ("freefem", 0)]
     md = (folder / "report" / "report.md").read_text()
     assert "## Contact set and fronts" in md and "## Errors against the exact fields" in md
     assert (folder / "report" / "errors-williams.png").exists()
@@ -168,9 +173,15 @@ def test_a_short_series_cannot_be_judged(tmp_path):
     folder = es.write_results(tmp_path / "w", levels=(0, 1))
     code, out, _ = run_cli(folder, "--quiet")
     assert code == 3
-    assert "INCONCLUSIVE (cannot judge yet" in out and "run levels up to 2" in out
+    assert "INCONCLUSIVE (cannot judge yet" in out and "run levels up to 3" in out
     rep = json.loads((folder / "report" / "report.json").read_text())
-    assert rep["verdict"] == "INCONCLUSIVE" and rep["run_levels_up_to"] == 2
+    # the field series need level 2; the SIFs, not computed at level 0 (its tip triangles reach
+    # beyond the ring's inner radius), need level 3
+    assert rep["verdict"] == "INCONCLUSIVE" and rep["run_levels_up_to"] == 3
+    by = {(s["tool"], s["quantity"]): s for s in rep["series"]}
+    assert by[("dolfinx", "u_l2")]["reason"].endswith("run levels up to 2")
+    assert by[("dolfinx", "K_I tip 1")]["levels"] == [1]
+    assert all(s["status"] == "inconclusive" for s in rep["series"])
     code, _, err = run_cli(folder, "--quiet")  # the report is there: refused without --replace
     assert code == 2 and "report exists" in err
 
