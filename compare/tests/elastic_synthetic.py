@@ -1,9 +1,10 @@
 """Synthetic results folders of elastic scenes (docs/elasticity.md) for the compare tool's tests,
-without sdcrack or the references: an edge crack y = 0, −1 ≤ x ≤ 0 on (−1, 1)² (mouth at
-(−1, 0), tip at the origin) on the structured SW–NE grid of references/tests/fake_export.py, the
-mesh export's files, and per reference the outputs a correct reference would write if its
-solution were the P1 interpolant of the exact u (u_level{L}.txt from the exact field, the crack
-file from it: opening and slip of the copies, the contact force m_j · p(x_j) on closed rows).
+without sdcrack or the references: the mesh export of references/tests/elastic_export.py (the
+dolfinx helper's stand-in for `sdcrack mesh`; by default the edge crack y = 0, −1 ≤ x ≤ 0 on
+(−1, 1)², mouth at (−1, 0), tip at the origin), and per reference the outputs a correct reference
+would write if its solution were the P1 interpolant of the exact u (u_level{L}.txt from the exact
+field, the crack file from it: opening and slip of the copies, the contact force m_j · p(x_j) on
+the rows it flags closed).
 
 williams(K_I, K_II): Williams' edge-crack field (plane strain, E = 1, ν = 0.3), stresses in closed
 form (the tests check them against Hooke's law of the symbolic derivatives of u).
@@ -13,15 +14,15 @@ import math
 from pathlib import Path
 
 import numpy as np
-from fake_export import structured_level  # references/tests (pyproject's pytest pythonpath)
+from elastic_export import elastic_export, material  # references/tests (pyproject's pytest pythonpath)
+from sdcompare_lib import elastic_read
 from sdshared import sdexpr
 
 E, NU = 1.0, 0.3
 MU = E / (2 * (1 + NU))
 LAMBDA = E * NU / ((1 + NU) * (1 - 2 * NU))
 KAPPA = 3 - 4 * NU
-PROBLEM = {"kind": "elasticity", "plane": "strain", "E": E, "nu": NU, "lambda": LAMBDA, "mu": MU,
-           "lambda_in_plane": LAMBDA, "kolosov": KAPPA, "e_prime": E / (1 - NU ** 2)}
+PROBLEM = material(E=E, nu=NU)
 
 
 def williams(k1, k2):
@@ -41,91 +42,61 @@ def williams(k1, k2):
             "slip": None, "pressure": None, "sif": [[k1, k2]]}
 
 
-def cracked_level(n):
-    """(points, triangles, pairs) of the n × n grid cut along y = 0, x ≤ 0: every crack node but
-    the tip doubled (the mouth at (−1, 0) too), the − copies appended, triangles below the crack
-    on them."""
-    xy_u, tri_u = structured_level(n)
-    on = (np.abs(xy_u[:, 1]) < 1e-14) & (xy_u[:, 0] < 1e-14)
-    nodes = np.flatnonzero(on)
-    nodes = nodes[np.argsort(xy_u[nodes, 0])]  # mouth (−1, 0) → tip (0, 0)
-    doubled = nodes[:-1]
-    copy = {int(v): len(xy_u) + k for k, v in enumerate(doubled)}
-    xy = np.vstack([xy_u, xy_u[doubled]])
-    tri = tri_u.copy()
-    below = xy_u[tri_u].mean(axis=1)[:, 1] < 0
-    for t in np.flatnonzero(below):
-        tri[t] = [copy.get(int(v), int(v)) for v in tri_u[t]]
-    pairs = np.array([(int(v), copy.get(int(v), int(v))) for v in nodes], dtype=np.int64)
-    return xy, tri, pairs
+def write_export(out, name, exact, levels, n0, crack=((-1.0, 0.0), (0.0, 0.0))):
+    """The mesh export (references/tests/elastic_export.py, the dolfinx helper's stand-in for
+    `sdcrack mesh`) of the scene with this exact table, g = the exact u on ∂Ω."""
+    g = None if exact is None else [exact["ux"], exact["uy"]]
+    return elastic_export(out, name, PROBLEM, f=["0", "0"], g=g, exact=exact, levels=levels, n0=n0,
+                          crack=crack)
 
 
-def write_export(out, name, exact, levels, n0):
-    out = Path(out)
-    for level in levels:
-        n = n0 * 2 ** level
-        xy, tri, pairs = cracked_level(n)
-        d = out / f"level{level}"
-        d.mkdir(parents=True, exist_ok=True)
-        np.savetxt(d / "vertices.txt", xy, fmt="%.17g")
-        np.savetxt(d / "triangles.txt", tri, fmt="%d")
-        np.savetxt(d / "crack.txt", pairs, fmt="%d")
-        np.savetxt(d / "cracks.txt", [[0, len(pairs), 0, 1]], fmt="%d")
-        np.savetxt(d / "crack_normals.txt", np.tile([0.0, 1.0], (len(pairs), 1)), fmt="%.17g")
-        (d / "mesh.json").write_text(json.dumps({"kind": "structured", "nx": n, "ny": n,
-                                                 "level": level, "h": 2 * math.sqrt(2) / n}))
-    scene = {"name": name, "problem": PROBLEM, "f": ["0", "0"], "g": [exact["ux"], exact["uy"]],
-             "tractions": {}, "fixed": [], "exact": exact,
-             "cracks": [{"points": [[-1.0, 0.0], [0.0, 0.0]]}], "levels": list(levels)}
-    (out / "scene.json").write_text(json.dumps(scene, indent=1))
-
-
-def interpolant(exact, xy, tri):
-    """u (N, 2) of the P1 interpolant on the cracked mesh: each vertex valued from a triangle that
-    uses it (a − copy from below the crack)."""
-    side = np.zeros(len(xy))
-    cy = xy[tri].mean(axis=1)[:, 1]
-    for k in range(3):
-        side[tri[:, k]] = np.sign(cy)
+def interpolant(exact, level):
+    """u (N, 2) of the P1 interpolant on the cracked mesh of a Level: the exact u at every vertex,
+    a crack row's + and − copies by sdexpr.on_face (the face rule's signed zeros)."""
+    xy = level.points
     x, y = xy[:, 0].copy(), xy[:, 1].copy()
-    y[(y == 0.0) & (side < 0)] = -0.0
+    rows = level.pair_rows()
+    for side, col in ((1.0, 0), (-1.0, 1)):
+        v = level.pairs[rows, col]
+        for k, nu in zip(v, level.normals[rows]):
+            x[k], y[k] = (float(c) for c in sdexpr.on_face(x[k:k + 1], y[k:k + 1], nu, side))
     return np.column_stack([sdexpr.to_numpy(exact[c])(x, y) for c in ("ux", "uy")])
 
 
-def nodal_measure(xy, pairs):
-    c = xy[pairs[:, 0]]
-    ell = np.hypot(*(c[1:] - c[:-1]).T)
-    m = np.zeros(len(pairs))
-    m[:-1] += 0.5 * ell
-    m[1:] += 0.5 * ell
-    return m
-
-
-def reference_outputs(exact, xy, tri, pairs, closed):
-    """(u, crack (I, 4)) of a reference whose solution is the interpolant; `closed` (I,) bool the
-    rows it reports active (their force m_j · p(x_j), p = −σ_yy of the exact field)."""
-    u = interpolant(exact, xy, tri)
-    j = u[pairs[:, 0]] - u[pairs[:, 1]]
+def reference_outputs(exact, level, closed):
+    """(u, crack (I, 4)) of a reference whose solution is the interpolant on the Level `level`
+    (sdcompare_lib.elastic_read); `closed` (I,) bool the rows it reports active, their force
+    m_j · p(x_j), p = −ν·σν of the exact field on the + face."""
+    xy, pairs, nu = level.points, level.pairs, level.normals
+    u = interpolant(exact, level)
     crack = np.zeros((len(pairs), 4))
-    crack[:, 0], crack[:, 1] = j[:, 1], j[:, 0]  # ν = (0, 1), τ = ν turned by −90° = (1, 0)
-    c = xy[pairs[:, 0]]
-    p = -sdexpr.to_numpy(exact["syy"])(c[:, 0], np.full(len(c), 0.0))
-    crack[:, 2] = np.where(closed, nodal_measure(xy, pairs) * p, 0.0)
+    crack[:, 0], crack[:, 1] = jumps(u, pairs, nu)
+    c = xy[pairs[:, 0]] + 1e-12 * nu
+    sxx, syy, sxy = (sdexpr.to_numpy(exact[k])(c[:, 0], c[:, 1]) for k in ("sxx", "syy", "sxy"))
+    p = -(sxx * nu[:, 0] ** 2 + 2 * sxy * nu[:, 0] * nu[:, 1] + syy * nu[:, 1] ** 2)
+    crack[:, 2] = np.where(closed, level.nodal_measure() * p, 0.0)
     crack[:, 3] = closed.astype(float)
-    crack[-1] = 0.0  # the tip
+    crack[level.tip_rows()] = 0.0
     return u, crack
 
 
+def jumps(u, pairs, nu):
+    """(opening, slip) per row: (u⁺ − u⁻)·ν and ·τ, τ = ν turned by −90°."""
+    j = u[pairs[:, 0]] - u[pairs[:, 1]]
+    return j[:, 0] * nu[:, 0] + j[:, 1] * nu[:, 1], j[:, 0] * nu[:, 1] - j[:, 1] * nu[:, 0]
+
+
 def write_results(out, exact=None, levels=(0, 1, 2), n0=4, tools=("dolfinx", "freefem"),
-                  name="williams", perturb=None, closed=None, damage=None):
-    """A results folder OUT/ of the Williams edge crack (or `exact`), every reference solving to
-    the interpolant. perturb(xy) -> (N, 2) is added to every reference's u; closed(level, xy, pairs)
-    -> (I,) bool the active flags (default none); damage(tool, level, u, crack) may change a
-    reference's arrays in place."""
+                  name="williams", perturb=None, closed=None, damage=None,
+                  crack=((-1.0, 0.0), (0.0, 0.0))):
+    """A results folder OUT/ of the Williams edge crack (or `exact` on `crack`), every reference
+    solving to the interpolant. perturb(xy) -> (N, 2) is added to every reference's u;
+    closed(level, xy, pairs) -> (I,) bool the active flags (default none); damage(tool, level, u,
+    crack) may change a reference's arrays in place."""
     out = Path(out)
     exact = exact or williams(1.0, 0.0)
     out.mkdir(parents=True, exist_ok=True)
-    write_export(out / "mesh", name, exact, levels, n0)
+    write_export(out / "mesh", name, exact, levels, n0, crack)
     (out / "summary.json").write_text(json.dumps({"scene": name, "problem": "elasticity"}))
     toml = [f'name = "{name}"', "[problem]", 'kind = "elasticity"', "E = 1.0", "nu = 0.3",
             "[discretization]", f"cells = [{n0}, {n0}]", f"levels = {list(levels)}",
@@ -136,19 +107,19 @@ def write_results(out, exact=None, levels=(0, 1, 2), n0=4, tools=("dolfinx", "fr
         d.mkdir(exist_ok=True)
         cases = []
         for level in levels:
-            n = n0 * 2 ** level
-            xy, tri, pairs = cracked_level(n)
+            lv = elastic_read.read_level(str(out / "mesh"), level)
+            xy, pairs = lv.points, lv.pairs
             flags = (closed(level, xy, pairs) if closed else np.zeros(len(pairs), dtype=bool))
-            u, crack = reference_outputs(exact, xy, tri, pairs, flags)
+            u, crack_out = reference_outputs(exact, lv, flags)
             if perturb is not None:
                 u = u + perturb(xy)
-                j = u[pairs[:, 0]] - u[pairs[:, 1]]
-                crack[:, 0], crack[:, 1] = j[:, 1], j[:, 0]
-                crack[-1] = 0.0
+                crack_out[:, 0], crack_out[:, 1] = jumps(u, pairs, lv.normals)
+                crack_out[lv.tip_rows()] = 0.0
             if damage is not None:
-                damage(tool, level, u, crack)
+                damage(tool, level, u, crack_out)
             np.savetxt(d / f"u_level{level}.txt", u, fmt="%.17g")
-            np.savetxt(d / f"crack_level{level}.txt", crack, fmt="%.17g")
+            np.savetxt(d / f"crack_level{level}.txt", crack_out, fmt="%.17g")
+            n = n0 * 2 ** level
             cases.append({"level": level, "h": 2 * math.sqrt(2) / n, "unknowns": 2 * len(xy),
                           "iterations": 1, "active": int(flags.sum()),
                           "kkt": {"equations": 1e-15, "primal": 0.0, "dual": 0.0,

@@ -9,6 +9,10 @@ folders (nor the elastic one for scalar folders).
 
 Run: /usr/bin/python3 -m pytest compare/tests/test_elastic.py -q
 """
+import contextlib
+import importlib.machinery
+import importlib.util
+import io
 import json
 import math
 import os
@@ -34,10 +38,25 @@ def problems(a, label):
     return next(p for lab, _, p, _ in a["checks"] if lab == label)
 
 
+def _load_script():
+    """compare/sdcompare as a module (the script has no .py suffix), so the command-line tests run
+    its main() in this process: the same code path without an interpreter's start-up each."""
+    loader = importlib.machinery.SourceFileLoader("sdcompare_script", SCRIPT)
+    spec = importlib.util.spec_from_loader(loader.name, loader)
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+SDCOMPARE = _load_script()
+
+
 def run_cli(folder, *extra):
-    p = subprocess.run([sys.executable, SCRIPT, str(folder), *extra], capture_output=True,
-                       text=True)
-    return p.returncode, p.stdout, p.stderr
+    """(exit code, stdout, stderr) of `compare/sdcompare FOLDER EXTRA…`."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = SDCOMPARE.main([str(folder), *extra])
+    return code, out.getvalue(), err.getvalue()
 
 
 # ------------------------------------------------------------------------- the norms
@@ -171,8 +190,11 @@ def test_mismatched_active_sets_fail(tmp_path):
 
 def test_a_short_series_cannot_be_judged(tmp_path):
     folder = es.write_results(tmp_path / "w", levels=(0, 1))
-    code, out, _ = run_cli(folder, "--quiet")
-    assert code == 3
+    # the script as a user runs it (the other tests call its main() in this process)
+    p = subprocess.run([sys.executable, SCRIPT, str(folder), "--quiet"], capture_output=True,
+                       text=True)
+    code, out = p.returncode, p.stdout
+    assert code == 3 and out.startswith("williams: INCONCLUSIVE"), out + p.stderr
     assert "INCONCLUSIVE (cannot judge yet" in out and "run levels up to 3" in out
     rep = json.loads((folder / "report" / "report.json").read_text())
     # the field series need level 2; the SIFs, not computed at level 0 (its tip triangles reach
@@ -254,6 +276,67 @@ def test_without_exact_the_references_are_compared(tmp_path):
         assert abs(x - (-0.5 + cell / 2)) < 1e-12 and y == 0.0
     dist = {(r["tool"], r["level"]): r["front_distance"] for r in a["finest"]}
     assert dist[("dolfinx", 1)] == pytest.approx(0.125 - 0.0625) and dist[("dolfinx", 2)] == 0.0
+
+
+def patch_folder(tmp_path, damage=None):
+    """The patch test: uniform strain (0.1, −0.3) across an interior crack y = 0, |x| ≤ 1/2, every
+    pair closed (σ_yy < 0), exact for P1; levels 2–4 of 4 × 4 cells (the ring of the tips, 0.2 to
+    0.4, needs the tip's triangles within 0.2)."""
+    grad = np.array([[0.1, 0.0], [0.0, -0.3]])
+    s = elastic_exact.hooke(grad, es.PROBLEM)
+    ex = {"ux": "0.1*x", "uy": "-0.3*y", "sxx": repr(s[0]), "syy": repr(s[1]), "sxy": repr(s[2]),
+          "opening": None, "slip": None, "pressure": None, "sif": [[0.0, 0.0], [0.0, 0.0]]}
+    return es.write_results(tmp_path / "patch", exact=ex, levels=(2, 3, 4), name="patch",
+                            crack=((-0.5, 0.0), (0.5, 0.0)), damage=damage,
+                            closed=lambda L, xy, pairs: np.ones(len(pairs), dtype=bool))
+
+
+def test_the_patch_test_is_exact(tmp_path):
+    """Every error at round-off, the pressure λ_j/m_j = −σ_yy at every row, every pair closed as
+    the exact field, K = 0 at both tips (the crack-face term cancels the pressure's K_I)."""
+    a = analyse(patch_folder(tmp_path))
+    assert a["verdict"] == "PASS", a["reasons"]
+    for e in a["errors"].values():
+        assert max(e.values()) < 1e-14, e
+    assert all(r["mismatch_rows"] == 0 and r["exact_closed_rows"] == r["reference_active_rows"] > 0
+               for r in a["active_set"])
+    level = elastic_read.load(str(tmp_path / "patch"))["levels"][4]
+    (t1, e1), (t2, e2) = level.tip_frames()  # first-point end first, e₁ ahead of each tip
+    assert t1.tolist() == [-0.5, 0.0] and e1.tolist() == [-1.0, 0.0] and e2.tolist() == [1.0, 0.0]
+    for ks in a["sif_by_key"].values():
+        assert np.abs(ks).max() < 1e-12
+
+
+def test_a_contact_force_left_out_fails_the_sifs(tmp_path):
+    """Both references report the closed rows active but with no force: their own fields are
+    untouched (the errors stay at round-off) and the crack outputs allow it (a force ≥ 0), but the
+    crack-face term then misses the pressure and K_I ≈ −0.17 does not converge to 0."""
+    def damage(tool, level, u, crack):
+        crack[:, 2] = 0.0
+
+    a = analyse(patch_folder(tmp_path, damage))
+    assert a["verdict"] == "FAIL"
+    assert {p.split(":")[0] for p in problems(a, "series")} >= {"dolfinx K_I tip 1",
+                                                                "freefem K_I tip 2"}
+    assert not problems(a, "crack outputs") and not problems(a, "reference agreement")
+    assert all(e["pressure_l2"] > 0.1 for e in a["errors"].values())
+
+
+def test_a_shear_stress_of_engineering_strain_fails(tmp_path, monkeypatch):
+    """A compare-tool bug (σ_xy = μ ε_xy, the engineering shear's law with the tensor strain) makes
+    σ(u_h)'s error stall at the size of σ_xy: the σ series fails, the others pass."""
+    right = elastic_exact.hooke
+
+    def wrong(grad, material):
+        s = right(grad, material)
+        s[..., 2] *= 0.5
+        return s
+
+    folder = es.write_results(tmp_path / "w", levels=LEVELS)
+    monkeypatch.setattr(elastic_exact, "hooke", wrong)
+    a = analyse(folder)
+    bad = problems(a, "series")
+    assert bad and all(p.split(":")[0].endswith("sigma_l2") for p in bad)
 
 
 # ------------------------------------------------------------------------- bad input, dispatch
