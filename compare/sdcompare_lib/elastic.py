@@ -25,6 +25,7 @@ Checks (each a list of problems; a check that does not apply says why):
   off); anywhere else it is a problem. The mismatch length Σ m_j over the differing rows is printed.
 """
 import math
+import os
 
 import numpy as np
 
@@ -445,6 +446,7 @@ def analyse(res):
         checks.append(("active set", "", [], why))
     checks.append(sif_check(res, a, sifs))
     a["finest"] = finest_distances(res, a, sifs)
+    a["field_distances"] = field_distances(res)
     a["checks"] = checks
     a["verdict"], a["reasons"] = verdict.decide(
         [(label, p) for label, _, p, _ in checks],
@@ -473,6 +475,67 @@ def sif_check(res, a, sifs):
             probs.append(f"{tool} level {max(by_level)}: "
                          f"{a['sif_skipped'].get((tool, max(by_level)), 'not computed')}")
     return ("SIF", what, probs, None if res["refs"] else "no reference in the folder")
+
+
+def _owners(res, coarse, fine):
+    """`refinements` of norms.prolong_to_fine from level `coarse` to `fine`: None (structured,
+    located by coordinates), the number of refinements (refined), or each fine triangle's
+    ancestor (graded: parents.txt of every level between, composed)."""
+    kind = res["levels"][fine].kind
+    if kind == "refined":
+        return kind, fine - coarse
+    if kind == "graded":
+        owner = np.arange(len(res["levels"][fine].triangles), dtype=np.int64)
+        for lv in range(fine, coarse, -1):
+            path = os.path.join(res["folder"], "mesh", f"level{lv}", "parents.txt")
+            if not os.path.exists(path):
+                raise elastic_read.InputError(f"missing file: {path} (a graded level's parents)")
+            owner = np.loadtxt(path, dtype=np.int64, ndmin=1)[owner]
+        return kind, owner
+    return kind, None
+
+
+def field_distances(res):
+    """Per reference and level below its finest: ‖u_finest − u_L‖_{L²} and the broken H¹ seminorm
+    of the difference, u_L evaluated exactly at the finest triangles' corners (norms.prolong_to_fine:
+    each fine triangle in its coarse triangle, so a field broken across the crack is taken on the
+    right face), both P1 on the finest mesh: exact, no quadrature."""
+    from . import norms
+
+    rows = []
+    for tool, (_, by_level) in sorted(res["refs"].items()):
+        if len(by_level) < 2:
+            continue
+        top = max(by_level)
+        fine, uf = res["levels"][top], by_level[top].u
+        area = norms.triangle_areas(fine.points, fine.triangles)
+        grad_f = elastic_exact.p1_gradients(fine.points, fine.triangles, uf)
+        _, _, G, _ = scalar_exact_geometry(fine)
+        for L in sorted(by_level):
+            if L == top:
+                continue
+            coarse = res["levels"][L]
+            kind, how = _owners(res, L, top)
+            try:
+                corners = norms.prolong_to_fine(coarse.points, coarse.triangles, by_level[L].u,
+                                                fine.points, fine.triangles, kind, how)
+            except norms.NormError as exc:
+                rows.append({"tool": tool, "level": L, "finest": top, "u_l2": None,
+                             "u_h1": None, "note": str(exc)})
+                continue
+            d = uf[fine.triangles] - corners
+            dg = grad_f - np.einsum("tvi,tvd->tid", corners, G)
+            rows.append({"tool": tool, "level": L, "finest": top,
+                         "u_l2": math.sqrt(norms._local_sq(area, d)),
+                         "u_h1": math.sqrt(float(area @ np.einsum("tij,tij->t", dg, dg))),
+                         "note": None})
+    return rows
+
+
+def scalar_exact_geometry(level):
+    from .exact import _geometry
+
+    return _geometry(level.points, level.triangles)
 
 
 def finest_distances(res, a, sifs):

@@ -128,6 +128,28 @@ def sif_section(a, exact_sif):
                         "distances to each reference's finest level")]}
 
 
+def finest_section(a):
+    rows = []
+    by_tool = {}
+    for r in a["field_distances"]:
+        by_tool.setdefault(r["tool"], []).append(r)
+    for tool, rs in by_tool.items():
+        for i, r in enumerate(rs):
+            prev = rs[i - 1] if i else None
+            rate_u = (rates.rate(a["h"][prev["level"]], prev["u_l2"], a["h"][r["level"]], r["u_l2"])
+                      if prev and prev["u_l2"] and r["u_l2"] else None)
+            rate_g = (rates.rate(a["h"][prev["level"]], prev["u_h1"], a["h"][r["level"]], r["u_h1"])
+                      if prev and prev["u_h1"] and r["u_h1"] else None)
+            rows.append([TOOL_NAME.get(tool, tool), r["level"], r["finest"], fmt(r["u_l2"]),
+                         fmt_rate(rate_u), fmt(r["u_h1"]), fmt_rate(rate_g), r["note"] or "–"])
+    return {"title": "Distances to the finest level",
+            "paras": ["Each reference's u at every level against its own finest level, evaluated "
+                      "exactly on the finest triangles (a self-convergence measure, biased by the "
+                      "finest level's own error: printed, not judged)."],
+            "tables": [(["reference", "level", "finest level", "‖u_L − u_finest‖", "rate",
+                         "‖∇(u_L − u_finest)‖", "rate", "note"], rows)]}
+
+
 def references_section(res, a):
     kkt = []
     for tool, (_, by_level) in sorted(res["refs"].items()):
@@ -198,6 +220,7 @@ def report_json(res, a, prov, images):
         "agreement": a["agreement"], "active_set": a["active_set"], "fronts": a["fronts"],
         "sifs": [{"tool": t, "level": L, "K": ks} for (t, L), ks in sorted(a["sif_by_key"].items())],
         "sif_missing": a["sif_missing"], "finest": a["finest"],
+        "field_distances": a["field_distances"],
         "sif_skipped": [{"tool": t, "level": L, "why": w} for (t, L), w in sorted(a["sif_skipped"].items())],
         "images": [i for i in images if i]})
 
@@ -218,7 +241,7 @@ def run(args, results_dir):
         images = [error_plot(tmp, a)]
         prov, prov_sec = provenance_section(res)
         secs = [summary_section(a, images), series_section(a), crack_section(a), sif_section(a, (res["mesh_scene"].get("exact") or {}).get("sif")),
-                references_section(res, a), prov_sec]
+                finest_section(a), references_section(res, a), prov_sec]
         title = f"sdcompare report — {a['scene']} (elasticity)"
         render.write_text(tmp, "report.md", render.markdown(title, secs))
         render.write_text(tmp, "index.html", render.html_page(title, secs, tmp))

@@ -156,6 +156,18 @@ def test_a_correct_folder_passes_and_reports(tmp_path):
     assert "Theorem 4.3" not in md  # the scalar problem's source of orders is not named
 
 
+def test_distances_to_the_finest_level_obey_the_triangle_inequality(tmp_path):
+    """‖u_L − u_f‖ (prolonged exactly onto the finest mesh) lies within e_f of e_L = ‖u_L − u‖, in
+    L² and in the broken H¹ seminorm: the prolongation takes each face's values."""
+    a = analyse(es.write_results(tmp_path / "w", levels=LEVELS))
+    assert len(a["field_distances"]) == 2 * (len(LEVELS) - 1)
+    for r in a["field_distances"]:
+        for q in ("u_l2", "u_h1"):
+            e_l, e_f = a["errors"][(r["tool"], r["level"])][q], a["errors"][(r["tool"], 3)][q]
+            assert abs(r[q] - e_l) <= e_f * (1 + 1e-12), (r, q)
+            assert r[q] > 0.5 * e_l
+
+
 def test_a_perturbed_field_fails_the_series(tmp_path):
     """Both references (so they agree) off by a smooth field of size 0.02 at every level: the u
     and σ errors stall at the perturbation's size."""
@@ -305,6 +317,7 @@ def test_the_patch_test_is_exact(tmp_path):
     assert t1.tolist() == [-0.5, 0.0] and e1.tolist() == [-1.0, 0.0] and e2.tolist() == [1.0, 0.0]
     for ks in a["sif_by_key"].values():
         assert np.abs(ks).max() < 1e-12
+    assert all(r["u_l2"] < 1e-14 and r["u_h1"] < 1e-13 for r in a["field_distances"])
 
 
 def test_a_contact_force_left_out_fails_the_sifs(tmp_path):
