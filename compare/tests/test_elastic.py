@@ -255,6 +255,24 @@ def test_references_that_disagree_fail(tmp_path):
     assert not problems(a, "series")
 
 
+def test_sifs_that_differ_fail_the_agreement(tmp_path):
+    """The agreement check on the SIFs: 2e-8 of the tip's largest K apart fails, 5e-9 passes."""
+    res = elastic_read.load(str(es.write_results(tmp_path / "w", levels=(1,))))
+    for gap, fails in ((2e-8, True), (5e-9, False)):
+        sifs = {("dolfinx", 1): [(1.0, 0.25)], ("freefem", 1): [(1.0 + gap, 0.25)]}
+        rows, bad = elastic.agreement(res, sifs)
+        assert rows[0]["sif_rel"] == pytest.approx(gap, rel=1e-6)
+        assert bool(bad) == fails, bad
+
+
+def test_a_finest_level_too_coarse_for_the_sifs_fails(tmp_path):
+    """At 4 × 4 cells the tip's triangles reach beyond the ring's inner radius: no SIF at the
+    finest level is a problem of the SIF check, naming why."""
+    a = analyse(es.write_results(tmp_path / "w", levels=(0,)))
+    bad = problems(a, "SIF")
+    assert len(bad) == 2 and all("r_in is smaller than the triangles at the tip" in p for p in bad)
+
+
 def test_a_missing_reference_level_fails_completeness(tmp_path):
     folder = es.write_results(tmp_path / "w", levels=LEVELS)
     path = folder / "freefem" / "summary.json"
