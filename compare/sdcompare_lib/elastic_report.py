@@ -72,7 +72,8 @@ def series_section(a):
     reasons = sorted({f"{s['quantity']}: {s['order_reason']}" for s in a["series"]})
     return {"title": "Errors against the exact fields",
             "paras": [f"Recomputed here from each reference's u and crack file (compare/sdcompare_lib/"
-                      f"elastic_exact.py). Rule: {rates.rule_text(theory.RATE_MARGIN, source=RULE_SOURCE)}"],
+                      f"elastic_exact.py); an error within {elastic.ROUNDOFF_REL:g} of the exact "
+                      "field's own norm is round-off and shown as 0. Rule: {rates.rule_text(theory.RATE_MARGIN, source=RULE_SOURCE)}"],
             "tables": [(["reference", "quantity", "level", "h", "error", "rate", "expected"], rows,
                         "errors and rates per reference, quantity and level"),
                        (["reference", "level", "pressure error"], pressure,
@@ -119,8 +120,10 @@ def sif_section(a, exact_sif):
     return {"title": "Stress intensity factors",
             "paras": ["K_I, K_II per tip by the interaction integral (compare/sdcompare_lib/sif.py) "
                       f"on the ring from {elastic.RING[0]:g} R to {elastic.RING[1]:g} R, R the tip's "
-                      "distance to the outer boundary or another crack, with each reference's own "
-                      "nodal pressure λ_j/m_j in the crack-face term and the scene's body force."]
+                      "distance to the outer boundary or another crack, with the scene's body force "
+                      f"and, in the crack-face term, the {a['sif_pressure']} pressure (with [exact] "
+                      "the exact one: the references' nodal pressure has an h^-1/2 layer at the tip "
+                      "whose weighted integral does not vanish, compare/sdcompare_lib/elastic.py)."]
             + skipped,
             "tables": [(["reference", "level", "tip", "K_I", "K_II", "K_I error", "K_II error"], rows),
                        (["reference", "level", "finest level", "largest K difference to the finest level's",
