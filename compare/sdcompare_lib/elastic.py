@@ -23,6 +23,14 @@ Checks (each a list of problems; a check that does not apply says why):
   (closed: exact opening ≤ elastic_exact.CONTACT_TOL × max |u| on Γc) lies within FRONT_REACH rows
   of a row where the exact status changes along the crack (the discrete front may sit one cell
   off); anywhere else it is a problem. The mismatch length Σ m_j over the differing rows is printed.
+* SIF: every reference's K_I, K_II computed at its finest level (sif.sif_p1 on a fixed ring;
+  their errors against the scene's exact SIFs are series above, their differences part of the
+  agreement).
+
+Printed, not judged: the nodal pressure error (it does not converge at a tip under slip: the
+references' λ_j/m_j has a layer of amplitude ~h^{-1/2} at the node next to the tip, 0.0567 …
+0.0547 over levels 0–3 of the closed crack with slip), the contact fronts, and each reference's
+distance to its own finest level (the only measure of convergence without [exact]).
 """
 import math
 import os

@@ -172,8 +172,8 @@ class ReferenceLevel:
     crack: np.ndarray
 
 
-def read_reference(folder, tool, levels, mesh_levels, scene):
-    """{level: ReferenceLevel} of folder/<tool>/ for the levels it has; the summary itself."""
+def read_reference(folder, tool, mesh_levels):
+    """(its summary, {level: ReferenceLevel}) of folder/<tool>/ for the levels it has."""
     sub = os.path.join(folder, tool)
     summary = load_json(os.path.join(sub, "summary.json"))
     if not isinstance(summary, dict) or not isinstance(summary.get("cases"), list):
@@ -224,6 +224,6 @@ def load(folder):
     refs = {}
     for tool in REFERENCE_TOOLS:
         if os.path.exists(os.path.join(folder, tool, "summary.json")):
-            refs[tool] = read_reference(folder, tool, levels, mesh, name)
+            refs[tool] = read_reference(folder, tool, mesh)
     return {"folder": folder, "summary": summary, "scene": name, "scene_file": scene_file,
             "mesh_scene": mesh_scene, "levels": mesh, "refs": refs}
