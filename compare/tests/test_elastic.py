@@ -391,6 +391,21 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path):
     assert code == 2 and "scene.json" in err
 
 
+def test_graded_levels_are_measured_in_unknowns(tmp_path):
+    """A graded export (mesh.json kind "graded"): rates per halving of N^-1/2, N = 2 × the cracked
+    mesh's vertices, not of the largest triangle."""
+    folder = es.write_results(tmp_path / "w", levels=(1,))
+    level = elastic_read.read_level(str(folder / "mesh"), 1)
+    assert elastic.mesh_parameter(level, True) == (2.0 * len(level.points)) ** -0.5
+    assert elastic.mesh_parameter(level, False) == pytest.approx(2 * math.sqrt(2) / 8, rel=1e-15)
+
+
+def test_scalar_only_options_are_refused(tmp_path):
+    folder = es.write_results(tmp_path / "w", levels=(0,))
+    code, _, err = run_cli(folder, "--baseline", str(folder))
+    assert code == 2 and "--baseline is not available for an elastic scene" in err
+
+
 def test_dispatch_reads_the_problem_key(tmp_path):
     (tmp_path / "summary.json").write_text(json.dumps({"scene": "x", "cases": []}))
     assert not elastic_read.is_elastic(str(tmp_path))
