@@ -89,13 +89,13 @@ def crack_section(a):
             r["reference_active_rows"], r["mismatch_rows"], fmt(r["mismatch_length"]),
             r["far_rows"]] for r in a["active_set"]]
     fr = [[TOOL_NAME.get(f["tool"], f["tool"]), f["level"],
-           "; ".join(f"({x:.6g}, {y:.6g})" for x, y in f["fronts"]) or "none (no flag changes)"]
+           "; ".join(f"({x:.10g}, {y:.10g})" for x, y in f["fronts"]) or "none (no flag changes)"]
           for f in a["fronts"]]
-    return {"title": "Contact set and fronts",
-            "paras": [f"A row's exact status is closed when the exact opening is ≤ "
-                      f"{elastic.elastic_exact.CONTACT_TOL:g} × the largest |u| on Γc; the "
-                      "mismatch length is Σ m_j over the rows (not tips, not mouths) whose "
-                      "reference flag differs."],
+    paras = ([f"A row's exact status is closed when the exact opening is ≤ "
+              f"{elastic.elastic_exact.CONTACT_TOL:g} × the largest |u| on Γc; the mismatch length "
+              "is Σ m_j over the rows (not tips, not mouths) whose reference flag differs."]
+             if a["has_exact"] else ["No [exact]: the references' contact fronts per level."])
+    return {"title": "Contact set and fronts", "paras": paras,
             "tables": [(["reference", "level", "exact closed rows", "active rows",
                          "rows differing", "mismatch length", "beyond the front's reach"], act),
                        (["reference", "level", "contact fronts (where the active flags change)"],
