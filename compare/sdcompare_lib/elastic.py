@@ -210,18 +210,17 @@ def exact_errors(res, ex, graded):
     quad = Quadrature()
     for L, level in sorted(res["levels"].items()):
         h[L] = mesh_parameter(level, graded)
-        batches = elastic_exact.domain_quadrature(level, ex, quad)
-        interp[L] = elastic_exact.interpolation_errors(batches, level, ex, material)
-        ce = crack_exact[L] = elastic_exact.CrackExact(level, ex, quad)
         zero = np.zeros((len(level.points), 2))
-        size[L] = elastic_exact.field_errors(batches, level, zero, material)
-        size[L].update(ce.jump_errors(*ce.nodal_jumps(zero)))
-        for tool, (_, by_level) in res["refs"].items():
-            r = by_level.get(L)
-            if r is None:
-                continue
-            e = elastic_exact.field_errors(batches, level, r.u, material)
-            e.update(ce.jump_errors(*ce.nodal_jumps(r.u)))
+        refs = {tool: by_level[L] for tool, (_, by_level) in res["refs"].items() if L in by_level}
+        fields = {("ref", tool): elastic_exact.p1_field(level, r.u) for tool, r in refs.items()}
+        fields["interpolant"] = elastic_exact.interpolant_field(level, ex)
+        fields["zero"] = elastic_exact.p1_field(level, zero)
+        dom = elastic_exact.domain_errors(level, ex, fields, material, quad)
+        interp[L] = dom["interpolant"]
+        ce = crack_exact[L] = elastic_exact.CrackExact(level, ex, quad)
+        size[L] = dict(dom["zero"], **ce.jump_errors(*ce.nodal_jumps(zero)))
+        for tool, r in refs.items():
+            e = dict(dom[("ref", tool)], **ce.jump_errors(*ce.nodal_jumps(r.u)))
             e["pressure_l2"] = ce.pressure_error(r.crack[:, 2])
             errors[(tool, L)] = e
     return errors, interp, crack_exact, h, size

@@ -119,56 +119,51 @@ def tip_points(level):
 DOMAIN_NAMES = ("ux", "uy", "duxdx", "duxdy", "duydx", "duydy", "sxx", "syy", "sxy")
 
 
-def domain_quadrature(level, ex, quad=None):
-    """[(ids, L, w, vals)]: the error quadrature's batches on the level's cracked mesh, weights
-    in area units, the exact u, ∇u, σ at their points (shared by every field of the level)."""
-    quad = quad or scalar_exact.Quadrature()
-    P, t = level.points, level.triangles
-    _, area, _, _ = scalar_exact._geometry(P, t)
-    out = []
-    for ids, L, W in scalar_exact._point_batches(P, t, tip_points(level), quad):
-        xy = L @ P[t][ids]
-        out.append((ids, L, W * area[ids][:, None], ex.evaluate(xy[..., 0], xy[..., 1],
-                                                                 DOMAIN_NAMES)))
-    return out
-
-
-def domain_errors(batches, level, u_corners, grads, material):
-    """{"u_l2", "u_h1", "sigma_l2"} of the P1 field with corner values u_corners (T, 3, 2) and
-    per-triangle gradients grads (T, 2, 2) on the batches of domain_quadrature."""
-    sig = hooke(grads, material)
-    su = sg = ss = 0.0
-    for ids, L, w, v in batches:
-        uh = L @ u_corners[ids]  # (K, q, 2)
-        dx, dy = uh[..., 0] - v["ux"], uh[..., 1] - v["uy"]
-        su += float(np.sum(w * (dx * dx + dy * dy)))
-        g = grads[ids][:, None]  # (K, 1, 2, 2)
-        d = [g[..., 0, 0] - v["duxdx"], g[..., 0, 1] - v["duxdy"], g[..., 1, 0] - v["duydx"],
-             g[..., 1, 1] - v["duydy"]]
-        sg += float(np.sum(w * sum(c * c for c in d)))
-        s = sig[ids][:, None]
-        a, b, c = s[..., 0] - v["sxx"], s[..., 1] - v["syy"], s[..., 2] - v["sxy"]
-        ss += float(np.sum(w * (a * a + b * b + 2 * c * c)))
-    return {"u_l2": math.sqrt(su), "u_h1": math.sqrt(sg), "sigma_l2": math.sqrt(ss)}
-
-
-def field_errors(batches, level, u, material):
-    """domain_errors of the P1 field u (N, 2) on the level's cracked mesh."""
+def p1_field(level, u):
+    """(corner values (T, 3, 2), gradients (T, 2, 2)) of the P1 field u (N, 2) on the level's
+    cracked mesh."""
     u = np.asarray(u, dtype=float)
-    return domain_errors(batches, level, u[level.triangles],
-                         p1_gradients(level.points, level.triangles, u), material)
+    return u[level.triangles], p1_gradients(level.points, level.triangles, u)
 
 
-def interpolation_errors(batches, level, ex, material):
-    """domain_errors of the P1 interpolant of the exact u on the level's cracked mesh, each
+def interpolant_field(level, ex):
+    """(corners, gradients) of the P1 interpolant of the exact u on the level's cracked mesh, each
     corner taken from its own triangle's side of the crack (exact.INSIDE)."""
     X = level.points[level.triangles]
     inner = X + scalar_exact.INSIDE * (X.mean(axis=1, keepdims=True) - X)
     v = ex.evaluate(inner[..., 0], inner[..., 1], ("ux", "uy"))
     corners = np.stack([v["ux"], v["uy"]], axis=-1)
     _, _, G, _ = scalar_exact._geometry(level.points, level.triangles)
-    grads = np.einsum("tvi,tvd->tid", corners, G)
-    return domain_errors(batches, level, corners, grads, material)
+    return corners, np.einsum("tvi,tvd->tid", corners, G)
+
+
+def domain_errors(level, ex, fields, material, quad=None):
+    """{name: {"u_l2", "u_h1", "sigma_l2"}} of the P1 fields {name: (corners (T, 3, 2), gradients
+    (T, 2, 2))} on the level's cracked mesh, with the error quadrature (module documentation); the
+    exact u, ∇u, σ are evaluated once per batch of points for all fields (memory bounded by a
+    batch, whatever the level)."""
+    quad = quad or scalar_exact.Quadrature()
+    P, t = level.points, level.triangles
+    _, area, _, _ = scalar_exact._geometry(P, t)
+    sig = {k: hooke(g, material) for k, (_, g) in fields.items()}
+    acc = {k: [0.0, 0.0, 0.0] for k in fields}
+    for ids, L, W in scalar_exact._point_batches(P, t, tip_points(level), quad):
+        xy = L @ P[t][ids]
+        v = ex.evaluate(xy[..., 0], xy[..., 1], DOMAIN_NAMES)
+        w = W * area[ids][:, None]
+        for k, (corners, grads) in fields.items():
+            uh = L @ corners[ids]  # (K, q, 2)
+            dx, dy = uh[..., 0] - v["ux"], uh[..., 1] - v["uy"]
+            g = grads[ids][:, None]  # (K, 1, 2, 2)
+            d = [g[..., 0, 0] - v["duxdx"], g[..., 0, 1] - v["duxdy"],
+                 g[..., 1, 0] - v["duydx"], g[..., 1, 1] - v["duydy"]]
+            sk = sig[k][ids][:, None]
+            a, b, c = sk[..., 0] - v["sxx"], sk[..., 1] - v["syy"], sk[..., 2] - v["sxy"]
+            acc[k][0] += float(np.sum(w * (dx * dx + dy * dy)))
+            acc[k][1] += float(np.sum(w * sum(e * e for e in d)))
+            acc[k][2] += float(np.sum(w * (a * a + b * b + 2 * c * c)))
+    return {k: {"u_l2": math.sqrt(su), "u_h1": math.sqrt(sg), "sigma_l2": math.sqrt(ss)}
+            for k, (su, sg, ss) in acc.items()}
 
 
 def crack_line_rule(level, quad=None):
