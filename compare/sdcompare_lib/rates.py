@@ -39,11 +39,12 @@ EXTRA_LEVELS = theory.EXTRA_LEVELS
 RATE_TIE = 1e-9
 
 
-def rule_text(margin, min_rate=None):
+def rule_text(margin, min_rate=None, source="the regularity of the solution and Theorem 4.3"):
+    """The rule in words; `source`: where the expected orders come from (the scalar problem's
+    default; the elastic report names its own, elastic_theory.py)."""
     return (f"a series is judged on its last {RULE_LEVELS} levels and its last two observed rates "
             f"log(e_(l−1)/e_l)/log(h_(l−1)/h_l) against t = its expected order p* − {margin:g} "
-            "(the expected order of each series, from the regularity of the solution and Theorem "
-            "4.3, is shown beside it with its reason"
+            f"(the expected order of each series, from {source}, is shown beside it with its reason"
             + (f"; the scene's floor min_rate = {min_rate:g} raises t" if min_rate else "")
             + "). It converges when its errors decrease and its last rate is ≥ t, the one before "
             f"too or rising into t from within {BUG_GAP / 2:g} of p*. It does not converge when "

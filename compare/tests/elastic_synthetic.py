@@ -1,0 +1,132 @@
+"""Synthetic results folders of elastic scenes (docs/elasticity.md) for the compare tool's tests,
+without sdcrack or the references: the mesh export of references/tests/elastic_export.py (the
+dolfinx helper's stand-in for `sdcrack mesh`; by default the edge crack y = 0, −1 ≤ x ≤ 0 on
+(−1, 1)², mouth at (−1, 0), tip at the origin), and per reference the outputs a correct reference
+would write if its solution were the P1 interpolant of the exact u (u_level{L}.txt from the exact
+field, the crack file from it: opening and slip of the copies, the contact force m_j · p(x_j) on
+the rows it flags closed).
+
+williams(K_I, K_II): Williams' edge-crack field (plane strain, E = 1, ν = 0.3), stresses in closed
+form (the tests check them against Hooke's law of the symbolic derivatives of u).
+"""
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from elastic_export import elastic_export, material  # references/tests (pyproject's pytest pythonpath)
+from sdcompare_lib import elastic_read
+from sdshared import sdexpr
+
+E, NU = 1.0, 0.3
+MU = E / (2 * (1 + NU))
+LAMBDA = E * NU / ((1 + NU) * (1 - 2 * NU))
+KAPPA = 3 - 4 * NU
+PROBLEM = material(E=E, nu=NU)
+
+
+def williams(k1, k2):
+    """The exact table of Williams' field K_I k1 + K_II k2 at the tip (0, 0), crack behind it."""
+    r, th = "sqrt(x^2 + y^2)", "atan2(y, x)"
+    c, s = f"cos({th}/2)", f"sin({th}/2)"
+    c3, s3 = f"cos(3*{th}/2)", f"sin(3*{th}/2)"
+    a = f"(sqrt({r}/(2*pi))/(2*{MU!r}))"
+    b = f"(1/sqrt(2*pi*{r}))"
+    k = repr(KAPPA)
+    ux = (f"{k1!r}*{a}*{c}*({k} - 1 + 2*{s}^2) + {k2!r}*{a}*{s}*({k} + 1 + 2*{c}^2)")
+    uy = (f"{k1!r}*{a}*{s}*({k} + 1 - 2*{c}^2) - {k2!r}*{a}*{c}*({k} - 1 - 2*{s}^2)")
+    sxx = f"{k1!r}*{b}*{c}*(1 - {s}*{s3}) - {k2!r}*{b}*{s}*(2 + {c}*{c3})"
+    syy = f"{k1!r}*{b}*{c}*(1 + {s}*{s3}) + {k2!r}*{b}*{s}*{c}*{c3}"
+    sxy = f"{k1!r}*{b}*{s}*{c}*{c3} + {k2!r}*{b}*{c}*(1 - {s}*{s3})"
+    return {"ux": ux, "uy": uy, "sxx": sxx, "syy": syy, "sxy": sxy, "opening": None,
+            "slip": None, "pressure": None, "sif": [[k1, k2]]}
+
+
+def write_export(out, name, exact, levels, n0, crack=((-1.0, 0.0), (0.0, 0.0))):
+    """The mesh export (references/tests/elastic_export.py, the dolfinx helper's stand-in for
+    `sdcrack mesh`) of the scene with this exact table, g = the exact u on ∂Ω."""
+    g = None if exact is None else [exact["ux"], exact["uy"]]
+    return elastic_export(out, name, PROBLEM, f=["0", "0"], g=g, exact=exact, levels=levels, n0=n0,
+                          crack=crack)
+
+
+def interpolant(exact, level):
+    """u (N, 2) of the P1 interpolant on the cracked mesh of a Level: the exact u at every vertex,
+    a crack row's + and − copies by sdexpr.on_face (the face rule's signed zeros)."""
+    xy = level.points
+    x, y = xy[:, 0].copy(), xy[:, 1].copy()
+    rows = level.pair_rows()
+    for side, col in ((1.0, 0), (-1.0, 1)):
+        v = level.pairs[rows, col]
+        for k, nu in zip(v, level.normals[rows]):
+            x[k], y[k] = (float(c) for c in sdexpr.on_face(x[k:k + 1], y[k:k + 1], nu, side))
+    return np.column_stack([sdexpr.to_numpy(exact[c])(x, y) for c in ("ux", "uy")])
+
+
+def reference_outputs(exact, level, closed):
+    """(u, crack (I, 4)) of a reference whose solution is the interpolant on the Level `level`
+    (sdcompare_lib.elastic_read); `closed` (I,) bool the rows it reports active, their force
+    m_j · p(x_j), p = −ν·σν of the exact field on the + face."""
+    xy, pairs, nu = level.points, level.pairs, level.normals
+    u = interpolant(exact, level)
+    crack = np.zeros((len(pairs), 4))
+    crack[:, 0], crack[:, 1] = jumps(u, pairs, nu)
+    c = xy[pairs[:, 0]] + 1e-12 * nu
+    sxx, syy, sxy = (sdexpr.to_numpy(exact[k])(c[:, 0], c[:, 1]) for k in ("sxx", "syy", "sxy"))
+    p = -(sxx * nu[:, 0] ** 2 + 2 * sxy * nu[:, 0] * nu[:, 1] + syy * nu[:, 1] ** 2)
+    crack[:, 2] = np.where(closed, level.nodal_measure() * p, 0.0)
+    crack[:, 3] = closed.astype(float)
+    crack[level.tip_rows()] = 0.0
+    return u, crack
+
+
+def jumps(u, pairs, nu):
+    """(opening, slip) per row: (u⁺ − u⁻)·ν and ·τ, τ = ν turned by −90°."""
+    j = u[pairs[:, 0]] - u[pairs[:, 1]]
+    return j[:, 0] * nu[:, 0] + j[:, 1] * nu[:, 1], j[:, 0] * nu[:, 1] - j[:, 1] * nu[:, 0]
+
+
+def write_results(out, exact=None, levels=(0, 1, 2), n0=4, tools=("dolfinx", "freefem"),
+                  name="williams", perturb=None, closed=None, damage=None,
+                  crack=((-1.0, 0.0), (0.0, 0.0))):
+    """A results folder OUT/ of the Williams edge crack (or `exact` on `crack`), every reference
+    solving to the interpolant. perturb(xy) -> (N, 2) is added to every reference's u;
+    closed(level, xy, pairs) -> (I,) bool the active flags (default none); damage(tool, level, u,
+    crack) may change a reference's arrays in place."""
+    out = Path(out)
+    exact = exact or williams(1.0, 0.0)
+    out.mkdir(parents=True, exist_ok=True)
+    write_export(out / "mesh", name, exact, levels, n0, crack)
+    (out / "summary.json").write_text(json.dumps({"scene": name, "problem": "elasticity"}))
+    toml = [f'name = "{name}"', "[problem]", 'kind = "elasticity"', "E = 1.0", "nu = 0.3",
+            "[discretization]", f"cells = [{n0}, {n0}]", f"levels = {list(levels)}",
+            "[outputs]", f"references = {json.dumps(list(tools))}"]
+    (out / "scene.toml").write_text("\n".join(toml) + "\n")
+    for tool in tools:
+        d = out / tool
+        d.mkdir(exist_ok=True)
+        cases = []
+        for level in levels:
+            lv = elastic_read.read_level(str(out / "mesh"), level)
+            xy, pairs = lv.points, lv.pairs
+            flags = (closed(level, xy, pairs) if closed else np.zeros(len(pairs), dtype=bool))
+            u, crack_out = reference_outputs(exact, lv, flags)
+            if perturb is not None:
+                u = u + perturb(xy)
+                crack_out[:, 0], crack_out[:, 1] = jumps(u, pairs, lv.normals)
+                crack_out[lv.tip_rows()] = 0.0
+            if damage is not None:
+                damage(tool, level, u, crack_out)
+            np.savetxt(d / f"u_level{level}.txt", u, fmt="%.17g")
+            np.savetxt(d / f"crack_level{level}.txt", crack_out, fmt="%.17g")
+            n = n0 * 2 ** level
+            cases.append({"level": level, "h": 2 * math.sqrt(2) / n, "unknowns": 2 * len(xy),
+                          "iterations": 1, "active": int(flags.sum()),
+                          "kkt": {"equations": 1e-15, "primal": 0.0, "dual": 0.0,
+                                  "complementarity": 0.0},
+                          "status": "converged", "timings_s": {"solve": 0.01}})
+        (d / "summary.json").write_text(json.dumps({"scene": name, "tool": tool,
+                                                    "problem": "elasticity",
+                                                    "provenance": {"tool": tool},
+                                                    "cases": cases}))
+    return out
