@@ -332,9 +332,9 @@ def fronts(res):
 
 # The interaction integral's ring, as fractions of the distance R from the tip to the nearest point
 # of the outer boundary or another crack: the same ring at every level (the geometry's), so the SIF
-# series measures the discretisation alone; its inner radius must contain the tip's triangles
-# (sif.sif_p1 checks it), which levels too coarse for it do not (their SIFs are not computed, and
-# say so).
+# series measures the discretisation alone. sif.sif_p1 sets q_h = 1 on the tip's triangles, so the
+# ring suits every level; a level whose mesh cannot carry it (sif_p1's ValueError: the tip no
+# vertex, the disc meeting ∂Ω or another crack) has no SIF, and the report says why.
 RING = (0.4, 0.8)
 
 

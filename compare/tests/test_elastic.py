@@ -147,11 +147,12 @@ def test_a_correct_folder_passes_and_reports(tmp_path):
     assert by[("dolfinx", "u_h1")]["expected"] == 0.5 and by[("dolfinx", "u_l2")]["expected"] == 1
     assert by[("freefem", "opening_l2")]["expected"] == 0.75
     assert all(s["status"] == "converges" for s in rep["series"])
-    # the SIFs: level 0 too coarse for the ring (said so), K_I → 1 and K_II → 0 at the finest
-    assert by[("freefem", "K_I tip 1")]["levels"] == [1, 2, 3]
+    # the SIFs on every level (q_h = 1 on the tip's triangles, whatever the ring), K_I → 1 and
+    # K_II → 0 at the finest
+    assert by[("freefem", "K_I tip 1")]["levels"] == [0, 1, 2, 3]
     assert by[("freefem", "K_I tip 1")]["errors"][-1] < 1e-5
     assert by[("freefem", "K_II tip 1")]["errors"][-1] < 1e-5
-    assert [(s["tool"], s["level"]) for s in rep["sif_skipped"]] == [("dolfinx", 0), ("freefem", 0)]
+    assert rep["sif_skipped"] == []
     md = (folder / "report" / "report.md").read_text()
     assert "## Contact set and fronts" in md and "## Errors against the exact fields" in md
     assert (folder / "report" / "errors-williams.png").exists()
@@ -209,14 +210,13 @@ def test_a_short_series_cannot_be_judged(tmp_path):
                        text=True)
     code, out = p.returncode, p.stdout
     assert code == 3 and out.startswith("williams: INCONCLUSIVE"), out + p.stderr
-    assert "INCONCLUSIVE (cannot judge yet" in out and "run levels up to 3" in out
+    assert "INCONCLUSIVE (cannot judge yet" in out and "run levels up to 2" in out
     rep = json.loads((folder / "report" / "report.json").read_text())
-    # the field series need level 2; the SIFs, not computed at level 0 (its tip triangles reach
-    # beyond the ring's inner radius), need level 3
-    assert rep["verdict"] == "INCONCLUSIVE" and rep["run_levels_up_to"] == 3
+    # every series (the fields' and the SIFs', computed from level 0 on) needs level 2
+    assert rep["verdict"] == "INCONCLUSIVE" and rep["run_levels_up_to"] == 2
     by = {(s["tool"], s["quantity"]): s for s in rep["series"]}
     assert by[("dolfinx", "u_l2")]["reason"].endswith("run levels up to 2")
-    assert by[("dolfinx", "K_I tip 1")]["levels"] == [1]
+    assert by[("dolfinx", "K_I tip 1")]["levels"] == [0, 1]
     assert all(s["status"] == "inconclusive" for s in rep["series"])
     code, _, err = run_cli(folder, "--quiet")  # the report is there: refused without --replace
     assert code == 2 and "report exists" in err
@@ -267,12 +267,19 @@ def test_sifs_that_differ_fail_the_agreement(tmp_path):
         assert bool(bad) == fails, bad
 
 
-def test_a_finest_level_too_coarse_for_the_sifs_fails(tmp_path):
-    """At 4 × 4 cells the tip's triangles reach beyond the ring's inner radius: no SIF at the
-    finest level is a problem of the SIF check, naming why."""
+def test_a_finest_level_without_sifs_fails(tmp_path, monkeypatch):
+    """sif.sif_p1 refuses a ring the mesh cannot carry (a ValueError naming why: a disc meeting
+    the boundary, a tip that is no vertex): no SIF at the finest level is a problem of the SIF
+    check, naming the reason."""
+    from sdcompare_lib import sif
+
+    def refuse(*args, **kwargs):
+        raise ValueError("sif_p1: the tip [0.0, 0.0] is not a vertex of the mesh")
+
+    monkeypatch.setattr(sif, "sif_p1", refuse)
     a = analyse(es.write_results(tmp_path / "w", levels=(0,)))
     bad = problems(a, "SIF")
-    assert len(bad) == 2 and all("r_in is smaller than the triangles at the tip" in p for p in bad)
+    assert len(bad) == 2 and all("is not a vertex of the mesh" in p for p in bad)
 
 
 def test_a_missing_reference_level_fails_completeness(tmp_path):
