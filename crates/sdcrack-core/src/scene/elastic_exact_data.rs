@@ -9,22 +9,25 @@
 //!   fixed points;
 //! - on Γc, from the one-sided limits of u and σ: `[exact] opening`, `slip` (or, when not given,
 //!   u⁺·ν − u⁻·ν and u⁺·τ − u⁻·τ by the face rule of [`crate::problem::eval_on_face`]) against
-//!   [u·ν], [u·τ]; `[exact] pressure` against −σ_νν on each face; and the contact conditions
-//!   [σν] = 0, σ_ντ = 0 on both faces, [u·ν] ≥ 0, σ_νν ≤ 0, σ_νν·[u·ν] = 0 (ν the crack's normal,
-//!   the + face the side it points into, τ = ν turned by −90°, the crack's direction).
+//!   \[u·ν\], \[u·τ\]; `[exact] pressure` against −σ_νν on each face; and the contact
+//!   conditions \[σν\] = 0, σ_ντ = 0 on both faces, \[u·ν\] ≥ 0, σ_νν ≤ 0, σ_νν·\[u·ν\] = 0 (ν
+//!   the crack's normal, the + face the side it points into, τ = ν turned by −90°, the crack's
+//!   direction).
 //!
 //! The tolerances are the scalar check's, for the same reasons ([`super::exact_data`]'s module
 //! documentation; the constants and the sampling live in [`super::exact_check`]):
 //! - two values that should be equal differ by more than 4 × the sum of their first-order running
 //!   round-off bounds ([`crate::expr::Expr::eval_bounded`]; 4 covers the neglected second-order
 //!   terms). A combination of evaluated values (σn, u·ν, σ_νν, −div σ) carries the bounds of its
-//!   terms and its own rounding ([`super::exact_check::combination`]). A correct scene's two sides
-//!   agree to round-off; a wrong sign, a wrong Lamé constant or a missing term is off by the size
-//!   of the term, orders of magnitude more;
+//!   terms and its own rounding (`exact_check::combination`). A correct scene's two sides
+//!   agree to round-off, within a quarter of the tolerance (3.7 % at worst on Williams' field,
+//!   near its r^{-1/2} tip included: a test holds it); a wrong sign, a wrong Lamé constant or a
+//!   missing term is off by the size of the term, ~10¹⁰ times a round-off tolerance;
 //! - a value on a face of Γc is the Richardson limit of its values at c ± εν, ε = 1e-4·|segment|
-//!   and ε/2, with 4 × the truncation estimate |a(ε) − a(ε/2)| added to its tolerance;
-//! - a sign condition (σ_νν ≤ 0, [u·ν] ≥ 0) fails only where the value is certainly of the wrong
-//!   sign (beyond its tolerance), and the complementarity σ_νν·[u·ν] = 0 only where the crack is
+//!   and ε/2, with 4 × the truncation estimate |a(ε) − a(ε/2)| added to its tolerance (~1e-4 of
+//!   the opening of Williams' field: a datum off by a term of its size is ~10⁴ times beyond it);
+//! - a sign condition (σ_νν ≤ 0, \[u·ν\] ≥ 0) fails only where the value is certainly of the wrong
+//!   sign (beyond its tolerance), and the complementarity σ_νν·\[u·ν\] = 0 only where the crack is
 //!   certainly open and its face certainly loaded; a zero (σ_ντ, u at a fixed point) only where
 //!   the value is certainly not 0.
 //!
@@ -289,7 +292,7 @@ fn limits(e: &dyn Fn([f64; 2]) -> Bounded, c: &CrackPoint) -> [(f64, Known); 2] 
     [1.0, -1.0].map(|side| (side, one_sided(e, c, side)))
 }
 
-/// What the scene says a crack point's opening [u·ν] is, and whether `[exact] opening` said it.
+/// What the scene says a crack point's opening \[u·ν\] is, and whether `[exact] opening` said it.
 struct Opening {
     value: Known,
     given: bool,
@@ -330,7 +333,7 @@ fn tangent(nu: [f64; 2]) -> [f64; 2] {
     [nu[1], -nu[0]]
 }
 
-/// The scene's opening and slip (given, or by the face rule) against [u·ν] and [u·τ] from the
+/// The scene's opening and slip (given, or by the face rule) against \[u·ν\] and \[u·τ\] from the
 /// faces' limits; the scene's opening for the contact conditions.
 fn check_jumps(
     exact: &ElasticExact,
@@ -370,7 +373,7 @@ fn check_jumps(
     Ok(opening.expect("the opening is the first jump"))
 }
 
-/// [σν] = 0 across Γc, σ_ντ = 0 on both faces, and the given pressure against −σ_νν.
+/// \[σν\] = 0 across Γc, σ_ντ = 0 on both faces, and the given pressure against −σ_νν.
 fn check_face_tractions(
     exact: &ElasticExact,
     c: &CrackPoint,
@@ -422,7 +425,7 @@ fn check_face_tractions(
     Ok(())
 }
 
-/// [u·ν] ≥ 0, σ_νν ≤ 0 on both faces, and σ_νν·[u·ν] = 0: a face certainly pressed where the
+/// \[u·ν\] ≥ 0, σ_νν ≤ 0 on both faces, and σ_νν·\[u·ν\] = 0: a face certainly pressed where the
 /// crack is certainly open fails.
 fn check_contact(
     exact: &ElasticExact,

@@ -58,8 +58,8 @@ pub(crate) fn williams_stress(k1: f64, k2: f64) -> [String; 3] {
     ]
 }
 
-/// Williams' jump (κ + 1)/μ·K·√(r/(2π)) across the crack behind the tip: the opening [u_y] for
-/// K = K_I, the slip [u_x] for K = K_II.
+/// Williams' jump (κ + 1)/μ·K·√(r/(2π)) across the crack behind the tip: the opening \[u_y\] for
+/// K = K_I, the slip \[u_x\] for K = K_II.
 pub(crate) fn williams_jump(k: f64, m: &Material) -> String {
     format!(
         "({} + 1)/{}*{}*sqrt(sqrt(x^2 + y^2)/(2*pi))",

@@ -234,7 +234,7 @@ impl ExactDataError {
         ExactDataError::at_key(KeyPath::keys(dotted), message)
     }
 
-    /// The error about the key `key` (which may carry an index: `data.fixed[1]`).
+    /// The error about the key `key` (which may carry an index: `data.fixed\[1\]`).
     pub(super) fn at_key(key: KeyPath, message: String) -> ExactDataError {
         ExactDataError { key, message }
     }
