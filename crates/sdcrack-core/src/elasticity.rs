@@ -1,9 +1,11 @@
 //! The elastic problem kind's data (issue 45): a 2-D linear elastic body Ω \ Γc whose crack faces
 //! may open, slide or press on each other without friction,
 //!
+//! ```text
 //!     −div σ(u) = f in Ω \ Γc,   σ(u) = λ tr ε(u) I + 2μ ε(u),
 //!     u = g on the Dirichlet parts of ∂Ω,   σn = t on the traction parts,
 //!     [u·ν] ≥ 0,  σ_νν ≤ 0,  σ_νν [u·ν] = 0,  σ_ντ = 0,  [σν] = 0   on Γc,
+//! ```
 //!
 //! with [v] = v⁺ − v⁻ and ν the crack's normal pointing into its + face (docs/scenes.md).
 //! This module owns the material ([`Material`]: plane strain or plane stress, from (E, ν) or
