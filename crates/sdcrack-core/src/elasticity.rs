@@ -1,9 +1,11 @@
 //! The elastic problem kind's data (issue 45): a 2-D linear elastic body Ω \ Γc whose crack faces
 //! may open, slide or press on each other without friction,
 //!
+//! ```text
 //!     −div σ(u) = f in Ω \ Γc,   σ(u) = λ tr ε(u) I + 2μ ε(u),
 //!     u = g on the Dirichlet parts of ∂Ω,   σn = t on the traction parts,
 //!     [u·ν] ≥ 0,  σ_νν ≤ 0,  σ_νν [u·ν] = 0,  σ_ντ = 0,  [σν] = 0   on Γc,
+//! ```
 //!
 //! with [v] = v⁺ − v⁻ and ν the crack's normal pointing into its + face (docs/scenes.md).
 //! This module owns the material ([`Material`]: plane strain or plane stress, from (E, ν) or
@@ -13,6 +15,7 @@
 //! smooth-domain solver of issue 46) take them from here.
 
 use crate::expr::{Expr, Var};
+use crate::problem::Domain;
 
 /// Plane strain (ε_zz = 0) or plane stress (σ_zz = 0).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -172,6 +175,54 @@ pub fn hooke_stress(u: &[Expr; 2], m: &Material) -> [Expr; 3] {
     })
 }
 
+/// The part that is all of ∂Ω: the only part of a `[discretization] mesh` scene.
+pub const WHOLE_BOUNDARY: &str = "boundary";
+
+/// One edge of ∂Ω, a → b with Ω on its left, and the part it belongs to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoundaryEdge {
+    /// The part: `left`, `right`, `bottom`, `top` or `edge1` … `edgeN`.
+    pub part: BoundaryPart,
+    /// First end (counter-clockwise order).
+    pub a: [f64; 2],
+    /// Second end.
+    pub b: [f64; 2],
+}
+
+impl BoundaryEdge {
+    /// The outward unit normal n of Ω on this edge: the direction a → b turned by −90°.
+    pub fn outward_normal(&self) -> [f64; 2] {
+        let (dx, dy) = (self.b[0] - self.a[0], self.b[1] - self.a[1]);
+        let l = dx.hypot(dy);
+        [dy / l, -dx / l]
+    }
+
+    /// True when the traction or Dirichlet datum of the part `part` acts on this edge: `part` is
+    /// the edge's own part or [`WHOLE_BOUNDARY`].
+    pub fn belongs_to(&self, part: &BoundaryPart) -> bool {
+        *part == self.part || part.0 == WHOLE_BOUNDARY
+    }
+}
+
+/// The edges of ∂Ω in [`Domain::polygon`]'s counter-clockwise order, each with its part: a
+/// rectangle's `bottom`, `right`, `top`, `left`; a polygon's `edge1` … `edgeN`, edge k from the
+/// k-th vertex of the polygon as stored (counter-clockwise from the scene's first vertex: a
+/// polygon written clockwise is stored with its other vertices reversed) to the next.
+pub fn boundary_edges(domain: &Domain) -> Vec<BoundaryEdge> {
+    let polygon = domain.polygon();
+    let name = |k: usize| match domain {
+        Domain::Rectangle(_) => ["bottom", "right", "top", "left"][k].to_string(),
+        Domain::Polygon(_) => format!("edge{}", k + 1),
+    };
+    (0..polygon.len())
+        .map(|k| BoundaryEdge {
+            part: BoundaryPart(name(k)),
+            a: polygon[k],
+            b: polygon[(k + 1) % polygon.len()],
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -209,5 +260,35 @@ mod tests {
         assert!((sxx.eval(x, y) - (2.0 * tr + 2.0 * x * y)).abs() < 1e-14);
         assert!((syy.eval(x, y) - (2.0 * tr - 2.0 * y)).abs() < 1e-14);
         assert!((sxy.eval(x, y) - 0.5 * (x * x + 1.0)).abs() < 1e-14);
+    }
+
+    #[test]
+    fn a_rectangles_sides_and_a_polygons_edges_with_their_outward_normals() {
+        let r = Domain::Rectangle(crate::problem::Rectangle {
+            min: [-1.0, -2.0],
+            max: [3.0, 4.0],
+        });
+        let edges = boundary_edges(&r);
+        let seen: Vec<_> = (edges.iter())
+            .map(|e| (e.part.0.as_str(), e.outward_normal()))
+            .collect();
+        assert_eq!(
+            seen,
+            [
+                ("bottom", [0.0, -1.0]),
+                ("right", [1.0, 0.0]),
+                ("top", [0.0, 1.0]),
+                ("left", [-1.0, 0.0]),
+            ]
+        );
+        assert_eq!((edges[3].a, edges[3].b), ([-1.0, 4.0], [-1.0, -2.0]));
+        let whole = BoundaryPart(WHOLE_BOUNDARY.into());
+        assert!(edges.iter().all(|e| e.belongs_to(&whole)));
+        assert!(!edges[0].belongs_to(&BoundaryPart("top".into())));
+        let triangle = Domain::Polygon(vec![[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]]);
+        let edges = boundary_edges(&triangle);
+        assert_eq!(edges[1].part, BoundaryPart("edge2".into()));
+        let n = edges[1].outward_normal();
+        assert!((n[0] - 0.5f64.sqrt()).abs() < 1e-15 && (n[1] - 0.5f64.sqrt()).abs() < 1e-15);
     }
 }

@@ -2,8 +2,13 @@
 //! format and its validation live in sdcrack-io's `scene_file`, which builds this struct; the
 //! study ([`crate::study`]) runs it. This file only declares the parts and re-exports them: the
 //! scene ([`validated`]), its limits ([`limits`]), its `[verification]` settings, the exact data's
-//! checks and the key paths its errors carry.
+//! checks (scalar and elastic, on their common ground [`exact_check`]) and the key paths its
+//! errors carry.
 
+pub mod elastic_exact_data;
+#[cfg(test)]
+pub(crate) mod elastic_testing;
+pub mod exact_check;
 pub mod exact_data;
 pub mod key_path;
 pub mod limits;

@@ -27,209 +27,17 @@
 //! points themselves for the jump and the contact conditions. A point where a value is not finite
 //! (a singular derivative) is skipped: NaN data are refused elsewhere, at the quadrature points.
 
-use super::key_path::KeyPath;
+use super::exact_check::{
+    at, boundary_points, crack_points, face_name, interior_points, num, one_sided, CrackPoint,
+    Known,
+};
+pub use super::exact_check::{
+    ExactDataError, BOUNDARY_SAMPLES, CRACK_SAMPLES, GRID, GRID_OFFSET, LIMIT_STEP, NEAR_CRACK,
+    ROUNDOFF_SAFETY, TRUNCATION_SAFETY,
+};
 use super::validated::Scene;
 use crate::expr::Var;
-use crate::geometry::{point_in_polygon, Inside};
 use crate::problem::{face_point, Exact};
-
-/// Grid points per direction over Ω's bounding box.
-pub const GRID: usize = 20;
-/// Offset of the grid points within their cells, as a fraction of a cell: 2 − φ (φ the golden
-/// ratio), irrational, so that the points miss the lines x, y = simple fractions of the box.
-pub const GRID_OFFSET: f64 = 0.381_966_011_250_105;
-/// Samples per crack segment: the points at k/CRACK_SAMPLES of it, 0 < k < CRACK_SAMPLES.
-pub const CRACK_SAMPLES: usize = 8;
-/// Distance of the near-crack points from the crack, relative to the segment's length.
-pub const NEAR_CRACK: f64 = 1e-3;
-/// Samples per edge of ∂Ω (at (k + GRID_OFFSET)/BOUNDARY_SAMPLES of the edge).
-pub const BOUNDARY_SAMPLES: usize = 12;
-/// The larger step ε of the one-sided limits, relative to the segment's length.
-pub const LIMIT_STEP: f64 = 1e-4;
-/// Margin on the first-order round-off bounds.
-pub const ROUNDOFF_SAFETY: f64 = 4.0;
-/// Margin on the Richardson truncation estimate of a one-sided limit.
-pub const TRUNCATION_SAFETY: f64 = 4.0;
-
-/// A value with the tolerance it is known to: round-off bound plus truncation estimate.
-#[derive(Clone, Copy, Debug)]
-struct Known {
-    value: f64,
-    /// What the value may be off by: ROUNDOFF_SAFETY × round-off + TRUNCATION_SAFETY × truncation.
-    tolerance: f64,
-}
-
-impl Known {
-    fn bounded((value, roundoff): (f64, f64)) -> Known {
-        Known {
-            value,
-            tolerance: ROUNDOFF_SAFETY * roundoff,
-        }
-    }
-
-    fn judgeable(self) -> bool {
-        self.value.is_finite() && self.tolerance.is_finite()
-    }
-
-    /// Certainly different from `other` (both judgeable, apart by more than both tolerances).
-    fn differs(self, other: Known) -> bool {
-        self.judgeable()
-            && other.judgeable()
-            && (self.value - other.value).abs() > self.tolerance + other.tolerance
-    }
-
-    fn certainly_positive(self) -> bool {
-        self.judgeable() && self.value > self.tolerance
-    }
-
-    fn certainly_negative(self) -> bool {
-        self.judgeable() && self.value < -self.tolerance
-    }
-}
-
-/// A number as the messages print it: six significant digits.
-fn num(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
-        let s = format!("{v:.6}");
-        let s = if s.contains('.') {
-            s.trim_end_matches('0').trim_end_matches('.').to_string()
-        } else {
-            s
-        };
-        if s == "-0" {
-            "0".into()
-        } else {
-            s
-        }
-    } else {
-        format!("{v:.5e}")
-    }
-}
-
-fn at(p: [f64; 2]) -> String {
-    format!("({}, {})", num(p[0]), num(p[1]))
-}
-
-/// One point of a crack: where it is, the normal ν of its segment and the segment's length.
-struct CrackPoint {
-    p: [f64; 2],
-    normal: [f64; 2],
-    length: f64,
-}
-
-fn crack_points(scene: &Scene) -> Vec<CrackPoint> {
-    let mut out = Vec::new();
-    for crack in &scene.cracks {
-        for k in 0..crack.segments() {
-            let s = crack.segment(k);
-            for i in 1..CRACK_SAMPLES {
-                let t = i as f64 / CRACK_SAMPLES as f64;
-                out.push(CrackPoint {
-                    p: [
-                        s.a[0] + t * (s.b[0] - s.a[0]),
-                        s.a[1] + t * (s.b[1] - s.a[1]),
-                    ],
-                    normal: s.normal(),
-                    length: s.length(),
-                });
-            }
-        }
-    }
-    out
-}
-
-/// The grid points inside Ω, then the points beside every crack on both faces.
-fn interior_points(scene: &Scene) -> Vec<[f64; 2]> {
-    let polygon = scene.domain.polygon();
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for v in &polygon {
-        for d in 0..2 {
-            lo[d] = lo[d].min(v[d]);
-            hi[d] = hi[d].max(v[d]);
-        }
-    }
-    let mut out = Vec::new();
-    for i in 0..GRID {
-        for j in 0..GRID {
-            let p = [
-                lo[0] + (i as f64 + GRID_OFFSET) / GRID as f64 * (hi[0] - lo[0]),
-                lo[1] + (j as f64 + GRID_OFFSET) / GRID as f64 * (hi[1] - lo[1]),
-            ];
-            if point_in_polygon(p, &polygon) == Inside::Inside {
-                out.push(p);
-            }
-        }
-    }
-    for c in crack_points(scene) {
-        for side in [1.0, -1.0] {
-            let d = side * NEAR_CRACK * c.length;
-            out.push([c.p[0] + d * c.normal[0], c.p[1] + d * c.normal[1]]);
-        }
-    }
-    out
-}
-
-fn boundary_points(scene: &Scene) -> Vec<[f64; 2]> {
-    let polygon = scene.domain.polygon();
-    let mut out = Vec::new();
-    for (k, a) in polygon.iter().enumerate() {
-        let b = polygon[(k + 1) % polygon.len()];
-        for i in 0..BOUNDARY_SAMPLES {
-            let t = (i as f64 + GRID_OFFSET) / BOUNDARY_SAMPLES as f64;
-            out.push([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]);
-        }
-    }
-    out
-}
-
-/// The limit of `e` at the crack point `c` from the face `side` (+1: the side ν points into),
-/// extrapolated from c + side·ε·ν at ε and ε/2 (see the module docs).
-fn one_sided(e: &dyn Fn([f64; 2]) -> (f64, f64), c: &CrackPoint, side: f64) -> Known {
-    let sample = |eps: f64| {
-        let d = side * eps;
-        e([c.p[0] + d * c.normal[0], c.p[1] + d * c.normal[1]])
-    };
-    let eps = LIMIT_STEP * c.length;
-    let (a1, e1) = sample(eps);
-    let (a2, e2) = sample(eps / 2.0);
-    Known {
-        value: 2.0 * a2 - a1,
-        tolerance: ROUNDOFF_SAFETY * (2.0 * e2 + e1) + TRUNCATION_SAFETY * (a1 - a2).abs(),
-    }
-}
-
-fn face_name(side: f64) -> &'static str {
-    if side > 0.0 {
-        "+"
-    } else {
-        "−"
-    }
-}
-
-/// Exact data that is not a solution of the scene's problem: the key it is about and one line
-/// naming that key first (`exact.px is not ∂u/∂x: …`), the values and the point.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ExactDataError {
-    /// The key the message is about (`exact.px`, `data.f`, …).
-    pub key: KeyPath,
-    /// The message, naming the key first.
-    pub message: String,
-}
-
-impl ExactDataError {
-    fn new(key: &str, message: String) -> ExactDataError {
-        ExactDataError {
-            key: KeyPath::keys(key),
-            message,
-        }
-    }
-}
-
-impl std::fmt::Display for ExactDataError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.message)
-    }
-}
 
 /// Checks the scene's `[exact]` data (nothing to check without it).
 pub fn check(scene: &Scene) -> Result<(), ExactDataError> {
@@ -248,7 +56,7 @@ fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
         ("exact.py", &exact.py, Var::Y, "∂u/∂y"),
     ] {
         let derivative = exact.u.derivative(var);
-        for p in interior_points(scene) {
+        for p in interior_points(&scene.domain, &scene.cracks) {
             let g = Known::bounded(given.eval_bounded(p[0], p[1]));
             let d = Known::bounded(derivative.eval_bounded(p[0], p[1]));
             if g.differs(d) {
@@ -271,7 +79,7 @@ fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
 fn check_source(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     let uxx = exact.u.derivative(Var::X).derivative(Var::X);
     let uyy = exact.u.derivative(Var::Y).derivative(Var::Y);
-    for p in interior_points(scene) {
+    for p in interior_points(&scene.domain, &scene.cracks) {
         let f = Known::bounded(scene.f.eval_bounded(p[0], p[1]));
         let (a, ea) = uxx.eval_bounded(p[0], p[1]);
         let (b, eb) = uyy.eval_bounded(p[0], p[1]);
@@ -296,7 +104,7 @@ fn check_source(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
 }
 
 fn check_boundary(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
-    for p in boundary_points(scene) {
+    for p in boundary_points(&scene.domain) {
         let g = Known::bounded(scene.g.eval_bounded(p[0], p[1]));
         let u = Known::bounded(exact.u.eval_bounded(p[0], p[1]));
         if g.differs(u) {
@@ -335,7 +143,7 @@ fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
         None => ("exact.u", "u⁺ − u⁻ by the face rule"),
     };
     let u = |q: [f64; 2]| exact.u.eval_bounded(q[0], q[1]);
-    for c in crack_points(scene) {
+    for c in crack_points(&scene.cracks) {
         let nu = c.normal;
         let flux = |q: [f64; 2]| {
             let (px, ex) = exact.px.eval_bounded(q[0], q[1]);
@@ -348,10 +156,7 @@ fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
         };
         let jump = scene_jump(exact, &c);
         let (u_plus, u_minus) = (one_sided(&u, &c, 1.0), one_sided(&u, &c, -1.0));
-        let limits = Known {
-            value: u_plus.value - u_minus.value,
-            tolerance: u_plus.tolerance + u_minus.tolerance,
-        };
+        let limits = u_plus.minus(u_minus);
         let where_ = format!("at {} (ν = {})", at(c.p), at(nu));
         if jump.differs(limits) {
             return Err(ExactDataError::new(jump_key, format!(
@@ -406,8 +211,9 @@ fn check_crack(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
 
 #[cfg(test)]
 mod tests {
-    use super::{check, KeyPath};
+    use super::check;
     use crate::scene::testing::scene;
+    use crate::scene::KeyPath;
 
     const W: &str = "max(0.25 - x^2, 0)^3";
     /// W'' for W = max(1/4 − x², 0)³: −6·max(…)² + 24x²·max(…).
