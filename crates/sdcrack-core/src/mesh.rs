@@ -33,7 +33,7 @@ mod tests_mouths;
 mod triangulation;
 
 pub use error::MeshError;
-pub use source::{msh_file_geometry, CoarseProvenance, MeshSource};
+pub use source::{msh_file_geometry, msh_file_geometry_with, CoarseProvenance, MeshSource};
 pub use triangulation::{
     centroid, frame_directions, CrackChain, Layout, Mesh, PCorner, PTopology, Side, UTopology,
 };

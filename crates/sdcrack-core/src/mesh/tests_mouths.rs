@@ -19,6 +19,11 @@ fn on_square_boundary(p: [f64; 2]) -> bool {
     p[0].abs() == 1.0 || p[1].abs() == 1.0
 }
 
+fn on_l_boundary(p: [f64; 2]) -> bool {
+    crate::geometry::point_in_polygon(p, &crate::geometry::L_SHAPE)
+        == crate::geometry::Inside::OnBoundary
+}
+
 /// The cracked mesh (the `broken` u numbering) is a conforming triangulation of Ω \ Γc: every
 /// edge in at most two triangles, and its boundary — the edges of one triangle — is exactly the
 /// boundary edges in cracked numbering ([`Mesh::boundary_edge_dofs`]) and both faces of every
@@ -65,6 +70,14 @@ pub(super) fn assert_cracked_mesh_conforms(m: &Mesh) {
 
 /// Every mouth's two copies sit on ∂Ω and the two boundary edges at the mouth take one copy each.
 fn assert_mouths_doubled(m: &Mesh, expected_mouths: &[[bool; 2]]) {
+    assert_mouths_doubled_on(m, expected_mouths, on_square_boundary);
+}
+
+fn assert_mouths_doubled_on(
+    m: &Mesh,
+    expected_mouths: &[[bool; 2]],
+    on_boundary: fn([f64; 2]) -> bool,
+) {
     let topo = m.u_topology(USpace::Broken);
     let found: Vec<[bool; 2]> = m.cracks.iter().map(|c| c.mouths).collect();
     assert_eq!(found, expected_mouths);
@@ -81,7 +94,7 @@ fn assert_mouths_doubled(m: &Mesh, expected_mouths: &[[bool; 2]]) {
             }
             assert_ne!(plus, minus, "a mouth is doubled");
             assert_eq!((topo.dof_vertex[plus], topo.dof_vertex[minus]), (v, v));
-            assert!(on_square_boundary(m.vertices[v]));
+            assert!(on_boundary(m.vertices[v]));
             let at: Vec<usize> = bdofs
                 .iter()
                 .flatten()
@@ -243,4 +256,77 @@ fn grading_refines_towards_tips_never_towards_mouths() {
     let m = &levels[1];
     let first = m.cracks[0].nodes[0];
     assert!(smallest_at(m, first) <= 0.5 * uniform_h / 2.0);
+}
+
+fn polylines(cracks: &[&[[f64; 2]]]) -> Vec<Polyline> {
+    cracks
+        .iter()
+        .map(|c| Polyline { points: c.to_vec() })
+        .collect()
+}
+
+#[test]
+fn gmsh_levels_with_mouths_are_cut_through_refined_and_graded() {
+    if gmsh::gmsh_version().is_err() {
+        println!("skipping: gmsh is not installed");
+        return;
+    }
+    let domain = crate::problem::Domain::Polygon(crate::geometry::L_SHAPE.to_vec());
+    let cracks = polylines(&[
+        &[[0.5, 0.0], [0.5, -0.5]],
+        &[[-0.5, 1.0], [-0.5, 0.5], [0.0, 0.5]],
+    ]);
+    let mouths = [[true, false], [true, true]];
+    let source =
+        MeshSource::new(&domain, &cracks, &crate::problem::Meshing::MeshSize(0.4)).expect("gmsh");
+    for level in 0..2 {
+        let m = source.level(level).expect("level");
+        assert_mouths_doubled_on(&m, &mouths, on_l_boundary);
+        assert_cracked_mesh_conforms(&m);
+    }
+    let graded = source.graded(Some(Grading {
+        beta: 0.4,
+        radius: 0.25,
+    }));
+    let m = graded.level(1).expect("graded level");
+    assert_mouths_doubled_on(&m, &mouths, on_l_boundary);
+    assert_cracked_mesh_conforms(&m);
+}
+
+#[test]
+fn a_mesh_file_with_a_mouth_is_read_only_when_asked() {
+    // (−1, 1)² fanned around (0, 0), a boundary vertex at (−1, 0): crack1 from there to (0, 0)
+    let text = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n3\n1 2 \"boundary\"\n\
+        1 3 \"crack1\"\n2 1 \"domain\"\n$EndPhysicalNames\n$Nodes\n6\n1 -1 -1 0\n2 1 -1 0\n\
+        3 1 1 0\n4 -1 1 0\n5 -1 0 0\n6 0 0 0\n$EndNodes\n$Elements\n11\n1 1 2 2 2 1 2\n\
+        2 1 2 2 2 2 3\n3 1 2 2 2 3 4\n4 1 2 2 2 4 5\n5 1 2 2 2 5 1\n6 1 2 3 3 5 6\n\
+        7 2 2 1 1 1 2 6\n8 2 2 1 1 2 3 6\n9 2 2 1 1 3 4 6\n10 2 2 1 1 4 5 6\n\
+        11 2 2 1 1 5 1 6\n$EndElements\n";
+    let dir = std::env::temp_dir().join(format!("sdcrack-mouth-msh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("mouth.msh");
+    std::fs::write(&path, text).unwrap();
+    let scalar = msh_file_geometry(&path).unwrap_err().to_string();
+    assert!(
+        scalar.contains("crack1 touches the boundary at vertex (-1, 0)"),
+        "{scalar}"
+    );
+    let (domain, cracks, triangles) =
+        msh_file_geometry_with(&path, crate::geometry::CrackEnds::MayBeMouths).expect("a mouth");
+    assert_eq!(triangles, 5);
+    assert_eq!(cracks[0].points, vec![[-1.0, 0.0], [0.0, 0.0]]);
+    let meshing = crate::problem::Meshing::File(path.clone());
+    let source = MeshSource::new(&domain, &cracks, &meshing).expect("levels");
+    for level in 0..3 {
+        let m = source.level(level).expect("level");
+        assert_mouths_doubled(&m, &[[true, false]]);
+        assert_cracked_mesh_conforms(&m);
+    }
+    // a crack ending at a corner of the file's boundary is refused by the geometry check:
+    // (−1, −1) moved to (−1/2, −1) makes (−1, 0) a corner
+    std::fs::write(&path, text.replace("1 -1 -1 0", "1 -0.5 -1 0")).unwrap();
+    let corner = msh_file_geometry_with(&path, crate::geometry::CrackEnds::MayBeMouths);
+    let _ = std::fs::remove_dir_all(&dir);
+    let corner = corner.unwrap_err().to_string();
+    assert!(corner.contains("is a corner of the domain"), "{corner}");
 }
