@@ -21,6 +21,7 @@
 //! it ([`Mesh::boundary_edge_dofs`]).
 
 pub mod bisect;
+mod boundary_parts;
 mod error;
 pub mod gmsh;
 pub mod refine;
@@ -32,6 +33,7 @@ mod tests;
 mod tests_mouths;
 mod triangulation;
 
+pub use boundary_parts::{BoundaryParts, RECTANGLE_PARTS};
 pub use error::MeshError;
 pub use source::{msh_file_geometry, msh_file_geometry_with, CoarseProvenance, MeshSource};
 pub use triangulation::{

@@ -330,3 +330,80 @@ fn a_mesh_file_with_a_mouth_is_read_only_when_asked() {
     let corner = corner.unwrap_err().to_string();
     assert!(corner.contains("is a corner of the domain"), "{corner}");
 }
+
+/// The boundary parts cover ∂Ω: each boundary edge lies on the side of its part (both ends
+/// within `tol` of it) and each part's edges add up to the side's length.
+fn assert_parts_cover(m: &Mesh, parts: &BoundaryParts, sides: &[[[f64; 2]; 2]], tol: f64) {
+    let of = parts.of_edges(m);
+    assert_eq!(of.len(), m.boundary_edges.len());
+    let mut length = vec![0.0; sides.len()];
+    let dist = |p: [f64; 2], [a, b]: [[f64; 2]; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        ((p[0] - a[0]) * dy - (p[1] - a[1]) * dx).abs() / dx.hypot(dy)
+    };
+    for (&[a, b], &k) in m.boundary_edges.iter().zip(&of) {
+        let (p, q) = (m.vertices[a], m.vertices[b]);
+        assert!(
+            dist(p, sides[k]) <= tol && dist(q, sides[k]) <= tol,
+            "{p:?}–{q:?} not on part {k}"
+        );
+        length[k] += (q[0] - p[0]).hypot(q[1] - p[1]);
+    }
+    for (k, s) in sides.iter().enumerate() {
+        let side = (s[1][0] - s[0][0]).hypot(s[1][1] - s[0][1]);
+        assert!(
+            (length[k] - side).abs() <= 1e-12 * side,
+            "part {k}: {} of {side}",
+            length[k]
+        );
+    }
+}
+
+#[test]
+fn boundary_parts_cover_the_rectangle_the_polygon_and_a_mesh_file() {
+    let rect = crate::problem::Domain::Rectangle(UNIT_SQUARE);
+    let parts = BoundaryParts::of(&rect, &crate::problem::Meshing::Cells([4, 4]));
+    assert_eq!(parts.names(), ["left", "right", "bottom", "top"]);
+    assert_eq!(parts.index("top"), Some(3));
+    assert_eq!(parts.index("edge1"), None);
+    let (lo, hi) = (-1.0, 1.0);
+    let sides = [
+        [[lo, lo], [lo, hi]],
+        [[hi, lo], [hi, hi]],
+        [[lo, lo], [hi, lo]],
+        [[lo, hi], [hi, hi]],
+    ];
+    let coarse = grid([4, 4], &[&[[-1.0, 0.0], [0.0, 0.0]]], 0);
+    let graded = bisect::graded_levels(
+        &coarse,
+        Grading {
+            beta: 0.4,
+            radius: 0.25,
+        },
+        1,
+    )
+    .expect("graded");
+    for m in [coarse.clone(), refine::refine(&coarse), graded[1].clone()] {
+        // the sides are exact: grid coordinates and midpoints of side edges
+        assert_parts_cover(&m, &parts, &sides, 0.0);
+    }
+    let l_shape = crate::geometry::L_SHAPE.to_vec();
+    let domain = crate::problem::Domain::Polygon(l_shape.clone());
+    let parts = BoundaryParts::of(&domain, &crate::problem::Meshing::MeshSize(0.4));
+    assert_eq!(parts.names().len(), 6);
+    assert_eq!(parts.index("edge6"), Some(5));
+    let file = BoundaryParts::of(&domain, &crate::problem::Meshing::File("m.msh".into()));
+    assert_eq!(file.names(), ["boundary"]);
+    if gmsh::gmsh_version().is_ok() {
+        let cracks = polylines(&[&[[0.5, 0.0], [0.5, -0.5]]]);
+        let source = MeshSource::new(&domain, &cracks, &crate::problem::Meshing::MeshSize(0.4))
+            .expect("gmsh");
+        let sides: Vec<[[f64; 2]; 2]> =
+            (0..6).map(|k| [l_shape[k], l_shape[(k + 1) % 6]]).collect();
+        for level in 0..2 {
+            let m = source.level(level).expect("level");
+            assert_parts_cover(&m, &parts, &sides, 1e-15);
+            assert!(file.of_edges(&m).iter().all(|&k| k == 0));
+        }
+    }
+}
