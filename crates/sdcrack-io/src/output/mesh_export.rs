@@ -12,20 +12,30 @@
 //!                                 triangle 4t + c of level L+1 lies in triangle t of level L;
 //!                                 "graded": graded towards the tips, see parents.txt),
 //!                                 h, coarse_triangles, n_cracks, n_vertices, n_uncut_vertices,
-//!                                 n_triangles, and normal for one straight crack
+//!                                 n_triangles, and normal for one straight crack; with
+//!                                 boundary parts: boundary_parts, the part names
+//!                                 ([`sdcrack_core::mesh::BoundaryParts`])
 //! DIR/level{L}/vertices.txt       x y   — the CRACKED mesh: uncut vertices, then a − copy of every
 //!                                         interior crack node (same coordinates)
 //! DIR/level{L}/triangles.txt      a b c — cracked numbering, counter-clockwise (− side uses − copies)
 //! DIR/level{L}/vertices_uncut.txt x y   — the uncut mesh
 //! DIR/level{L}/triangles_uncut.txt a b c
 //! DIR/level{L}/crack.txt          plus minus — per crack node, cracks concatenated, each from its
-//!                                 first tip to its last (tips: plus = minus)
-//! DIR/level{L}/cracks.txt         first n — per crack: its rows of crack.txt
+//!                                 first end to its last (tips: plus = minus; a mouth, a crack end
+//!                                 on ∂Ω, is doubled: plus ≠ minus, both on ∂Ω)
+//! DIR/level{L}/cracks.txt         first n — per crack: its rows of crack.txt; a crack with a
+//!                                 mouth: first n tip_first tip_last (1 = that end is a tip,
+//!                                 0 = a mouth)
 //! DIR/level{L}/crack_normals.txt  nx ny — per crack.txt row: the node's normal ν̄ (the edge
 //!                                 normal; at a kink the normalised ℓ-weighted mean of the two)
-//! DIR/level{L}/boundary.txt       one vertex per line: the vertices on Γ
+//! DIR/level{L}/boundary.txt       one vertex per line: the vertices on Γ (cracked numbering:
+//!                                 both copies of a mouth)
 //! DIR/level{L}/sides.txt          per triangle, per corner: 1 (+ face), -1 (− face), 0 (the
-//!                                 corner is not an interior crack node)
+//!                                 corner is not a doubled crack node: an interior node or a mouth)
+//! DIR/level{L}/boundary_edges.txt v0 v1 part — with MeshExportOptions::boundary_parts (elastic
+//!                                 scenes): per boundary edge, counter-clockwise along Γ, its
+//!                                 cracked-mesh vertices (at a mouth, its own face's copy) and the
+//!                                 index of its part in mesh.json's "boundary_parts"
 //! DIR/level{L}/parents.txt        "graded" levels L > 0: per triangle, the triangle of level L−1
 //!                                 it lies in
 //! ```
@@ -36,7 +46,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use sdcrack_core::mesh::{Layout, Mesh, MeshError, Side};
+use sdcrack_core::mesh::{BoundaryParts, Layout, Mesh, MeshError, Side};
 use sdcrack_core::multiplier::CrackOperators;
 use sdcrack_core::problem::{Domain, Meshing, USpace};
 use sdcrack_core::scene::Scene;
@@ -122,12 +132,23 @@ fn scene_json(scene: &Scene) -> serde_json::Value {
     json
 }
 
-fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
+/// What the export writes beyond the scalar problem's files (all off: the scalar export).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MeshExportOptions {
+    /// `level{L}/boundary_edges.txt` and mesh.json's `"boundary_parts"` (elastic scenes).
+    pub boundary_parts: bool,
+}
+
+fn write_level(dir: &Path, mesh: &Mesh, parts: Option<&BoundaryParts>) -> Result<(), ExportError> {
     std::fs::create_dir(dir).map_err(io(dir))?;
     let topo = mesh.u_topology(USpace::Broken);
     let points: Vec<[f64; 2]> = topo.dof_vertex.iter().map(|&v| mesh.vertices[v]).collect();
-    let mut boundary: Vec<usize> = mesh.boundary_edges.iter().map(|e| e[0]).collect();
+    let boundary_edges = mesh.boundary_edge_dofs(&topo);
+    // Γ's vertices in the cracked mesh: both ends of its edges (a mouth's two copies end and
+    // start the edges of its two faces; without a mouth every vertex starts one edge)
+    let mut boundary: Vec<usize> = boundary_edges.iter().flatten().copied().collect();
     boundary.sort_unstable();
+    boundary.dedup();
     let side = |s: &Option<Side>| match s {
         Some(Side::Plus) => 1,
         Some(Side::Minus) => -1,
@@ -161,6 +182,19 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
             meta["normal"] = serde_json::json!(c.normals[0]);
         }
     }
+    if let Some(parts) = parts {
+        meta["boundary_parts"] = serde_json::json!(parts.names());
+    }
+    // per crack: its rows of crack.txt, and which ends are tips when one is a mouth
+    let crack_rows: Vec<String> = ops
+        .crack_nodes
+        .iter()
+        .zip(&mesh.cracks)
+        .map(|((first, n), c)| match c.mouths {
+            [false, false] => format!("{first} {n}"),
+            [m0, m1] => format!("{first} {n} {} {}", u8::from(!m0), u8::from(!m1)),
+        })
+        .collect();
     let files: [(&str, String); 10] = [
         ("mesh.json", format!("{meta:#}\n")),
         ("vertices.txt", points_text(&points)),
@@ -179,12 +213,7 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
                 let _ = write!(s, "{v}");
             }),
         ),
-        (
-            "cracks.txt",
-            lines(&ops.crack_nodes, |s, (first, n)| {
-                let _ = write!(s, "{first} {n}");
-            }),
-        ),
+        ("cracks.txt", lines(&crack_rows, |s, row| s.push_str(row))),
         ("crack_normals.txt", points_text(&ops.node_normals())),
         (
             "sides.txt",
@@ -198,6 +227,15 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
         let path = dir.join(name);
         std::fs::write(&path, text).map_err(io(&path))?;
     }
+    if let Some(parts) = parts {
+        let path = dir.join("boundary_edges.txt");
+        let of = parts.of_edges(mesh);
+        let rows: Vec<(&[usize; 2], &usize)> = boundary_edges.iter().zip(&of).collect();
+        let text = lines(&rows, |s, ([a, b], k)| {
+            let _ = write!(s, "{a} {b} {k}");
+        });
+        std::fs::write(&path, text).map_err(io(&path))?;
+    }
     if !mesh.parents.is_empty() {
         let path = dir.join("parents.txt");
         let text = lines(&mesh.parents, |s, p| {
@@ -208,8 +246,19 @@ fn write_level(dir: &Path, mesh: &Mesh) -> Result<(), ExportError> {
     Ok(())
 }
 
-/// Writes the export of every level of `scene` (or only `levels` when given) into `out`.
+/// Writes the export of every level of `scene` (or only `levels` when given) into `out`: the
+/// scalar problem's files ([`export_meshes_with`] and no options).
 pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBuf, ExportError> {
+    export_meshes_with(scene, levels, out, MeshExportOptions::default())
+}
+
+/// [`export_meshes`] with the extra files `options` asks for.
+pub fn export_meshes_with(
+    scene: &Scene,
+    levels: &[u32],
+    out: &Path,
+    options: MeshExportOptions,
+) -> Result<PathBuf, ExportError> {
     if out.exists() {
         return Err(ExportError::Exists(out.to_path_buf()));
     }
@@ -226,9 +275,12 @@ pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBu
         let path = tmp.join("scene.json");
         std::fs::write(&path, format!("{json:#}\n")).map_err(io(&path))?;
         let source = scene.mesh_source()?;
+        let parts = options
+            .boundary_parts
+            .then(|| BoundaryParts::of(&scene.domain, &scene.meshing));
         for &level in levels {
             let mesh = source.level(level)?;
-            write_level(&tmp.join(format!("level{level}")), &mesh)?;
+            write_level(&tmp.join(format!("level{level}")), &mesh, parts.as_ref())?;
         }
         Ok(())
     })?;
