@@ -336,4 +336,111 @@ mod tests {
             "never overwrites"
         );
     }
+
+    fn read_rows(path: &Path) -> Vec<Vec<i64>> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .map(|l| l.split(' ').map(|t| t.parse().unwrap()).collect())
+            .collect()
+    }
+
+    /// The default scene cut by an edge crack from (−1, 0) (a mouth) to (0, 0) (a tip).
+    fn edge_crack_scene() -> Scene {
+        let mut scene = Scene::default_scene();
+        scene.domain = Domain::Rectangle(sdcrack_core::problem::Rectangle {
+            min: [-1.0, -1.0],
+            max: [1.0, 1.0],
+        });
+        scene.cracks = vec![sdcrack_core::problem::Polyline {
+            points: vec![[-1.0, 0.0], [0.0, 0.0]],
+        }];
+        scene.meshing = Meshing::Cells([4, 4]);
+        scene.grading = None;
+        scene
+    }
+
+    #[test]
+    fn a_mouth_is_exported_doubled_with_its_boundary_edges_split_between_faces() {
+        let scene = edge_crack_scene();
+        let root = tempfile::tempdir().unwrap();
+        let out = root.path().join("m");
+        let options = MeshExportOptions {
+            boundary_parts: true,
+        };
+        export_meshes_with(&scene, &[0, 1], &out, options).unwrap();
+        for level in [0, 1] {
+            let lvl = out.join(format!("level{level}"));
+            let n = 2 << level; // crack edges: from x = −1 to 0 on 4·2^level cells of (−1, 1)
+            assert_eq!(
+                read_rows(&lvl.join("cracks.txt")),
+                vec![vec![0, n + 1, 0, 1]]
+            );
+            let crack = read_rows(&lvl.join("crack.txt"));
+            let (plus, minus) = (crack[0][0], crack[0][1]);
+            assert_ne!(plus, minus, "the mouth is doubled");
+            let tip = &crack[crack.len() - 1];
+            assert_eq!(tip[0], tip[1], "the tip is not");
+            let verts = std::fs::read_to_string(lvl.join("vertices.txt")).unwrap();
+            let verts: Vec<&str> = verts.lines().collect();
+            assert_eq!(verts[plus as usize], verts[minus as usize]);
+            let meta: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(lvl.join("mesh.json")).unwrap())
+                    .unwrap();
+            assert_eq!(
+                meta["boundary_parts"],
+                serde_json::json!(["left", "right", "bottom", "top"])
+            );
+            let edges = read_rows(&lvl.join("boundary_edges.txt"));
+            assert_eq!(edges.len(), 4 * (4 << level));
+            // the mouth's two edges, both on `left`: the one above takes the + copy
+            let at: Vec<&Vec<i64>> = edges
+                .iter()
+                .filter(|e| e[..2].contains(&plus) || e[..2].contains(&minus))
+                .collect();
+            assert_eq!(at.len(), 2);
+            assert!(at.iter().all(|e| e[2] == 0), "{at:?}");
+            let y = |v: i64| -> f64 {
+                verts[v as usize]
+                    .split(' ')
+                    .nth(1)
+                    .unwrap()
+                    .parse()
+                    .unwrap()
+            };
+            for e in at {
+                let other = if e[0] == plus || e[0] == minus {
+                    e[1]
+                } else {
+                    e[0]
+                };
+                let copy = if y(other) > 0.0 { plus } else { minus };
+                assert!(e[..2].contains(&copy), "{e:?}");
+            }
+            let boundary: Vec<i64> = read_rows(&lvl.join("boundary.txt")).concat();
+            assert!(boundary.contains(&plus) && boundary.contains(&minus));
+            assert_eq!(
+                boundary.len(),
+                edges.len() + 1,
+                "the loop is cut open at the mouth"
+            );
+        }
+        // without the option: no boundary_edges.txt, no boundary_parts
+        let plain = root.path().join("plain");
+        export_meshes(&scene, &[0], &plain).unwrap();
+        assert!(!plain.join("level0/boundary_edges.txt").exists());
+        let meta = std::fs::read_to_string(plain.join("level0/mesh.json")).unwrap();
+        assert!(!meta.contains("boundary_parts"));
+    }
+
+    #[test]
+    fn a_scalar_export_keeps_two_columns_and_no_boundary_edges() {
+        let scene = Scene::default_scene();
+        let root = tempfile::tempdir().unwrap();
+        let out = root.path().join("m");
+        export_meshes(&scene, &[0], &out).unwrap();
+        let rows = read_rows(&out.join("level0/cracks.txt"));
+        assert!(rows.iter().all(|r| r.len() == 2), "{rows:?}");
+        assert!(!out.join("level0/boundary_edges.txt").exists());
+    }
 }
