@@ -443,4 +443,60 @@ mod tests {
         assert!(rows.iter().all(|r| r.len() == 2), "{rows:?}");
         assert!(!out.join("level0/boundary_edges.txt").exists());
     }
+
+    /// The export of [`edge_crack_scene`] (levels 0, 1, boundary parts) that
+    /// compare/tests/test_edge_crack_export.py reads: this test fails when the committed copy is
+    /// not what the exporter writes (SDCRACK_WRITE_FIXTURES=1 rewrites it).
+    #[test]
+    fn the_committed_edge_crack_export_is_the_exporters() {
+        let fixture = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../compare/tests/data/edge-crack-export");
+        let root = tempfile::tempdir().unwrap();
+        let out = root.path().join("m");
+        let options = MeshExportOptions {
+            boundary_parts: true,
+        };
+        export_meshes_with(&edge_crack_scene(), &[0, 1], &out, options).unwrap();
+        let files = |dir: &Path| -> Vec<(String, Vec<u8>)> {
+            let mut all = Vec::new();
+            for sub in ["", "level0", "level1"] {
+                let d = dir.join(sub);
+                let mut names: Vec<_> = std::fs::read_dir(&d)
+                    .unwrap()
+                    .map(|e| e.unwrap().path())
+                    .filter(|p| p.is_file())
+                    .collect();
+                names.sort();
+                for p in names {
+                    let name = format!("{sub}/{}", p.file_name().unwrap().to_string_lossy());
+                    all.push((name, std::fs::read(&p).unwrap()));
+                }
+            }
+            all
+        };
+        if std::env::var_os("SDCRACK_WRITE_FIXTURES").is_some() {
+            let _ = std::fs::remove_dir_all(&fixture);
+            std::fs::create_dir_all(fixture.parent().unwrap()).unwrap();
+            copy_dir(&out, &fixture);
+        }
+        let (fresh, committed) = (files(&out), files(&fixture));
+        let names = |v: &[(String, Vec<u8>)]| v.iter().map(|f| f.0.clone()).collect::<Vec<_>>();
+        assert_eq!(names(&fresh), names(&committed));
+        for ((name, a), (_, b)) in fresh.iter().zip(&committed) {
+            assert!(a == b, "{name} differs from the committed fixture");
+        }
+    }
+
+    fn copy_dir(from: &Path, to: &Path) {
+        std::fs::create_dir_all(to).unwrap();
+        for e in std::fs::read_dir(from).unwrap() {
+            let p = e.unwrap().path();
+            let target = to.join(p.file_name().unwrap());
+            if p.is_dir() {
+                copy_dir(&p, &target);
+            } else {
+                std::fs::copy(&p, &target).unwrap();
+            }
+        }
+    }
 }
