@@ -93,6 +93,18 @@ pub fn validate_cracks_with(
     check_cracks_disjoint(cracks)
 }
 
+/// The crack tips of a validated geometry in the tips' order of docs/elasticity.md: for each
+/// crack its first point, then its last, each unless it lies on ∂Ω (a mouth). The mesh's own
+/// [`crate::mesh::Mesh::tips`] lists the same points in the same order.
+pub fn crack_tips(polygon: &[[f64; 2]], cracks: &[Vec<[f64; 2]>]) -> Vec<[f64; 2]> {
+    cracks
+        .iter()
+        .filter(|c| !c.is_empty())
+        .flat_map(|c| [c[0], c[c.len() - 1]])
+        .filter(|&p| point_in_polygon(p, polygon) != Inside::OnBoundary)
+        .collect()
+}
+
 // ---------------------------------------------------------------------------------------------
 // Polygon checks
 

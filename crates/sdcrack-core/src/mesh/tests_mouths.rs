@@ -171,7 +171,15 @@ fn two_mouths_kinks_and_several_cracks_on_the_grid() {
         let m = grid([8, 8], &[through, kinked, inside], level);
         assert_mouths_doubled(&m, &[[true, true], [true, false], [false, false]]);
         assert_cracked_mesh_conforms(&m);
-        assert_eq!(m.tips().len(), 3);
+        // the tips, in order: the kinked crack's last point, the interior crack's two
+        let tips: Vec<[f64; 2]> = m.tips().iter().map(|&v| m.vertices[v]).collect();
+        assert_eq!(tips, vec![[0.0, 0.0], [-0.5, 0.5], [-0.25, 0.5]]);
+        let square = crate::problem::Domain::Rectangle(UNIT_SQUARE).polygon();
+        let lines: Vec<Vec<[f64; 2]>> = [through, kinked, inside]
+            .iter()
+            .map(|c| c.to_vec())
+            .collect();
+        assert_eq!(crate::geometry::crack_tips(&square, &lines), tips);
     }
 }
 
