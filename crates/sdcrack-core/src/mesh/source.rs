@@ -177,9 +177,10 @@ pub fn msh_file_geometry(
 }
 
 /// [`msh_file_geometry`] with the crack ends `ends` allows. With [`CrackEnds::MayBeMouths`] a
-/// crack group's chain may end on a boundary vertex (a mouth); the polygon and polylines read
-/// are then checked as a scene's ([`crate::geometry::validate_cracks_with`]: a mouth not at a
-/// corner of the merged boundary polygon, the crack meeting ∂Ω there only).
+/// crack group's chain may end on a boundary vertex (a mouth), not at a corner of the merged
+/// boundary polygon. (Its tips: a mesh's [`crate::mesh::Mesh::tips`]; the exact predicates of
+/// [`crate::geometry::crack_tips`] need a mouth exactly on the polygon's edge, which a file's
+/// node on an inclined side need not be.)
 pub fn msh_file_geometry_with(
     path: &std::path::Path,
     ends: CrackEnds,
@@ -199,16 +200,25 @@ pub fn msh_file_geometry_with(
             points: merge_collinear(chain.iter().map(|&v| coarse.vertices[v]).collect(), false),
         })
         .collect::<Vec<Polyline>>();
-    if ends == CrackEnds::MayBeMouths {
-        let polylines: Vec<Vec<[f64; 2]>> = cracks.iter().map(|c| c.points.clone()).collect();
-        crate::geometry::validate_cracks_with(&polygon, &polylines, ends).map_err(|e| {
-            // the core names crack i `geometry.cracks[i]`; the file names it crack{i+1}
-            let mut m = e.to_string();
-            for i in (0..cracks.len()).rev() {
-                m = m.replace(&format!("geometry.cracks[{i}]"), &format!("crack{}", i + 1));
+    // A mouth is found by the mesh's topology, not by the exact predicates: a node of a straight
+    // but inclined side, printed with 16 digits, is not exactly on the merged polygon's edge.
+    // The reader checked the rest (only a chain's ends on ∂Ω, its edges interior ones, no shared
+    // vertex), which also makes the crack meet ∂Ω transversally there.
+    let on_boundary: std::collections::HashSet<usize> =
+        coarse.boundary_edges.iter().flatten().copied().collect();
+    for (c, chain) in coarse.cracks.iter().enumerate() {
+        for v in [chain[0], chain[chain.len() - 1]] {
+            let p = coarse.vertices[v];
+            if on_boundary.contains(&v) && polygon.contains(&p) {
+                return Err(MeshError::Gmsh(format!(
+                    "{}: crack{} ends at a corner of the boundary ({}, {}): a crack may end on the boundary only away from its corners",
+                    path.display(),
+                    c + 1,
+                    p[0],
+                    p[1]
+                )));
             }
-            MeshError::Gmsh(format!("{}: {}", path.display(), m))
-        })?;
+        }
     }
     Ok((Domain::Polygon(polygon), cracks, coarse.triangles.len()))
 }
