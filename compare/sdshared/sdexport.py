@@ -26,8 +26,8 @@ which has one straight crack on a structured grid):
                                          normal at every row (when the caller gives one), else the normals
                                          computed from the nodes by that rule.
     sides.txt          s0 s1 s2          per triangle, one per corner in triangles.txt order: +1 / −1 when
-                                         that corner is an interior crack node and the triangle lies on its
-                                         + / − face, 0 otherwise. Old format: one integer per triangle,
+                                         that corner is a doubled crack node (an interior node or a mouth)
+                                         and the triangle lies on its + / − face, 0 otherwise. Old format: one integer per triangle,
                                          ±1 for a triangle at an interior crack node, 0 otherwise.
     mesh.json          "kind"            "structured" (a rectangle's grid: `nx`, `ny` cells) or "refined"
                                          (level 0 from gmsh, `coarse_triangles` triangles, refined
@@ -321,7 +321,8 @@ def read_layout(level_dir, points, n_vertices, default_normal=None, copies=True)
 
 def read_sides(path, triangles, layout):
     """(T, 3) sides.txt at `path`, with the cracked `triangles` (T, 3). New format: each ±1 corner must
-    be the + / − copy of an interior crack node, each 0 corner none. Old format (one value per
+    be the + / − copy of a doubled crack node (layout.interior(): interior nodes and mouths), each 0
+    corner none. Old format (one value per
     triangle): ±1 spread to the corners at interior crack copies. Absent: None."""
     path = Path(path)
     if not path.exists():
