@@ -7,15 +7,16 @@ which has one straight crack on a structured grid):
 
     crack.txt          plus minus        per crack node: the cracked-mesh vertex on the + face and the one
                                          on the − face. The cracks' nodes are concatenated in scene order,
-                                         each crack from its first point to its last; the two tips of every
-                                         crack (its first and last row) have plus == minus, every other
-                                         node plus != minus.
+                                         each crack from its first point to its last; the tips of every
+                                         crack (its first and last row, unless that end is a mouth) have
+                                         plus == minus, every other node plus != minus. A mouth (an edge
+                                         crack's end on ∂Ω, elastic scenes) is doubled like an interior
+                                         node: plus != minus, both copies on ∂Ω.
     cracks.txt         first n           per crack: crack c is rows first..first+n−1 of crack.txt, n ≥ 2,
-                       [tip_first         the cracks in order and together covering every row.
-                        tip_last]        Absent: one crack made of all rows. Elastic exports
-                                         (docs/elasticity.md) may add two columns: 1 = that end is
-                                         a tip, 0 = a mouth (an end on ∂Ω, doubled like an interior
-                                         node: plus != minus); two columns mean both ends are tips.
+      or first n tip_first tip_last      the cracks in order and together covering every row; a crack
+                                         with a mouth has two more columns, 1 where that end is a tip and
+                                         0 where it is a mouth (two columns: both ends are tips).
+                                         Absent: one crack made of all rows.
     crack_normals.txt  nx ny             per row of crack.txt: the unit normal ν at the node. A segment's
                                          normal is its direction (node k → k+1) turned by +90°; at an
                                          interior node the normalised length-weighted mean
@@ -25,8 +26,8 @@ which has one straight crack on a structured grid):
                                          normal at every row (when the caller gives one), else the normals
                                          computed from the nodes by that rule.
     sides.txt          s0 s1 s2          per triangle, one per corner in triangles.txt order: +1 / −1 when
-                                         that corner is an interior crack node and the triangle lies on its
-                                         + / − face, 0 otherwise. Old format: one integer per triangle,
+                                         that corner is a doubled crack node (an interior node or a mouth)
+                                         and the triangle lies on its + / − face, 0 otherwise. Old format: one integer per triangle,
                                          ±1 for a triangle at an interior crack node, 0 otherwise.
     mesh.json          "kind"            "structured" (a rectangle's grid: `nx`, `ny` cells) or "refined"
                                          (level 0 from gmsh, `coarse_triangles` triangles, refined
@@ -36,6 +37,13 @@ which has one straight crack on a structured grid):
                                          newest-vertex bisection; levels L > 0 have parents.txt:
                                          per triangle, the triangle of level L−1 it lies in).
                                          Absent: "structured".
+             "boundary_parts"  [name, …]  the named parts of ∂Ω (elastic scenes): a rectangle's "left",
+                                         "right", "bottom", "top"; a polygon's "edge1" … "edgeN"; a mesh
+                                         file's "boundary".
+    boundary_edges.txt v0 v1 part        elastic scenes: per boundary edge of the cracked mesh,
+                                         counter-clockwise along ∂Ω (Ω on its left), its vertices (at a
+                                         mouth, the copy of the edge's own face) and the index of its
+                                         part in mesh.json's "boundary_parts" (read_boundary_edges).
 
 A crack's segments are the pairs of consecutive rows WITHIN it: no segment joins the last node of a
 crack to the first of the next. Errors are ExportError, one line naming the file (and the crack).
@@ -63,7 +71,7 @@ class ExportError(ValueError):
 class CrackLayout:
     """The cracks of one level: pairs (I, 2) = crack.txt, ranges [(first, n)] per crack (rows
     first..first+n−1), normals (I, 2) the unit normal ν at each row, ends [(tip_first, tip_last)]
-    per crack (None: every end a tip; False: a mouth, cracks.txt's tip flags)."""
+    per crack: whether each end is a tip (False: a mouth on ∂Ω); None: every end is a tip."""
 
     pairs: np.ndarray
     ranges: list
@@ -74,19 +82,28 @@ class CrackLayout:
     def n_cracks(self):
         return len(self.ranges)
 
+    def crack_ends(self):
+        """[(tip_first, tip_last)] per crack (True: that end is a tip)."""
+        return self.ends if self.ends is not None else [(True, True)] * len(self.ranges)
+
     def tip_rows(self):
-        """The rows of the tips: each crack's first and last row, in crack order, its mouths left out
-        (2·cracks rows when no crack has a mouth)."""
-        ends = self.ends or [(True, True)] * len(self.ranges)
-        return np.array([r for (first, n), tips in zip(self.ranges, ends)
+        """The rows of the tips, in crack order: each crack's first and last row unless that end is a
+        mouth (the tips' order of docs/elasticity.md)."""
+        return np.array([r for (first, n), tips in zip(self.ranges, self.crack_ends())
                          for r, tip in zip((first, first + n - 1), tips) if tip], dtype=np.int64)
+
+    def mouth_rows(self):
+        """The rows of the mouths (crack ends on ∂Ω, doubled), in crack order."""
+        return np.array([r for (first, n), tips in zip(self.ranges, self.crack_ends())
+                         for r, tip in zip((first, first + n - 1), tips) if not tip], dtype=np.int64)
 
     def tip_vertices(self):
         """The cracked-mesh vertices of all tips (a tip's plus == minus)."""
         return self.pairs[self.tip_rows(), 0]
 
     def interior(self):
-        """(I,) bool: rows that are not tips (their nodes have a + and a − copy; mouths included)."""
+        """(I,) bool: rows that are not tips (their nodes have a + and a − copy: the interior crack
+        nodes and the mouths)."""
         mask = np.ones(len(self.pairs), dtype=bool)
         mask[self.tip_rows()] = False
         return mask
@@ -166,59 +183,80 @@ def load_table(path, dtype, ncols):
 def read_ranges(path, n_rows):
     """[(first, n)] of cracks.txt at `path` for a crack.txt of `n_rows` rows ([(0, n_rows)] when the
     file is absent): the cracks must follow each other from row 0 and cover every row."""
-    return read_cracks(path, n_rows)[0]
+    return read_crack_table(path, n_rows)[0]
 
 
-def read_cracks(path, n_rows):
-    """([(first, n)], [(tip_first, tip_last)]) of cracks.txt at `path` (read_ranges), the tip flags
-    from its optional third and fourth columns (absent: every end a tip)."""
+def read_crack_table(path, n_rows):
+    """([(first, n)], [(tip_first, tip_last)]) of cracks.txt at `path` for a crack.txt of `n_rows`
+    rows: read_ranges's ranges, and per crack whether each end is a tip (rows of four columns; two
+    columns: both tips)."""
     path = Path(path)
     if not path.exists():
         if n_rows < 2:
             raise ExportError(f"{path.parent / 'crack.txt'}: {n_rows} row(s), a crack needs at least its 2 tips")
         return [(0, int(n_rows))], [(True, True)]
-    try:
-        table = load_table(path, np.int64, 2)
-    except ExportError:
-        table = load_table(path, np.int64, 4)
-        if not np.isin(table[:, 2:], (0, 1)).all():
-            raise ExportError(f"{path}: the tip flags (columns 3 and 4) must be 0 (a mouth) or 1 (a tip)") from None
+    table = _int_rows(path, (2, 4))
     if len(table) == 0:
         raise ExportError(f"{path}: no crack listed")
-    ends = [(True, True)] * len(table) if table.shape[1] == 2 else [(bool(a), bool(b)) for a, b in table[:, 2:]]
-    ranges, expected = [], 0
-    for c, (first, n) in enumerate(table[:, :2].tolist()):
+    ranges, ends, expected = [], [], 0
+    for c, row in enumerate(table):
+        first, n = row[:2]
         if first != expected:
             raise ExportError(f"{path}: crack {c} starts at row {first} of crack.txt, expected {expected} "
                               "(the cracks' rows must follow each other)")
         if n < 2:
-            raise ExportError(f"{path}: crack {c} has {n} node(s), at least its 2 tips are needed")
+            raise ExportError(f"{path}: crack {c} has {n} node(s), at least its 2 ends are needed")
+        tips = tuple(row[2:]) or (1, 1)
+        if any(t not in (0, 1) for t in tips):
+            raise ExportError(f"{path}: crack {c}: tip_first tip_last must be 0 (a mouth) or 1 (a tip), "
+                              f"found {tips[0]} {tips[1]}")
         ranges.append((int(first), int(n)))
+        ends.append((bool(tips[0]), bool(tips[1])))
         expected = first + n
     if expected != n_rows:
         raise ExportError(f"{path}: the cracks cover rows 0..{expected - 1}, but crack.txt has {n_rows} rows")
     return ranges, ends
 
 
+def _int_rows(path, widths):
+    """The rows of a whitespace table of integers, each of one of the column counts `widths`."""
+    rows = []
+    try:
+        text = Path(path).read_text()
+    except (OSError, UnicodeDecodeError) as e:
+        raise ExportError(f"cannot read {path}: {e}".replace("\n", " ")) from None
+    for k, line in enumerate(text.splitlines()):
+        words = line.split()
+        if not words:
+            continue
+        try:
+            row = [int(w) for w in words]
+        except ValueError:
+            raise ExportError(f"{path}: line {k + 1} is not integers: {line.strip()[:60]!r}") from None
+        if len(row) not in widths:
+            raise ExportError(f"{path}: line {k + 1} has {len(row)} columns, expected "
+                              f"{' or '.join(map(str, widths))}")
+        rows.append(row)
+    return rows
+
+
 def check_pairs(path, pairs, ranges, n_vertices, copies=True, ends=None):
     """crack.txt's rows against the ranges: indices in range, each crack's tips with plus == minus and,
-    with `copies`, its interior nodes and mouths with plus != minus (the cracked mesh of a solver; a
-    field on a mesh without copies, where every row has plus == minus, is read with copies=False);
-    `ends`: the tip flags of read_cracks (None: every end a tip)."""
+    with `copies`, its interior nodes and its mouths (`ends` [(tip_first, tip_last)], None: every end
+    a tip) with plus != minus (the cracked mesh of a solver; a field on a mesh without copies, where
+    every row has plus == minus, is read with copies=False)."""
     if pairs.size and (pairs.min() < 0 or pairs.max() >= n_vertices):
         raise ExportError(f"{path}: vertex index out of range 0..{n_vertices - 1}")
-    for c, (first, n) in enumerate(ranges):
+    ends = ends if ends is not None else [(True, True)] * len(ranges)
+    for c, ((first, n), tips) in enumerate(zip(ranges, ends)):
         last = first + n - 1
-        tips = ends[c] if ends is not None else (True, True)
         for row, tip in zip((first, last), tips):
-            if not tip:
-                if copies and pairs[row, 0] == pairs[row, 1]:
-                    raise ExportError(f"{path}: crack {c} (rows {first}..{last}): its mouth at row {row} "
-                                      "has plus == minus (a mouth needs two copies)")
-                continue
-            if pairs[row, 0] != pairs[row, 1]:
+            if tip and pairs[row, 0] != pairs[row, 1]:
                 raise ExportError(f"{path}: crack {c} (rows {first}..{last}): its tip at row {row} has "
                                   f"plus {pairs[row, 0]} != minus {pairs[row, 1]}")
+            if not tip and copies and pairs[row, 0] == pairs[row, 1]:
+                raise ExportError(f"{path}: crack {c} (rows {first}..{last}): its mouth at row {row} has "
+                                  "plus == minus (a mouth on ∂Ω needs two copies)")
         if not copies:
             continue
         inner = np.flatnonzero(pairs[first + 1:last, 0] == pairs[first + 1:last, 1])
@@ -272,18 +310,19 @@ def read_layout(level_dir, points, n_vertices, default_normal=None, copies=True)
     `copies`: see check_pairs."""
     d = Path(level_dir)
     pairs = load_table(d / "crack.txt", np.int64, 2)
-    ranges, ends = read_cracks(d / "cracks.txt", len(pairs))
+    ranges, ends = read_crack_table(d / "cracks.txt", len(pairs))
     check_pairs(d / "crack.txt", pairs, ranges, n_vertices, copies, ends)
     nodes = np.asarray(points, dtype=float)[pairs[:, 0], :2]
     check_segments(d / "crack.txt", nodes, ranges)
     normals = read_normals(d / "crack_normals.txt", nodes, ranges, default_normal)
-    has_mouth = not all(a and b for a, b in ends)
+    has_mouth = any(not all(e) for e in ends)
     return CrackLayout(pairs=pairs, ranges=ranges, normals=normals, ends=ends if has_mouth else None)
 
 
 def read_sides(path, triangles, layout):
     """(T, 3) sides.txt at `path`, with the cracked `triangles` (T, 3). New format: each ±1 corner must
-    be the + / − copy of an interior crack node, each 0 corner none. Old format (one value per
+    be the + / − copy of a doubled crack node (layout.interior(): interior nodes and mouths), each 0
+    corner none. Old format (one value per
     triangle): ±1 spread to the corners at interior crack copies. Absent: None."""
     path = Path(path)
     if not path.exists():
@@ -312,8 +351,8 @@ def read_sides(path, triangles, layout):
 
 
 def _copy_name(side):
-    return {1: "the + copy of an interior crack node", -1: "the − copy of an interior crack node",
-            0: "no interior crack node"}[int(side)]
+    return {1: "the + copy of a doubled crack node", -1: "the − copy of a doubled crack node",
+            0: "no doubled crack node"}[int(side)]
 
 
 def read_kind(meta, path):
@@ -344,6 +383,64 @@ def read_mesh_json(level_dir):
     if not isinstance(meta, dict):
         raise ExportError(f"{path}: not a JSON object")
     return meta
+
+
+def read_boundary_edges(level_dir, n_vertices=None, layout=None):
+    """(edges (E, 2), parts (E,), names) of level_dir's boundary_edges.txt and mesh.json's
+    "boundary_parts", checked: names a non-empty list of distinct non-empty strings; every row
+    `v0 v1 part` with v0 != v1, vertices in 0..n_vertices−1 (when given), part an index of names,
+    every part used, no edge twice; each vertex starts at most one edge and ends at most one (∂Ω
+    is one loop, cut open at the mouths); with `layout`, each mouth's two copies end or start
+    exactly one edge each (the faces split the boundary at a mouth) and no tip is on an edge."""
+    d = Path(level_dir)
+    path = d / "boundary_edges.txt"
+    meta = read_mesh_json(d)
+    names = meta.get("boundary_parts")
+    if not (isinstance(names, list) and names and all(isinstance(n, str) and n for n in names)
+            and len(set(names)) == len(names)):
+        raise ExportError(f"{d / 'mesh.json'}: 'boundary_parts' must be a non-empty list of distinct "
+                          "part names")
+    table = load_table(path, np.int64, 3)
+    if len(table) == 0:
+        raise ExportError(f"{path}: no boundary edge listed")
+    edges, parts = table[:, :2], table[:, 2]
+    if (edges[:, 0] == edges[:, 1]).any():
+        row = int(np.flatnonzero(edges[:, 0] == edges[:, 1])[0])
+        raise ExportError(f"{path}: row {row} joins vertex {edges[row, 0]} to itself")
+    if edges.min() < 0 or (n_vertices is not None and edges.max() >= n_vertices):
+        raise ExportError(f"{path}: vertex index out of range 0..{(n_vertices or 1) - 1}")
+    if parts.min() < 0 or parts.max() >= len(names):
+        raise ExportError(f"{path}: part index out of range 0..{len(names) - 1} ({', '.join(names)})")
+    unused = sorted(set(range(len(names))) - set(parts.tolist()))
+    if unused:
+        raise ExportError(f"{path}: boundary part {names[unused[0]]!r} has no edge")
+    if len(np.unique(np.sort(edges, axis=1), axis=0)) != len(edges):
+        raise ExportError(f"{path}: an edge is listed twice")
+    for column, role in ((0, "starts"), (1, "ends")):
+        values, counts = np.unique(edges[:, column], return_counts=True)
+        if (counts > 1).any():
+            raise ExportError(f"{path}: vertex {values[counts > 1][0]} {role} {counts.max()} boundary edges "
+                              "(∂Ω is one loop)")
+    if layout is not None:
+        _check_boundary_at_cracks(path, edges, layout)
+    return edges, parts, names
+
+
+def _check_boundary_at_cracks(path, edges, layout):
+    """At each mouth of `layout`: the + and the − copy each on exactly one boundary edge; no tip on
+    one."""
+    on = np.bincount(edges.ravel(), minlength=int(layout.pairs.max(initial=0)) + 1)
+
+    def count(v):
+        return int(on[v]) if v < len(on) else 0
+    for row in layout.mouth_rows():
+        plus, minus = (int(v) for v in layout.pairs[row])
+        if count(plus) != 1 or count(minus) != 1:
+            raise ExportError(f"{path}: the mouth at crack.txt row {row} has its copies {plus} and {minus} on "
+                              f"{count(plus)} and {count(minus)} boundary edges (each face's copy needs one)")
+    for v in layout.tip_vertices():
+        if count(int(v)):
+            raise ExportError(f"{path}: tip vertex {int(v)} is on a boundary edge (a crack end on ∂Ω is a mouth)")
 
 
 # ---- scene.json ----------------------------------------------------------------------------------

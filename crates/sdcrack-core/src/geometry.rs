@@ -22,9 +22,11 @@ mod validate;
 
 pub use error::{GeometryError, MAX_COORDINATE};
 pub use predicates::{
-    counter_clockwise, point_in_polygon, segments_intersect, signed_area, Inside,
+    boundary_edge_of, counter_clockwise, point_in_polygon, segments_intersect, signed_area, Inside,
 };
-pub use validate::{validate_cracks, validate_polygon};
+pub use validate::{
+    crack_tips, validate_cracks, validate_cracks_with, validate_polygon, CrackEnds,
+};
 
 /// The L-shaped domain of the unit tests (here and in [`crate::mesh::gmsh`]), counter-clockwise.
 #[cfg(test)]

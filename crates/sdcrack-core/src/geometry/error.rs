@@ -191,6 +191,44 @@ pub enum GeometryError {
         /// End points of the domain edge.
         edge_points: [[f64; 2]; 2],
     },
+    /// An edge crack's end point (a mouth) is a vertex of the domain polygon.
+    #[error(
+        "geometry.cracks[{crack}] point {point} {} is a corner of the domain: a crack may end on the boundary only away from its corners",
+        pt(.coords)
+    )]
+    CrackMouthAtCorner {
+        /// Index of the crack.
+        crack: usize,
+        /// Index of the point within the crack (its first or last).
+        point: usize,
+        /// The point as given.
+        coords: [f64; 2],
+    },
+    /// An edge crack's end segment runs along the domain edge its mouth lies on.
+    #[error(
+        "geometry.cracks[{crack}] point {point} {} lies on domain edge {edge} and the crack runs along that edge: a crack must leave the boundary transversally",
+        pt(.coords)
+    )]
+    CrackMouthAlongBoundary {
+        /// Index of the crack.
+        crack: usize,
+        /// Index of the point within the crack (its first or last).
+        point: usize,
+        /// The point as given.
+        coords: [f64; 2],
+        /// Index of the domain edge the point lies on.
+        edge: usize,
+    },
+    /// A crack segment joins two points of ∂Ω outside the domain.
+    #[error(
+        "geometry.cracks[{crack}] segment {segment} joins two boundary points outside the domain"
+    )]
+    CrackSegmentOutside {
+        /// Index of the crack.
+        crack: usize,
+        /// Index of the segment within the crack.
+        segment: usize,
+    },
     /// Two cracks cross or touch.
     #[error(
         "geometry.cracks[{first}] and geometry.cracks[{second}] intersect \
@@ -252,7 +290,10 @@ impl GeometryError {
             | GeometryError::CrackFoldsBack { crack, .. }
             | GeometryError::CrackPointOutside { crack, .. }
             | GeometryError::CrackPointOnBoundary { crack, .. }
-            | GeometryError::CrackCrossesBoundary { crack, .. } => Some(*crack),
+            | GeometryError::CrackCrossesBoundary { crack, .. }
+            | GeometryError::CrackMouthAtCorner { crack, .. }
+            | GeometryError::CrackMouthAlongBoundary { crack, .. }
+            | GeometryError::CrackSegmentOutside { crack, .. } => Some(*crack),
             GeometryError::CracksIntersect { first, .. } => Some(*first),
             _ => None,
         }

@@ -67,6 +67,15 @@ pub fn point_in_polygon(p: [f64; 2], polygon: &[[f64; 2]]) -> Inside {
     }
 }
 
+/// The first edge `k` of `polygon` (from vertex k to vertex k + 1) on which `p` lies, by the
+/// exact predicates; `None` when `p` is not on ∂Ω.
+#[must_use]
+pub fn boundary_edge_of(p: [f64; 2], polygon: &[[f64; 2]]) -> Option<usize> {
+    edges(polygon)
+        .find(|&(_, edge)| on_segment(p, edge))
+        .map(|(k, _)| k)
+}
+
 /// Whether two closed segments `[start, end]` share at least one point.
 ///
 /// Touching counts: an end point on the other segment, shared end points and collinear overlap

@@ -720,3 +720,134 @@ fn awkward_inputs_never_panic() {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Edge cracks (CrackEnds::MayBeMouths, docs/elasticity.md)
+
+fn mouths(polygon: &[[f64; 2]], crack: &[[f64; 2]]) -> Result<(), GeometryError> {
+    validate_cracks_with(polygon, &[crack.to_vec()], CrackEnds::MayBeMouths)
+}
+
+#[test]
+fn an_edge_crack_is_refused_for_the_scalar_problem_with_todays_message() {
+    let crack = vec![[-1.0, 0.0], [0.0, 0.0]];
+    let expected = GeometryError::CrackPointOnBoundary {
+        crack: 0,
+        point: 0,
+        coords: [-1.0, 0.0],
+    };
+    for ends in [None, Some(CrackEnds::Inside)] {
+        let got = match ends {
+            None => validate_cracks(&square(1.0), std::slice::from_ref(&crack)),
+            Some(e) => validate_cracks_with(&square(1.0), std::slice::from_ref(&crack), e),
+        };
+        assert_eq!(got, Err(expected.clone()));
+    }
+    assert_eq!(
+        expected.to_string(),
+        "geometry.cracks[0] point 0 (-1, 0) touches the domain boundary"
+    );
+}
+
+#[test]
+fn edge_cracks_with_one_or_two_mouths_are_accepted() {
+    let sq = square(1.0);
+    assert_eq!(mouths(&sq, &[[-1.0, 0.0], [0.0, 0.0]]), Ok(()));
+    assert_eq!(mouths(&sq, &[[0.0, 0.25], [1.0, 0.25]]), Ok(()));
+    // through the whole square, and a kinked one with both ends on ∂Ω
+    assert_eq!(mouths(&sq, &[[-1.0, 0.5], [1.0, -0.5]]), Ok(()));
+    assert_eq!(mouths(&sq, &[[-0.5, -1.0], [0.0, 0.0], [1.0, 0.5]]), Ok(()));
+    // oblique on a rotated square, both orientations of the polygon
+    let rot = rotated(&sq, 30.0);
+    let mid = [0.5 * (rot[0][0] + rot[1][0]), 0.5 * (rot[0][1] + rot[1][1])];
+    let mut reversed = rot.clone();
+    reversed.reverse();
+    for poly in [&rot, &reversed] {
+        // the midpoint of an edge may round off ∂Ω: accept it only where it is exactly on it
+        if point_in_polygon(mid, poly) == Inside::OnBoundary {
+            assert_eq!(mouths(poly, &[mid, [0.0, 0.0]]), Ok(()));
+        }
+    }
+    // the L-shape's re-entrant edges
+    assert_eq!(mouths(&L_SHAPE, &[[0.5, 0.0], [0.5, -0.5]]), Ok(()));
+    assert_eq!(mouths(&L_SHAPE, &[[0.0, 0.5], [-0.5, 0.5]]), Ok(()));
+}
+
+#[test]
+fn edge_crack_errors_name_the_broken_requirement() {
+    let sq = square(1.0);
+    // a corner of Ω
+    assert_eq!(
+        mouths(&sq, &[[-1.0, -1.0], [0.0, 0.0]]),
+        Err(GeometryError::CrackMouthAtCorner {
+            crack: 0,
+            point: 0,
+            coords: [-1.0, -1.0]
+        })
+    );
+    // an interior point of the polyline on ∂Ω
+    assert_eq!(
+        mouths(&sq, &[[0.0, 0.0], [1.0, 0.0], [0.5, 0.5]]),
+        Err(GeometryError::CrackPointOnBoundary {
+            crack: 0,
+            point: 1,
+            coords: [1.0, 0.0]
+        })
+    );
+    // along the boundary edge (the other end on the edge's line, outside the square)
+    let e = mouths(&sq, &[[0.5, -1.0], [1.5, -1.0]]).unwrap_err();
+    assert!(
+        matches!(e, GeometryError::CrackPointOutside { point: 1, .. }),
+        "{e}"
+    );
+    let along = mouths(&L_SHAPE, &[[0.5, 0.0], [-0.5, 0.0]]).unwrap_err();
+    assert!(
+        matches!(
+            along,
+            GeometryError::CrackMouthAlongBoundary {
+                point: 0,
+                edge: 2,
+                ..
+            }
+        ),
+        "{along}"
+    );
+    // a segment from a mouth that crosses ∂Ω: from the L-shape's top edge across the notch
+    assert_eq!(
+        mouths(&L_SHAPE, &[[-0.5, 1.0], [0.5, -0.5]]),
+        Err(GeometryError::CrackCrossesBoundary {
+            crack: 0,
+            segment: 0,
+            edge: 2,
+            edge_points: [[1.0, 0.0], [0.0, 0.0]]
+        })
+    );
+    // two mouths joined outside Ω: across the L-shape's missing quadrant
+    assert_eq!(
+        mouths(&L_SHAPE, &[[0.5, 0.0], [0.0, 0.5]]),
+        Err(GeometryError::CrackSegmentOutside {
+            crack: 0,
+            segment: 0
+        })
+    );
+    // two cracks sharing a mouth
+    let two = vec![vec![[-1.0, 0.0], [0.0, 0.0]], vec![[-1.0, 0.0], [0.0, 0.5]]];
+    assert!(matches!(
+        validate_cracks_with(&sq, &two, CrackEnds::MayBeMouths),
+        Err(GeometryError::CracksIntersect { .. })
+    ));
+    for e in [
+        GeometryError::CrackMouthAtCorner {
+            crack: 2,
+            point: 0,
+            coords: [0.0, 0.0],
+        },
+        GeometryError::CrackSegmentOutside {
+            crack: 2,
+            segment: 0,
+        },
+    ] {
+        assert_eq!(e.crack(), Some(2));
+        assert!(!e.to_string().contains('\n'));
+    }
+}

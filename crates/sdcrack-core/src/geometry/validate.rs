@@ -3,9 +3,22 @@
 
 use super::error::{GeometryError, MAX_COORDINATE};
 use super::predicates::{
-    edges, folds_back, is_finite, orientation, point_in_polygon, polyline_segments,
+    edges, folds_back, is_finite, on_segment, orientation, point_in_polygon, polyline_segments,
     segments_intersect, Inside,
 };
+
+/// Whether a crack may end on ∂Ω: the switch between the scalar problem (every crack strictly
+/// inside Ω) and the elastic one (docs/elasticity.md: an *edge crack*, whose end on ∂Ω is a
+/// *mouth*). The scene loader turns it on for elastic scenes only.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum CrackEnds {
+    /// Every crack point strictly inside Ω (the scalar problem).
+    #[default]
+    Inside,
+    /// A crack's first and/or last point may lie on ∂Ω, not at a corner of Ω, the crack meeting
+    /// ∂Ω transversally there and nowhere else; its other points strictly inside.
+    MayBeMouths,
+}
 
 /// Checks that `polygon` is a usable domain: a simple polygon of non-zero area.
 ///
@@ -50,12 +63,46 @@ pub fn validate_cracks(
     polygon: &[[f64; 2]],
     cracks: &[Vec<[f64; 2]>],
 ) -> Result<(), GeometryError> {
+    validate_cracks_with(polygon, cracks, CrackEnds::Inside)
+}
+
+/// [`validate_cracks`] with the crack ends `ends` allows: with [`CrackEnds::Inside`] exactly
+/// [`validate_cracks`]; with [`CrackEnds::MayBeMouths`] a first or last crack point may lie on
+/// ∂Ω (a mouth), where it must not be a vertex of the polygon
+/// ([`GeometryError::CrackMouthAtCorner`]), the crack's segment there must not run along the
+/// domain edge ([`GeometryError::CrackMouthAlongBoundary`]), and no segment may meet ∂Ω
+/// anywhere but at its mouths; a segment joining two mouths must run inside Ω
+/// ([`GeometryError::CrackSegmentOutside`]).
+///
+/// # Errors
+///
+/// As [`validate_cracks`], and the three mouth errors above.
+pub fn validate_cracks_with(
+    polygon: &[[f64; 2]],
+    cracks: &[Vec<[f64; 2]>],
+    ends: CrackEnds,
+) -> Result<(), GeometryError> {
     validate_polygon(polygon)?;
     for (index, crack) in cracks.iter().enumerate() {
         check_crack_shape(index, crack)?;
-        check_crack_in_domain(index, crack, polygon)?;
+        match ends {
+            CrackEnds::Inside => check_crack_in_domain(index, crack, polygon)?,
+            CrackEnds::MayBeMouths => check_edge_crack_in_domain(index, crack, polygon)?,
+        }
     }
     check_cracks_disjoint(cracks)
+}
+
+/// The crack tips of a validated geometry in the tips' order of docs/elasticity.md: for each
+/// crack its first point, then its last, each unless it lies on ∂Ω (a mouth). The mesh's own
+/// [`crate::mesh::Mesh::tips`] lists the same points in the same order.
+pub fn crack_tips(polygon: &[[f64; 2]], cracks: &[Vec<[f64; 2]>]) -> Vec<[f64; 2]> {
+    cracks
+        .iter()
+        .filter(|c| !c.is_empty())
+        .flat_map(|c| [c[0], c[c.len() - 1]])
+        .filter(|&p| point_in_polygon(p, polygon) != Inside::OnBoundary)
+        .collect()
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -220,6 +267,100 @@ fn check_crack_in_domain(
         }
     }
     Ok(())
+}
+
+/// Checks that a crack lies inside the (valid) domain polygon but for its mouths: end points on
+/// ∂Ω, each on one edge away from its ends, met transversally by the crack's end segment.
+fn check_edge_crack_in_domain(
+    crack: usize,
+    points: &[[f64; 2]],
+    polygon: &[[f64; 2]],
+) -> Result<(), GeometryError> {
+    let last = points.len() - 1;
+    // per point: the domain edge its mouth lies on (ends only)
+    let mut mouth_edge: Vec<Option<usize>> = vec![None; points.len()];
+    for (point, &coords) in points.iter().enumerate() {
+        let where_ = point_in_polygon(coords, polygon);
+        let error = |variant: fn(usize, usize, [f64; 2]) -> GeometryError| {
+            Err(variant(crack, point, coords))
+        };
+        match where_ {
+            Inside::Inside => {}
+            Inside::Outside => return error(point_outside),
+            Inside::OnBoundary if point != 0 && point != last => return error(point_on_boundary),
+            Inside::OnBoundary => {
+                if polygon.contains(&coords) {
+                    return error(mouth_at_corner);
+                }
+                // not a vertex: on exactly one edge, away from its ends
+                mouth_edge[point] = edges(polygon)
+                    .find(|&(_, e)| on_segment(coords, e))
+                    .map(|(edge, _)| edge);
+            }
+        }
+    }
+    for (segment, s) in polyline_segments(points).enumerate() {
+        let ends = [segment, segment + 1];
+        for end in ends {
+            if let Some(edge) = mouth_edge[end] {
+                let [a, b] = edges(polygon).nth(edge).map(|(_, e)| e).unwrap_or_default();
+                let other = points[if end == segment { segment + 1 } else { segment }];
+                if orientation(a, b, other) == 0 {
+                    return Err(GeometryError::CrackMouthAlongBoundary {
+                        crack,
+                        point: end,
+                        coords: points[end],
+                        edge,
+                    });
+                }
+            }
+        }
+        // a transversal end segment meets its mouth's edge at the mouth only: that edge is
+        // allowed, every other edge must stay clear of the segment
+        let allowed = |edge: usize| ends.iter().any(|&p| mouth_edge[p] == Some(edge));
+        let hit = edges(polygon).find(|&(edge, e)| !allowed(edge) && segments_intersect(s, e));
+        if let Some((edge, edge_points)) = hit {
+            return Err(GeometryError::CrackCrossesBoundary {
+                crack,
+                segment,
+                edge,
+                edge_points,
+            });
+        }
+        if ends.iter().all(|&p| mouth_edge[p].is_some()) {
+            // both ends on ∂Ω and no other contact: the open segment is wholly inside or
+            // wholly outside Ω; its midpoint tells which
+            let mid = [0.5 * (s[0][0] + s[1][0]), 0.5 * (s[0][1] + s[1][1])];
+            if point_in_polygon(mid, polygon) != Inside::Inside {
+                return Err(GeometryError::CrackSegmentOutside { crack, segment });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn point_outside(crack: usize, point: usize, coords: [f64; 2]) -> GeometryError {
+    GeometryError::CrackPointOutside {
+        crack,
+        point,
+        coords,
+    }
+}
+
+fn point_on_boundary(crack: usize, point: usize, coords: [f64; 2]) -> GeometryError {
+    GeometryError::CrackPointOnBoundary {
+        crack,
+        point,
+        coords,
+    }
+}
+
+fn mouth_at_corner(crack: usize, point: usize, coords: [f64; 2]) -> GeometryError {
+    GeometryError::CrackMouthAtCorner {
+        crack,
+        point,
+        coords,
+    }
 }
 
 /// Checks that no two cracks share a point.

@@ -190,7 +190,7 @@ impl Bisection {
                     normals.extend(std::iter::repeat_n(nu, piece.len()));
                     nodes.extend(piece);
                 }
-                CrackChain { nodes, normals }
+                CrackChain::from_parts(nodes, normals)
             })
             .collect();
         let parents = self.tris.iter().map(|t| t.origin).collect();

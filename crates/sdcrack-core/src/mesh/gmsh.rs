@@ -6,7 +6,8 @@
 //! `"domain"`), the 1D physical group `"boundary"` holds every edge of the outer boundary
 //! ∂Ω, and the 1D physical groups `"crack1"`, `"crack2"`, … (numbered consecutively from 1)
 //! each hold one crack as an open chain of mesh edges that touches neither ∂Ω nor
-//! another crack.
+//! another crack — but for an edge crack's mouth (elastic scenes, [`read_msh_file_with`]): a
+//! chain end on a boundary vertex.
 
 mod coarse;
 mod error;
@@ -18,5 +19,5 @@ mod tests;
 
 pub use coarse::CoarseMesh;
 pub use error::GmshError;
-pub use read::{read_msh, read_msh_file};
+pub use read::{read_msh, read_msh_file, read_msh_file_with};
 pub use run::{geo_script, gmsh_version, mesh_polygon, GmshRun};

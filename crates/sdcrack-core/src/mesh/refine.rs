@@ -53,7 +53,7 @@ pub fn refine(mesh: &Mesh) -> Mesh {
                 nodes.push(w[1]);
                 normals.extend([nu, nu]);
             }
-            CrackChain { nodes, normals }
+            CrackChain::from_parts(nodes, normals)
         })
         .collect();
     let coarse_triangles = match mesh.layout {
@@ -171,10 +171,10 @@ mod tests {
                 .position(|p| p[0] == x && p[1] == y)
                 .unwrap()
         };
-        let chain = CrackChain {
-            nodes: vec![at(&m1, 0.5, 1.0), at(&m1, 1.0, 1.0), at(&m1, 1.5, 1.5)],
-            normals: vec![[0.0, 1.0], [-0.5f64.sqrt(), 0.5f64.sqrt()]],
-        };
+        let chain = CrackChain::from_parts(
+            vec![at(&m1, 0.5, 1.0), at(&m1, 1.0, 1.0), at(&m1, 1.5, 1.5)],
+            vec![[0.0, 1.0], [-0.5f64.sqrt(), 0.5f64.sqrt()]],
+        );
         let m1 = Mesh::new(
             1,
             m1.layout,

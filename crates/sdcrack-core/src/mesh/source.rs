@@ -5,6 +5,7 @@
 use super::error::MeshError;
 use super::triangulation::{CrackChain, Layout, Mesh};
 use super::{bisect, gmsh, refine, structured};
+use crate::geometry::CrackEnds;
 use crate::problem::{Domain, Meshing, Polyline};
 
 /// What a gmsh run or a mesh file contributed to a scene's meshes (recorded in the results).
@@ -80,7 +81,13 @@ impl MeshSource {
             }
             (Meshing::File(path), _) => {
                 let origin = path.display().to_string();
-                let mesh = coarse_mesh(read_msh_file(path)?, cracks, &origin)?;
+                // the scene's validation ([`msh_file_geometry_with`]) decided whether the
+                // file's cracks may end on ∂Ω
+                let mesh = coarse_mesh(
+                    read_msh_file(path, CrackEnds::MayBeMouths)?,
+                    cracks,
+                    &origin,
+                )?;
                 Ok(MeshSource::refined(mesh, origin, None))
             }
         }
@@ -161,11 +168,24 @@ impl MeshSource {
 
 /// The geometry of a .msh file: the boundary loop as a polygon and the cracks as polylines, each
 /// with its collinear runs merged into one segment (so a straight crack meshed in many edges is
-/// one segment, with one normal), and the number of triangles.
+/// one segment, with one normal), and the number of triangles. Every crack strictly inside
+/// (the scalar problem): [`msh_file_geometry_with`] and [`CrackEnds::Inside`].
 pub fn msh_file_geometry(
     path: &std::path::Path,
 ) -> Result<(Domain, Vec<Polyline>, usize), MeshError> {
-    let coarse = read_msh_file(path)?;
+    msh_file_geometry_with(path, CrackEnds::Inside)
+}
+
+/// [`msh_file_geometry`] with the crack ends `ends` allows. With [`CrackEnds::MayBeMouths`] a
+/// crack group's chain may end on a boundary vertex (a mouth), not at a corner of the merged
+/// boundary polygon. (Its tips: a mesh's [`crate::mesh::Mesh::tips`]; the exact predicates of
+/// [`crate::geometry::crack_tips`] need a mouth exactly on the polygon's edge, which a file's
+/// node on an inclined side need not be.)
+pub fn msh_file_geometry_with(
+    path: &std::path::Path,
+    ends: CrackEnds,
+) -> Result<(Domain, Vec<Polyline>, usize), MeshError> {
+    let coarse = read_msh_file(path, ends)?;
     let boundary = boundary_loop(&coarse.boundary_edges).ok_or_else(|| {
         MeshError::Gmsh(format!(
             "{}: the boundary edges do not form one closed loop (only simply connected domains are supported)",
@@ -179,12 +199,32 @@ pub fn msh_file_geometry(
         .map(|chain| Polyline {
             points: merge_collinear(chain.iter().map(|&v| coarse.vertices[v]).collect(), false),
         })
-        .collect();
+        .collect::<Vec<Polyline>>();
+    // A mouth is found by the mesh's topology, not by the exact predicates: a node of a straight
+    // but inclined side, printed with 16 digits, is not exactly on the merged polygon's edge.
+    // The reader checked the rest (only a chain's ends on ∂Ω, its edges interior ones, no shared
+    // vertex), which also makes the crack meet ∂Ω transversally there.
+    let on_boundary: std::collections::HashSet<usize> =
+        coarse.boundary_edges.iter().flatten().copied().collect();
+    for (c, chain) in coarse.cracks.iter().enumerate() {
+        for v in [chain[0], chain[chain.len() - 1]] {
+            let p = coarse.vertices[v];
+            if on_boundary.contains(&v) && polygon.contains(&p) {
+                return Err(MeshError::Gmsh(format!(
+                    "{}: crack{} ends at a corner of the boundary ({}, {}): a crack may end on the boundary only away from its corners",
+                    path.display(),
+                    c + 1,
+                    p[0],
+                    p[1]
+                )));
+            }
+        }
+    }
     Ok((Domain::Polygon(polygon), cracks, coarse.triangles.len()))
 }
 
-fn read_msh_file(path: &std::path::Path) -> Result<gmsh::CoarseMesh, MeshError> {
-    gmsh::read_msh_file(path).map_err(|e| MeshError::Gmsh(e.to_string()))
+fn read_msh_file(path: &std::path::Path, ends: CrackEnds) -> Result<gmsh::CoarseMesh, MeshError> {
+    gmsh::read_msh_file_with(path, ends).map_err(|e| MeshError::Gmsh(e.to_string()))
 }
 
 /// The vertices of a closed chain of edges in order, if the edges form exactly one loop.

@@ -1,7 +1,10 @@
 //! The structured triangulation of a rectangle: level ℓ has `2^ℓ·nx × 2^ℓ·ny` cells, each split by
 //! its SW–NE diagonal into two counter-clockwise triangles, so levels are nested. Every crack
 //! segment must join two level-0 vertices along a grid line (horizontal, vertical or SW–NE
-//! diagonal) strictly inside Ω; its nodes are then grid vertices and its pieces grid edges.
+//! diagonal) strictly inside Ω, but for a crack's first or last point, which may lie on a side
+//! of the rectangle away from its corners (a mouth, elastic scenes only: the scene's geometry
+//! validation refuses it for the scalar problem); its nodes are then grid vertices and its pieces
+//! grid edges.
 
 use super::error::MeshError;
 use super::triangulation::{CrackChain, Layout, Mesh};
@@ -35,10 +38,12 @@ pub fn structured(
     let mut owner = vec![usize::MAX; vertices.len()];
     let mut chains = Vec::with_capacity(cracks.len());
     for (c, crack) in cracks.iter().enumerate() {
+        let last = crack.points.len() - 1;
         let ends = crack
             .points
             .iter()
-            .map(|&p| end_index(domain, cells, p, c))
+            .enumerate()
+            .map(|(k, &p)| end_index(domain, cells, p, c, k == 0 || k == last))
             .collect::<Result<Vec<_>, _>>()?;
         let mut nodes = Vec::new();
         let mut segment_of = Vec::new();
@@ -95,12 +100,14 @@ pub fn structured(
     ))
 }
 
-/// The grid index (i, j) of a crack point on the level-0 grid.
+/// The grid index (i, j) of a crack point on the level-0 grid; an end of the crack (`end`) may
+/// lie on a side of the rectangle, not at a corner.
 fn end_index(
     domain: Rectangle,
     cells: [usize; 2],
     p: [f64; 2],
     crack: usize,
+    end: bool,
 ) -> Result<(i64, i64), MeshError> {
     let inside = (0..2).all(|d| p[d] >= domain.min[d] && p[d] <= domain.max[d]);
     if !inside {
@@ -122,7 +129,16 @@ fn end_index(
             ny: cells[1],
         });
     };
-    if i <= 0 || j <= 0 || i >= cells[0] as i64 || j >= cells[1] as i64 {
+    let on_side = [
+        i == 0 || i == cells[0] as i64,
+        j == 0 || j == cells[1] as i64,
+    ];
+    let allowed = match on_side {
+        [false, false] => true,
+        [true, true] => false, // a corner
+        _ => end,
+    };
+    if !allowed {
         return Err(MeshError::NotInside {
             crack,
             x: p[0],

@@ -153,7 +153,22 @@ fn crack_errors() {
             ..
         }
     ));
-    let e = cut_square([4, 4], [-1.0, 0.0], [0.5, 0.0], 0).unwrap_err();
+    // a crack end may lie on a side (a mouth), not at a corner, and no other point on ∂Ω
+    assert!(cut_square([4, 4], [-1.0, 0.0], [0.5, 0.0], 0).is_ok());
+    for (a, b) in [([-1.0, -1.0], [0.0, 0.0]), ([0.5, 0.5], [1.0, 1.0])] {
+        let e = cut_square([4, 4], a, b, 0).unwrap_err();
+        assert!(matches!(
+            e,
+            MeshError::NotInside {
+                what: "touches the boundary",
+                ..
+            }
+        ));
+    }
+    let through = Polyline {
+        points: vec![[0.0, 0.5], [1.0, 0.5], [0.5, 0.0]],
+    };
+    let e = structured::structured(UNIT_SQUARE, [4, 4], &[through], 0).unwrap_err();
     assert!(matches!(
         e,
         MeshError::NotInside {

@@ -17,10 +17,13 @@ pub enum Side {
 /// One crack as a chain of mesh vertices.
 #[derive(Clone, Debug)]
 pub struct CrackChain {
-    /// Vertex numbers of x_0, …, x_I (both tips included).
+    /// Vertex numbers of x_0, …, x_I (both ends included).
     pub nodes: Vec<usize>,
     /// Per chain edge k (x_k → x_{k+1}): the unit normal ν of the polyline segment it lies on.
     pub normals: Vec<[f64; 2]>,
+    /// Whether x_0, resp. x_I, is a *mouth* (a vertex of ∂Ω: an edge crack, docs/elasticity.md)
+    /// rather than a tip. Set by [`Mesh::new`] from the boundary edges.
+    pub mouths: [bool; 2],
 }
 
 impl CrackChain {
@@ -36,7 +39,36 @@ impl CrackChain {
             .iter()
             .map(|&s| crack.segment(s).normal())
             .collect();
-        CrackChain { nodes, normals }
+        CrackChain::from_parts(nodes, normals)
+    }
+
+    /// The chain of `nodes` with the edge normals `normals` (its mouths are found by
+    /// [`Mesh::new`]).
+    pub fn from_parts(nodes: Vec<usize>, normals: Vec<[f64; 2]>) -> CrackChain {
+        CrackChain {
+            nodes,
+            normals,
+            mouths: [false; 2],
+        }
+    }
+
+    /// The ends x_0 and x_I that are tips (not mouths), first end first.
+    pub fn tips(&self) -> impl Iterator<Item = usize> + '_ {
+        [self.nodes[0], self.nodes[self.nodes.len() - 1]]
+            .into_iter()
+            .zip(self.mouths)
+            .filter_map(|(v, mouth)| (!mouth).then_some(v))
+    }
+
+    /// The nodes whose vertex is doubled in the cracked mesh, in chain order: every node but the
+    /// tips (the interior nodes and the mouths).
+    pub fn doubled_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+        let last = self.nodes.len() - 1;
+        self.nodes
+            .iter()
+            .enumerate()
+            .filter(move |&(j, _)| (0 < j && j < last) || self.mouths[usize::from(j == last)])
+            .map(|(_, &v)| v)
     }
 }
 
@@ -111,8 +143,9 @@ impl Mesh {
         vertices: Vec<[f64; 2]>,
         triangles: Vec<[usize; 3]>,
         boundary_edges: Vec<[usize; 2]>,
-        cracks: Vec<CrackChain>,
+        mut cracks: Vec<CrackChain>,
     ) -> Mesh {
+        mark_mouths(&mut cracks, &boundary_edges);
         let corner_sides = corner_sides(&vertices, &triangles, &cracks);
         Mesh {
             level,
@@ -144,19 +177,37 @@ impl Mesh {
         self.cracks.iter().flat_map(|c| c.nodes.iter().copied())
     }
 
-    /// The tips: first and last node of every crack.
+    /// The tips: the first and last node of every crack that are not mouths, cracks in order.
     pub fn tips(&self) -> Vec<usize> {
-        self.cracks
-            .iter()
-            .flat_map(|c| [c.nodes[0], c.nodes[c.nodes.len() - 1]])
-            .collect()
+        self.cracks.iter().flat_map(CrackChain::tips).collect()
     }
 
-    /// The interior crack nodes (tips excluded), cracks in order.
-    fn interior_crack_nodes(&self) -> impl Iterator<Item = usize> + '_ {
-        self.cracks
+    /// The crack nodes with two u copies (every crack node but the tips: the interior nodes
+    /// and the mouths), cracks in order.
+    fn doubled_crack_nodes(&self) -> impl Iterator<Item = usize> + '_ {
+        self.cracks.iter().flat_map(CrackChain::doubled_nodes)
+    }
+
+    /// The boundary edges in the numbering of `topo` (for the `broken` space: the cracked mesh),
+    /// each edge's ends as the u dofs of the one triangle it belongs to: at a mouth, each of the
+    /// two boundary edges takes the copy of its own face.
+    pub fn boundary_edge_dofs(&self, topo: &UTopology) -> Vec<[usize; 2]> {
+        let index: std::collections::HashMap<(usize, usize), usize> = self
+            .boundary_edges
             .iter()
-            .flat_map(|c| c.nodes[1..c.nodes.len() - 1].iter().copied())
+            .enumerate()
+            .map(|(i, &[a, b])| ((a, b), i))
+            .collect();
+        let mut out = self.boundary_edges.clone();
+        for (t, dofs) in self.triangles.iter().zip(&topo.triangle_dofs) {
+            for k in 0..3 {
+                // Ω lies left of a boundary edge, so it is an edge of its counter-clockwise triangle
+                if let Some(&i) = index.get(&(t[k], t[(k + 1) % 3])) {
+                    out[i] = [dofs[k], dofs[(k + 1) % 3]];
+                }
+            }
+        }
+        out
     }
 
     /// The u degrees of freedom of `space` on this mesh.
@@ -165,7 +216,7 @@ impl Mesh {
         let mut minus_of = vec![usize::MAX; nv];
         let mut dof_vertex: Vec<usize> = (0..nv).collect();
         if space == USpace::Broken {
-            for (k, v) in self.interior_crack_nodes().enumerate() {
+            for (k, v) in self.doubled_crack_nodes().enumerate() {
                 minus_of[v] = nv + k;
                 dof_vertex.push(v);
             }
@@ -375,13 +426,30 @@ fn corner_sides(
     triangles: &[[usize; 3]],
     cracks: &[CrackChain],
 ) -> Vec<[Option<Side>; 3]> {
-    // for each interior crack node: the directions to its chain neighbours (after, before)
+    // for each doubled crack node: the directions to its chain neighbours (after, before)
     let mut around: Vec<Option<([f64; 2], [f64; 2])>> = vec![None; vertices.len()];
+    let dir = |v: usize, q: usize| {
+        [
+            vertices[q][0] - vertices[v][0],
+            vertices[q][1] - vertices[v][1],
+        ]
+    };
+    let minus = |d: [f64; 2]| [-d[0], -d[1]];
     for c in cracks {
         for w in c.nodes.windows(3) {
-            let v = vertices[w[1]];
-            let dir = |q: usize| [vertices[q][0] - v[0], vertices[q][1] - v[1]];
-            around[w[1]] = Some((dir(w[2]), dir(w[0])));
+            around[w[1]] = Some((dir(w[1], w[2]), dir(w[1], w[0])));
+        }
+        // A mouth has one neighbour: Ω near it is a half-plane the crack enters transversally,
+        // so the crack's continuation straight through the mouth (outside Ω) splits it as the
+        // crack does — its + face is the left of the path, as at an interior node.
+        let (first, last) = (c.nodes[0], c.nodes[c.nodes.len() - 1]);
+        if c.mouths[0] {
+            let out = dir(first, c.nodes[1]);
+            around[first] = Some((out, minus(out)));
+        }
+        if c.mouths[1] {
+            let back = dir(last, c.nodes[c.nodes.len() - 2]);
+            around[last] = Some((minus(back), back));
         }
     }
     triangles
@@ -399,6 +467,15 @@ fn corner_sides(
             })
         })
         .collect()
+}
+
+/// Marks the crack ends that are vertices of the boundary `edges` as mouths.
+fn mark_mouths(cracks: &mut [CrackChain], edges: &[[usize; 2]]) {
+    let on_boundary: std::collections::HashSet<usize> = edges.iter().flatten().copied().collect();
+    for c in cracks {
+        let ends = [c.nodes[0], c.nodes[c.nodes.len() - 1]];
+        c.mouths = ends.map(|v| on_boundary.contains(&v));
+    }
 }
 
 /// Whether direction `d` from a crack node lies left of the path that arrives from direction

@@ -111,7 +111,13 @@ pub(super) fn crack_number(name: &str) -> Option<usize> {
     Some(digits.parse().unwrap_or(usize::MAX))
 }
 
-pub(super) fn assemble(raw: &RawMesh, origin: &str) -> Result<CoarseMesh> {
+/// The coarse mesh of `raw`; a crack chain may end on ∂Ω (a mouth) only if `ends` allows it,
+/// and then it must leave ∂Ω along an interior edge.
+pub(super) fn assemble(
+    raw: &RawMesh,
+    origin: &str,
+    ends: crate::geometry::CrackEnds,
+) -> Result<CoarseMesh> {
     let groups = find_groups(&raw.names, origin)?;
     let mut node_index = HashMap::with_capacity(raw.nodes.len());
     for (i, n) in raw.nodes.iter().enumerate() {
@@ -139,9 +145,12 @@ pub(super) fn assemble(raw: &RawMesh, origin: &str) -> Result<CoarseMesh> {
     let mut cracks = Vec::with_capacity(groups.cracks.len());
     for (name, tags) in &groups.cracks {
         let chain = ctx.crack_chain(name, tags)?;
-        for &v in &chain {
+        let mouths_allowed = ends == crate::geometry::CrackEnds::MayBeMouths;
+        let last = chain.len() - 1;
+        for (j, &v) in chain.iter().enumerate() {
             let [x, y] = vertices[v];
-            if on_boundary.contains(&v) {
+            let end = j == 0 || j == last;
+            if on_boundary.contains(&v) && !(mouths_allowed && end) {
                 return Err(invalid(
                     origin,
                     format!("{name} touches the boundary at vertex ({x}, {y})"),
@@ -152,6 +161,19 @@ pub(super) fn assemble(raw: &RawMesh, origin: &str) -> Result<CoarseMesh> {
                     origin,
                     format!("{other} and {name} share the vertex ({x}, {y})"),
                 ));
+            }
+        }
+        if mouths_allowed {
+            // a chain edge on ∂Ω would run along the boundary (the mouth must be entered
+            // transversally): every crack edge is an edge of two triangles
+            for w in chain.windows(2) {
+                if edges.get(w[0], w[1]).map(|e| e.0) != Some(2) {
+                    let ([xa, ya], [xb, yb]) = (vertices[w[0]], vertices[w[1]]);
+                    return Err(invalid(
+                        origin,
+                        format!("{name} runs along the boundary ({xa}, {ya})–({xb}, {yb})"),
+                    ));
+                }
             }
         }
         cracks.push(chain);

@@ -6,6 +6,7 @@ use std::path::Path;
 use super::coarse::{assemble, CoarseMesh};
 use super::error::{io_error, Result};
 use super::msh::{parse_msh, RawNode};
+use crate::geometry::CrackEnds;
 
 /// Reads an ASCII gmsh mesh (format 4.1 or 2.2, with `$PhysicalNames`) into a [`CoarseMesh`];
 /// `origin` names the file in error messages.
@@ -23,23 +24,37 @@ use super::msh::{parse_msh, RawNode};
 ///
 /// Other physical groups and 0D elements are ignored.
 pub fn read_msh(text: &str, origin: &str) -> Result<CoarseMesh> {
-    read_msh_snapped(text, origin, &[])
+    read_msh_snapped(text, origin, &[], CrackEnds::Inside)
 }
 
 /// Reads an ASCII `.msh` file from disk with [`read_msh`] (the path is the origin); invalid
 /// UTF-8 is replaced, so binary files reach the binary-format error.
 pub fn read_msh_file(path: &Path) -> Result<CoarseMesh> {
+    read_msh_file_with(path, CrackEnds::Inside)
+}
+
+/// [`read_msh_file`] with the crack ends `ends` allows: with [`CrackEnds::MayBeMouths`] a crack
+/// chain may end on a boundary vertex (a mouth, elastic scenes), its other vertices and edges
+/// still off ∂Ω.
+pub fn read_msh_file_with(path: &Path, ends: CrackEnds) -> Result<CoarseMesh> {
     let bytes = std::fs::read(path).map_err(|e| io_error(path, &e))?;
-    read_msh(
+    read_msh_snapped(
         &String::from_utf8_lossy(&bytes),
         &path.display().to_string(),
+        &[],
+        ends,
     )
 }
 
-pub(super) fn read_msh_snapped(text: &str, origin: &str, exact: &[[f64; 2]]) -> Result<CoarseMesh> {
+pub(super) fn read_msh_snapped(
+    text: &str,
+    origin: &str,
+    exact: &[[f64; 2]],
+    ends: CrackEnds,
+) -> Result<CoarseMesh> {
     let mut raw = parse_msh(text, origin)?;
     snap_nodes(&mut raw.nodes, exact);
-    assemble(&raw, origin)
+    assemble(&raw, origin, ends)
 }
 
 /// Gives the node nearest to each exact point that point's coordinates, if it is within

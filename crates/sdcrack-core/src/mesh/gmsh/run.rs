@@ -29,8 +29,10 @@ pub struct GmshRun {
 ///
 /// `polygon` is the outer boundary, counter-clockwise or clockwise, closed implicitly (a last
 /// point equal to the first is dropped); `cracks` are polylines of at least two points strictly
-/// inside the polygon (not validated here). Points are numbered polygon first, then each crack
-/// in order; every point gets characteristic length `mesh_size`; crack segment k is a Line from
+/// inside the polygon but for their ends, which may lie on an edge (a mouth: the point is then
+/// inserted into the boundary curve, between the edge's vertices, and the crack uses it; not
+/// validated here). Points are numbered boundary first (with no mouth: the polygon's vertices),
+/// then each crack's other points in order; every point gets characteristic length `mesh_size`; crack segment k is a Line from
 /// point k to point k+1, so gmsh's line elements run from the first tip toward the last. The
 /// crack lines are embedded in the surface. Physical groups: `"domain"` (the surface),
 /// `"boundary"` (all polygon lines), `"crack1"`, `"crack2"`, … in the order of `cracks`.
@@ -46,8 +48,11 @@ pub fn geo_script(polygon: &[[f64; 2]], cracks: &[Vec<[f64; 2]>], mesh_size: f64
         cracks.len()
     );
     s.push_str(&geo_options(h));
-    let n = polygon.len();
-    for (k, p) in polygon.iter().enumerate() {
+    // the boundary points: the polygon's vertices with the cracks' mouths inserted along their
+    // edges (an edge crack's end must be a point of the boundary curve); no mouth, no change
+    let boundary = boundary_points(polygon, cracks);
+    let n = boundary.len();
+    for (k, p) in boundary.iter().enumerate() {
         let _ = writeln!(
             s,
             "Point({}) = {{{:?}, {:?}, 0, {h:?}}};",
@@ -67,19 +72,21 @@ pub fn geo_script(polygon: &[[f64; 2]], cracks: &[Vec<[f64; 2]>], mesh_size: f64
     let mut crack_lines = Vec::new();
     for (c, crack) in cracks.iter().enumerate() {
         let _ = writeln!(s, "// crack{}", c + 1);
-        let first = next;
-        for p in crack {
-            let _ = writeln!(s, "Point({next}) = {{{:?}, {:?}, 0, {h:?}}};", p[0], p[1]);
-            next += 1;
+        let mut tags = Vec::with_capacity(crack.len());
+        for (k, p) in crack.iter().enumerate() {
+            let end = k == 0 || k + 1 == crack.len();
+            match boundary.iter().position(|b| b == p).filter(|_| end) {
+                Some(mouth) => tags.push(mouth + 1),
+                None => {
+                    let _ = writeln!(s, "Point({next}) = {{{:?}, {:?}, 0, {h:?}}};", p[0], p[1]);
+                    tags.push(next);
+                    next += 1;
+                }
+            }
         }
         let mut lines = Vec::new();
-        for k in 0..crack.len().saturating_sub(1) {
-            let _ = writeln!(
-                s,
-                "Line({next_line}) = {{{}, {}}};",
-                first + k,
-                first + k + 1
-            );
+        for w in tags.windows(2) {
+            let _ = writeln!(s, "Line({next_line}) = {{{}, {}}};", w[0], w[1]);
             lines.push(next_line);
             next_line += 1;
         }
@@ -121,6 +128,33 @@ pub(super) fn geo_options(h: f64) -> String {
          Mesh.RandomSeed = 1;\n\
          General.NumThreads = 1;\n"
     )
+}
+
+/// The polygon's vertices in order with every crack end that lies on an edge (exactly, not at
+/// a vertex: a mouth) inserted into that edge, ordered along it.
+fn boundary_points(polygon: &[[f64; 2]], cracks: &[Vec<[f64; 2]>]) -> Vec<[f64; 2]> {
+    let ends = cracks
+        .iter()
+        .filter(|c| c.len() >= 2)
+        .flat_map(|c| [c[0], c[c.len() - 1]]);
+    let mut on_edge: Vec<Vec<[f64; 2]>> = vec![Vec::new(); polygon.len()];
+    for p in ends {
+        if polygon.contains(&p) {
+            continue;
+        }
+        if let Some(k) = crate::geometry::boundary_edge_of(p, polygon) {
+            on_edge[k].push(p);
+        }
+    }
+    let mut out = Vec::with_capacity(polygon.len());
+    for (&v, mouths) in polygon.iter().zip(&mut on_edge) {
+        out.push(v);
+        let d = |p: &[f64; 2]| (p[0] - v[0]).hypot(p[1] - v[1]);
+        mouths.sort_by(|a, b| d(a).total_cmp(&d(b)));
+        mouths.dedup();
+        out.extend(mouths.iter().copied());
+    }
+    out
 }
 
 pub(super) fn join(tags: &[usize]) -> String {
@@ -192,7 +226,13 @@ pub fn mesh_polygon(
         .chain(cracks.iter().flatten())
         .copied()
         .collect();
-    let mesh = read_msh_snapped(&msh_text, &msh.display().to_string(), &exact)?;
+    // the geometry was validated by the caller: crack ends on ∂Ω are mouths the script made
+    let mesh = read_msh_snapped(
+        &msh_text,
+        &msh.display().to_string(),
+        &exact,
+        crate::geometry::CrackEnds::MayBeMouths,
+    )?;
     let run = GmshRun {
         version,
         seconds,

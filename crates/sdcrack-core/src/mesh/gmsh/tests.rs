@@ -606,3 +606,110 @@ fn mesh_polygon_rejects_bad_input() {
     assert!(e.to_string().contains("no cracks"), "{e}");
     assert!(!dir.exists());
 }
+
+// ---------------------------------------------------------------------------------------------
+// Edge cracks: a crack chain ending on ∂Ω (a mouth)
+
+/// The unit square with a vertex M = (0, 0.5) on its left side and P = (0.5, 0.5) inside,
+/// fanned around P; `crack` lists the crack1 lines.
+fn square_with_mouth(crack: &[&str]) -> String {
+    let nodes = "6\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n5 0 0.5 0\n6 0.5 0.5 0\n";
+    let mut elements: Vec<(i64, i64, &str)> = ["1 2", "2 3", "3 4", "4 5", "5 1"]
+        .iter()
+        .map(|n| (1, 2, *n))
+        .collect();
+    elements.extend(crack.iter().map(|n| (1, 3, *n)));
+    elements.extend(
+        ["1 2 6", "2 3 6", "3 4 6", "4 5 6", "5 1 6"]
+            .iter()
+            .map(|n| (2, 1, *n)),
+    );
+    msh22(SQUARE_NAMES, &elements).replace(SQUARE_NODES, nodes)
+}
+
+fn read_with_mouths(text: &str, name: &str) -> Result<CoarseMesh, GmshError> {
+    let dir = Scratch::new(name);
+    std::fs::create_dir_all(&*dir).unwrap();
+    let path = dir.join("m.msh");
+    std::fs::write(&path, text).unwrap();
+    read_msh_file_with(&path, crate::geometry::CrackEnds::MayBeMouths).map_err(|e| {
+        GmshError::Input(
+            e.to_string()
+                .replace(&path.display().to_string(), "test.msh"),
+        )
+    })
+}
+
+#[test]
+fn a_crack_chain_may_end_on_the_boundary_only_when_asked() {
+    let text = square_with_mouth(&["5 6"]);
+    // the scalar reader refuses it as before
+    assert_error(&text, &["crack1 touches the boundary at vertex (0, 0.5)"]);
+    let m = read_with_mouths(&text, "mouth-ok").expect("a mouth");
+    assert_eq!(m.cracks.len(), 1);
+    let chain: Vec<[f64; 2]> = m.cracks[0].iter().map(|&v| m.vertices[v]).collect();
+    assert_eq!(chain, vec![[0.0, 0.5], [0.5, 0.5]]);
+    // only an end may be on ∂Ω, and the chain must leave ∂Ω along an interior edge
+    let along = read_with_mouths(&square_with_mouth(&["4 5", "5 6"]), "mouth-along").unwrap_err();
+    assert!(
+        along
+            .to_string()
+            .contains("crack1 touches the boundary at vertex (0, 0.5)"),
+        "{along}"
+    );
+    let edge = read_with_mouths(&square_with_mouth(&["4 5"]), "mouth-edge").unwrap_err();
+    assert!(
+        edge.to_string()
+            .contains("crack1 runs along the boundary (0, 1)–(0, 0.5)"),
+        "{edge}"
+    );
+}
+
+#[test]
+fn geo_script_puts_a_mouth_on_the_boundary_curve() {
+    let square = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    let interior = vec![vec![[-0.5, 0.0], [0.0, 0.0]]];
+    let plain = geo_script(&square, &interior, 0.5);
+    assert!(plain.contains("Line(4) = {4, 1};"), "{plain}");
+    let edge = vec![vec![[0.0, 0.0], [-1.0, 0.0]], vec![[1.0, 0.5], [0.5, 0.5]]];
+    let geo = geo_script(&square, &edge, 0.5);
+    // boundary: 1 (−1,−1), 2 (1,−1), 3 (1,0.5) the second crack's mouth, 4 (1,1), 5 (−1,1),
+    // 6 (−1,0) the first crack's mouth; each crack uses its mouth's tag
+    for line in [
+        "Point(3) = {1.0, 0.5, 0, 0.5};",
+        "Point(6) = {-1.0, 0.0, 0, 0.5};",
+        "Line(6) = {6, 1};",
+        "Curve Loop(1) = {1, 2, 3, 4, 5, 6};",
+        "Point(7) = {0.0, 0.0, 0, 0.5};",
+        "Line(7) = {7, 6};",
+        "Point(8) = {0.5, 0.5, 0, 0.5};",
+        "Line(8) = {3, 8};",
+        "Physical Curve(\"boundary\") = {1, 2, 3, 4, 5, 6};",
+    ] {
+        assert!(geo.lines().any(|l| l == line), "`{line}` not in:\n{geo}");
+    }
+}
+
+#[test]
+fn gmsh_meshes_a_mouth_as_a_boundary_vertex() {
+    let Some(dir) = gmsh_scratch("mouth") else {
+        return;
+    };
+    // one mouth on the L's inner edge y = 0; two mouths (top side, inner edge x = 0), kinked
+    let cracks = vec![
+        vec![[0.5, 0.0], [0.5, -0.5]],
+        vec![[-0.5, 1.0], [-0.5, 0.5], [0.0, 0.5]],
+    ];
+    let (m, _) = mesh_polygon(&L_SHAPE, &cracks, 0.3, &dir).expect("meshed");
+    let boundary: HashSet<usize> = m.boundary_edges.iter().flatten().copied().collect();
+    let mut mouths = Vec::new();
+    for (chain, polyline) in m.cracks.iter().zip(&cracks) {
+        check_chain(&m, chain, polyline);
+        mouths.push([chain[0], chain[chain.len() - 1]].map(|v| boundary.contains(&v)));
+        // only the ends touch ∂Ω
+        assert!(chain[1..chain.len() - 1]
+            .iter()
+            .all(|v| !boundary.contains(v)));
+    }
+    assert_eq!(mouths, vec![[true, false], [true, true]]);
+}
