@@ -107,6 +107,70 @@ pub struct FixedPoint {
     pub components: [bool; 2],
 }
 
+/// A displacement component, as `data.fixed`'s `components` name it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Component {
+    /// u_x.
+    X,
+    /// u_y.
+    Y,
+}
+
+crate::scene_names!(Component { X => "x", Y => "y" });
+
+/// The crack ends that are tips: each crack's first point, then its last, those not on ∂Ω (an
+/// end on ∂Ω is a mouth; docs/elasticity.md). `polygon`: ∂Ω's vertices in order.
+pub fn crack_tips(polygon: &[[f64; 2]], cracks: &[crate::problem::Polyline]) -> Vec<[f64; 2]> {
+    use crate::geometry::{point_in_polygon, Inside};
+    (cracks.iter())
+        .flat_map(|c| [c.points[0], c.points[c.points.len() - 1]])
+        .filter(|&p| point_in_polygon(p, polygon) != Inside::OnBoundary)
+        .collect()
+}
+
+/// How many of the three rigid modes of the plane, (1, 0), (0, 1) and (−y, x), the fixed
+/// components `fixed` remove: the rank of the rows (1, 0, −y) (u_x held at (x, y)) and
+/// (0, 1, x) (u_y held), the modes' values in the held components. Every 3 × 3 minor of these
+/// rows is a difference of corner coordinates (or zero), so a minor is zero exactly when the
+/// corners make it so; the threshold `1e-12 · max(1, |x|, |y|)` only keeps round-off of the
+/// determinant (a few units of the coordinates' last place) from counting.
+pub fn rigid_modes_removed(fixed: &[FixedPoint]) -> usize {
+    let rows: Vec<[f64; 3]> = (fixed.iter())
+        .flat_map(|f| {
+            let [x, y] = f.point;
+            [
+                (f.components[0], [1.0, 0.0, -y]),
+                (f.components[1], [0.0, 1.0, x]),
+            ]
+        })
+        .filter_map(|(held, row)| held.then_some(row))
+        .collect();
+    let scale = rows.iter().map(|r| r[2].abs()).fold(1.0, f64::max);
+    let tol = 1e-12 * scale;
+    let nonzero_row = rows.iter().any(|r| r.iter().any(|v| v.abs() > tol));
+    let cross = |a: &[f64; 3], b: &[f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let mut rank2 = false;
+    for (i, a) in rows.iter().enumerate() {
+        for b in &rows[i + 1..] {
+            let n = cross(a, b);
+            if n.iter().any(|v| v.abs() > tol) {
+                rank2 = true;
+                let det = |c: &[f64; 3]| n[0] * c[0] + n[1] * c[1] + n[2] * c[2];
+                if rows.iter().any(|c| det(c).abs() > tol) {
+                    return 3;
+                }
+            }
+        }
+    }
+    usize::from(nonzero_row) + usize::from(rank2)
+}
+
 /// A stress intensity factor pair at one crack tip, in the tip's frame (docs/scenes.md: e₁ points
 /// ahead of the tip, out of the crack; e₂ is e₁ turned by +90°).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -175,6 +239,27 @@ pub fn hooke_stress(u: &[Expr; 2], m: &Material) -> [Expr; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rigid_modes_of_fixed_corners() {
+        let at = |point, x, y| FixedPoint {
+            point,
+            components: [x, y],
+        };
+        // both components at one corner: the translations, not the rotation about it
+        assert_eq!(rigid_modes_removed(&[at([1.0, -1.0], true, true)]), 2);
+        // and u_x at a corner above it: the rotation too
+        let three = [at([1.0, -1.0], true, true), at([1.0, 1.0], true, false)];
+        assert_eq!(rigid_modes_removed(&three), 3);
+        // u_y at a corner above it: (0, 1, x) twice with the same x, still two
+        let same_x = [at([1.0, -1.0], true, true), at([1.0, 1.0], false, true)];
+        assert_eq!(rigid_modes_removed(&same_x), 2);
+        // u_x at two corners: one translation and the rotation
+        let xs = [at([1.0, -1.0], true, false), at([1.0, 1.0], true, false)];
+        assert_eq!(rigid_modes_removed(&xs), 2);
+        assert_eq!(rigid_modes_removed(&[]), 0);
+        assert_eq!(rigid_modes_removed(&[at([0.0, 0.0], true, false)]), 1);
+    }
 
     #[test]
     fn young_poisson_round_trip_and_constants() {

@@ -29,7 +29,7 @@
 
 use super::key_path::KeyPath;
 use super::validated::Scene;
-use crate::expr::Var;
+use crate::expr::{Expr, Var};
 use crate::geometry::{point_in_polygon, Inside};
 use crate::problem::{face_point, Exact};
 
@@ -231,14 +231,18 @@ impl std::fmt::Display for ExactDataError {
     }
 }
 
-/// Checks the scene's `[exact]` data (nothing to check without it).
+/// Checks a scalar scene's `[exact]` data (nothing to check without it, nor here for an elastic
+/// scene).
 pub fn check(scene: &Scene) -> Result<(), ExactDataError> {
-    let Some(exact) = &scene.exact else {
+    let Some(problem) = scene.scalar() else {
+        return Ok(());
+    };
+    let Some(exact) = &problem.exact else {
         return Ok(());
     };
     check_gradient(exact, scene)?;
-    check_source(exact, scene)?;
-    check_boundary(exact, scene)?;
+    check_source(exact, &problem.f, scene)?;
+    check_boundary(exact, &problem.g, scene)?;
     check_crack(exact, scene)
 }
 
@@ -268,11 +272,11 @@ fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     Ok(())
 }
 
-fn check_source(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
+fn check_source(exact: &Exact, source: &Expr, scene: &Scene) -> Result<(), ExactDataError> {
     let uxx = exact.u.derivative(Var::X).derivative(Var::X);
     let uyy = exact.u.derivative(Var::Y).derivative(Var::Y);
     for p in interior_points(scene) {
-        let f = Known::bounded(scene.f.eval_bounded(p[0], p[1]));
+        let f = Known::bounded(source.eval_bounded(p[0], p[1]));
         let (a, ea) = uxx.eval_bounded(p[0], p[1]);
         let (b, eb) = uyy.eval_bounded(p[0], p[1]);
         let minus_laplacian = -(a + b);
@@ -295,9 +299,9 @@ fn check_source(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     Ok(())
 }
 
-fn check_boundary(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
+fn check_boundary(exact: &Exact, dirichlet: &Expr, scene: &Scene) -> Result<(), ExactDataError> {
     for p in boundary_points(scene) {
-        let g = Known::bounded(scene.g.eval_bounded(p[0], p[1]));
+        let g = Known::bounded(dirichlet.eval_bounded(p[0], p[1]));
         let u = Known::bounded(exact.u.eval_bounded(p[0], p[1]));
         if g.differs(u) {
             return Err(ExactDataError::new(
@@ -485,7 +489,8 @@ mod tests {
             assert!(e.contains(" at ("), "{e}");
         }
         let mut s = scene("px", f, u, Some((u, "0")));
-        s.exact.as_mut().unwrap().px = crate::expr::Expr::parse("-pi*cos(pi*x)*cos(pi*y)").unwrap();
+        s.scalar_mut().unwrap().exact.as_mut().unwrap().px =
+            crate::expr::Expr::parse("-pi*cos(pi*x)*cos(pi*y)").unwrap();
         let e = check(&s).unwrap_err();
         assert_eq!(e.key, KeyPath::keys("exact.px"));
         assert!(e.message.starts_with("exact.px is not ∂u/∂x"), "{e}");
