@@ -62,6 +62,11 @@ impl Material {
         self.lambda / (2.0 * (self.lambda + self.mu))
     }
 
+    /// Young's modulus E = 2μ(1 + ν).
+    pub fn young(&self) -> f64 {
+        2.0 * self.mu * (1.0 + self.poisson())
+    }
+
     /// Kolosov's constant κ: 3 − 4ν in plane strain, (3 − ν)/(1 + ν) in plane stress.
     pub fn kolosov(&self) -> f64 {
         let nu = self.poisson();
@@ -73,8 +78,7 @@ impl Material {
 
     /// E′ of Irwin's relation G = K²/E′: E/(1 − ν²) in plane strain, E in plane stress.
     pub fn e_prime(&self) -> f64 {
-        let nu = self.poisson();
-        let e = 2.0 * self.mu * (1.0 + nu);
+        let (nu, e) = (self.poisson(), self.young());
         match self.plane {
             PlaneModel::Strain => e / (1.0 - nu * nu),
             PlaneModel::Stress => e,

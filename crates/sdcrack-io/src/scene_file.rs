@@ -21,6 +21,7 @@
 //! [`Expr`]: sdcrack_core::expr::Expr
 
 mod document;
+mod elastic;
 mod error;
 mod limits;
 mod load;

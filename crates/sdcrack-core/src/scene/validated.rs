@@ -108,6 +108,14 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Whether the scene gives exact fields (`[exact]`), whatever its problem kind.
+    pub fn has_exact(&self) -> bool {
+        match &self.problem {
+            Problem::Scalar(p) => p.exact.is_some(),
+            Problem::Elasticity(d) => d.exact.is_some(),
+        }
+    }
+
     /// The scalar problem's data; `None` for an elastic scene.
     pub fn scalar(&self) -> Option<&ScalarProblem> {
         match &self.problem {
