@@ -171,11 +171,19 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Print a commented scene template (every table and key with its type and default).
+    /// Print a commented scene template (every table and key with its type and default):
+    /// `--template` the scalar problem's, `--template elasticity` the elastic problem's.
     Scene {
-        /// Print the template (the only action so far).
-        #[arg(long, required = true)]
-        template: bool,
+        /// Print the template of this problem kind (the only action so far).
+        #[arg(
+            long,
+            required = true,
+            num_args = 0..=1,
+            default_missing_value = "scalar",
+            value_parser = parse_problem_kind,
+            value_name = "scalar|elasticity"
+        )]
+        template: Option<ProblemKind>,
     },
     /// Print the scene schema as JSON: every table with its keys, each key's type, its words
     /// and allowed names, and the names shared with the compare tool (quantities, checks a
@@ -217,6 +225,10 @@ fn or_list(names: &[&str]) -> String {
         [one] => one.to_string(),
         [init @ .., last] => format!("{} or {last}", init.join(", ")),
     }
+}
+
+fn parse_problem_kind(s: &str) -> Result<ProblemKind, String> {
+    parse_name(s, "problem kind")
 }
 
 fn parse_u_space(s: &str) -> Result<USpace, String> {
@@ -339,8 +351,11 @@ fn clap_one_line(e: &clap::Error) -> String {
 /// Runs a parsed command; `Ok(code)` is 0, or 3 when some case did not converge.
 pub fn execute(cli: Cli) -> Result<i32, Failure> {
     match cli.command {
-        Command::Scene { template: _ } => {
-            say_raw(sdcrack_io::scene_file::SCENE_TEMPLATE);
+        Command::Scene { template } => {
+            say_raw(match template.unwrap_or_default() {
+                ProblemKind::Scalar => sdcrack_io::scene_file::SCENE_TEMPLATE,
+                ProblemKind::Elasticity => sdcrack_io::scene_file::ELASTIC_SCENE_TEMPLATE,
+            });
             Ok(0)
         }
         Command::Schema => {
