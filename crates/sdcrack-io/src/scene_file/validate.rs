@@ -75,6 +75,8 @@ impl SceneToml {
                 ),
             ));
         }
+        // the problem kind first: what the rest of the scene may hold depends on it
+        let kind = problem_kind(self.problem.as_ref())?;
         let d = &self.discretization;
         let meshing = validate_meshing(d, base_dir)?;
         let grading = d.grading.as_ref().map(validate_grading).transpose()?;
@@ -112,7 +114,6 @@ impl SceneToml {
             }
             Meshing::File(_) => Level0Size::Triangles(file_triangles as f64),
         };
-        let kind = problem_kind(self.problem.as_ref())?;
         let (problem, axes, fields, references, verification) = match kind {
             ProblemKind::Scalar => {
                 refuse_elastic_keys(self.problem.as_ref(), &self.data, self.exact.as_ref())?;
