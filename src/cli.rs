@@ -766,13 +766,22 @@ fn run(
     let failed = study.cases.iter().filter(|c| !c.converged).count();
     // the whole command's time, and the solve's (summary.json's wall_s) beside it: the fields
     // and the references may take most of it
-    say!(
-        "{} cases in {:.1} s (solving {:.1} s); results in {}",
-        study.cases.len(),
-        start.elapsed().as_secs_f64(),
-        wall,
-        path.display()
-    );
+    match scene.problem.kind() {
+        ProblemKind::Scalar => say!(
+            "{} cases in {:.1} s (solving {:.1} s); results in {}",
+            study.cases.len(),
+            start.elapsed().as_secs_f64(),
+            wall,
+            path.display()
+        ),
+        ProblemKind::Elasticity => say!(
+            "elastic scene '{}': no solver case (issue 46), references {references:?} on levels {:?} in {:.1} s; results in {}",
+            scene.name,
+            plan.axes.levels,
+            start.elapsed().as_secs_f64(),
+            path.display()
+        ),
+    }
     Ok(convergence_status(failed, references_converged))
 }
 
