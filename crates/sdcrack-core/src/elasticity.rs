@@ -245,6 +245,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn crack_ends_on_the_boundary_are_mouths_not_tips() {
+        use crate::problem::Polyline;
+        let square = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+        let line = |points: Vec<[f64; 2]>| Polyline { points };
+        let interior = line(vec![[-0.5, 0.0], [0.5, 0.0]]);
+        let edge = line(vec![[-1.0, 0.0], [0.0, 0.0]]);
+        let through = line(vec![[0.0, -1.0], [0.0, -0.5], [0.5, 1.0]]);
+        assert_eq!(crack_tips(&square, &[interior.clone()]).len(), 2);
+        assert_eq!(
+            crack_tips(&square, &[edge, interior]),
+            [[0.0, 0.0], [-0.5, 0.0], [0.5, 0.0]]
+        );
+        assert!(crack_tips(&square, &[through]).is_empty());
+    }
+
+    #[test]
     fn rigid_modes_of_fixed_corners() {
         let at = |point, x, y| FixedPoint {
             point,

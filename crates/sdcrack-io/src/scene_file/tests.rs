@@ -409,3 +409,71 @@ fn docs_table_lists_exactly_the_schema_keys() {
         }
     }
 }
+
+/// An elastic scene as the loader reads it: the material of either pair and plane model, the
+/// stress by Hooke's law unless given, the parts of a polygon, no solver case axes, the fields
+/// ["u"] by default; a scalar scene is the scalar problem.
+#[test]
+fn elastic_scenes_are_read_into_the_elastic_problem() {
+    use sdcrack_core::elasticity::{hooke_stress, PlaneModel};
+    let d = |text: &str| {
+        Scene::from_toml(text)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .elasticity()
+            .cloned()
+            .expect("elastic")
+    };
+    let scene = Scene::from_toml(ELASTIC_SCENE_TEMPLATE).unwrap();
+    assert_eq!(scene.axes.levels, [0, 1, 2]);
+    assert_eq!(scene.axes.case_count(), 0);
+    let data = scene.elasticity().unwrap();
+    let m = data.material;
+    assert!((m.young() - 1.0).abs() < 1e-15 && (m.poisson() - 0.3).abs() < 1e-15);
+    assert_eq!(m.plane, PlaneModel::Strain);
+    let exact = data.exact.as_ref().unwrap();
+    let hooke = hooke_stress(&exact.u, &m);
+    for (s, h) in exact.stress.iter().zip(&hooke) {
+        assert_eq!(s.source(), h.source());
+    }
+    // σ_yy of u = (0.1 x, −0.1 y): 2μ · (−0.1)
+    assert!((exact.stress[1].eval(0.2, 0.3) + 0.2 * m.mu).abs() < 1e-15);
+    assert_eq!(exact.sif.len(), 2);
+    let stress = ELASTIC_SCENE_TEMPLATE.replace("plane = \"strain\"", "plane = \"stress\"");
+    assert_eq!(d(&stress).material.plane, PlaneModel::Stress);
+    // no [outputs]: the references' fields ["u"]; no [problem] plane: strain
+    let bare = ELASTIC_SCENE_TEMPLATE
+        .replace("[outputs]", "# [outputs]")
+        .replace("\nfields = ", "\n# fields = ")
+        .replace("\nreferences = ", "\n# references = ")
+        .replace("plane = \"strain\"", "");
+    let s = Scene::from_toml(&bare).unwrap();
+    assert!(s.fields.u && !s.fields.p && !s.fields.lambda && s.references.is_empty());
+    assert_eq!(s.elasticity().unwrap().material.plane, PlaneModel::Strain);
+    // a polygon's parts are edge1 … edgeN
+    let polygon = ELASTIC_SCENE_TEMPLATE
+        .replace(
+            "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
+            "domain = { polygon = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]] }",
+        )
+        .replace("cells = [8, 8]", "mesh_size = 0.5")
+        .replace(
+            "# traction = { top = [\"0\", \"-0.1\"], bottom = [\"0\", \"-0.1\"] }",
+            "traction = { edge3 = [\"0\", \"-0.1\"] }",
+        );
+    let parts: Vec<String> = d(&polygon)
+        .tractions
+        .iter()
+        .map(|t| t.part.0.clone())
+        .collect();
+    assert_eq!(parts, ["edge3"]);
+    let e = Scene::from_toml(&polygon.replace("edge3 =", "edge5 ="))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "unknown boundary part \"edge5\" (this domain's parts: edge1, edge2, edge3, edge4)"
+        ),
+        "{e}"
+    );
+    assert!(Scene::from_toml(SCENE_TEMPLATE).unwrap().scalar().is_some());
+}
