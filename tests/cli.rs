@@ -551,7 +551,10 @@ fn every_scene_of_the_repository_and_the_tests_passes_the_exact_data_check() {
     use sdcrack_core::scene::{exact_data, Scene};
     use sdcrack_io::scene_file::TomlScene;
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut files = vec![root.join("docs/scene-template.toml")];
+    let mut files = vec![
+        root.join("docs/scene-template.toml"),
+        root.join("docs/scene-template-elasticity.toml"),
+    ];
     for dir in ["scenes", "tools/untuned-scenes", "tests/data/scenes"] {
         for e in std::fs::read_dir(root.join(dir)).unwrap() {
             let p = e.unwrap().path();

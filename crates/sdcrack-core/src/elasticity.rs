@@ -252,7 +252,10 @@ mod tests {
         let interior = line(vec![[-0.5, 0.0], [0.5, 0.0]]);
         let edge = line(vec![[-1.0, 0.0], [0.0, 0.0]]);
         let through = line(vec![[0.0, -1.0], [0.0, -0.5], [0.5, 1.0]]);
-        assert_eq!(crack_tips(&square, &[interior.clone()]).len(), 2);
+        assert_eq!(
+            crack_tips(&square, std::slice::from_ref(&interior)).len(),
+            2
+        );
         assert_eq!(
             crack_tips(&square, &[edge, interior]),
             [[0.0, 0.0], [-0.5, 0.0], [0.5, 0.0]]
