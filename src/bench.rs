@@ -422,13 +422,18 @@ pub fn run_bench(
     vertices: usize,
     observer: &mut dyn Observer,
 ) -> Result<BenchReport, BenchError> {
+    if scene.scalar().is_none() {
+        return Err(StudyError::NotScalar.into());
+    }
     let cells = bench_cells(scene, vertices)?;
     let mut bench_scene = scene.clone();
     bench_scene.meshing = Meshing::Cells(cells);
     bench_scene.level0 = sdcrack_core::scene::Level0Size::Grid(cells);
     bench_scene.axes.levels = vec![0];
     bench_scene.fields = FieldSet::default();
-    bench_scene.exact = None;
+    if let Some(problem) = bench_scene.scalar_mut() {
+        problem.exact = None;
+    }
     bench_scene.references.clear();
 
     observer.phase("yardstick: Cholesky of the P1 Laplacian");
@@ -555,7 +560,8 @@ fn iterative_route(scene: &Scene, lumped: &StudyResult) -> Result<IterativeRoute
     let mesh = scene.mesh_source()?.level(0)?;
     let topo = mesh.u_topology(USpace::Broken);
     let t0 = Instant::now();
-    let system = krylov::continuous_p_system(&mesh, &topo, scene, PMass::Lumped)
+    let problem = scene.scalar().ok_or(StudyError::NotScalar)?;
+    let system = krylov::continuous_p_system(&mesh, &topo, problem, PMass::Lumped)
         .map_err(StudyError::from)?;
     let system_assembly_s = t0.elapsed().as_secs_f64();
     let solve = krylov::solve_u(&mesh, &topo, &system, 0.0, krylov::ROUTE_TOLERANCE)?;

@@ -18,8 +18,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use sdcrack_core::case::{delta_text, CaseKey, CasePattern, Pattern};
 use sdcrack_core::problem::Named;
 use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
-use sdcrack_core::scene::{KeyPath, Scene};
-use sdcrack_core::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
+use sdcrack_core::scene::{KeyPath, ProblemKind, Scene};
+use sdcrack_core::study::{run_study, CasePlan, CaseResult, Observer, StudyError, StudyResult};
 use sdcrack_io::output::summary::Provenance;
 use sdcrack_io::output::{write_run, ResultsDir};
 use sdcrack_io::scene_file::{LoadedScene, SceneError};
@@ -171,11 +171,19 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Print a commented scene template (every table and key with its type and default).
+    /// Print a commented scene template (every table and key with its type and default):
+    /// `--template` the scalar problem's, `--template elasticity` the elastic problem's.
     Scene {
-        /// Print the template (the only action so far).
-        #[arg(long, required = true)]
-        template: bool,
+        /// Print the template of this problem kind (the only action so far).
+        #[arg(
+            long,
+            required = true,
+            num_args = 0..=1,
+            default_missing_value = "scalar",
+            value_parser = parse_problem_kind,
+            value_name = "scalar|elasticity"
+        )]
+        template: Option<ProblemKind>,
     },
     /// Print the scene schema as JSON: every table with its keys, each key's type, its words
     /// and allowed names, and the names shared with the compare tool (quantities, checks a
@@ -217,6 +225,10 @@ fn or_list(names: &[&str]) -> String {
         [one] => one.to_string(),
         [init @ .., last] => format!("{} or {last}", init.join(", ")),
     }
+}
+
+fn parse_problem_kind(s: &str) -> Result<ProblemKind, String> {
+    parse_name(s, "problem kind")
 }
 
 fn parse_u_space(s: &str) -> Result<USpace, String> {
@@ -339,8 +351,11 @@ fn clap_one_line(e: &clap::Error) -> String {
 /// Runs a parsed command; `Ok(code)` is 0, or 3 when some case did not converge.
 pub fn execute(cli: Cli) -> Result<i32, Failure> {
     match cli.command {
-        Command::Scene { template: _ } => {
-            say_raw(sdcrack_io::scene_file::SCENE_TEMPLATE);
+        Command::Scene { template } => {
+            say_raw(match template.unwrap_or_default() {
+                ProblemKind::Scalar => sdcrack_io::scene_file::SCENE_TEMPLATE,
+                ProblemKind::Elasticity => sdcrack_io::scene_file::ELASTIC_SCENE_TEMPLATE,
+            });
             Ok(0)
         }
         Command::Schema => {
@@ -364,13 +379,23 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                 say!("{}", plan_json(s, &triangles));
                 return Ok(0);
             }
-            say!(
-                "{}: valid scene '{}' ({} cases)",
-                scene.display(),
-                s.name,
-                s.axes.case_count()
-            );
-            if s.exact.is_none() && s.references.is_empty() {
+            match s.problem.kind() {
+                ProblemKind::Scalar => say!(
+                    "{}: valid scene '{}' ({} cases)",
+                    scene.display(),
+                    s.name,
+                    s.axes.case_count()
+                ),
+                // no solver case until the elastic solver (issue 46): the references solve it
+                ProblemKind::Elasticity => say!(
+                    "{}: valid elastic scene '{}' (levels {:?}, references {:?}; no solver case: the smooth-domain solver of the elastic problem is issue 46)",
+                    scene.display(),
+                    s.name,
+                    s.axes.levels,
+                    s.references
+                ),
+            }
+            if !s.has_exact() && s.references.is_empty() {
                 eprintln!(
                     "sdcrack: warning: scene '{}' has no [exact] and no references: there is nothing to judge its errors against, so the compare tool can only call it INCONCLUSIVE (add [exact] or [outputs] references)",
                     s.name
@@ -387,6 +412,13 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             json,
         } => {
             let (loaded, _) = load_checked(scene)?;
+            if loaded.scene.scalar().is_none() {
+                return Err(usage(format!(
+                    "scene '{}' is elastic: {}",
+                    loaded.scene.name,
+                    StudyError::NotScalar
+                )));
+            }
             bench(&loaded.scene, vertices, json)
         }
         Command::Mesh { scene, out, level } => {
@@ -409,7 +441,10 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             let (loaded, origin) = load_checked(scene)?;
             let filter = cases.filter();
             check_level_option(&loaded.scene, filter.level)?;
-            check_space_pairs(&loaded.scene, &filter)?;
+            match loaded.scene.problem.kind() {
+                ProblemKind::Scalar => check_space_pairs(&loaded.scene, &filter)?,
+                ProblemKind::Elasticity => check_no_scalar_axes(&loaded.scene, &cases)?,
+            }
             run(&loaded, &origin, &filter, &out, quiet, solver_only)
         }
         Command::Reference {
@@ -621,6 +656,25 @@ fn check_space_pairs(scene: &Scene, filter: &Pattern<CaseKey>) -> Result<(), Fai
     )))
 }
 
+/// Refuses the options of the scalar problem's case axes for an elastic scene, which has none
+/// (only `--level` selects its levels).
+fn check_no_scalar_axes(scene: &Scene, cases: &CaseSelection) -> Result<(), Failure> {
+    let given = [
+        ("--u-space", cases.u_space.is_some()),
+        ("--multiplier", cases.multiplier.is_some()),
+        ("--p-mass", cases.p_mass.is_some()),
+        ("--p-space", cases.p_space.is_some()),
+        ("--delta", cases.delta.is_some()),
+    ];
+    match given.iter().find(|(_, is)| *is) {
+        Some((option, _)) => Err(usage(format!(
+            "{option} selects a case of the scalar problem's solver, and scene '{}' is elastic: it has no solver case (issue 46); only --level selects its levels",
+            scene.name
+        ))),
+        None => Ok(()),
+    }
+}
+
 fn check_level_option(scene: &Scene, level: Option<u32>) -> Result<(), Failure> {
     match level {
         Some(l) => sdcrack_core::scene::check_level(scene.level0, l)
@@ -680,7 +734,11 @@ fn run(
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut progress = Progress { bar };
-    let study = run_study(scene, &plan, &mut progress).map_err(|e| match e {
+    let study = match scene.problem.kind() {
+        ProblemKind::Scalar => run_study(scene, &plan, &mut progress),
+        ProblemKind::Elasticity => no_solver_cases(scene),
+    }
+    .map_err(|e| match e {
         StudyError::Linalg(_) => runtime(e),
         // Non-finite data at a quadrature point, a crack off a finer mesh: the scene's fault.
         _ => invalid_scene(loaded, origin, study_scene_error(&e)),
@@ -708,14 +766,32 @@ fn run(
     let failed = study.cases.iter().filter(|c| !c.converged).count();
     // the whole command's time, and the solve's (summary.json's wall_s) beside it: the fields
     // and the references may take most of it
-    say!(
-        "{} cases in {:.1} s (solving {:.1} s); results in {}",
-        study.cases.len(),
-        start.elapsed().as_secs_f64(),
-        wall,
-        path.display()
-    );
+    match scene.problem.kind() {
+        ProblemKind::Scalar => say!(
+            "{} cases in {:.1} s (solving {:.1} s); results in {}",
+            study.cases.len(),
+            start.elapsed().as_secs_f64(),
+            wall,
+            path.display()
+        ),
+        ProblemKind::Elasticity => say!(
+            "elastic scene '{}': no solver case (issue 46), references {references:?} on levels {:?} in {:.1} s; results in {}",
+            scene.name,
+            plan.axes.levels,
+            start.elapsed().as_secs_f64(),
+            path.display()
+        ),
+    }
     Ok(convergence_status(failed, references_converged))
+}
+
+/// The study of an elastic scene: no solver case (its solver is issue 46), only where level 0
+/// came from (gmsh's level 0 is kept as `coarse.msh`, as for a scalar scene).
+fn no_solver_cases(scene: &Scene) -> Result<StudyResult, StudyError> {
+    Ok(StudyResult {
+        coarse_mesh: scene.mesh_source()?.provenance,
+        ..StudyResult::default()
+    })
 }
 
 /// The exit code of a command that wrote its results: 0, or 3 (with a line on stderr for each
@@ -801,7 +877,7 @@ pub fn print_table(scene: &Scene, cases: &[CaseResult]) {
             PSpace::BrokenTangential => ", broken-tangential p",
         };
         say!("\n{u_space} u, {multiplier}{mass}{space}");
-        if scene.exact.is_some() {
+        if scene.has_exact() {
             say!("level        h  unknowns  iter     e_u  rate     e_p  rate     e_λ  rate   kkt");
         } else {
             // open: multiplier unknowns with λ > 0, where the crack faces separate (contact

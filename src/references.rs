@@ -206,15 +206,11 @@ pub struct ReferenceRun {
     pub all_converged: bool,
 }
 
-/// Runs `tool` on the mesh export `mesh_dir`, writing into `out`.
-pub fn run_reference(
-    tool: &str,
-    mesh_dir: &Path,
-    out: &Path,
-    fields: bool,
-) -> Result<ReferenceRun, ReferenceError> {
+/// The command that runs `tool` on the mesh export `mesh_dir` into `out`, whatever the scene's
+/// problem kind (the scripts read it from the export's scene.json):
+/// `/usr/bin/python3 SCRIPTS/<tool>/solve.py MESH_DIR --out OUT [--fields]`, absolute paths.
+fn reference_command(tool: &str, mesh_dir: &Path, out: &Path, fields: bool) -> Command {
     let script = scripts_dir().join(tool).join("solve.py");
-    let start = Instant::now();
     // Absolute paths: a tool may change its working directory.
     let absolute = |p: &Path| std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
     let mut cmd = python(&script);
@@ -223,10 +219,23 @@ pub fn run_reference(
         cmd.arg("--fields");
     }
     cmd.env("FF_LOADPATH", "/usr/lib/freefem++");
-    let output = cmd.output().map_err(|e| ReferenceError::Spawn {
-        tool: tool.to_string(),
-        reason: e.to_string(),
-    })?;
+    cmd
+}
+
+/// Runs `tool` on the mesh export `mesh_dir`, writing into `out`.
+pub fn run_reference(
+    tool: &str,
+    mesh_dir: &Path,
+    out: &Path,
+    fields: bool,
+) -> Result<ReferenceRun, ReferenceError> {
+    let start = Instant::now();
+    let output = reference_command(tool, mesh_dir, out, fields)
+        .output()
+        .map_err(|e| ReferenceError::Spawn {
+            tool: tool.to_string(),
+            reason: e.to_string(),
+        })?;
     let not_converged = output.status.code() == Some(EXIT_NOT_CONVERGED);
     if !output.status.success() && !not_converged {
         return Err(ReferenceError::Failed {
@@ -244,6 +253,28 @@ pub fn run_reference(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_reference_runs_its_script_on_the_export_with_fields_when_asked() {
+        let args = |fields| {
+            let cmd = reference_command(
+                "freefem",
+                Path::new("/r/mesh"),
+                Path::new("/r/freefem"),
+                fields,
+            );
+            assert_eq!(cmd.get_program(), PYTHON);
+            cmd.get_args()
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect::<Vec<_>>()
+        };
+        let script = scripts_dir().join("freefem/solve.py").display().to_string();
+        assert_eq!(
+            args(true),
+            [&script, "/r/mesh", "--out", "/r/freefem", "--fields"]
+        );
+        assert_eq!(args(false), [&script, "/r/mesh", "--out", "/r/freefem"]);
+    }
 
     #[test]
     fn a_reference_leaves_the_slurm_step_and_its_pmi_behind_and_keeps_the_rest() {

@@ -14,6 +14,36 @@ use std::process::Command;
 /// A valid scene that every `edit` case changes in one place.
 use common::SMALL_SCENE as SMALL;
 
+/// A valid elastic scene (docs/elasticity.md) that every `edit_elastic` case changes in one place:
+/// uniform compression across an interior crack, Dirichlet on the whole boundary.
+const ELASTIC: &str = r#"name = "small"
+[problem]
+kind = "elasticity"
+E = 1.0
+nu = 0.3
+[geometry]
+domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }
+crack = { segment = [[-0.5, 0.0], [0.5, 0.0]] }
+[data]
+fx = "0"
+fy = "0"
+gx = "0.1*x"
+gy = "-0.1*y"
+[exact]
+ux = "0.1*x"
+uy = "-0.1*y"
+sif = [[0.0, 0.0], [0.0, 0.0]]
+[discretization]
+cells = [4, 4]
+levels = [0, 1]
+[outputs]
+fields = ["u"]
+references = []
+"#;
+
+/// Tractions on all four sides of [`ELASTIC`]'s square (uniaxial compression), in place of g.
+const ALL_TRACTION: &str = "traction = { left = [\"0\", \"0\"], right = [\"0\", \"0\"], bottom = [\"0\", \"0.1\"], top = [\"0\", \"-0.1\"] }";
+
 /// What is at the scene path.
 enum Input {
     /// A file with these bytes.
@@ -71,6 +101,26 @@ fn case(what: &'static str, input: Input, needle: &str) -> Case {
 /// `text` as the scene of `sdcrack run`.
 fn scene(what: &'static str, text: &str, needle: &str) -> Case {
     case(what, Input::Scene(text.as_bytes().to_vec()), needle)
+}
+
+/// ELASTIC with its first `from` replaced by `to` (which must change it).
+fn edit_elastic(what: &'static str, from: &str, to: &str, needle: &str) -> Case {
+    assert!(
+        ELASTIC.contains(from),
+        "{what}: '{from}' is not in the scene"
+    );
+    scene(what, &ELASTIC.replacen(from, to, 1), needle)
+}
+
+/// ELASTIC with the Dirichlet data replaced by [`ALL_TRACTION`] and `fixed` (a line, or "").
+fn all_traction(what: &'static str, fixed: &str, needle: &str) -> Case {
+    let text = ELASTIC.replacen(
+        "gx = \"0.1*x\"\ngy = \"-0.1*y\"",
+        &format!("{ALL_TRACTION}\n{fixed}"),
+        1,
+    );
+    assert_ne!(text, ELASTIC);
+    scene(what, &text, needle)
 }
 
 /// SMALL with its first `from` replaced by `to` (which must change it).
@@ -279,7 +329,7 @@ fn catalogue() -> Vec<Case> {
             "key of another table",
             "g = \"0\"",
             "g = \"0\"\ncrack = 1",
-            "unknown key `crack` in [data] at line 8, column 1; `crack` belongs in [geometry] (allowed: f, g)",
+            "unknown key `crack` in [data] at line 8, column 1; `crack` belongs in [geometry] (allowed: f, g, fx, fy, gx, gy, traction, fixed)",
         ),
         scene(
             "unknown key without a near one",
@@ -906,6 +956,199 @@ fn catalogue() -> Vec<Case> {
                 "check without a scene",
                 SMALL,
                 "the following required arguments were not provided: <SCENE>",
+            )
+        },
+        // --- the elastic problem kind (docs/elasticity.md): format and consistency ---
+        edit_elastic(
+            "unknown problem kind",
+            "kind = \"elasticity\"",
+            "kind = \"elastic\"",
+            "problem.kind: unknown value \"elastic\" (expected one of scalar, elasticity) (at line 3, column 1)",
+        ),
+        edit_elastic(
+            "Poisson's ratio 1/2 in plane strain",
+            "nu = 0.3",
+            "nu = 0.5",
+            "problem.nu = 0.5 must be in (-1, 1/2): Poisson's ratio of a compressible body",
+        ),
+        edit_elastic(
+            "Poisson's ratio 1/2 in plane stress",
+            "nu = 0.3",
+            "nu = 0.5\nplane = \"stress\"",
+            "problem.nu = 0.5 must be in (-1, 1/2)",
+        ),
+        edit_elastic(
+            "Young's modulus zero",
+            "E = 1.0",
+            "E = 0.0",
+            "problem.E = 0 must be a finite number > 0 (Young's modulus) (at line 4, column 1)",
+        ),
+        edit_elastic(
+            "shear modulus negative",
+            "E = 1.0\nnu = 0.3",
+            "lambda = 1.0\nmu = -1.0",
+            "problem.mu = -1 must be a finite number > 0 (the shear modulus)",
+        ),
+        edit_elastic(
+            "Lamé constants of a negative bulk modulus",
+            "E = 1.0\nnu = 0.3",
+            "lambda = -1.0\nmu = 1.0",
+            "problem.lambda = -1 must be finite with 3 lambda + 2 mu > 0",
+        ),
+        edit_elastic(
+            "both material pairs",
+            "nu = 0.3",
+            "nu = 0.3\nlambda = 1.0\nmu = 1.0",
+            "problem.lambda is given and E, nu: give one pair, E and nu or lambda and mu",
+        ),
+        edit_elastic(
+            "material pair incomplete",
+            "nu = 0.3\n",
+            "",
+            "missing key `nu` in [problem]: E is given, and the material needs the pair E and nu (the table is at line 2",
+        ),
+        edit_elastic(
+            "no material",
+            "E = 1.0\nnu = 0.3\n",
+            "",
+            "missing key `E` in [problem]: an elastic body needs its material",
+        ),
+        edit_elastic(
+            "friction",
+            "nu = 0.3",
+            "nu = 0.3\nfriction = 0.2",
+            "problem.friction = 0.2: only frictionless contact is solved",
+        ),
+        edit_elastic(
+            "unknown boundary part",
+            "gy = \"-0.1*y\"",
+            "gy = \"-0.1*y\"\ntraction = { middle = [\"0\", \"0\"] }",
+            "data.traction.middle: unknown boundary part \"middle\" (this domain's parts: left, right, bottom, top) (at line 14, column 14)",
+        ),
+        edit_elastic(
+            "boundary part listed twice",
+            "gy = \"-0.1*y\"",
+            "gy = \"-0.1*y\"\ntraction = { top = [\"0\", \"0\"], top = [\"0\", \"1\"] }",
+            "duplicate key",
+        ),
+        edit_elastic(
+            "traction not two expressions",
+            "gy = \"-0.1*y\"",
+            "gy = \"-0.1*y\"\ntraction = { top = [\"0\"] }",
+            "data.traction.top must be two expressions [\"tx\", \"ty\"]; got 1",
+        ),
+        edit_elastic(
+            "g missing with a Dirichlet part",
+            "gx = \"0.1*x\"\n",
+            "",
+            "missing key `gx` in [data]: the boundary part(s) left, right, bottom, top have no traction, so u = (gx, gy) there",
+        ),
+        all_traction(
+            "g given with no Dirichlet part",
+            "gx = \"0\"\nfixed = [{ point = [-1.0, -1.0], components = [\"x\", \"y\"] }, { point = [-1.0, 1.0], components = [\"x\"] }]",
+            "data.gx: every boundary part has a traction, so no part takes u = g",
+        ),
+        all_traction(
+            "pure traction without rigid-mode constraints",
+            "",
+            "missing key `fixed` in [data]: every boundary part has a traction, so the body may translate and rotate freely",
+        ),
+        all_traction(
+            "fixed points that leave the rotation free",
+            "fixed = [{ point = [-1.0, -1.0], components = [\"x\", \"y\"] }, { point = [-1.0, 1.0], components = [\"y\"] }]",
+            "data.fixed removes 2 of the 3 rigid modes",
+        ),
+        all_traction(
+            "fixed point not a corner",
+            "fixed = [{ point = [0.0, -1.0], components = [\"x\", \"y\"] }, { point = [-1.0, 1.0], components = [\"x\"] }]",
+            "data.fixed[0].point = [0, -1] is not a corner of the domain",
+        ),
+        all_traction(
+            "fixed component unknown",
+            "fixed = [{ point = [-1.0, -1.0], components = [\"z\"] }]",
+            "data.fixed[0].components: unknown component \"z\" (expected x, y)",
+        ),
+        edit_elastic(
+            "fixed with a Dirichlet part",
+            "gy = \"-0.1*y\"",
+            "gy = \"-0.1*y\"\nfixed = [{ point = [-1.0, -1.0], components = [\"x\", \"y\"] }]",
+            "data.fixed: fixed points are for a body whose whole boundary has tractions; the part(s) left, right, bottom, top take u = g",
+        ),
+        edit_elastic(
+            "scalar f in an elastic scene",
+            "fx = \"0\"",
+            "f = \"0\"\nfx = \"0\"",
+            "data.f is a key of the scalar problem, and this scene is elastic",
+        ),
+        edit_elastic(
+            "scalar exact u in an elastic scene",
+            "ux = \"0.1*x\"",
+            "u = \"x\"\nux = \"0.1*x\"",
+            "exact.u is a key of the scalar problem, and this scene is elastic",
+        ),
+        edit_elastic(
+            "scalar case axis in an elastic scene",
+            "levels = [0, 1]",
+            "levels = [0, 1]\ndeltas = [0.0]",
+            "discretization.deltas is a key of the scalar problem, and this scene is elastic",
+        ),
+        edit_elastic(
+            "scalar field in an elastic scene",
+            "fields = [\"u\"]",
+            "fields = [\"u\", \"lambda\"]",
+            "outputs.fields: \"lambda\" is a field of the scalar problem; an elastic scene writes \"u\"",
+        ),
+        edit(
+            "elastic data in a scalar scene",
+            "g = \"0\"",
+            "g = \"0\"\nfx = \"0\"",
+            "data.fx is a key of the elastic problem, and this scene is scalar (set [problem] kind = \"elasticity\"",
+        ),
+        scene(
+            "elastic material in a scalar scene",
+            &SMALL.replacen("[geometry]", "[problem]\nkind = \"scalar\"\nE = 1.0\n[geometry]", 1),
+            "problem.E is a key of the elastic problem, and this scene is scalar",
+        ),
+        edit_elastic(
+            "stress incomplete",
+            "uy = \"-0.1*y\"",
+            "uy = \"-0.1*y\"\nsxx = \"0\"",
+            "missing key `syy` in [exact]: give the stress's three components sxx, syy, sxy, or none",
+        ),
+        edit_elastic(
+            "sif of the wrong number of tips",
+            "sif = [[0.0, 0.0], [0.0, 0.0]]",
+            "sif = [[0.0, 0.0]]",
+            "exact.sif has 1 pair(s) [K_I, K_II]; the cracks have 2 tip(s)",
+        ),
+        edit_elastic(
+            "sif not a pair",
+            "sif = [[0.0, 0.0], [0.0, 0.0]]",
+            "sif = [[0.0, 0.0], [0.0]]",
+            "exact.sif[1] must be two finite numbers [K_I, K_II]; got [0.0]",
+        ),
+        Case {
+            args: vec!["run", "{scene}", "--out", "{out}", "--u-space", "broken"],
+            ..scene(
+                "scalar case option on an elastic scene",
+                ELASTIC,
+                "--u-space selects a case of the scalar problem's solver, and scene 'small' is elastic",
+            )
+        },
+        Case {
+            args: vec!["bench", "{scene}", "--vertices", "100"],
+            ..scene(
+                "bench on an elastic scene",
+                ELASTIC,
+                "scene 'small' is elastic: the smooth-domain solver solves the scalar problem only",
+            )
+        },
+        Case {
+            args: vec!["scene", "--template", "elastic"],
+            ..scene(
+                "unknown template kind",
+                SMALL,
+                "unknown problem kind 'elastic' (expected scalar or elasticity)",
             )
         },
         // --- exact data that are not those of an exact solution (issue 42): `check` refuses ---

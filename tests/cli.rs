@@ -551,7 +551,10 @@ fn every_scene_of_the_repository_and_the_tests_passes_the_exact_data_check() {
     use sdcrack_core::scene::{exact_data, Scene};
     use sdcrack_io::scene_file::TomlScene;
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut files = vec![root.join("docs/scene-template.toml")];
+    let mut files = vec![
+        root.join("docs/scene-template.toml"),
+        root.join("docs/scene-template-elasticity.toml"),
+    ];
     for dir in ["scenes", "tools/untuned-scenes", "tests/data/scenes"] {
         for e in std::fs::read_dir(root.join(dir)).unwrap() {
             let p = e.unwrap().path();
@@ -564,12 +567,153 @@ fn every_scene_of_the_repository_and_the_tests_passes_the_exact_data_check() {
     let mut exact = 0;
     for f in &files {
         let s = Scene::from_file(f).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
-        exact += usize::from(s.exact.is_some());
+        exact += usize::from(s.has_exact());
         exact_data::check(&s).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
     }
     assert!(
         exact >= 9,
         "{exact} scenes with [exact] among {}",
         files.len()
+    );
+}
+
+/// A fake reference `tool` under `dir/refs` (SDCRACK_REFERENCES) that writes its command line
+/// to OUT/argv.json, with a fake `FreeFem++` under `dir/bin` for the availability check.
+fn fake_reference(dir: &Path, tool: &str) -> (PathBuf, String) {
+    use std::os::unix::fs::PermissionsExt;
+    let refs = dir.join("refs");
+    std::fs::create_dir_all(refs.join(tool)).unwrap();
+    std::fs::write(
+        refs.join(tool).join("solve.py"),
+        "import json, os, sys\nout = sys.argv[sys.argv.index('--out') + 1]\nos.makedirs(out)\n\
+         json.dump(sys.argv, open(os.path.join(out, 'argv.json'), 'w'))\n",
+    )
+    .unwrap();
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let ff = bin.join("FreeFem++");
+    std::fs::write(&ff, "#!/bin/sh\nexit 0\n").unwrap();
+    std::fs::set_permissions(&ff, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let path = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    (refs, path)
+}
+
+/// An elastic scene's run: no solver case (summary.json marks the problem, lists no case and no
+/// recomputation file), the mesh export with the elastic scene.json, and each listed reference
+/// run as `solve.py EXPORT --out RESULTS/<tool>` with `--fields` when `fields = ["u"]`;
+/// `--level` selects a level, and an existing results folder is refused, as for a scalar scene.
+#[test]
+fn an_elastic_scene_runs_its_references_on_its_mesh_export() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = include_str!("data/scenes/elastic-compressed.toml");
+    let (refs, path) = fake_reference(dir.path(), "freefem");
+    let run = |text: &str, out: &Path, extra: &[&str]| {
+        let scene = write_scene(dir.path(), "elastic.toml", text);
+        Command::new(env!("CARGO_BIN_EXE_sdcrack"))
+            .args(["run", &scene, "--out", out.to_str().unwrap(), "--quiet"])
+            .args(extra)
+            .env("SDCRACK_REFERENCES", &refs)
+            .env("PATH", &path)
+            .output()
+            .unwrap()
+    };
+    // without references: the scene's copy and summary.json only
+    let out = dir.path().join("none");
+    let o = run(text, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let folder = out.join("elastic-compressed");
+    let mut files: Vec<String> = std::fs::read_dir(&folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    files.sort();
+    assert_eq!(files, ["scene.toml", "summary.json"]);
+    let s = summary(&folder);
+    assert_eq!(s["problem"], "elasticity");
+    assert_eq!(s["cases"], serde_json::json!([]));
+    assert_eq!(s["plan"]["levels"], serde_json::json!([0, 1]));
+    assert!(s.get("recomputation_file").is_none(), "{s}");
+    assert_eq!(
+        std::fs::read_to_string(folder.join("scene.toml")).unwrap(),
+        text
+    );
+    let again = run(text, &out, &[]);
+    assert_eq!(again.status.code(), Some(2), "{}", stderr(&again));
+    assert!(
+        stderr(&again).contains("already exists"),
+        "{}",
+        stderr(&again)
+    );
+    // with a reference, fields ["u"], one level
+    let listed = text.replace("references = []", "references = [\"freefem\"]");
+    let out = dir.path().join("one");
+    let o = run(&listed, &out, &["--level", "1"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let folder = out.join("elastic-compressed");
+    assert_eq!(summary(&folder)["plan"]["levels"], serde_json::json!([1]));
+    let mesh = folder.join("mesh");
+    assert!(mesh.join("level1").is_dir() && !mesh.join("level0").exists());
+    let scene_json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(mesh.join("scene.json")).unwrap()).unwrap();
+    assert_eq!(scene_json["problem"]["kind"], "elasticity");
+    assert_eq!(scene_json["problem"]["plane"], "strain");
+    assert_eq!(scene_json["g"], serde_json::json!(["0.1*x", "-0.1*y"]));
+    assert_eq!(
+        scene_json["exact"]["sif"],
+        serde_json::json!([[0.0, 0.0], [0.0, 0.0]])
+    );
+    let argv: Vec<String> =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("freefem/argv.json")).unwrap())
+            .unwrap();
+    assert!(argv[0].ends_with("freefem/solve.py"), "{argv:?}");
+    assert!(
+        argv[1].ends_with("/mesh") && argv[3].ends_with("/freefem"),
+        "{argv:?}"
+    );
+    assert_eq!(&argv[2..], ["--out", &argv[3], "--fields"]);
+    // fields [] runs it without --fields
+    let no_fields = listed.replace("fields = [\"u\"]", "fields = []");
+    let out = dir.path().join("bare");
+    let o = run(&no_fields, &out, &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let argv: Vec<String> = serde_json::from_str(
+        &std::fs::read_to_string(out.join("elastic-compressed/freefem/argv.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(argv.len(), 4, "{argv:?}");
+}
+
+/// `sdcrack check` and `sdcrack scene --template elasticity` know the elastic problem kind.
+#[test]
+fn check_and_the_template_know_the_elastic_kind() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = root.join("tests/data/scenes/elastic-compressed.toml");
+    let o = sdcrack(&["check", scene.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let line = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        line.contains("valid elastic scene 'elastic-compressed' (levels [0, 1], references []"),
+        "{line}"
+    );
+    let o = sdcrack(&["check", "--json", scene.to_str().unwrap()]);
+    let plan: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (plan["cases"].as_u64(), &plan["levels"]),
+        (Some(0), &serde_json::json!([0, 1]))
+    );
+    let o = sdcrack(&["scene", "--template", "elasticity"]);
+    assert_eq!(o.status.code(), Some(0));
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        include_str!("../docs/scene-template-elasticity.toml")
+    );
+    let o = sdcrack(&["scene", "--template"]);
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        include_str!("../docs/scene-template.toml")
     );
 }

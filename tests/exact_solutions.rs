@@ -10,7 +10,7 @@ use sdcrack_core::scene::Scene;
 const H: f64 = 1e-4;
 
 fn laplacian(s: &Scene, x: f64, y: f64) -> f64 {
-    let u = &s.exact.as_ref().unwrap().u;
+    let u = &s.scalar().unwrap().exact.as_ref().unwrap().u;
     (u.eval(x + H, y) + u.eval(x - H, y) + u.eval(x, y + H) + u.eval(x, y - H) - 4.0 * u.eval(x, y))
         / (H * H)
 }
@@ -40,11 +40,11 @@ fn sample_points(n: usize) -> Vec<(f64, f64)> {
 
 fn check_pde_and_boundary(name: &str) {
     let s = common::load(name);
-    let exact = s.exact.as_ref().unwrap();
+    let exact = s.scalar().unwrap().exact.as_ref().unwrap();
     for (x, y) in sample_points(200) {
-        let r = -laplacian(&s, x, y) - s.f.eval(x, y);
+        let r = -laplacian(&s, x, y) - s.scalar().unwrap().f.eval(x, y);
         assert!(
-            r.abs() < 1e-4 * (1.0 + s.f.eval(x, y).abs()),
+            r.abs() < 1e-4 * (1.0 + s.scalar().unwrap().f.eval(x, y).abs()),
             "{name}: −Δu − f = {r} at ({x}, {y})"
         );
         // the symbolic gradient agrees with finite differences
@@ -63,7 +63,7 @@ fn check_pde_and_boundary(name: &str) {
         let t = -1.0 + 2.0 * k as f64 / 40.0;
         for (x, y) in [(t, -1.0), (t, 1.0), (-1.0, t), (1.0, t)] {
             assert!(
-                (exact.u.eval(x, y) - s.g.eval(x, y)).abs() < 1e-14,
+                (exact.u.eval(x, y) - s.scalar().unwrap().g.eval(x, y)).abs() < 1e-14,
                 "{name}: g ≠ u at ({x}, {y})"
             );
         }
@@ -72,7 +72,7 @@ fn check_pde_and_boundary(name: &str) {
 
 /// (jump, ∂u/∂ν on the + face, ∂u/∂ν on the − face) at crack point x (crack on y = 0, ν = (0, 1)).
 fn face_values(s: &Scene, x: f64) -> (f64, f64, f64) {
-    let e = s.exact.as_ref().unwrap();
+    let e = s.scalar().unwrap().exact.as_ref().unwrap();
     let nu = [0.0, 1.0];
     let up = eval_on_face(&e.u, [x, 0.0], nu, 1.0);
     let um = eval_on_face(&e.u, [x, 0.0], nu, -1.0);

@@ -177,7 +177,7 @@ fn delta_sweep(name: &str) {
     deltas.push(0.0);
     scene.axes.deltas = deltas.clone();
     scene.fields = ALL_FIELDS;
-    scene.exact = None; // the error norms are not what is measured here
+    scene.scalar_mut().unwrap().exact = None; // the error norms are not what is measured here
     let cases = common::solve(&scene, CasePattern::default());
     assert_eq!(
         cases.len(),
@@ -313,7 +313,7 @@ fn scaling_base(name: &str) -> (Scene, String, String) {
     scene.axes.u_spaces = vec![USpace::Continuous, USpace::Broken];
     scene.axes.multipliers = MultiplierSpace::ALL.to_vec();
     scene.fields = ALL_FIELDS;
-    scene.exact = None;
+    scene.scalar_mut().unwrap().exact = None;
     (scene, data_text(name, "f"), data_text(name, "g"))
 }
 
@@ -357,8 +357,8 @@ fn data_scaling_scales_the_solution() {
         assert_solved(&base, name);
         for s in [1e-8, 1e-4, 1e4, 1e8] {
             let mut scaled = scene.clone();
-            scaled.f = expr(&format!("{s:e}*({f})"));
-            scaled.g = expr(&format!("{s:e}*({g})"));
+            scaled.scalar_mut().unwrap().f = expr(&format!("{s:e}*({f})"));
+            scaled.scalar_mut().unwrap().g = expr(&format!("{s:e}*({g})"));
             let cases = common::solve(&scaled, CasePattern::default());
             let kkt = assert_solved(&cases, name);
             let w = assert_scaled(&format!("{name} × {s:e}"), &cases, &base, (s, s, s));
@@ -380,8 +380,8 @@ fn translating_the_domain_changes_nothing() {
         for a in [[0.75, -2.5], [40.0, 24.0]] {
             let mut moved = scene.clone();
             let (sx, sy) = (format!("x-{:e}", a[0]), format!("y-{:e}", a[1]));
-            moved.f = expr(&substitute_xy(&f, &sx, &sy));
-            moved.g = expr(&substitute_xy(&g, &sx, &sy));
+            moved.scalar_mut().unwrap().f = expr(&substitute_xy(&f, &sx, &sy));
+            moved.scalar_mut().unwrap().g = expr(&substitute_xy(&g, &sx, &sy));
             let shift = |p: [f64; 2]| [p[0] + a[0], p[1] + a[1]];
             map_geometry(&mut moved, shift);
             let cases = common::solve(&moved, CasePattern::default());
@@ -403,8 +403,8 @@ fn translating_the_domain_changes_nothing() {
 fn dilate(scene: &Scene, f: &str, g: &str, l: f64) -> Scene {
     let mut big = scene.clone();
     let (sx, sy) = (format!("x/{l:e}"), format!("y/{l:e}"));
-    big.f = expr(&format!("({})/{:e}", substitute_xy(f, &sx, &sy), l * l));
-    big.g = expr(&substitute_xy(g, &sx, &sy));
+    big.scalar_mut().unwrap().f = expr(&format!("({})/{:e}", substitute_xy(f, &sx, &sy), l * l));
+    big.scalar_mut().unwrap().g = expr(&substitute_xy(g, &sx, &sy));
     map_geometry(&mut big, |p| p.map(|v| v * l));
     big.axes.deltas = scene.axes.deltas.iter().map(|d| d / (l * l)).collect();
     big
@@ -513,7 +513,7 @@ fn anisotropic_scene(dir: Direction, cells: [usize; 2]) -> Scene {
         points: vec![[-c[0], -c[1]], c],
     }];
     let n2 = 2.0 * (c[0] * c[0] + c[1] * c[1]);
-    scene.f = expr(&format!(
+    scene.scalar_mut().unwrap().f = expr(&format!(
         "20*sin(2*pi*(x*{:e} + y*{:e})/{n2:e})*sign(y*{:e} - x*{:e})",
         c[0], c[1], c[0], c[1]
     ));
@@ -719,8 +719,8 @@ fn crack_reduction(
         &mesh,
         &topo,
         &mesh.p_topology(sdcrack_core::problem::PSpace::Continuous),
-        &scene.f,
-        &scene.g,
+        &scene.scalar().unwrap().f,
+        &scene.scalar().unwrap().g,
         sdcrack_core::problem::PMass::Consistent,
     )
     .unwrap();

@@ -65,6 +65,11 @@ impl Material {
         self.lambda / (2.0 * (self.lambda + self.mu))
     }
 
+    /// Young's modulus E = 2μ(1 + ν).
+    pub fn young(&self) -> f64 {
+        2.0 * self.mu * (1.0 + self.poisson())
+    }
+
     /// Kolosov's constant κ: 3 − 4ν in plane strain, (3 − ν)/(1 + ν) in plane stress.
     pub fn kolosov(&self) -> f64 {
         let nu = self.poisson();
@@ -76,8 +81,7 @@ impl Material {
 
     /// E′ of Irwin's relation G = K²/E′: E/(1 − ν²) in plane strain, E in plane stress.
     pub fn e_prime(&self) -> f64 {
-        let nu = self.poisson();
-        let e = 2.0 * self.mu * (1.0 + nu);
+        let (nu, e) = (self.poisson(), self.young());
         match self.plane {
             PlaneModel::Strain => e / (1.0 - nu * nu),
             PlaneModel::Stress => e,
@@ -108,6 +112,60 @@ pub struct FixedPoint {
     pub point: [f64; 2],
     /// Which components are held: `[u_x, u_y]`.
     pub components: [bool; 2],
+}
+
+/// A displacement component, as `data.fixed`'s `components` name it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Component {
+    /// u_x.
+    X,
+    /// u_y.
+    Y,
+}
+
+crate::scene_names!(Component { X => "x", Y => "y" });
+
+/// How many of the three rigid modes of the plane, (1, 0), (0, 1) and (−y, x), the fixed
+/// components `fixed` remove: the rank of the rows (1, 0, −y) (u_x held at (x, y)) and
+/// (0, 1, x) (u_y held), the modes' values in the held components. Every 3 × 3 minor of these
+/// rows is a difference of corner coordinates (or zero), so a minor is zero exactly when the
+/// corners make it so; the threshold `1e-12 · max(1, |x|, |y|)` only keeps round-off of the
+/// determinant (a few units of the coordinates' last place) from counting.
+pub fn rigid_modes_removed(fixed: &[FixedPoint]) -> usize {
+    let rows: Vec<[f64; 3]> = (fixed.iter())
+        .flat_map(|f| {
+            let [x, y] = f.point;
+            [
+                (f.components[0], [1.0, 0.0, -y]),
+                (f.components[1], [0.0, 1.0, x]),
+            ]
+        })
+        .filter_map(|(held, row)| held.then_some(row))
+        .collect();
+    let scale = rows.iter().map(|r| r[2].abs()).fold(1.0, f64::max);
+    let tol = 1e-12 * scale;
+    let nonzero_row = rows.iter().any(|r| r.iter().any(|v| v.abs() > tol));
+    let cross = |a: &[f64; 3], b: &[f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let mut rank2 = false;
+    for (i, a) in rows.iter().enumerate() {
+        for b in &rows[i + 1..] {
+            let n = cross(a, b);
+            if n.iter().any(|v| v.abs() > tol) {
+                rank2 = true;
+                let det = |c: &[f64; 3]| n[0] * c[0] + n[1] * c[1] + n[2] * c[2];
+                if rows.iter().any(|c| det(c).abs() > tol) {
+                    return 3;
+                }
+            }
+        }
+    }
+    usize::from(nonzero_row) + usize::from(rank2)
 }
 
 /// A stress intensity factor pair at one crack tip, in the tip's frame (docs/scenes.md: e₁ points
@@ -158,8 +216,10 @@ pub struct ElasticData {
 /// Hooke's law of the symbolic derivatives of u: (σ_xx, σ_yy, σ_xy) with
 /// σ = λ_in tr ε(u) I + 2μ ε(u) ([`Material::lambda_in_plane`]). Built as text from the
 /// derivatives' infix forms and parsed back (the expression language has no combinators), so the
-/// result prints as a scene expression.
-pub fn hooke_stress(u: &[Expr; 2], m: &Material) -> [Expr; 3] {
+/// result prints as a scene expression. Fails (the parser's [`crate::expr::ExprError`]) when
+/// the text outgrows the expression language's limits on length and nesting: a long u should
+/// then come with its stress given.
+pub fn hooke_stress(u: &[Expr; 2], m: &Material) -> Result<[Expr; 3], crate::expr::ExprError> {
     let d = |c: usize, v: Var| format!("({})", u[c].derivative(v).to_string_infix());
     let (ux_x, uy_y) = (d(0, Var::X), d(1, Var::Y));
     let (ux_y, uy_x) = (d(0, Var::Y), d(1, Var::X));
@@ -170,9 +230,8 @@ pub fn hooke_stress(u: &[Expr; 2], m: &Material) -> [Expr; 3] {
         format!("{trace} + 2 * {mu} * {uy_y}"),
         format!("{mu} * ({ux_y} + {uy_x})"),
     ];
-    texts.map(|t| {
-        Expr::parse(&t).expect("derivatives of a parsed expression print as parsable text")
-    })
+    let [xx, yy, xy] = texts;
+    Ok([Expr::parse(&xx)?, Expr::parse(&yy)?, Expr::parse(&xy)?])
 }
 
 /// The part that is all of ∂Ω: the only part of a `[discretization] mesh` scene.
@@ -210,15 +269,17 @@ impl BoundaryEdge {
 /// polygon written clockwise is stored with its other vertices reversed) to the next.
 pub fn boundary_edges(domain: &Domain) -> Vec<BoundaryEdge> {
     let polygon = domain.polygon();
-    let name = |k: usize| match domain {
-        Domain::Rectangle(_) => ["bottom", "right", "top", "left"][k].to_string(),
-        Domain::Polygon(_) => format!("edge{}", k + 1),
-    };
+    let parts = crate::mesh::BoundaryParts::of_domain(domain);
     (0..polygon.len())
-        .map(|k| BoundaryEdge {
-            part: BoundaryPart(name(k)),
-            a: polygon[k],
-            b: polygon[(k + 1) % polygon.len()],
+        .map(|k| {
+            let (a, b) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+            let middle = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+            let name = &parts.names()[parts.part_at(middle)];
+            BoundaryEdge {
+                part: BoundaryPart(name.clone()),
+                a,
+                b,
+            }
         })
         .collect()
 }
@@ -226,6 +287,45 @@ pub fn boundary_edges(domain: &Domain) -> Vec<BoundaryEdge> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn crack_ends_on_the_boundary_are_mouths_not_tips() {
+        use crate::geometry::crack_tips;
+        let square = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+        let interior = vec![[-0.5, 0.0], [0.5, 0.0]];
+        let edge = vec![[-1.0, 0.0], [0.0, 0.0]];
+        let through = vec![[0.0, -1.0], [0.0, -0.5], [0.5, 1.0]];
+        assert_eq!(
+            crack_tips(&square, std::slice::from_ref(&interior)).len(),
+            2
+        );
+        assert_eq!(
+            crack_tips(&square, &[edge, interior]),
+            [[0.0, 0.0], [-0.5, 0.0], [0.5, 0.0]]
+        );
+        assert!(crack_tips(&square, &[through]).is_empty());
+    }
+
+    #[test]
+    fn rigid_modes_of_fixed_corners() {
+        let at = |point, x, y| FixedPoint {
+            point,
+            components: [x, y],
+        };
+        // both components at one corner: the translations, not the rotation about it
+        assert_eq!(rigid_modes_removed(&[at([1.0, -1.0], true, true)]), 2);
+        // and u_x at a corner above it: the rotation too
+        let three = [at([1.0, -1.0], true, true), at([1.0, 1.0], true, false)];
+        assert_eq!(rigid_modes_removed(&three), 3);
+        // u_y at a corner above it: (0, 1, x) twice with the same x, still two
+        let same_x = [at([1.0, -1.0], true, true), at([1.0, 1.0], false, true)];
+        assert_eq!(rigid_modes_removed(&same_x), 2);
+        // u_x at two corners: one translation and the rotation
+        let xs = [at([1.0, -1.0], true, false), at([1.0, 1.0], true, false)];
+        assert_eq!(rigid_modes_removed(&xs), 2);
+        assert_eq!(rigid_modes_removed(&[]), 0);
+        assert_eq!(rigid_modes_removed(&[at([0.0, 0.0], true, false)]), 1);
+    }
 
     #[test]
     fn young_poisson_round_trip_and_constants() {
@@ -254,7 +354,7 @@ mod tests {
             mu: 0.5,
             plane: PlaneModel::Strain,
         };
-        let [sxx, syy, sxy] = hooke_stress(&u, &m);
+        let [sxx, syy, sxy] = hooke_stress(&u, &m).unwrap();
         let (x, y) = (0.3, -0.7);
         let tr = 2.0 * x * y - 2.0 * y;
         assert!((sxx.eval(x, y) - (2.0 * tr + 2.0 * x * y)).abs() < 1e-14);

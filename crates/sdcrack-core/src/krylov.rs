@@ -15,7 +15,7 @@ use crate::fe::p1::TriangleGeometry;
 use crate::linalg::{Cholesky, CholeskyTimings, LinalgError, SymCsc};
 use crate::mesh::{Mesh, UTopology};
 use crate::problem::{PMass, PSpace};
-use crate::scene::Scene;
+use crate::scene::ScalarProblem;
 
 /// Errors of the iterative route.
 #[derive(Debug, thiserror::Error)]
@@ -120,23 +120,24 @@ impl<'a> SchurOperator<'a> {
     }
 }
 
-/// The condensed system of `scene` on `mesh` with the u space of `topo`, the continuous p and
-/// the p–p block `p_mass`: the system [`solve_u`] takes (which refuses all but the lumped mass).
+/// The condensed system of the scalar `problem` on `mesh` with the u space of `topo`, the
+/// continuous p and the p–p block `p_mass`: the system [`solve_u`] takes (which refuses all but
+/// the lumped mass).
 ///
 /// # Errors
 /// The scene's data cannot be integrated ([`AssemblyError`]).
 pub fn continuous_p_system(
     mesh: &Mesh,
     topo: &UTopology,
-    scene: &Scene,
+    problem: &ScalarProblem,
     p_mass: PMass,
 ) -> Result<System, AssemblyError> {
     assemble(
         mesh,
         topo,
         &mesh.p_topology(PSpace::Continuous),
-        &scene.f,
-        &scene.g,
+        &problem.f,
+        &problem.g,
         p_mass,
     )
 }
@@ -336,7 +337,9 @@ mod tests {
             let mesh = source.level(2).unwrap();
             for space in [USpace::Continuous, USpace::Broken] {
                 let topo = mesh.u_topology(space);
-                let system = continuous_p_system(&mesh, &topo, &scene, PMass::Lumped).unwrap();
+                let system =
+                    continuous_p_system(&mesh, &topo, scene.scalar().unwrap(), PMass::Lumped)
+                        .unwrap();
                 for delta in [0.0, 1e-2] {
                     let it = solve_u(&mesh, &topo, &system, delta, ROUTE_TOLERANCE).unwrap();
                     assert!(
@@ -361,7 +364,8 @@ mod tests {
         let scene = load("mixed");
         let mesh = scene.mesh_source().unwrap().level(0).unwrap();
         let topo = mesh.u_topology(USpace::Broken);
-        let system = continuous_p_system(&mesh, &topo, &scene, PMass::Consistent).unwrap();
+        let system =
+            continuous_p_system(&mesh, &topo, scene.scalar().unwrap(), PMass::Consistent).unwrap();
         let err = solve_u(&mesh, &topo, &system, 0.0, 1e-12).err().unwrap();
         assert!(matches!(err, KrylovError::NotLumped { .. }), "{err}");
     }

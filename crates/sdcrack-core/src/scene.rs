@@ -23,5 +23,5 @@ pub use limits::{
     estimated_mesh_memory_bytes, Level0Size, MAX_LEVEL, MAX_MEMORY_BYTES, MEMORY_BASE_BYTES,
     MEMORY_BYTES_PER_CELL,
 };
-pub use validated::{FieldSet, Scene};
+pub use validated::{FieldSet, Problem, ProblemKind, ScalarProblem, Scene};
 pub use verification::{ExpectedFailure, Verification};

@@ -26,7 +26,7 @@ use crate::multiplier::{CrackField, CrackOperators, Multiplier};
 use crate::norms::{DiscreteSolution, ErrorNorms, NormCache, NormQuadrature, NORM_CACHE_BUDGET};
 use crate::ordering::elimination_order;
 use crate::problem::PMass;
-use crate::scene::Scene;
+use crate::scene::{ScalarProblem, Scene};
 
 #[cfg(test)]
 mod tests;
@@ -65,6 +65,10 @@ pub enum StudyError {
     /// The sparse solver failed.
     #[error("linear solver: {0}")]
     Linalg(#[from] LinalgError),
+    /// The scene poses the elastic problem, which the smooth-domain solver does not solve yet
+    /// (issue 46): its runs write the mesh export and run the references only.
+    #[error("the smooth-domain solver solves the scalar problem only; an elastic scene runs its references (issue 46)")]
+    NotScalar,
 }
 
 /// The cases a scene asks for after a filter.
@@ -232,6 +236,7 @@ pub fn run_study(
     observer: &mut dyn Observer,
 ) -> Result<StudyResult, StudyError> {
     let mut result = StudyResult::default();
+    let problem = scene.scalar().ok_or(StudyError::NotScalar)?;
     let source = scene.mesh_source()?;
     result.coarse_mesh = source.provenance.clone();
     for &level in &plan.axes.levels {
@@ -249,10 +254,8 @@ pub fn run_study(
         let passes =
             plan.axes.space_pairs().len() * plan.axes.p_masses.len() * plan.axes.deltas.len();
         let budget = if passes > 1 { NORM_CACHE_BUDGET } else { 0 };
-        let norm_cache = scene
-            .exact
-            .as_ref()
-            .map(|exact| NormCache::new(&mesh, exact, &scene.f, plan.norm_quadrature, budget));
+        let norm_cache = (problem.exact.as_ref())
+            .map(|exact| NormCache::new(&mesh, exact, &problem.f, plan.norm_quadrature, budget));
         for &u_space in &plan.axes.u_spaces {
             observer.phase(&format!("level {level}, {u_space}: assembling"));
             let t1 = Instant::now();
@@ -277,7 +280,8 @@ pub fn run_study(
                         "level {level}, {u_space} u, {p_space} p, {p_mass} p mass: assembling"
                     ));
                     let t1 = Instant::now();
-                    let mut system = assemble(&mesh, &topo, &ptopo, &scene.f, &scene.g, p_mass)?;
+                    let mut system =
+                        assemble(&mesh, &topo, &ptopo, &problem.f, &problem.g, p_mass)?;
                     let assembly = topo_time + t1.elapsed().as_secs_f64();
                     let t2 = Instant::now();
                     let order = elimination_order(&mesh, &topo, &ptopo, &p_ops, p_mass);
@@ -286,7 +290,7 @@ pub fn run_study(
                     // the sweep's only copy of K: each δ is written into it (System::set_delta)
                     let k = std::mem::take(&mut system.base);
                     let ctx = LevelContext {
-                        scene,
+                        problem,
                         mesh: &mesh,
                         topo: &topo,
                         ptopo: &ptopo,
@@ -312,7 +316,8 @@ pub fn run_study(
 
 /// What the δ loop of one (level, u space, p space, p mass) needs.
 struct LevelContext<'a> {
-    scene: &'a Scene,
+    /// The scene's (scalar) problem.
+    problem: &'a ScalarProblem,
     mesh: &'a Mesh,
     topo: &'a UTopology,
     ptopo: &'a PTopology,
@@ -592,7 +597,7 @@ impl LevelContext<'_> {
         // p at the u dofs: the vertex values seen from each dof's face
         let p_dof = self.ptopo.at_u_dofs(self.mesh, self.topo, p);
         // The lumped p is P1 without bubble: zero bubbles in the norms, none in the fields.
-        let exact = self.scene.exact.is_some();
+        let exact = self.problem.exact.is_some();
         let bubbles = match self.p_mass {
             PMass::Consistent if exact || plan.keep_fields => self.bubbles(&p_dof, u),
             PMass::Lumped if exact => vec![[0.0; 2]; self.mesh.triangles.len()],
@@ -625,7 +630,7 @@ impl LevelContext<'_> {
                 p: &s.p_dof,
                 bubbles: &s.bubbles,
                 lambda: &s.lambda,
-                source: &self.scene.f,
+                source: &self.problem.f,
             })
             .collect();
         cache

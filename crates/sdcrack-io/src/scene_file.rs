@@ -21,6 +21,7 @@
 //! [`Expr`]: sdcrack_core::expr::Expr
 
 mod document;
+mod elastic;
 mod error;
 mod limits;
 mod load;
@@ -35,6 +36,6 @@ pub mod verification;
 
 pub use error::{KeyRole, SceneError};
 pub use limits::{MAX_CELLS, MAX_SCENE_BYTES};
-pub use load::{LoadedScene, TomlScene, DEFAULT_SCENE, SCENE_TEMPLATE};
+pub use load::{LoadedScene, TomlScene, DEFAULT_SCENE, ELASTIC_SCENE_TEMPLATE, SCENE_TEMPLATE};
 pub use position::Position;
 pub use schema::KNOWN_REFERENCES;

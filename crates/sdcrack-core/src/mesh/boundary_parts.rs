@@ -28,18 +28,26 @@ enum Shape {
 pub const RECTANGLE_PARTS: [&str; 4] = ["left", "right", "bottom", "top"];
 
 impl BoundaryParts {
-    /// The parts of `domain` meshed as `meshing` says (a mesh file's boundary is one part).
+    /// The parts of `domain` meshed as `meshing` says (a mesh file's boundary is one part,
+    /// [`crate::elasticity::WHOLE_BOUNDARY`]).
     pub fn of(domain: &Domain, meshing: &Meshing) -> BoundaryParts {
-        match (meshing, domain) {
-            (Meshing::File(_), _) => BoundaryParts {
-                names: vec!["boundary".to_string()],
+        match meshing {
+            Meshing::File(_) => BoundaryParts {
+                names: vec![crate::elasticity::WHOLE_BOUNDARY.to_string()],
                 shape: Shape::Whole,
             },
-            (_, Domain::Rectangle(r)) => BoundaryParts {
+            _ => BoundaryParts::of_domain(domain),
+        }
+    }
+
+    /// The parts of the drawn domain: a rectangle's sides, a polygon's edges.
+    pub fn of_domain(domain: &Domain) -> BoundaryParts {
+        match domain {
+            Domain::Rectangle(r) => BoundaryParts {
                 names: RECTANGLE_PARTS.iter().map(|s| s.to_string()).collect(),
                 shape: Shape::Rectangle(*r),
             },
-            (_, Domain::Polygon(p)) => BoundaryParts {
+            Domain::Polygon(p) => BoundaryParts {
                 names: (1..=p.len()).map(|k| format!("edge{k}")).collect(),
                 shape: Shape::Polygon(p.clone()),
             },
@@ -73,8 +81,8 @@ impl BoundaryParts {
             .collect()
     }
 
-    /// The part nearest to the point `m` of ∂Ω.
-    fn part_at(&self, m: [f64; 2]) -> usize {
+    /// The part nearest to the point `m` of ∂Ω (an index into [`BoundaryParts::names`]).
+    pub fn part_at(&self, m: [f64; 2]) -> usize {
         match &self.shape {
             Shape::Whole => 0,
             Shape::Rectangle(r) => nearest(&[

@@ -76,10 +76,10 @@ use std::f64::consts::PI;
 fn zero_field_norms(scene: Scene, level: u32) -> (ErrorNorms, Mesh) {
     let mesh = scene.mesh_source().unwrap().level(level).unwrap();
     let topo = mesh.u_topology(USpace::Broken);
-    let exact = scene.exact.as_ref().expect("exact scene");
+    let exact = scene.scalar().unwrap().exact.as_ref().expect("exact scene");
     let lambda = CrackField::PerNode(vec![0.0; mesh.cracks[0].nodes.len()]);
     let field = Field::zero(&mesh, &topo, lambda);
-    let sol = field.solution(&scene.f);
+    let sol = field.solution(&scene.scalar().unwrap().f);
     let norms = error_norms(&mesh, &topo, exact, &sol, NormQuadrature::default());
     (norms, mesh)
 }
@@ -201,7 +201,7 @@ fn all_bits(norms: &[(ErrorNorms, ErrorNorms)]) -> Vec<[u64; 4]> {
 fn with_open_crack_solutions(check: impl Fn(&Mesh, &Exact, &[(UTopology, Vec<DiscreteSolution>)])) {
     let scene = testing::open_exact();
     let mesh = scene.mesh_source().unwrap().level(0).unwrap();
-    let exact = scene.exact.as_ref().unwrap();
+    let exact = scene.scalar().unwrap().exact.as_ref().unwrap();
     let topos = [USpace::Broken, USpace::Continuous].map(|s| mesh.u_topology(s));
     let n = topos[0].n_dofs;
     let u: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
@@ -219,7 +219,7 @@ fn with_open_crack_solutions(check: impl Fn(&Mesh, &Exact, &[(UTopology, Vec<Dis
                 p: &p[..topo.n_dofs],
                 bubbles: &bubbles,
                 lambda,
-                source: &scene.f,
+                source: &scene.scalar().unwrap().f,
             })
             .to_vec()
     };

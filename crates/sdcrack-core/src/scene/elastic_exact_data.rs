@@ -42,7 +42,7 @@ use super::exact_check::{
     CrackPoint, ExactDataError, Known,
 };
 use super::key_path::KeyPath;
-use crate::elasticity::{boundary_edges, hooke_stress, ElasticData, ElasticExact, Material};
+use crate::elasticity::{boundary_edges, ElasticData, ElasticExact, Material};
 use crate::expr::{Expr, Var};
 use crate::problem::{face_point, Domain, Polyline};
 
@@ -118,12 +118,24 @@ fn check_hooke(
     domain: &Domain,
     cracks: &[Polyline],
 ) -> Result<(), ExactDataError> {
-    let law = hooke_stress(&exact.u, m);
+    // Hooke's law evaluated from the four derivatives (no text: any u that parses has them)
+    let d = |c: usize, v: Var| exact.u[c].derivative(v);
+    let (ux_x, uy_y) = (d(0, Var::X), d(1, Var::Y));
+    let (ux_y, uy_x) = (d(0, Var::Y), d(1, Var::X));
+    let (lam, mu) = (m.lambda_in_plane(), m.mu);
+    let law = |k: usize, p: [f64; 2]| -> Bounded {
+        let (a, b) = (eval(&ux_x, p), eval(&uy_y, p));
+        match k {
+            0 => combination(&[(lam + 2.0 * mu, a), (lam, b)]),
+            1 => combination(&[(lam, a), (lam + 2.0 * mu, b)]),
+            _ => combination(&[(mu, eval(&ux_y, p)), (mu, eval(&uy_x, p))]),
+        }
+    };
     let points = interior_points(domain, cracks);
     for (k, name) in STRESS_KEYS.iter().enumerate() {
         for &p in &points {
             let given = Known::bounded(eval(&exact.stress[k], p));
-            let hooke = Known::bounded(eval(&law[k], p));
+            let hooke = Known::bounded(law(k, p));
             if given.differs(hooke) {
                 let key = format!("exact.{name}");
                 return Err(ExactDataError::new(&key, format!(
@@ -504,7 +516,7 @@ mod tests {
     fn williams_open(k1: f64, k2: f64) -> Elastic {
         let m = steel_like();
         let u = williams(k1, k2, &m);
-        let stress = hooke_stress(&refs(&u).map(|s| Expr::parse(s).unwrap()), &m);
+        let stress = hooke_stress(&refs(&u).map(|s| Expr::parse(s).unwrap()), &m).unwrap();
         let t = [stress[0].to_string_infix(), stress[2].to_string_infix()];
         Elastic::new(m, refs(&u), ["0", "0"])
             .g_is_u()
@@ -589,7 +601,7 @@ mod tests {
         let m = steel_like();
         for (k1, k2) in [(1.0, 0.0), (0.0, 1.0)] {
             let u = williams(k1, k2, &m).map(|s| Expr::parse(&s).unwrap());
-            let [_, syy, sxy] = hooke_stress(&u, &m);
+            let [_, syy, sxy] = hooke_stress(&u, &m).unwrap();
             let r = 1e-6;
             let scale = (2.0 * std::f64::consts::PI * r).sqrt();
             assert!((syy.eval(r, 0.0) * scale - k1).abs() < 1e-9);
@@ -792,7 +804,7 @@ mod tests {
         let given = williams_stress(1.0, 0.5);
         let e = williams_open(1.0, 0.5).stress([&given[0], &given[1], &given[2]]);
         let exact = e.data.exact.as_ref().unwrap();
-        let law = hooke_stress(&exact.u, &m);
+        let law = hooke_stress(&exact.u, &m).unwrap();
         let [sxx, syy, sxy] = &exact.stress;
         let divergence = [
             [sxx.derivative(Var::X), sxy.derivative(Var::Y)],

@@ -142,7 +142,7 @@ impl Elastic {
     /// it when `[exact]` gives none), the body force `f` and no boundary data.
     pub(crate) fn new(m: Material, u: [&str; 2], f: [&str; 2]) -> Elastic {
         let u = pair(u);
-        let stress = crate::elasticity::hooke_stress(&u, &m);
+        let stress = crate::elasticity::hooke_stress(&u, &m).unwrap();
         Elastic {
             data: ElasticData {
                 material: m,

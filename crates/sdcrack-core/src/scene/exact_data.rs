@@ -35,18 +35,26 @@ pub use super::exact_check::{
     ExactDataError, BOUNDARY_SAMPLES, CRACK_SAMPLES, GRID, GRID_OFFSET, LIMIT_STEP, NEAR_CRACK,
     ROUNDOFF_SAFETY, TRUNCATION_SAFETY,
 };
+use super::validated::Problem;
 use super::validated::Scene;
-use crate::expr::Var;
+use crate::expr::{Expr, Var};
 use crate::problem::{face_point, Exact};
 
-/// Checks the scene's `[exact]` data (nothing to check without it).
+/// Checks the scene's `[exact]` data (nothing to check without it); an elastic scene's by
+/// [`super::elastic_exact_data::check`].
 pub fn check(scene: &Scene) -> Result<(), ExactDataError> {
-    let Some(exact) = &scene.exact else {
+    let problem = match &scene.problem {
+        Problem::Elasticity(data) => {
+            return super::elastic_exact_data::check(data, &scene.domain, &scene.cracks)
+        }
+        Problem::Scalar(problem) => problem,
+    };
+    let Some(exact) = &problem.exact else {
         return Ok(());
     };
     check_gradient(exact, scene)?;
-    check_source(exact, scene)?;
-    check_boundary(exact, scene)?;
+    check_source(exact, &problem.f, scene)?;
+    check_boundary(exact, &problem.g, scene)?;
     check_crack(exact, scene)
 }
 
@@ -76,11 +84,11 @@ fn check_gradient(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     Ok(())
 }
 
-fn check_source(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
+fn check_source(exact: &Exact, source: &Expr, scene: &Scene) -> Result<(), ExactDataError> {
     let uxx = exact.u.derivative(Var::X).derivative(Var::X);
     let uyy = exact.u.derivative(Var::Y).derivative(Var::Y);
     for p in interior_points(&scene.domain, &scene.cracks) {
-        let f = Known::bounded(scene.f.eval_bounded(p[0], p[1]));
+        let f = Known::bounded(source.eval_bounded(p[0], p[1]));
         let (a, ea) = uxx.eval_bounded(p[0], p[1]);
         let (b, eb) = uyy.eval_bounded(p[0], p[1]);
         let minus_laplacian = -(a + b);
@@ -103,9 +111,9 @@ fn check_source(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
     Ok(())
 }
 
-fn check_boundary(exact: &Exact, scene: &Scene) -> Result<(), ExactDataError> {
+fn check_boundary(exact: &Exact, dirichlet: &Expr, scene: &Scene) -> Result<(), ExactDataError> {
     for p in boundary_points(&scene.domain) {
-        let g = Known::bounded(scene.g.eval_bounded(p[0], p[1]));
+        let g = Known::bounded(dirichlet.eval_bounded(p[0], p[1]));
         let u = Known::bounded(exact.u.eval_bounded(p[0], p[1]));
         if g.differs(u) {
             return Err(ExactDataError::new(
@@ -291,7 +299,8 @@ mod tests {
             assert!(e.contains(" at ("), "{e}");
         }
         let mut s = scene("px", f, u, Some((u, "0")));
-        s.exact.as_mut().unwrap().px = crate::expr::Expr::parse("-pi*cos(pi*x)*cos(pi*y)").unwrap();
+        s.scalar_mut().unwrap().exact.as_mut().unwrap().px =
+            crate::expr::Expr::parse("-pi*cos(pi*x)*cos(pi*y)").unwrap();
         let e = check(&s).unwrap_err();
         assert_eq!(e.key, KeyPath::keys("exact.px"));
         assert!(e.message.starts_with("exact.px is not ∂u/∂x"), "{e}");

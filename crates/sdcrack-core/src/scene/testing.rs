@@ -36,9 +36,11 @@ pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -
         meshing: Meshing::Cells([8, 8]),
         grading: None,
         level0: Level0Size::Grid([8, 8]),
-        f: Expr::parse(f).unwrap(),
-        g: Expr::parse(g).unwrap(),
-        exact,
+        problem: Problem::Scalar(ScalarProblem {
+            f: Expr::parse(f).unwrap(),
+            g: Expr::parse(g).unwrap(),
+            exact,
+        }),
         axes: CaseAxes {
             levels: vec![0, 1, 2, 3, 4],
             u_spaces: vec![USpace::Continuous, USpace::Broken],

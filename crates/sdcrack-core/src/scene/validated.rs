@@ -1,9 +1,11 @@
-//! The validated scene: the problem (Ω, Γc, f, g, the exact solution), how its meshes are made,
-//! the case axes of its study, the fields to write and what the verdict may expect.
+//! The validated scene: the problem (Ω, Γc, and the problem kind's data: f, g and the exact
+//! solution of the scalar problem, or the elastic problem's material and loads), how its meshes
+//! are made, the case axes of its study, the fields to write and what the verdict may expect.
 
 use super::limits::Level0Size;
 use super::verification::Verification;
 use crate::case::CaseAxes;
+use crate::elasticity::ElasticData;
 use crate::expr::Expr;
 use crate::problem::{Domain, Exact, Meshing, Polyline};
 
@@ -32,6 +34,49 @@ impl FieldSet {
     }
 }
 
+/// The scalar problem's data: −Δu = f in Ω \ Γc, u = g on Γ, the contact conditions on Γc.
+#[derive(Clone, Debug)]
+pub struct ScalarProblem {
+    /// Source term f of −Δu = f.
+    pub f: Expr,
+    /// Dirichlet data g on Γ.
+    pub g: Expr,
+    /// Exact solution, if the scene has one.
+    pub exact: Option<Exact>,
+}
+
+/// The problem a scene poses on Ω \ Γc (`[problem] kind`): its data.
+#[derive(Clone, Debug)]
+pub enum Problem {
+    /// The scalar problem (the default kind, `"scalar"`).
+    Scalar(ScalarProblem),
+    /// Linear elasticity with frictionless contact on the crack faces (`"elasticity"`,
+    /// docs/elasticity.md).
+    Elasticity(ElasticData),
+}
+
+/// The problem kinds of `[problem] kind`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ProblemKind {
+    /// −Δu = f with unilateral contact: the problem the smooth-domain solver solves.
+    #[default]
+    Scalar,
+    /// Linear elasticity with frictionless non-penetration (docs/elasticity.md).
+    Elasticity,
+}
+
+crate::scene_names!(ProblemKind { Scalar => "scalar", Elasticity => "elasticity" });
+
+impl Problem {
+    /// Which kind it is.
+    pub fn kind(&self) -> ProblemKind {
+        match self {
+            Problem::Scalar(_) => ProblemKind::Scalar,
+            Problem::Elasticity(_) => ProblemKind::Elasticity,
+        }
+    }
+}
+
 /// A validated scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -49,13 +94,10 @@ pub struct Scene {
     pub grading: Option<crate::problem::Grading>,
     /// The level-0 mesh's size, for memory estimates before meshing.
     pub level0: Level0Size,
-    /// Source term f of −Δu = f.
-    pub f: Expr,
-    /// Dirichlet data g on Γ.
-    pub g: Expr,
-    /// Exact solution, if the scene has one.
-    pub exact: Option<Exact>,
-    /// The cases to run: every combination of these values.
+    /// The problem posed and its data.
+    pub problem: Problem,
+    /// The cases to run: every combination of these values (an elastic scene: its levels only,
+    /// the other axes empty, so no solver case until its solver exists, issue 46).
     pub axes: CaseAxes,
     /// Fields to write.
     pub fields: FieldSet,
@@ -66,6 +108,38 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Whether the scene gives exact fields (`[exact]`), whatever its problem kind.
+    pub fn has_exact(&self) -> bool {
+        match &self.problem {
+            Problem::Scalar(p) => p.exact.is_some(),
+            Problem::Elasticity(d) => d.exact.is_some(),
+        }
+    }
+
+    /// The scalar problem's data; `None` for an elastic scene.
+    pub fn scalar(&self) -> Option<&ScalarProblem> {
+        match &self.problem {
+            Problem::Scalar(p) => Some(p),
+            Problem::Elasticity(_) => None,
+        }
+    }
+
+    /// The scalar problem's data, to change; `None` for an elastic scene.
+    pub fn scalar_mut(&mut self) -> Option<&mut ScalarProblem> {
+        match &mut self.problem {
+            Problem::Scalar(p) => Some(p),
+            Problem::Elasticity(_) => None,
+        }
+    }
+
+    /// The elastic problem's data; `None` for a scalar scene.
+    pub fn elasticity(&self) -> Option<&ElasticData> {
+        match &self.problem {
+            Problem::Elasticity(d) => Some(d),
+            Problem::Scalar(_) => None,
+        }
+    }
+
     /// The scene's meshes (runs gmsh for a `mesh_size` scene).
     pub fn mesh_source(&self) -> Result<crate::mesh::MeshSource, crate::mesh::MeshError> {
         Ok(

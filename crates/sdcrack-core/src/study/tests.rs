@@ -67,7 +67,15 @@ impl Discretized {
         let topo = mesh.u_topology(space);
         let ptopo = mesh.p_topology(p_space);
         let ops = CrackOperators::new(mesh).with_p_topology(&ptopo);
-        let system = assemble(mesh, &topo, &ptopo, &scene.f, &scene.g, p_mass).unwrap();
+        let system = assemble(
+            mesh,
+            &topo,
+            &ptopo,
+            &scene.scalar().unwrap().f,
+            &scene.scalar().unwrap().g,
+            p_mass,
+        )
+        .unwrap();
         let order = elimination_order(mesh, &topo, &ptopo, &ops, p_mass);
         let symbolic = SymbolicLdlt::analyze_ordered(&system.base, &order).unwrap();
         Discretized {
@@ -83,7 +91,7 @@ impl Discretized {
     /// The level context of a study without multiplier spaces or norms.
     fn context<'a>(&'a self, scene: &'a Scene, mesh: &'a Mesh) -> LevelContext<'a> {
         LevelContext {
-            scene,
+            problem: scene.scalar().unwrap(),
             mesh,
             topo: &self.topo,
             ptopo: &self.ptopo,

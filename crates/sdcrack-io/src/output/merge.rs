@@ -241,7 +241,7 @@ pub fn merge_shards(
         all_converged: not_converged == 0,
         wall_s: solver.iter().map(|(_, s)| s.wall_s).sum(),
         fields_write_s,
-        recomputation_file: recomputation_file(&scene.fields),
+        recomputation_file: recomputation_file(&scene),
         cases,
         shards: Some(shard_records(&solver)),
         ..lead.clone()

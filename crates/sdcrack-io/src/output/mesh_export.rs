@@ -46,10 +46,12 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use sdcrack_core::elasticity::{Component, ElasticData};
+use sdcrack_core::expr::Expr;
 use sdcrack_core::mesh::{BoundaryParts, Layout, Mesh, MeshError, Side};
 use sdcrack_core::multiplier::CrackOperators;
 use sdcrack_core::problem::{Domain, Meshing, USpace};
-use sdcrack_core::scene::Scene;
+use sdcrack_core::scene::{Problem, ProblemKind, ScalarProblem, Scene};
 
 /// Errors of the mesh export.
 #[derive(Debug, thiserror::Error)]
@@ -98,30 +100,14 @@ fn triangles_text(tris: &[[usize; 3]]) -> String {
     })
 }
 
-/// The scene's data as JSON for the references (expressions as their source text).
+/// The scene's data as JSON for the references (expressions as their source text): a scalar
+/// scene's f, g and exact solution, or an elastic scene's problem, loads and exact fields
+/// (docs/elasticity.md), then the geometry and meshing.
 fn scene_json(scene: &Scene) -> serde_json::Value {
-    let exact = scene.exact.as_ref().map(|e| {
-        serde_json::json!({
-            "u": e.u.source(),
-            "px": e.px.source(),
-            "py": e.py.source(),
-            "jump": e.jump.as_ref().map(|j| j.source()),
-        })
-    });
-    let mut json = serde_json::json!({
-        "name": scene.name,
-        "f": scene.f.source(),
-        "g": scene.g.source(),
-        "exact": exact,
-        "domain": match &scene.domain {
-            Domain::Rectangle(r) => serde_json::json!({"min": r.min, "max": r.max}),
-            Domain::Polygon(p) => serde_json::json!({"polygon": p}),
-        },
-        "cracks": scene.cracks.iter().map(|c| serde_json::json!({"points": c.points})).collect::<Vec<_>>(),
-        "cells": match scene.meshing { Meshing::Cells(c) => Some(c), _ => None },
-        "mesh_size": match scene.meshing { Meshing::MeshSize(h) => Some(h), _ => None },
-        "levels": scene.axes.levels,
-    });
+    let mut json = match &scene.problem {
+        Problem::Scalar(p) => scalar_json(scene, p),
+        Problem::Elasticity(d) => elastic_json(scene, d),
+    };
     // the single straight crack of older exports, for readers that know only that
     if let [c] = &scene.cracks[..] {
         if c.points.len() == 2 {
@@ -132,11 +118,116 @@ fn scene_json(scene: &Scene) -> serde_json::Value {
     json
 }
 
+/// The scene's geometry and meshing, as every scene.json has them.
+fn geometry_json(scene: &Scene) -> serde_json::Value {
+    serde_json::json!({
+        "name": scene.name,
+        "domain": match &scene.domain {
+            Domain::Rectangle(r) => serde_json::json!({"min": r.min, "max": r.max}),
+            Domain::Polygon(p) => serde_json::json!({"polygon": p}),
+        },
+        "cracks": scene.cracks.iter().map(|c| serde_json::json!({"points": c.points})).collect::<Vec<_>>(),
+        "cells": match scene.meshing { Meshing::Cells(c) => Some(c), _ => None },
+        "mesh_size": match scene.meshing { Meshing::MeshSize(h) => Some(h), _ => None },
+        "levels": scene.axes.levels,
+    })
+}
+
+/// An elastic scene's scene.json (docs/elasticity.md, The mesh export).
+fn elastic_json(scene: &Scene, d: &ElasticData) -> serde_json::Value {
+    let m = &d.material;
+    let pair = |e: &[Expr; 2]| [e[0].source().to_string(), e[1].source().to_string()];
+    let exact = d.exact.as_ref().map(|e| {
+        let given = |x: &Option<Expr>| x.as_ref().map(|x| x.source().to_string());
+        serde_json::json!({
+            "ux": e.u[0].source(),
+            "uy": e.u[1].source(),
+            "sxx": e.stress[0].source(),
+            "syy": e.stress[1].source(),
+            "sxy": e.stress[2].source(),
+            "opening": given(&e.opening),
+            "slip": given(&e.slip),
+            "pressure": given(&e.pressure),
+            "sif": (!e.sif.is_empty()).then(|| e.sif.iter().map(|k| [k.k1, k.k2]).collect::<Vec<_>>()),
+        })
+    });
+    let components = |c: [bool; 2]| {
+        (Component::ALL.iter().zip(c))
+            .filter(|(_, held)| *held)
+            .map(|(c, _)| c.name())
+            .collect::<Vec<_>>()
+    };
+    let mut json = geometry_json(scene);
+    let loads = serde_json::json!({
+        "problem": {
+            "kind": ProblemKind::Elasticity.name(),
+            "plane": m.plane.name(),
+            "E": m.young(),
+            "nu": m.poisson(),
+            "lambda": m.lambda,
+            "mu": m.mu,
+            "lambda_in_plane": m.lambda_in_plane(),
+            "kolosov": m.kolosov(),
+            "e_prime": m.e_prime(),
+        },
+        "f": pair(&d.f),
+        "g": d.g.as_ref().map(pair),
+        "tractions": (d.tractions.iter())
+            .map(|t| (t.part.0.clone(), serde_json::json!(pair(&t.t))))
+            .collect::<serde_json::Map<_, _>>(),
+        "fixed": (d.fixed.iter())
+            .map(|f| serde_json::json!({"point": f.point, "components": components(f.components)}))
+            .collect::<Vec<_>>(),
+        "exact": exact,
+    });
+    if let (Some(json), serde_json::Value::Object(loads)) = (json.as_object_mut(), loads) {
+        json.extend(loads);
+    }
+    json
+}
+
+/// A scalar scene's scene.json: f, g, exact {u, px, py, jump}, the geometry (unchanged since
+/// the elastic kind came: no `problem` key means scalar).
+fn scalar_json(scene: &Scene, problem: &ScalarProblem) -> serde_json::Value {
+    let exact = problem.exact.as_ref().map(|e| {
+        serde_json::json!({
+            "u": e.u.source(),
+            "px": e.px.source(),
+            "py": e.py.source(),
+            "jump": e.jump.as_ref().map(|j| j.source()),
+        })
+    });
+    serde_json::json!({
+        "name": scene.name,
+        "f": problem.f.source(),
+        "g": problem.g.source(),
+        "exact": exact,
+        "domain": match &scene.domain {
+            Domain::Rectangle(r) => serde_json::json!({"min": r.min, "max": r.max}),
+            Domain::Polygon(p) => serde_json::json!({"polygon": p}),
+        },
+        "cracks": scene.cracks.iter().map(|c| serde_json::json!({"points": c.points})).collect::<Vec<_>>(),
+        "cells": match scene.meshing { Meshing::Cells(c) => Some(c), _ => None },
+        "mesh_size": match scene.meshing { Meshing::MeshSize(h) => Some(h), _ => None },
+        "levels": scene.axes.levels,
+    })
+}
+
 /// What the export writes beyond the scalar problem's files (all off: the scalar export).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MeshExportOptions {
     /// `level{L}/boundary_edges.txt` and mesh.json's `"boundary_parts"` (elastic scenes).
     pub boundary_parts: bool,
+}
+
+impl MeshExportOptions {
+    /// What a scene's problem needs: the boundary parts for an elastic scene (its tractions and
+    /// Dirichlet data live on them), nothing more for a scalar one.
+    pub fn for_scene(scene: &Scene) -> MeshExportOptions {
+        MeshExportOptions {
+            boundary_parts: scene.problem.kind() == ProblemKind::Elasticity,
+        }
+    }
 }
 
 fn write_level(dir: &Path, mesh: &Mesh, parts: Option<&BoundaryParts>) -> Result<(), ExportError> {
@@ -246,10 +337,10 @@ fn write_level(dir: &Path, mesh: &Mesh, parts: Option<&BoundaryParts>) -> Result
     Ok(())
 }
 
-/// Writes the export of every level of `scene` (or only `levels` when given) into `out`: the
-/// scalar problem's files ([`export_meshes_with`] and no options).
+/// Writes the export of every level of `scene` (or only `levels` when given) into `out`, with
+/// the files its problem kind needs ([`MeshExportOptions::for_scene`]).
 pub fn export_meshes(scene: &Scene, levels: &[u32], out: &Path) -> Result<PathBuf, ExportError> {
-    export_meshes_with(scene, levels, out, MeshExportOptions::default())
+    export_meshes_with(scene, levels, out, MeshExportOptions::for_scene(scene))
 }
 
 /// [`export_meshes`] with the extra files `options` asks for.

@@ -16,14 +16,15 @@ pub const VERIFICATION_STEM: &str = "verification";
 
 /// The file of a results folder that holds every field the compare tool recomputes the errors
 /// from: `fields.h5` when the scene lists u, p and λ, `verification.h5` otherwise (summary.json's
-/// `recomputation_file`).
-pub fn recomputation_file(fields: &sdcrack_core::scene::FieldSet) -> String {
-    let stem = if fields.is_complete() {
+/// `recomputation_file`); none for an elastic scene, whose run has no solver case (issue 46).
+pub fn recomputation_file(scene: &sdcrack_core::scene::Scene) -> Option<String> {
+    scene.scalar()?;
+    let stem = if scene.fields.is_complete() {
         FIELDS_STEM
     } else {
         VERIFICATION_STEM
     };
-    format!("{stem}.h5")
+    Some(format!("{stem}.h5"))
 }
 /// The copy of the scene file in a results folder (the embedded default's text for `sdcrack run`
 /// without a file): what the run was asked to do, read by the compare tool.

@@ -46,7 +46,10 @@ pub fn write_run(
         })?;
     }
     let t0 = std::time::Instant::now();
-    write_fields(dir, scene, study)?;
+    // an elastic scene's run has no solver case, hence no field of its own (issue 46)
+    if scene.scalar().is_some() {
+        write_fields(dir, scene, study)?;
+    }
     let fields_write_s = t0.elapsed().as_secs_f64();
     let summary = summary::Summary::of_run(scene, plan, study, wall_s, fields_write_s, provenance);
     let path = dir.join("summary.json");

@@ -37,6 +37,9 @@ pub struct Summary {
     pub scene: String,
     /// Scene description.
     pub description: String,
+    /// The problem kind of an elastic scene, `"elasticity"` (absent: the scalar problem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub problem: Option<String>,
     /// Version of sdcrack that wrote it.
     pub sdcrack_version: String,
     /// Where the results come from: command line, binary, commit, date, machine.
@@ -59,8 +62,9 @@ pub struct Summary {
     /// The file holding every field the compare tool recomputes the errors from: `fields.h5`
     /// when the scene's `fields` lists u, p and λ, otherwise `verification.h5` (the same HDF5
     /// layout with all of them, no XDMF series). Each case's group in it is
-    /// `/cases/<fields_grid>`.
-    pub recomputation_file: String,
+    /// `/cases/<fields_grid>`. Absent for an elastic scene (no solver case, issue 46).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recomputation_file: Option<String>,
     /// For an unstructured scene: where level 0 came from (gmsh's version and seconds, or the
     /// mesh file) and its size; gmsh's level 0 is also written as `coarse.msh`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -99,6 +103,7 @@ impl Summary {
         Summary {
             scene: scene.name.clone(),
             description: scene.description.clone(),
+            problem: (scene.scalar().is_none()).then(|| scene.problem.kind().name().to_string()),
             sdcrack_version: provenance.sdcrack_version.clone(),
             provenance: provenance.clone(),
             kkt_tolerance: KKT_TOLERANCE,
@@ -107,7 +112,7 @@ impl Summary {
             all_converged: study.cases.iter().all(|c| c.converged),
             wall_s,
             fields_write_s,
-            recomputation_file: super::results_dir::recomputation_file(&scene.fields),
+            recomputation_file: super::results_dir::recomputation_file(scene),
             coarse_mesh: study.coarse_mesh.clone(),
             cases: (study.cases.iter())
                 .map(|c| CaseSummary::from_case(c, with_fields))

@@ -13,6 +13,11 @@ use sdcrack_core::scene::Scene;
 /// The commented scene template printed by `sdcrack scene --template` (a valid, small scene).
 pub const SCENE_TEMPLATE: &str = include_str!("../../../../docs/scene-template.toml");
 
+/// The commented elastic scene template printed by `sdcrack scene --template elasticity` (a
+/// valid, small elastic scene naming every key of the elastic problem kind).
+pub const ELASTIC_SCENE_TEMPLATE: &str =
+    include_str!("../../../../docs/scene-template-elasticity.toml");
+
 /// The embedded default scene (`sdcrack run` without argument): a partly open, partly closed crack.
 pub const DEFAULT_SCENE: &str = include_str!("../../../../scenes/mixed.toml");
 

@@ -5,6 +5,8 @@
 //! A new key is a new field here (with its `#[serde(default)]` when it is optional), then its
 //! validation; docs/scenes.md's table must list it (a test says so).
 
+use std::collections::BTreeMap;
+
 use serde::Deserialize;
 
 /// The whole scene file.
@@ -14,12 +16,29 @@ pub(super) struct SceneToml {
     pub(super) name: String,
     #[serde(default)]
     pub(super) description: String,
+    pub(super) problem: Option<ProblemToml>,
     pub(super) geometry: Option<GeometryToml>,
     pub(super) data: DataToml,
     pub(super) exact: Option<ExactToml>,
     pub(super) discretization: DiscretizationToml,
     pub(super) outputs: Option<OutputsToml>,
     pub(super) verification: Option<VerificationToml>,
+}
+
+/// `[problem]`: the problem kind (`"scalar"`, the default, or `"elasticity"`) and an elastic
+/// scene's material (docs/elasticity.md): one pair of (E, ν) and (λ, μ), the plane model, and
+/// the friction coefficient (0 only).
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub(super) struct ProblemToml {
+    pub(super) kind: Option<String>,
+    pub(super) plane: Option<String>,
+    #[serde(rename = "E")]
+    pub(super) young: Option<f64>,
+    pub(super) nu: Option<f64>,
+    pub(super) lambda: Option<f64>,
+    pub(super) mu: Option<f64>,
+    pub(super) friction: Option<f64>,
 }
 
 /// `[geometry]`: Ω and the cracks (absent with `discretization.mesh`).
@@ -62,25 +81,53 @@ pub(super) struct GradingToml {
     pub(super) radius: f64,
 }
 
-/// `[data]`: the source term and the Dirichlet data, as expressions.
+/// `[data]`: the loads, as expressions. The scalar problem's source term and Dirichlet data
+/// (`f`, `g`: required in a scalar scene), or the elastic problem's body force, Dirichlet data,
+/// tractions per boundary part and fixed points (the validation says which keys a kind needs
+/// and refuses the other kind's).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct DataToml {
-    pub(super) f: String,
-    pub(super) g: String,
+    pub(super) f: Option<String>,
+    pub(super) g: Option<String>,
+    pub(super) fx: Option<String>,
+    pub(super) fy: Option<String>,
+    pub(super) gx: Option<String>,
+    pub(super) gy: Option<String>,
+    pub(super) traction: Option<BTreeMap<String, Vec<String>>>,
+    pub(super) fixed: Option<Vec<FixedToml>>,
 }
 
-/// `[exact]`: an exact solution, its gradient and its jump (expressions).
+/// One `data.fixed` entry: displacement components held at 0 at a corner of Ω.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct FixedToml {
+    pub(super) point: Vec<f64>,
+    pub(super) components: Vec<String>,
+}
+
+/// `[exact]`: the scalar problem's exact solution, its gradient and its jump, or the elastic
+/// problem's displacement, stress, crack quantities and stress intensity factors.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct ExactToml {
-    pub(super) u: String,
+    pub(super) u: Option<String>,
     pub(super) px: Option<String>,
     pub(super) py: Option<String>,
     pub(super) jump: Option<String>,
+    pub(super) ux: Option<String>,
+    pub(super) uy: Option<String>,
+    pub(super) sxx: Option<String>,
+    pub(super) syy: Option<String>,
+    pub(super) sxy: Option<String>,
+    pub(super) opening: Option<String>,
+    pub(super) slip: Option<String>,
+    pub(super) pressure: Option<String>,
+    pub(super) sif: Option<Vec<Vec<f64>>>,
 }
 
-/// `[discretization]`: level 0, the levels, the spaces and the δ sweep.
+/// `[discretization]`: level 0, the levels, the spaces and the δ sweep (the spaces and δ are the
+/// scalar problem's case axes: required in a scalar scene, refused in an elastic one).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct DiscretizationToml {
@@ -90,13 +137,13 @@ pub(super) struct DiscretizationToml {
     #[serde(default)]
     pub(super) grading: Option<GradingToml>,
     pub(super) levels: Vec<i64>,
-    pub(super) u_spaces: Vec<String>,
-    pub(super) multipliers: Vec<String>,
+    pub(super) u_spaces: Option<Vec<String>>,
+    pub(super) multipliers: Option<Vec<String>>,
     #[serde(default)]
     pub(super) p_mass: Option<Vec<String>>,
     #[serde(default)]
     pub(super) p_spaces: Option<Vec<String>>,
-    pub(super) deltas: Vec<f64>,
+    pub(super) deltas: Option<Vec<f64>>,
 }
 
 /// `[outputs]`: the fields written and the reference solvers run.

@@ -17,9 +17,11 @@ use serde::{Deserialize, Serialize};
 
 use super::raw::SceneToml;
 use sdcrack_core::case::{AxisSchema, CaseKey};
+use sdcrack_core::elasticity::{Component, PlaneModel};
 use sdcrack_core::norms::Quantity;
 use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use sdcrack_core::scene::verification::NOT_APPLICABLE_CHECKS;
+use sdcrack_core::scene::ProblemKind;
 
 /// Reference tools the project knows how to run.
 pub const KNOWN_REFERENCES: [&str; 2] = ["dolfinx", "freefem"];
@@ -37,6 +39,9 @@ pub enum Kind {
     Bool,
     /// An array of values of one kind.
     List(Box<Kind>),
+    /// A table whose keys are names the scene chooses (boundary parts), each holding a value
+    /// of one kind.
+    Map(Box<Kind>),
     /// A table (a `[header]`, an inline table, or each of an array of tables).
     Table,
 }
@@ -58,6 +63,14 @@ impl Kind {
                     format!("list of {name}"),
                     format!("a list of {many}"),
                     format!("lists of {many}"),
+                ];
+            }
+            Kind::Map(item) => {
+                let [name, _, many] = item.forms();
+                return [
+                    format!("table of {name}"),
+                    format!("a table of {many}"),
+                    format!("tables of {many}"),
                 ];
             }
         };
@@ -137,8 +150,14 @@ pub struct Schema {
 /// Names of the fields `[outputs] fields` may list.
 pub const FIELDS: &[&str] = &["u", "p", "lambda"];
 
+/// The fields an elastic scene's `[outputs] fields` may list (the references' u and stress).
+pub const ELASTIC_FIELDS: &[&str] = &["u"];
+
 /// The names a key may hold, by `table.key` (the verification patterns also take `"*"`).
 pub const ALLOWED: &[(&str, &[&str])] = &[
+    ("problem.kind", ProblemKind::NAMES),
+    ("problem.plane", PlaneModel::NAMES),
+    ("data.fixed.components", Component::NAMES),
     ("discretization.u_spaces", USpace::NAMES),
     ("discretization.multipliers", MultiplierSpace::NAMES),
     ("discretization.p_mass", PMass::NAMES),
@@ -193,6 +212,27 @@ pub(super) const WORDS: &[(&str, &str)] = &[
     ("px", "an expression in quotes"),
     ("py", "an expression in quotes"),
     ("jump", "an expression in quotes"),
+    ("fx", "an expression in quotes, e.g. \"0\""),
+    ("fy", "an expression in quotes, e.g. \"0\""),
+    ("gx", "an expression in quotes"),
+    ("gy", "an expression in quotes"),
+    (
+        "traction",
+        "a table of boundary parts, each [\"tx\", \"ty\"]: two expressions in quotes",
+    ),
+    ("point", "a point [x, y] of numbers"),
+    ("ux", "an expression in quotes"),
+    ("uy", "an expression in quotes"),
+    ("sxx", "an expression in quotes"),
+    ("syy", "an expression in quotes"),
+    ("sxy", "an expression in quotes"),
+    ("opening", "an expression in quotes"),
+    ("slip", "an expression in quotes"),
+    ("pressure", "an expression in quotes"),
+    (
+        "sif",
+        "a list of pairs [K_I, K_II] of numbers, one per crack tip",
+    ),
     ("cells", "two integers [nx, ny]"),
     ("deltas", "a list of numbers ≥ 0"),
 ];
@@ -382,9 +422,48 @@ impl<'de> de::Deserializer<'de> for Recorder<'_> {
         Ok(value)
     }
 
+    fn deserialize_map<V: de::Visitor<'de>>(self, visitor: V) -> Result<V::Value, Error> {
+        let mut item = Kind::Table;
+        let value = visitor.visit_map(OneEntry {
+            recorder: Some(Recorder {
+                path: self.path,
+                kind: &mut item,
+                tables: self.tables,
+            }),
+        })?;
+        *self.kind = Kind::Map(Box::new(item));
+        Ok(value)
+    }
+
     serde::forward_to_deserialize_any! {
         i8 i16 i32 i128 u8 u16 u32 u64 u128 f32 char bytes byte_buf unit unit_struct
-        newtype_struct tuple tuple_struct map enum identifier ignored_any
+        newtype_struct tuple tuple_struct enum identifier ignored_any
+    }
+}
+
+/// A table of names of exactly one entry (named `name`), its value recorded.
+struct OneEntry<'a> {
+    recorder: Option<Recorder<'a>>,
+}
+
+impl<'de> MapAccess<'de> for OneEntry<'_> {
+    type Error = Error;
+
+    fn next_key_seed<K: DeserializeSeed<'de>>(
+        &mut self,
+        seed: K,
+    ) -> Result<Option<K::Value>, Error> {
+        if self.recorder.is_none() {
+            return Ok(None);
+        }
+        seed.deserialize("name".into_deserializer()).map(Some)
+    }
+
+    fn next_value_seed<V: DeserializeSeed<'de>>(&mut self, seed: V) -> Result<V::Value, Error> {
+        match self.recorder.take() {
+            Some(r) => seed.deserialize(r),
+            None => Err(de::Error::custom("a value asked for before its key")),
+        }
     }
 }
 

@@ -66,28 +66,65 @@ fn key_positions_in_the_scene_text() {
     );
 }
 
-/// The template is a valid scene, names every table and key (commented or not), and its
-/// optional tables, uncommented, are valid too.
+/// The templates are valid scenes (the scalar one and the elastic one), together they name
+/// every table and key (commented or not), and their optional tables, uncommented, are valid
+/// too.
 #[test]
 fn template_is_a_valid_scene_naming_every_key() {
     let scene = Scene::from_toml(SCENE_TEMPLATE).expect("template parses");
     assert_eq!(scene.name, "my-crack");
+    assert!(scene.scalar().is_some());
+    let elastic = Scene::from_toml(ELASTIC_SCENE_TEMPLATE).expect("elastic template parses");
+    assert!(elastic.elasticity().is_some_and(|d| d.exact.is_some()));
+    let both = format!("{SCENE_TEMPLATE}\n{ELASTIC_SCENE_TEMPLATE}");
     let schema = schema();
     for t in &schema.tables {
         let (table, keys) = (&t.table, t.key_names());
         let last = table.rsplit('.').next().unwrap_or(table);
-        let named = SCENE_TEMPLATE.contains(&format!("[{table}]"))
-            || SCENE_TEMPLATE.contains(&format!("{last} = {{"))
-            || SCENE_TEMPLATE.contains(&format!("{last} = [{{"));
-        assert!(table.is_empty() || named, "template lacks [{table}]");
+        let named = both.contains(&format!("[{table}]"))
+            || both.contains(&format!("{last} = {{"))
+            || both.contains(&format!("{last} = [{{"));
+        assert!(table.is_empty() || named, "templates lack [{table}]");
         for key in keys {
             assert!(
-                SCENE_TEMPLATE.contains(&format!("{key} ="))
+                both.contains(&format!("{key} ="))
                     || schema.tables.iter().any(|t| t.table.ends_with(key)),
-                "template lacks `{key}` of [{table}]"
+                "templates lack `{key}` of [{table}]"
             );
         }
     }
+    // the elastic template's alternatives, uncommented: (λ, μ), an all-traction body held at
+    // two corners, the stress given
+    let lame = ELASTIC_SCENE_TEMPLATE
+        .replace("\nE = 1.0", "\n")
+        .replace("\nnu = 0.3", "\n")
+        .replace("# lambda = ", "lambda = ")
+        .replace("# mu = ", "mu = ")
+        .replace("# friction = ", "friction = ");
+    let m = Scene::from_toml(&lame)
+        .expect("lambda, mu")
+        .elasticity()
+        .unwrap()
+        .material;
+    assert_eq!((m.lambda, m.mu), (0.5, 0.4));
+    let free = ELASTIC_SCENE_TEMPLATE
+        .replace("\ngx = ", "\n# gx = ")
+        .replace("\ngy = ", "\n# gy = ")
+        .replace(
+            "# traction = { top = [\"0\", \"-0.1\"], bottom = [\"0\", \"-0.1\"] }",
+            "traction = { top = [\"0\", \"-0.1\"], bottom = [\"0\", \"0.1\"], left = [\"0\", \"0\"], right = [\"0\", \"0\"] }",
+        )
+        .replace("# fixed = ", "fixed = ")
+        .replace("# sxx = \"...\"", "sxx = \"0\"")
+        .replace("# syy = \"...\"", "syy = \"0\"")
+        .replace("# sxy = \"...\"", "sxy = \"0\"");
+    let d = Scene::from_toml(&free)
+        .expect("all traction")
+        .elasticity()
+        .cloned()
+        .unwrap();
+    assert!(d.g.is_none());
+    assert_eq!((d.tractions.len(), d.fixed.len()), (4, 2));
     // Uncomment the optional [exact] and expected-failure blocks: still a valid scene.
     let full = SCENE_TEMPLATE
         .replace("# [exact]", "[exact]")
@@ -102,7 +139,7 @@ fn template_is_a_valid_scene_naming_every_key() {
         .replace("# rate = ", "rate = ")
         .replace("# check = ", "check = ");
     let scene = Scene::from_toml(&full).expect("template with its options parses");
-    assert!(scene.exact.is_some());
+    assert!(scene.has_exact());
 }
 
 /// Peak resident memory measured with `/usr/bin/time -f %M` for
@@ -199,7 +236,16 @@ fn messages_escape_control_characters() {
 fn schema_is_read_off_the_structs() {
     let s = schema();
     let top = s.table("").expect("top level");
-    assert_eq!(&top.key_names()[..3], ["name", "description", "geometry"]);
+    assert_eq!(
+        &top.key_names()[..4],
+        ["name", "description", "problem", "geometry"]
+    );
+    let traction = s.key("data", "traction").expect("traction");
+    assert_eq!(traction.type_name, "table of list of string");
+    assert_eq!(
+        s.key("problem", "kind").expect("kind").values,
+        ["scalar", "elasticity"]
+    );
     let grading = s.table("discretization.grading").expect("grading");
     assert_eq!(grading.key_names(), ["beta", "radius"]);
     assert!(grading.keys.iter().all(|k| *k.kind() == Kind::Number));
@@ -272,9 +318,9 @@ fn errors_of_the_structs_carry_their_key_path() {
     assert_eq!(e.fault, document::Fault::UnknownKey("h".into()));
     assert_eq!(e.path, path("data.h"));
     assert_eq!(e.span.map(|s| s.start), text.find("h ="));
-    let e = raw_error("name = \"n\"\n[data]\nf = \"1\"\n");
-    assert_eq!(e.fault, document::Fault::MissingKey("g"));
-    assert_eq!(e.path, path("data"));
+    let e = raw_error("name = \"n\"\n[discretization]\ncells = [2, 2]\n");
+    assert_eq!(e.fault, document::Fault::MissingKey("levels"));
+    assert_eq!(e.path, path("discretization"));
     let text = "[discretization]\nlevels = [0, 1.5]\n";
     let e = raw_error(text);
     assert_eq!(e.path, path("discretization.levels[1]"));
@@ -362,4 +408,72 @@ fn docs_table_lists_exactly_the_schema_keys() {
             }
         }
     }
+}
+
+/// An elastic scene as the loader reads it: the material of either pair and plane model, the
+/// stress by Hooke's law unless given, the parts of a polygon, no solver case axes, the fields
+/// ["u"] by default; a scalar scene is the scalar problem.
+#[test]
+fn elastic_scenes_are_read_into_the_elastic_problem() {
+    use sdcrack_core::elasticity::{hooke_stress, PlaneModel};
+    let d = |text: &str| {
+        Scene::from_toml(text)
+            .unwrap_or_else(|e| panic!("{e}"))
+            .elasticity()
+            .cloned()
+            .expect("elastic")
+    };
+    let scene = Scene::from_toml(ELASTIC_SCENE_TEMPLATE).unwrap();
+    assert_eq!(scene.axes.levels, [0, 1, 2]);
+    assert_eq!(scene.axes.case_count(), 0);
+    let data = scene.elasticity().unwrap();
+    let m = data.material;
+    assert!((m.young() - 1.0).abs() < 1e-15 && (m.poisson() - 0.3).abs() < 1e-15);
+    assert_eq!(m.plane, PlaneModel::Strain);
+    let exact = data.exact.as_ref().unwrap();
+    let hooke = hooke_stress(&exact.u, &m).unwrap();
+    for (s, h) in exact.stress.iter().zip(&hooke) {
+        assert_eq!(s.source(), h.source());
+    }
+    // σ_yy of u = (0.1 x, −0.1 y): 2μ · (−0.1)
+    assert!((exact.stress[1].eval(0.2, 0.3) + 0.2 * m.mu).abs() < 1e-15);
+    assert_eq!(exact.sif.len(), 2);
+    let stress = ELASTIC_SCENE_TEMPLATE.replace("plane = \"strain\"", "plane = \"stress\"");
+    assert_eq!(d(&stress).material.plane, PlaneModel::Stress);
+    // no [outputs]: the references' fields ["u"]; no [problem] plane: strain
+    let bare = ELASTIC_SCENE_TEMPLATE
+        .replace("[outputs]", "# [outputs]")
+        .replace("\nfields = ", "\n# fields = ")
+        .replace("\nreferences = ", "\n# references = ")
+        .replace("plane = \"strain\"", "");
+    let s = Scene::from_toml(&bare).unwrap();
+    assert!(s.fields.u && !s.fields.p && !s.fields.lambda && s.references.is_empty());
+    assert_eq!(s.elasticity().unwrap().material.plane, PlaneModel::Strain);
+    // a polygon's parts are edge1 … edgeN
+    let polygon = ELASTIC_SCENE_TEMPLATE
+        .replace(
+            "domain = { rectangle = [[-1.0, -1.0], [1.0, 1.0]] }",
+            "domain = { polygon = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]] }",
+        )
+        .replace("cells = [8, 8]", "mesh_size = 0.5")
+        .replace(
+            "# traction = { top = [\"0\", \"-0.1\"], bottom = [\"0\", \"-0.1\"] }",
+            "traction = { edge3 = [\"0\", \"-0.1\"] }",
+        );
+    let parts: Vec<String> = d(&polygon)
+        .tractions
+        .iter()
+        .map(|t| t.part.0.clone())
+        .collect();
+    assert_eq!(parts, ["edge3"]);
+    let e = Scene::from_toml(&polygon.replace("edge3 =", "edge5 ="))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(
+            "unknown boundary part \"edge5\" (this domain's parts: edge1, edge2, edge3, edge4)"
+        ),
+        "{e}"
+    );
+    assert!(Scene::from_toml(SCENE_TEMPLATE).unwrap().scalar().is_some());
 }

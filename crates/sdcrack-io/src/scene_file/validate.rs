@@ -6,19 +6,25 @@
 
 use std::path::Path;
 
+use super::elastic::{validate_elastic, ElasticContext};
 use super::error::{CrackName, KeyRole, SceneError};
 use super::limits::MAX_CELLS;
-use super::raw::{CrackToml, DiscretizationToml, GeometryToml, GradingToml, SceneToml};
-use super::schema::{FIELDS, KNOWN_REFERENCES};
+use super::raw::{
+    CrackToml, DataToml, DiscretizationToml, ExactToml, GeometryToml, GradingToml, OutputsToml,
+    ProblemToml, SceneToml,
+};
+use super::schema::{ELASTIC_FIELDS, FIELDS, KNOWN_REFERENCES};
 use crate::did_you_mean::suggest;
 use sdcrack_core::case::CaseAxes;
 use sdcrack_core::expr::{Expr, Var};
+use sdcrack_core::geometry::CrackEnds;
 use sdcrack_core::problem::Named;
 use sdcrack_core::problem::{
     Domain, Exact, Meshing, MultiplierSpace, Polyline, Rectangle, Segment, USpace,
 };
 use sdcrack_core::scene::{
-    check_level, FieldSet, KeyPath, Level0Size, Scene, Verification, MAX_LEVEL,
+    check_level, FieldSet, KeyPath, Level0Size, Problem, ProblemKind, ScalarProblem, Scene,
+    Verification, MAX_LEVEL,
 };
 
 fn parse_expr(key: &str, text: &str) -> Result<Expr, SceneError> {
@@ -70,13 +76,17 @@ impl SceneToml {
                 ),
             ));
         }
-        let d = self.discretization;
-        let meshing = validate_meshing(&d, base_dir)?;
+        // the problem kind first: what the rest of the scene may hold depends on it
+        let kind = problem_kind(self.problem.as_ref())?;
+        let d = &self.discretization;
+        let meshing = validate_meshing(d, base_dir)?;
         let grading = d.grading.as_ref().map(validate_grading).transpose()?;
         let mut file_triangles = 0;
+        let ends = crack_ends(kind);
         let (domain, cracks, crack_names) = match (&meshing, self.geometry) {
             (Meshing::File(path), None) => {
-                let (domain, cracks, triangles) = sdcrack_core::mesh::msh_file_geometry(path)
+                let (domain, cracks, triangles) =
+                    sdcrack_core::mesh::msh_file_geometry_with(path, ends)
                     .map_err(|e| value("discretization.mesh", format!(": {e}")))?;
                 file_triangles = triangles;
                 let names = (1..=cracks.len())
@@ -97,7 +107,7 @@ impl SceneToml {
                     " is missing: give geometry.domain and geometry.crack (or geometry.cracks)",
                 ))
             }
-            (_, Some(g)) => validate_geometry(g)?,
+            (_, Some(g)) => validate_geometry(g, ends)?,
         };
         let level0 = match meshing {
             Meshing::Cells(c) => Level0Size::Grid(c),
@@ -107,73 +117,63 @@ impl SceneToml {
             }
             Meshing::File(_) => Level0Size::Triangles(file_triangles as f64),
         };
-        let f = parse_expr("data.f", &self.data.f)?;
-        let g = parse_expr("data.g", &self.data.g)?;
-        let exact = match self.exact {
-            None => None,
-            Some(e) => {
-                let u = parse_expr("exact.u", &e.u)?;
-                let px = match e.px {
-                    Some(s) => parse_expr("exact.px", &s)?,
-                    None => u.derivative(Var::X),
+        let (problem, axes, fields, references, verification) = match kind {
+            ProblemKind::Scalar => {
+                refuse_elastic_keys(self.problem.as_ref(), &self.data, self.exact.as_ref())?;
+                let problem = scalar_problem(&self.data, self.exact.as_ref())?;
+                let levels = validate_levels(&d.levels, level0)?;
+                let (axes, u_spaces, multipliers) = scalar_axes(d, levels)?;
+                let (fields, references) = validate_outputs(self.outputs.as_ref(), FIELDS)?;
+                let verification = match self.verification {
+                    None => Verification::default(),
+                    Some(v) => v.validate(&u_spaces, &multipliers)?,
                 };
-                let py = match e.py {
-                    Some(s) => parse_expr("exact.py", &s)?,
-                    None => u.derivative(Var::Y),
+                (
+                    Problem::Scalar(problem),
+                    axes,
+                    fields,
+                    references,
+                    verification,
+                )
+            }
+            ProblemKind::Elasticity => {
+                refuse_scalar_keys(&self.data, self.exact.as_ref(), d)?;
+                let context = ElasticContext {
+                    domain: &domain,
+                    cracks: &cracks,
+                    meshing: &meshing,
                 };
-                let jump = e.jump.map(|s| parse_expr("exact.jump", &s)).transpose()?;
-                Some(Exact { u, px, py, jump })
+                let no_problem = ProblemToml::default();
+                let data = validate_elastic(
+                    self.problem.as_ref().unwrap_or(&no_problem),
+                    &self.data,
+                    self.exact.as_ref(),
+                    &context,
+                )?;
+                let levels = validate_levels(&d.levels, level0)?;
+                // the scalar case axes do not apply: no solver case until issue 46
+                let axes = CaseAxes {
+                    levels,
+                    u_spaces: Vec::new(),
+                    multipliers: Vec::new(),
+                    p_masses: Vec::new(),
+                    p_spaces: Vec::new(),
+                    deltas: Vec::new(),
+                };
+                let (fields, references) = validate_outputs(self.outputs.as_ref(), ELASTIC_FIELDS)?;
+                let verification = match self.verification {
+                    None => Verification::default(),
+                    Some(v) => v.validate(&[], &[])?,
+                };
+                (
+                    Problem::Elasticity(data),
+                    axes,
+                    fields,
+                    references,
+                    verification,
+                )
             }
         };
-        let levels = validate_levels(&d.levels, level0)?;
-        let u_spaces = validate_names::<USpace>("discretization.u_spaces", &d.u_spaces)?;
-        let multipliers =
-            validate_names::<MultiplierSpace>("discretization.multipliers", &d.multipliers)?;
-        // a scene that leaves an axis out runs the key's default (sdcrack-core's case)
-        let mut axes = CaseAxes::defaults();
-        let p_masses = names_or("discretization.p_mass", &d.p_mass, axes.p_masses.take())?;
-        let p_spaces = names_or("discretization.p_spaces", &d.p_spaces, axes.p_spaces.take())?;
-        if !p_spaces
-            .iter()
-            .any(|p| u_spaces.iter().any(|&u| p.serves(u)))
-        {
-            return Err(value(
-                "discretization.p_spaces",
-                " = [\"broken-tangential\"] needs broken u: a continuous u cannot open the crack, so u_spaces must list \"broken\" (or p_spaces \"continuous\")",
-            ));
-        }
-        let deltas = validate_deltas(&d.deltas)?;
-        let (fields, references) = match self.outputs {
-            None => (
-                FieldSet {
-                    u: true,
-                    p: true,
-                    lambda: true,
-                },
-                Vec::new(),
-            ),
-            Some(o) => (
-                validate_fields(&o.fields)?,
-                validate_references(&o.references)?,
-            ),
-        };
-        let verification = match self.verification {
-            None => Verification::default(),
-            Some(v) => v.validate(&u_spaces, &multipliers)?,
-        };
-        // the lists the scene gives; the axes it may leave out keep their defaults
-        axes.levels = Some(levels);
-        axes.u_spaces = Some(u_spaces);
-        axes.multipliers = Some(multipliers);
-        axes.p_masses = Some(p_masses);
-        axes.p_spaces = Some(p_spaces);
-        axes.deltas = Some(deltas);
-        let axes = axes.complete().map_err(|axis| {
-            SceneError::value(
-                KeyPath::keys("discretization"),
-                format!(": no list of {axis} (a defect of sdcrack)"),
-            )
-        })?;
         let scene = Scene {
             name,
             description: self.description,
@@ -182,15 +182,220 @@ impl SceneToml {
             meshing,
             grading,
             level0,
-            f,
-            g,
-            exact,
+            problem,
             axes,
             fields,
             references,
             verification,
         };
         Ok((scene, crack_names))
+    }
+}
+
+/// `[problem] kind`: scalar (the default, also without `[problem]`) or elasticity.
+fn problem_kind(problem: Option<&ProblemToml>) -> Result<ProblemKind, SceneError> {
+    match problem.and_then(|p| p.kind.as_deref()) {
+        None => Ok(ProblemKind::Scalar),
+        Some(name) => ProblemKind::from_name(name).ok_or_else(|| {
+            let hint = suggest(name, ProblemKind::NAMES)
+                .map(|s| format!("; did you mean \"{s}\"?"))
+                .unwrap_or_default();
+            value(
+                "problem.kind",
+                format!(
+                    ": unknown value {name:?} (expected one of {}){hint}",
+                    ProblemKind::NAMES.join(", ")
+                ),
+            )
+        }),
+    }
+}
+
+/// The first key of `keys` (dotted, with whether the scene gives it) that the scene gives,
+/// refused with `why`.
+fn refuse_given(keys: &[(&str, bool)], why: &str) -> Result<(), SceneError> {
+    match keys.iter().find(|(_, given)| *given) {
+        Some((k, _)) => Err(value(k, why)),
+        None => Ok(()),
+    }
+}
+
+/// A scalar scene gives none of the elastic problem's keys.
+fn refuse_elastic_keys(
+    problem: Option<&ProblemToml>,
+    d: &DataToml,
+    exact: Option<&ExactToml>,
+) -> Result<(), SceneError> {
+    let mut keys: Vec<(&str, bool)> = Vec::new();
+    if let Some(p) = problem {
+        keys.extend([
+            ("problem.plane", p.plane.is_some()),
+            ("problem.E", p.young.is_some()),
+            ("problem.nu", p.nu.is_some()),
+            ("problem.lambda", p.lambda.is_some()),
+            ("problem.mu", p.mu.is_some()),
+            ("problem.friction", p.friction.is_some()),
+        ]);
+    }
+    keys.extend([
+        ("data.fx", d.fx.is_some()),
+        ("data.fy", d.fy.is_some()),
+        ("data.gx", d.gx.is_some()),
+        ("data.gy", d.gy.is_some()),
+        ("data.traction", d.traction.is_some()),
+        ("data.fixed", d.fixed.is_some()),
+    ]);
+    if let Some(e) = exact {
+        keys.extend([
+            ("exact.ux", e.ux.is_some()),
+            ("exact.uy", e.uy.is_some()),
+            ("exact.sxx", e.sxx.is_some()),
+            ("exact.syy", e.syy.is_some()),
+            ("exact.sxy", e.sxy.is_some()),
+            ("exact.opening", e.opening.is_some()),
+            ("exact.slip", e.slip.is_some()),
+            ("exact.pressure", e.pressure.is_some()),
+            ("exact.sif", e.sif.is_some()),
+        ]);
+    }
+    refuse_given(
+        &keys,
+        " is a key of the elastic problem, and this scene is scalar (set [problem] kind = \"elasticity\" for an elastic body; docs/elasticity.md)",
+    )
+}
+
+/// An elastic scene gives none of the scalar problem's keys (data, exact solution, case axes).
+fn refuse_scalar_keys(
+    d: &DataToml,
+    exact: Option<&ExactToml>,
+    x: &DiscretizationToml,
+) -> Result<(), SceneError> {
+    let mut keys: Vec<(&str, bool)> = vec![("data.f", d.f.is_some()), ("data.g", d.g.is_some())];
+    if let Some(e) = exact {
+        keys.extend([
+            ("exact.u", e.u.is_some()),
+            ("exact.px", e.px.is_some()),
+            ("exact.py", e.py.is_some()),
+            ("exact.jump", e.jump.is_some()),
+        ]);
+    }
+    keys.extend([
+        ("discretization.u_spaces", x.u_spaces.is_some()),
+        ("discretization.multipliers", x.multipliers.is_some()),
+        ("discretization.p_mass", x.p_mass.is_some()),
+        ("discretization.p_spaces", x.p_spaces.is_some()),
+        ("discretization.deltas", x.deltas.is_some()),
+    ]);
+    refuse_given(
+        &keys,
+        " is a key of the scalar problem, and this scene is elastic ([problem] kind = \"elasticity\": data fx, fy, gx, gy, traction, fixed; exact ux, uy, ...; no solver case axes; docs/elasticity.md)",
+    )
+}
+
+/// `missing key `name` in [table]`.
+fn missing(table: &str, name: &str) -> SceneError {
+    SceneError::key(KeyPath::keys(table), KeyRole::Missing(name.into()), "")
+}
+
+/// The scalar problem's f, g and exact solution.
+fn scalar_problem(data: &DataToml, exact: Option<&ExactToml>) -> Result<ScalarProblem, SceneError> {
+    let f = parse_expr(
+        "data.f",
+        data.f.as_deref().ok_or_else(|| missing("data", "f"))?,
+    )?;
+    let g = parse_expr(
+        "data.g",
+        data.g.as_deref().ok_or_else(|| missing("data", "g"))?,
+    )?;
+    let exact = match exact {
+        None => None,
+        Some(e) => {
+            let u = e.u.as_deref().ok_or_else(|| missing("exact", "u"))?;
+            let u = parse_expr("exact.u", u)?;
+            let px = match &e.px {
+                Some(s) => parse_expr("exact.px", s)?,
+                None => u.derivative(Var::X),
+            };
+            let py = match &e.py {
+                Some(s) => parse_expr("exact.py", s)?,
+                None => u.derivative(Var::Y),
+            };
+            let jump = (e.jump.as_deref())
+                .map(|s| parse_expr("exact.jump", s))
+                .transpose()?;
+            Some(Exact { u, px, py, jump })
+        }
+    };
+    Ok(ScalarProblem { f, g, exact })
+}
+
+/// The scalar problem's case axes (`levels` validated): u spaces, multipliers, p masses,
+/// p spaces and δ, with the u spaces and multipliers for `[verification]`.
+fn scalar_axes(
+    d: &DiscretizationToml,
+    levels: Vec<u32>,
+) -> Result<(CaseAxes, Vec<USpace>, Vec<MultiplierSpace>), SceneError> {
+    let u_spaces = d
+        .u_spaces
+        .as_deref()
+        .ok_or_else(|| missing("discretization", "u_spaces"))?;
+    let u_spaces = validate_names::<USpace>("discretization.u_spaces", u_spaces)?;
+    let multipliers =
+        (d.multipliers.as_deref()).ok_or_else(|| missing("discretization", "multipliers"))?;
+    let multipliers = validate_names::<MultiplierSpace>("discretization.multipliers", multipliers)?;
+    // a scene that leaves an axis out runs the key's default (sdcrack-core's case)
+    let mut axes = CaseAxes::defaults();
+    let p_masses = names_or("discretization.p_mass", &d.p_mass, axes.p_masses.take())?;
+    let p_spaces = names_or("discretization.p_spaces", &d.p_spaces, axes.p_spaces.take())?;
+    if !p_spaces
+        .iter()
+        .any(|p| u_spaces.iter().any(|&u| p.serves(u)))
+    {
+        return Err(value(
+            "discretization.p_spaces",
+            " = [\"broken-tangential\"] needs broken u: a continuous u cannot open the crack, so u_spaces must list \"broken\" (or p_spaces \"continuous\")",
+        ));
+    }
+    let deltas = d
+        .deltas
+        .as_deref()
+        .ok_or_else(|| missing("discretization", "deltas"))?;
+    let deltas = validate_deltas(deltas)?;
+    // the lists the scene gives; the axes it may leave out keep their defaults
+    axes.levels = Some(levels);
+    axes.u_spaces = Some(u_spaces.clone());
+    axes.multipliers = Some(multipliers.clone());
+    axes.p_masses = Some(p_masses);
+    axes.p_spaces = Some(p_spaces);
+    axes.deltas = Some(deltas);
+    let axes = axes.complete().map_err(|axis| {
+        SceneError::value(
+            KeyPath::keys("discretization"),
+            format!(": no list of {axis} (a defect of sdcrack)"),
+        )
+    })?;
+    Ok((axes, u_spaces, multipliers))
+}
+
+/// `[outputs]`: the fields (names of `known`) and the references; absent: every field of
+/// `known`, no reference.
+fn validate_outputs(
+    outputs: Option<&OutputsToml>,
+    known: &[&str],
+) -> Result<(FieldSet, Vec<String>), SceneError> {
+    match outputs {
+        None => Ok((
+            FieldSet {
+                u: known.contains(&"u"),
+                p: known.contains(&"p"),
+                lambda: known.contains(&"lambda"),
+            },
+            Vec::new(),
+        )),
+        Some(o) => Ok((
+            validate_fields(&o.fields, known)?,
+            validate_references(&o.references)?,
+        )),
     }
 }
 
@@ -209,10 +414,20 @@ fn two_points(key: &KeyPath, v: &[Vec<f64>]) -> Result<[[f64; 2]; 2], SceneError
     }
 }
 
+/// Where a crack may end: an elastic scene's crack may end on ∂Ω (an edge crack's mouth,
+/// docs/elasticity.md); a scalar scene's cracks stay strictly inside Ω.
+fn crack_ends(kind: ProblemKind) -> CrackEnds {
+    match kind {
+        ProblemKind::Elasticity => CrackEnds::MayBeMouths,
+        ProblemKind::Scalar => CrackEnds::Inside,
+    }
+}
+
 /// Domain and cracks of `[geometry]`, validated ([`sdcrack_core::geometry`]), with each crack's name
 /// for messages. A polygon is stored counter-clockwise.
 fn validate_geometry(
     g: GeometryToml,
+    ends: CrackEnds,
 ) -> Result<(Domain, Vec<Polyline>, Vec<CrackName>), SceneError> {
     let Some(domain) = g.domain else {
         return Err(value(
@@ -281,17 +496,19 @@ fn validate_geometry(
         }
     };
     let polylines: Vec<Vec<[f64; 2]>> = cracks.iter().map(|c| c.points.clone()).collect();
-    sdcrack_core::geometry::validate_cracks(&domain.polygon(), &polylines).map_err(|e| {
-        // the core names crack i `geometry.cracks[i]`: name the cracks as the scene does
-        let mut m = e.to_string();
-        for (i, name) in names.iter().enumerate().rev() {
-            m = m.replace(&format!("geometry.cracks[{i}]"), &name.to_string());
-        }
-        match e.crack().and_then(|c| names.get(c)) {
-            Some(key) => SceneError::named(key.clone(), m),
-            None => SceneError::Scene(m),
-        }
-    })?;
+    sdcrack_core::geometry::validate_cracks_with(&domain.polygon(), &polylines, ends).map_err(
+        |e| {
+            // the core names crack i `geometry.cracks[i]`: name the cracks as the scene does
+            let mut m = e.to_string();
+            for (i, name) in names.iter().enumerate().rev() {
+                m = m.replace(&format!("geometry.cracks[{i}]"), &name.to_string());
+            }
+            match e.crack().and_then(|c| names.get(c)) {
+                Some(key) => SceneError::named(key.clone(), m),
+                None => SceneError::Scene(m),
+            }
+        },
+    )?;
     Ok((
         domain,
         cracks,
@@ -534,9 +751,23 @@ fn validate_deltas(deltas: &[f64]) -> Result<Vec<f64>, SceneError> {
     Ok(out)
 }
 
-fn validate_fields(fields: &[String]) -> Result<FieldSet, SceneError> {
+/// `outputs.fields`: names of `known` (the problem kind's fields), each once.
+fn validate_fields(fields: &[String], known: &[&str]) -> Result<FieldSet, SceneError> {
     let mut set = FieldSet::default();
     for f in fields {
+        if FIELDS.contains(&f.as_str()) && !known.contains(&f.as_str()) {
+            return Err(value(
+                "outputs.fields",
+                format!(
+                    ": {f:?} is a field of the scalar problem; an elastic scene writes {}",
+                    known
+                        .iter()
+                        .map(|k| format!("{k:?}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
         let slot = match f.as_str() {
             "u" => &mut set.u,
             "p" => &mut set.p,
