@@ -73,7 +73,7 @@ def series_section(a):
     return {"title": "Errors against the exact fields",
             "paras": [f"Recomputed here from each reference's u and crack file (compare/sdcompare_lib/"
                       f"elastic_exact.py); an error within {elastic.ROUNDOFF_REL:g} of the exact "
-                      "field's own norm is round-off and shown as 0. Rule: {rates.rule_text(theory.RATE_MARGIN, source=RULE_SOURCE)}"],
+                      f"field's own norm is round-off and shown as 0. Rule: {rates.rule_text(theory.RATE_MARGIN, source=RULE_SOURCE)}"],
             "tables": [(["reference", "quantity", "level", "h", "error", "rate", "expected"], rows,
                         "errors and rates per reference, quantity and level"),
                        (["reference", "level", "pressure error"], pressure,

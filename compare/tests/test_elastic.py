@@ -14,6 +14,7 @@ import importlib.machinery
 import importlib.util
 import io
 import json
+import re
 import math
 import os
 import subprocess
@@ -157,6 +158,8 @@ def test_a_correct_folder_passes_and_reports(tmp_path):
     assert "## Contact set and fronts" in md and "## Errors against the exact fields" in md
     assert (folder / "report" / "errors-williams.png").exists()
     assert "Theorem 4.3" not in md  # the scalar problem's source of orders is not named
+    # every sentence is formatted: no Python placeholder left in the text (a missing f prefix)
+    assert not re.search(r"\{[A-Za-z_][A-Za-z_.]*[(}]", md), re.search(r"\{[A-Za-z_][A-Za-z_.]*[(}].{0,60}", md)
 
 
 def test_distances_to_the_finest_level_obey_the_triangle_inequality(tmp_path):
