@@ -3,15 +3,16 @@ summary.json ("problem": "elasticity"), the scene copy scene.toml, the mesh expo
 references' outputs <tool>/ (summary.json, u_level{L}.txt, crack_level{L}.txt).
 
 Every malformed or missing file is read.InputError (exit 2), one line naming the file. The mesh
-export's level files are read here rather than with sdexport.read_layout: an edge crack's mouth row
-has plus ≠ minus at the crack's end, which sdexport's scalar check refuses (a tip there must have
-plus == minus), and cracks.txt has the two extra columns tip_first tip_last.
+export's crack files (crack.txt, cracks.txt with its tip flags, crack_normals.txt) are read and
+checked by compare/sdshared/sdexport.py, as both references read them.
 """
 import json
 import os
 from dataclasses import dataclass
 
 import numpy as np
+
+from sdshared import sdexport
 
 from .read import REFERENCE_TOOLS, InputError, load_json, load_scene_copy
 
@@ -47,25 +48,22 @@ class Level:
     normals: np.ndarray
     kind: str
 
+    def layout(self):
+        """The crack rows as sdexport's CrackLayout (tips, mouths, doubled rows)."""
+        return sdexport.CrackLayout(pairs=self.pairs, ranges=self.ranges, normals=self.normals,
+                                    ends=self.tip_ends)
+
     def tip_rows(self):
         """The rows of crack.txt that are tips, in docs/elasticity.md's order: per crack its
         first-point end, then its last-point end, mouths skipped."""
-        rows = []
-        for (first, n), (tf, tl) in zip(self.ranges, self.tip_ends):
-            rows += ([first] if tf else []) + ([first + n - 1] if tl else [])
-        return np.array(rows, dtype=np.int64)
+        return self.layout().tip_rows()
 
     def mouth_rows(self):
-        rows = []
-        for (first, n), (tf, tl) in zip(self.ranges, self.tip_ends):
-            rows += ([] if tf else [first]) + ([] if tl else [first + n - 1])
-        return np.array(rows, dtype=np.int64)
+        return self.layout().mouth_rows()
 
     def pair_rows(self):
         """(I,) bool: the rows whose node has two copies (every row that is not a tip)."""
-        mask = np.ones(len(self.pairs), dtype=bool)
-        mask[self.tip_rows()] = False
-        return mask
+        return self.layout().interior()
 
     def segments(self):
         """(S, 2) the row pairs [k, k+1] within each crack."""
@@ -112,52 +110,26 @@ def _table(path, dtype, ncols_allowed):
     return a
 
 
-def _cracks(path, n_rows):
-    """ranges and tip ends of cracks.txt (absent: one crack, both ends tips)."""
-    if not os.path.exists(path):
-        return [(0, n_rows)], [(True, True)]
-    t = _table(path, np.int64, (2, 4))
-    ranges, ends, expected = [], [], 0
-    for c, row in enumerate(t.tolist()):
-        first, n = row[0], row[1]
-        if first != expected or n < 2:
-            raise InputError(f"{path}: crack {c} (rows {first}, {n} nodes) does not follow the "
-                             f"previous crack at row {expected} with at least 2 nodes")
-        if len(row) == 4 and not all(v in (0, 1) for v in row[2:]):
-            raise InputError(f"{path}: crack {c}: tip_first, tip_last must be 0 or 1")
-        ranges.append((first, n))
-        ends.append((bool(row[2]), bool(row[3])) if len(row) == 4 else (True, True))
-        expected = first + n
-    if expected != n_rows:
-        raise InputError(f"{path}: the cracks cover {expected} rows, crack.txt has {n_rows}")
-    return ranges, ends
-
-
 def read_level(export, level):
-    """The Level of export/level{L}/, checked: indices in range, tips with plus == minus, every
-    other row with plus != minus at the same position, unit normals."""
+    """The Level of export/level{L}/, checked: indices in range, the crack layout by sdexport
+    (tips with plus == minus, every other row with plus != minus, unit normals), each row's two
+    copies at the same point."""
     d = os.path.join(export, f"level{level}")
     pts = _table(os.path.join(d, "vertices.txt"), float, (2, 3))[:, :2]
     tris = _table(os.path.join(d, "triangles.txt"), np.int64, (3,))
-    pairs = _table(os.path.join(d, "crack.txt"), np.int64, (2,))
     n = len(pts)
-    for name, a in (("triangles.txt", tris), ("crack.txt", pairs)):
+    for name, a in (("triangles.txt", tris),):
         if a.size and (a.min() < 0 or a.max() >= n):
             raise InputError(f"{os.path.join(d, name)}: vertex index out of range 0..{n - 1}")
-    ranges, ends = _cracks(os.path.join(d, "cracks.txt"), len(pairs))
+    try:
+        layout = sdexport.read_layout(d, pts, n)
+    except sdexport.ExportError as exc:
+        raise InputError(str(exc)) from None
     meta_path = os.path.join(d, "mesh.json")
     meta = load_json(meta_path) if os.path.exists(meta_path) else {}
-    normals_path = os.path.join(d, "crack_normals.txt")
-    normals = _table(normals_path, float, (2,))
-    if normals.shape != pairs.shape or np.abs(np.hypot(*normals.T) - 1).max(initial=0) > 1e-9:
-        raise InputError(f"{normals_path}: expected one unit normal per row of crack.txt")
-    lv = Level(level, pts, tris, pairs, ranges, ends, normals, meta.get("kind", "structured"))
-    tips = lv.tip_rows()
-    if (pairs[tips, 0] != pairs[tips, 1]).any():
-        raise InputError(f"{d}/crack.txt: a tip row has plus != minus")
-    others = lv.pair_rows()
-    if (pairs[others, 0] == pairs[others, 1]).any():
-        raise InputError(f"{d}/crack.txt: a row that is not a tip has plus == minus")
+    lv = Level(level, pts, tris, layout.pairs, layout.ranges, layout.crack_ends(), layout.normals,
+               meta.get("kind", "structured"))
+    pairs = layout.pairs
     if np.abs(pts[pairs[:, 0]] - pts[pairs[:, 1]]).max(initial=0) > 0:
         raise InputError(f"{d}/crack.txt: the + and − copies of a row lie at different points")
     return lv

@@ -124,86 +124,31 @@ def _table(path, dtype, ncols):
         raise Failure(str(e)) from None
 
 
-def read_cracks(path, n_rows):
-    """cracks.txt of an elastic export: [(first, n, tip_first, tip_last)]; two columns (first n)
-    mean both ends are tips. The ranges must follow each other and cover crack.txt's rows (the
-    rule of sdexport.read_ranges, which reads two columns only: read here until sdexport reads the
-    tip flags)."""
-    path = Path(path)
-    if not path.exists():
-        raise Failure(f"missing file {path}")
-    try:
-        table = np.loadtxt(path, dtype=np.int64, ndmin=2)
-    except ValueError as e:
-        raise Failure(f"cannot read {path}: {e}".replace("\n", " ")) from None
-    if table.size == 0 or table.shape[1] not in (2, 4):
-        raise Failure(f"{path}: expected rows 'first n' or 'first n tip_first tip_last'")
-    if table.shape[1] == 2:
-        table = np.column_stack([table, np.ones((len(table), 2), dtype=np.int64)])
-    if not np.isin(table[:, 2:], (0, 1)).all():
-        raise Failure(f"{path}: the tip flags must be 0 (a mouth) or 1 (a tip)")
-    expected = 0
-    for c, (first, n, _, _) in enumerate(table.tolist()):
-        if first != expected or n < 2:
-            raise Failure(f"{path}: crack {c} (first {first}, {n} rows) does not follow the previous "
-                          f"one at row {expected} with at least 2 rows")
-        expected = first + n
-    if expected != n_rows:
-        raise Failure(f"{path}: the cracks cover rows 0..{expected - 1}, but crack.txt has {n_rows} rows")
-    return [tuple(int(v) for v in row) for row in table]
-
-
 def read_level(export, level):
     """{"dir", "meta", "xy", "tri", "pairs" (crack.txt), "ranges" [(first, n)], "doubled" (I,) bool
     (rows with two copies: not a tip), "normals" (I, 2), "edges" (E, 3) boundary_edges.txt,
-    "parts" (mesh.json's boundary_parts)}."""
+    "parts" (mesh.json's boundary_parts)}: the files read and checked by compare/sdshared/sdexport.py
+    (the crack layout with its tips and mouths, the boundary edges with their parts)."""
     d = Path(export) / f"level{level}"
     if not d.is_dir():
         raise Failure(f"missing folder {d}")
     try:
         meta = sdexport.read_mesh_json(d)
         sdexport.read_kind(meta, d / "mesh.json")
+        xy = sdexport.load_table(d / "vertices.txt", float, 2)
+        tri = sdexport.load_table(d / "triangles.txt", np.int64, 3)
+        nv = len(xy)
+        if tri.size and (tri.min() < 0 or tri.max() >= nv):
+            raise sdexport.ExportError(f"{d}/triangles.txt: vertex index out of range 0..{nv - 1}")
+        if meta.get("n_vertices", nv) != nv or meta.get("n_triangles", len(tri)) != len(tri):
+            raise sdexport.ExportError(f"{d}/mesh.json: counts do not match vertices.txt/triangles.txt")
+        layout = sdexport.read_layout(d, xy, nv)
+        edges, part, parts = sdexport.read_boundary_edges(d, nv, layout)
     except sdexport.ExportError as e:
         raise Failure(str(e)) from None
-    xy, tri = _table(d / "vertices.txt", float, 2), _table(d / "triangles.txt", np.int64, 3)
-    pairs, edges = _table(d / "crack.txt", np.int64, 2), _table(d / "boundary_edges.txt", np.int64, 3)
-    nv = len(xy)
-    for name, arr in (("triangles", tri), ("crack", pairs), ("boundary_edges", edges[:, :2])):
-        if arr.size and (arr.min() < 0 or arr.max() >= nv):
-            raise Failure(f"{d}/{name}.txt: vertex index out of range 0..{nv - 1}")
-    if meta.get("n_vertices", nv) != nv or meta.get("n_triangles", len(tri)) != len(tri):
-        raise Failure(f"{d}/mesh.json: counts do not match vertices.txt/triangles.txt")
-    parts = meta.get("boundary_parts")
-    if not isinstance(parts, list) or not parts or not all(isinstance(p, str) for p in parts):
-        raise Failure(f"{d}/mesh.json: 'boundary_parts' must be a non-empty list of part names")
-    if edges.size and (edges[:, 2].min() < 0 or edges[:, 2].max() >= len(parts)):
-        raise Failure(f"{d}/boundary_edges.txt: part index out of range 0..{len(parts) - 1}")
-    cracks = read_cracks(d / "cracks.txt", len(pairs))
-    ranges = [(first, n) for first, n, _, _ in cracks]
-    doubled = np.ones(len(pairs), dtype=bool)
-    on_boundary = np.zeros(nv, dtype=bool)
-    on_boundary[edges[:, :2].ravel()] = True
-    for c, (first, n, tip_a, tip_b) in enumerate(cracks):
-        for row, tip in ((first, tip_a), (first + n - 1, tip_b)):
-            doubled[row] = not tip
-            plus, minus = pairs[row]
-            if tip and plus != minus:
-                raise Failure(f"{d}/crack.txt: crack {c}: its tip at row {row} has plus {plus} != minus {minus}")
-            if not tip and not (plus != minus and on_boundary[plus] and on_boundary[minus]):
-                raise Failure(f"{d}/crack.txt: crack {c}: its mouth at row {row} needs two copies on ∂Ω "
-                              f"(plus {plus}, minus {minus})")
-    inner = np.flatnonzero(doubled & (pairs[:, 0] == pairs[:, 1]))
-    if len(inner):
-        raise Failure(f"{d}/crack.txt: row {inner[0]} has plus == minus (a crack node that is not a tip "
-                      "needs two copies)")
-    try:
-        nodes = xy[pairs[:, 0]]
-        sdexport.check_segments(d / "crack.txt", nodes, ranges)
-        normals = sdexport.read_normals(d / "crack_normals.txt", nodes, ranges)
-    except sdexport.ExportError as e:
-        raise Failure(str(e)) from None
-    return {"dir": d, "meta": meta, "xy": xy, "tri": tri, "pairs": pairs, "ranges": ranges,
-            "doubled": doubled, "normals": normals, "edges": edges, "parts": parts}
+    return {"dir": d, "meta": meta, "xy": xy, "tri": tri, "pairs": layout.pairs,
+            "ranges": layout.ranges, "doubled": layout.interior(), "normals": layout.normals,
+            "edges": np.column_stack([edges, part]), "parts": list(parts)}
 
 
 # ---------------------------------------------------------------------------------------------

@@ -365,10 +365,10 @@ def test_malformed_export_is_refused(tmp_path, bad):
         crack = np.loadtxt(d / "crack.txt", dtype=int)
         crack[0, 1] = crack[0, 0]
         np.savetxt(d / "crack.txt", crack, fmt="%d")
-        expect = "its mouth at row 0 needs two copies"
+        expect = "its mouth at row 0 has plus == minus"
     else:
         (d / "cracks.txt").write_text("0 9 2 1\n")
-        expect = "tip flags must be 0"
+        expect = "tip_first tip_last must be 0"
     with pytest.raises(solve.SolveError, match=expect) as info:
         solve.run(exp, tmp_path / "out")
     assert "\n" not in str(info.value) and not (tmp_path / "out").exists()

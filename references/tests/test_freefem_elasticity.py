@@ -361,7 +361,7 @@ def test_sdexport_reads_an_edge_cracks_mouth_and_refuses_a_mouth_without_copies(
     assert layout.tip_vertices().tolist() == [layout.pairs[-1, 0]]
     first, n, _, _ = np.loadtxt(d / "cracks.txt", dtype=np.int64)
     (d / "cracks.txt").write_text(f"{first} {n} 2 1\n")
-    with pytest.raises(sdexport.ExportError, match="tip flags"):
+    with pytest.raises(sdexport.ExportError, match="tip_first tip_last must be 0"):
         sdexport.read_layout(d, xy, len(xy))
     (d / "cracks.txt").write_text(f"{first} {n}\n")   # both ends tips: the mouth's row is not one
     with pytest.raises(sdexport.ExportError, match="its tip at row 0 has plus"):
