@@ -98,21 +98,6 @@ def scene_data(base, scene, scene_path):
 
 # ---- one level's input --------------------------------------------------------------------------
 
-def boundary_edges(level_dir, n_vertices, parts_of_level):
-    """(E, 3) boundary_edges.txt `v0 v1 part` (cracked vertices, part an index into mesh.json's
-    boundary_parts), checked."""
-    path = Path(level_dir) / "boundary_edges.txt"
-    table = sdexport.load_table(path, np.int64, 3)
-    if len(table) == 0:
-        raise sdexport.ExportError(f"{path}: no boundary edge")
-    if table[:, :2].min() < 0 or table[:, :2].max() >= n_vertices:
-        raise sdexport.ExportError(f"{path}: vertex index out of range 0..{n_vertices - 1}")
-    if table[:, 2].min() < 0 or table[:, 2].max() >= len(parts_of_level):
-        raise sdexport.ExportError(f"{path}: part index out of range 0..{len(parts_of_level) - 1} "
-                                   f"(mesh.json's boundary_parts {parts_of_level})")
-    return table
-
-
 def face_of_vertices(layout, n):
     """(n,) +1 / −1 at the + / − copy of every doubled crack row, 0 elsewhere, and (n, 2) the node's
     normal there: the face a copy's data are evaluated on (sdexpr.on_face)."""
@@ -276,19 +261,18 @@ def write_text(path, table):
 # ---- driver -------------------------------------------------------------------------------------
 
 def read_level(base, export, level, parts_of_scene):
-    """solve.read_level plus boundary_edges.txt ("edges") and mesh.json's boundary_parts ("parts")."""
+    """solve.read_level plus boundary_edges.txt ("edges": `v0 v1 part` rows) and mesh.json's
+    boundary_parts ("parts"), read and checked by sdexport.read_boundary_edges."""
     lv = base.read_level(export, level, mouths=True)
-    parts = lv["meta"].get("boundary_parts")
     d = Path(export) / f"level{level}"
-    if not (isinstance(parts, list) and parts and all(isinstance(p, str) for p in parts)):
-        raise base.SolveError(f"{d / 'mesh.json'}: boundary_parts must be a non-empty list of names")
+    try:
+        edges, part, parts = sdexport.read_boundary_edges(d, len(lv["xy"]), lv["layout"])
+    except sdexport.ExportError as e:
+        raise base.SolveError(str(e)) from None
     unknown = sorted(set(parts_of_scene) - set(parts))
     if unknown:
         raise base.SceneError(f"tractions on unknown boundary parts {unknown} (level {level} has {parts})")
-    try:
-        lv["edges"] = boundary_edges(d, len(lv["xy"]), parts)
-    except sdexport.ExportError as e:
-        raise base.SolveError(str(e)) from None
+    lv["edges"] = np.column_stack([edges, part])
     lv["parts"] = parts
     return lv
 
