@@ -258,7 +258,10 @@ fn load(text: &str) -> Option<String> {
                 scene.axes.case_count() > 0 || scene.elasticity().is_some(),
                 "valid scene without cases: {text:?}"
             );
-            assert!(!scene.axes.levels.is_empty(), "valid scene without levels: {text:?}");
+            assert!(
+                !scene.axes.levels.is_empty(),
+                "valid scene without levels: {text:?}"
+            );
             None
         }
         Ok(Err(e)) => {

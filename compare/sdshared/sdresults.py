@@ -166,6 +166,24 @@ def case_status(kkt, tolerance=KKT_TOLERANCE, failure=None):
     return "converged" if not reasons else "not_converged: " + "; ".join(reasons)
 
 
+def kkt_measures(residual, scale, jump, lam, jump_scale):
+    """The references' relative KKT residuals of a contact QP (docs/design.md; the elastic ones of
+    docs/elasticity.md): "equations" the componentwise backward error of the free rows' residual
+    K u − F − Bᵀλ against its scale |K||u| + |Bᵀλ| + |F|; "primal" the largest violation of the
+    constraint jump ≥ 0 over jump_scale (‖B‖∞‖u‖∞, or 1 where that is 0); "dual" the largest
+    negative λ over ‖λ‖∞ (1 where 0); "complementarity" max |λ_j jump_j| over both scales."""
+    import numpy as np
+
+    lam, jump = np.asarray(lam, dtype=float), np.asarray(jump, dtype=float)
+    l_scale = np.abs(lam).max(initial=0.0) or 1.0
+    return {
+        "equations": componentwise_backward_error(residual, scale),
+        "primal": float(max(0.0, -jump.min(initial=0.0)) / jump_scale),
+        "dual": float(max(0.0, -lam.min(initial=0.0)) / l_scale),
+        "complementarity": float(np.abs(lam * jump).max(initial=0.0) / (l_scale * jump_scale)),
+    }
+
+
 def componentwise_backward_error(residual, scale):
     """max_i |r_i| / scale_i (Oettli–Prager, as crates/sdcrack-core/src/linalg.rs): 0/0 counts as 0, a non-zero residual
     over a zero scale as ∞, a NaN residual gives NaN."""

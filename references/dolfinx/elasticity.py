@@ -424,14 +424,7 @@ def kkt_residuals(K, F, u, plus, minus, normal, free, active):
     w = (u[2 * plus] - u[2 * minus]) * normal[:, 0] + (u[2 * plus + 1] - u[2 * minus + 1]) * normal[:, 1]
     b_norm = 2.0 * np.abs(normal).sum(axis=1).max(initial=0.0)
     u_scale = b_norm * np.abs(u).max(initial=0.0) or 1.0
-    l_scale = np.abs(lam).max(initial=0.0) or 1.0
-    kkt = {
-        "equations": sdresults.componentwise_backward_error(r[free], scale[free]),
-        "primal": float(max(0.0, -w.min(initial=0.0)) / u_scale),
-        "dual": float(max(0.0, -lam.min(initial=0.0)) / l_scale),
-        "complementarity": float(np.abs(lam * w).max(initial=0.0) / (l_scale * u_scale)),
-    }
-    return kkt, lam
+    return sdresults.kkt_measures(r[free], scale[free], w, lam, u_scale), lam
 
 
 def cell_stress(xy, tri, u, lam, mu):

@@ -403,14 +403,7 @@ def kkt_residuals(K, F, u, plus, minus, free, active):
     scale = abs(K) @ np.abs(u) + np.abs(bt_lam) + np.abs(F)
     w = u[plus] - u[minus]
     u_scale = 2.0 * np.abs(u).max(initial=0.0) or 1.0
-    l_scale = np.abs(lam).max(initial=0.0) or 1.0
-    kkt = {
-        "equations": sdresults.componentwise_backward_error(r[free], scale[free]),
-        "primal": float(max(0.0, -w.min(initial=0.0)) / u_scale),
-        "dual": float(max(0.0, -lam.min(initial=0.0)) / l_scale),
-        "complementarity": float(np.abs(lam * w).max(initial=0.0) / (l_scale * u_scale)),
-    }
-    return kkt, lam
+    return sdresults.kkt_measures(r[free], scale[free], w, lam, u_scale), lam
 
 
 # ---------------------------------------------------------------------------------------------

@@ -197,20 +197,15 @@ fn scalar_json(scene: &Scene, problem: &ScalarProblem) -> serde_json::Value {
             "jump": e.jump.as_ref().map(|j| j.source()),
         })
     });
-    serde_json::json!({
-        "name": scene.name,
-        "f": problem.f.source(),
-        "g": problem.g.source(),
-        "exact": exact,
-        "domain": match &scene.domain {
-            Domain::Rectangle(r) => serde_json::json!({"min": r.min, "max": r.max}),
-            Domain::Polygon(p) => serde_json::json!({"polygon": p}),
-        },
-        "cracks": scene.cracks.iter().map(|c| serde_json::json!({"points": c.points})).collect::<Vec<_>>(),
-        "cells": match scene.meshing { Meshing::Cells(c) => Some(c), _ => None },
-        "mesh_size": match scene.meshing { Meshing::MeshSize(h) => Some(h), _ => None },
-        "levels": scene.axes.levels,
-    })
+    let mut json = serde_json::Map::new();
+    json.insert("name".into(), scene.name.clone().into());
+    json.insert("f".into(), problem.f.source().into());
+    json.insert("g".into(), problem.g.source().into());
+    json.insert("exact".into(), exact.into());
+    if let serde_json::Value::Object(geometry) = geometry_json(scene) {
+        json.extend(geometry.into_iter().filter(|(key, _)| key != "name"));
+    }
+    serde_json::Value::Object(json)
 }
 
 /// What the export writes beyond the scalar problem's files (all off: the scalar export).
