@@ -526,7 +526,7 @@ def analyse(res):
     checks.append(sif_check(res, a, sifs))
     a["finest"] = finest_distances(res, a, sifs)
     a["field_distances"] = field_distances(res)
-    a["checks"] = elastic_exactdata.not_judged(checks, a["exact_data"])
+    checks = a["checks"] = elastic_exactdata.not_judged(checks, a["exact_data"])
     a["verdict"], a["reasons"] = verdict.decide(
         [(label, p) for label, _, p, _ in checks],
         [(k, v) for k, v in a["undecided"].items() if v])

@@ -483,7 +483,8 @@ def _contact(fld, c, nu, length, opening, where):
                 pressed = Problem("exact.ux", (
                     f"exact.ux, exact.uy break σ_νν·[u·ν] = 0 on Γc: the crack is open ([u·ν] = "
                     f"{_fmt(w[i])}) and its {face} face is pressed (σ_νν = {_fmt(s[i])}; "
-                    f"σ_νν·[u·ν] = {_fmt(s[i] * w[i])}) {where(i)}"))
+                    f"σ_νν·[u·ν] = {_fmt(s[i] * w[i])}, off by {_fmt(abs(s[i] * w[i]))} from 0) "
+                    f"{where(i)}"))
     return out + [p for p in (pulled, pressed) if p is not None]
 
 
