@@ -135,6 +135,12 @@ def _expr(text, key):
         raise SceneError(f"scene.json: {key}: {exc}")
 
 
+def _numbers(value, n):
+    """A list of n finite numbers."""
+    return (isinstance(value, list) and len(value) == n
+            and all(isinstance(v, (int, float)) and math.isfinite(v) for v in value))
+
+
 def _pair(value, key):
     if not (isinstance(value, list) and len(value) == 2):
         raise SceneError(f"scene.json: {key} is not a pair of expressions")
@@ -223,7 +229,15 @@ class _Field:
             raise SceneError("scene.json: 'tractions' is not a mapping")
         self.tractions = {part: _pair(v, f"tractions.{part}") for part, v in t.items()}
         self.fixed = scene.get("fixed") or []
+        for i, f in enumerate(self.fixed):
+            if not (isinstance(f, dict) and _numbers(f.get("point"), 2)
+                    and isinstance(f.get("components"), list)
+                    and set(f["components"]) <= {"x", "y"}):
+                raise SceneError(f"scene.json: fixed[{i}] is not {{point: [x, y], components}}")
         self.sif = ex.get("sif")
+        if self.sif is not None and not (isinstance(self.sif, list)
+                                         and all(_numbers(k, 2) for k in self.sif)):
+            raise SceneError("scene.json: exact.sif is not a list of [K_I, K_II] numbers")
 
     def u_along(self, x, y, d):
         """u·d with its tolerance; d (2,) or (K, 2)."""
@@ -428,10 +442,10 @@ def _face_tractions(fld, c, nu, tau, length, where):
     i = _first(bad)
     if i is not None:
         plus, minus = ((sn[s, 0][0][i], sn[s, 1][0][i]) for s in (1.0, -1.0))
+        off = math.hypot(plus[0] - minus[0], plus[1] - minus[1])
         out.append(Problem("exact.ux", (
             f"exact.ux, exact.uy break [σν] = 0 on Γc: σν = {_at(plus)} on the + face, "
-            f"{_at(minus)} on the − face (off by {_fmt(math.hypot(plus[0] - minus[0], plus[1] - minus[1]))}) "
-            f"{where(i)}")))
+            f"{_at(minus)} on the − face (off by {_fmt(off)}) {where(i)}")))
     for side, face in ((1.0, "+"), (-1.0, "−")):
         s, t = _limit(lambda x, y: fld.stress_form(x, y, tau, nu), c, nu, length, side)
         with np.errstate(invalid="ignore"):
@@ -525,8 +539,8 @@ def sif_limits(fld, tip, e1, R):
 def _sifs(fld, tip_list):
     if fld.sif is None:
         return []
-    if not isinstance(fld.sif, list) or len(fld.sif) != len(tip_list):
-        n = len(fld.sif) if isinstance(fld.sif, list) else "no"
+    if len(fld.sif) != len(tip_list):
+        n = len(fld.sif)
         return [Problem("exact.sif", f"exact.sif has {n} entries, the cracks have "
                                      f"{len(tip_list)} tip(s) (one [K_I, K_II] per tip)")]
     out = []

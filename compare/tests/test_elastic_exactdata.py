@@ -7,8 +7,6 @@ with the scene as its cause, not the references.
 Run: /usr/bin/python3 -m pytest -q -p no:cacheprovider compare/tests/test_elastic_exactdata.py
 """
 import copy
-import contextlib
-import io
 import json
 import math
 import os
@@ -283,3 +281,15 @@ def test_a_malformed_scene_json_is_bad_input(tmp_path):
     code, out, err = run_cli(folder)
     assert code == 2 and err.count("\n") == 1 and "exact.sxx" in err, out + err
     assert not (folder / "report").exists()
+
+
+def test_malformed_entries_are_scene_errors(exported):
+    for change in (lambda s: s["exact"].update(sif=[[1.0]]),
+                   lambda s: s["exact"].update(sif="1"),
+                   lambda s: s.update(fixed=[{"point": [1.0], "components": ["x"]}]),
+                   lambda s: s.update(f=["0"]),
+                   lambda s: s.update(domain={"circle": 1})):
+        s = copy.deepcopy(exported["elastic-williams-open"])
+        change(s)
+        with pytest.raises(ed.SceneError, match="^scene.json: "):
+            ed.check_scene(s)
