@@ -5,6 +5,12 @@ summary.json says "problem": "elasticity"; the report's sections are elastic_rep
 
 Checks (each a list of problems; a check that does not apply says why):
 
+* exact data (with [exact], run first): the scene's exact data are those of an exact solution
+  (elastic_exactdata.py: Hooke's law, equilibrium, g, t, the fixed points, the crack's conditions
+  and given opening, slip, pressure, the SIFs against the exact stress's near-tip limits). When
+  they are not, the verdict is FAIL with the scene as its cause (verdict_cause "scene"), and the
+  checks measured against them (series, active set) are not judged: their problems say nothing of
+  the references.
 * completeness: every level of the scene copy's [discretization] levels has a case of every
   reference its [outputs] references ask for (default both), and every summary names the scene.
 * reference status: each case's status is "converged" and its KKT residuals are numbers
@@ -37,7 +43,8 @@ import os
 
 import numpy as np
 
-from . import elastic_exact, elastic_read, elastic_theory, rates, render, theory, verdict
+from . import (elastic_exact, elastic_exactdata, elastic_read, elastic_theory, rates, render, theory,
+               verdict)
 from .exact import ExactError, Quadrature
 
 KKT_TOLERANCE = 1e-10
@@ -59,7 +66,7 @@ CRACK_ROUNDOFF = 64 * np.finfo(float).eps
 # front, below the discretisation error within one cell of it.
 FRONT_REACH = 1
 QUANTITIES = ("u_l2", "u_h1", "sigma_l2", "opening_l2", "slip_l2")
-CHECKS = ("completeness", "reference status", "crack outputs", "reference agreement", "series",
+CHECKS = ("exact data", "completeness", "reference status", "crack outputs", "reference agreement", "series",
           "active set", "SIF")
 
 
@@ -466,7 +473,7 @@ def analyse(res):
     graded = any(lv.kind == "graded" for lv in res["levels"].values())
     a = {"scene": res["scene"], "has_exact": has_exact, "graded": graded,
          "levels": sorted(res["levels"]), "tools": sorted(res["refs"])}
-    checks = []
+    checks = [exact_data_check(a, ms)]
     checks.append(("completeness", "every level of the scene has a case of every reference it "
                    "asks for, and every summary names the scene", completeness(res), None))
     checks.append(("reference status", f"every reference case converged with KKT residuals "
@@ -519,14 +526,39 @@ def analyse(res):
     checks.append(sif_check(res, a, sifs))
     a["finest"] = finest_distances(res, a, sifs)
     a["field_distances"] = field_distances(res)
-    a["checks"] = checks
+    checks = a["checks"] = elastic_exactdata.not_judged(checks, a["exact_data"])
     a["verdict"], a["reasons"] = verdict.decide(
         [(label, p) for label, _, p, _ in checks],
         [(k, v) for k, v in a["undecided"].items() if v])
     ups = [s["run_levels_up_to"] for s in a["series"] if s["status"] == "inconclusive"
            and s["run_levels_up_to"] is not None]
     a["run_levels_up_to"] = max(ups) if ups and a["verdict"] == "INCONCLUSIVE" else None
+    a["verdict_cause"] = verdict_cause(a)
     return a
+
+
+def exact_data_check(a, mesh_scene):
+    """The exact-data check's row (run first): the scene.json's exact data checked by
+    elastic_exactdata; a["exact_data"] keeps its problems (key and sentence each). A scene.json
+    whose entries cannot be read is bad input (exit 2)."""
+    try:
+        found, checked = elastic_exactdata.check_scene(mesh_scene)
+    except elastic_exactdata.SceneError as exc:
+        raise elastic_read.InputError(f"mesh/{exc}")
+    a["exact_data"] = found
+    return (elastic_exactdata.LABEL, elastic_exactdata.REQUIREMENT
+            + (f" ({checked})" if checked else ""), [p.sentence for p in found],
+            None if a["has_exact"] else "the scene has no [exact]")
+
+
+def verdict_cause(a):
+    """What a verdict is attributed to (the scalar tool's rule): "scene" when the scene's exact
+    data are inconsistent, "results" for any other FAIL, "levels" for INCONCLUSIVE, None on PASS."""
+    if a["verdict"] == "PASS":
+        return None
+    if a["verdict"] == "INCONCLUSIVE":
+        return "levels"
+    return "scene" if a["exact_data"] else "results"
 
 
 def sif_check(res, a, sifs):

@@ -20,6 +20,10 @@ def _status(a, label, problems, na):
 
 
 def headline(a):
+    """The verdict as the report's first words: the scene named first when it is the cause."""
+    if a.get("verdict_cause") == "scene":
+        return (f"{a['verdict']} (cause: the scene: its [exact] data are not those of an exact "
+                f"solution; the references are not judged against them)")
     return a["verdict"]
 
 
@@ -30,8 +34,8 @@ def verdict_line(a):
         return (f"{a['scene']}: INCONCLUSIVE (cannot judge yet: {n} series"
                 + (f"; run levels up to {up}" if up is not None else "")
                 + f"; first: {a['reasons'][0]})")
-    return f"{a['scene']}: {a['verdict']}" + (f" ({n} problem(s); first: {a['reasons'][0]})"
-                                              if n else "")
+    return f"{a['scene']}: {headline(a)}" + (f" ({n} problem(s); first: {a['reasons'][0]})"
+                                             if n else "")
 
 
 # ------------------------------------------------------------------------------ sections
@@ -206,7 +210,9 @@ def error_plot(folder, a):
 
 def report_json(res, a, prov, images):
     return verdict.clean({
-        "verdict": a["verdict"], "reasons": a["reasons"], "scene": a["scene"],
+        "verdict": a["verdict"], "verdict_cause": a["verdict_cause"], "reasons": a["reasons"],
+        "scene": a["scene"],
+        "exact_data": [{"key": p.key, "problem": p.sentence} for p in a["exact_data"]],
         "problem": elastic_read.PROBLEM, "results_dir": res["folder"], "provenance": prov,
         "convergence_rule": rates.rule_text(theory.RATE_MARGIN, source=RULE_SOURCE),
         "regularity": {"s": a.get("s"), "reason": a.get("s_reason")},
