@@ -102,7 +102,10 @@ def series_judgement(h, e, levels, min_rate):
     tail = list(zip(h, e, levels))[-RULE_LEVELS:]
     steps = []
     for (h0, e0, l0), (h1, e1, l1) in zip(tail, tail[1:]):
-        if not e1 < e0:
+        # 0 → 0 is two exact levels (a field the discretisation represents, its round-off taken
+        # as 0 by the caller), not growth: e.g. a patch's SIF, quadrature error 4e-10 at level 0
+        # and exact from level 1 on
+        if not (e1 < e0 or e1 == e0 == 0.0):
             return "does not converge", (f"the error grows from level {l0} to {l1} "
                                          f"({e0:.3e} → {e1:.3e})"), None
         steps.append(rate(h0, e0, h1, e1))

@@ -199,3 +199,22 @@ def test_levels_0_to_5_pass_with_rates_below_2(judged):
               if y["quantity"] == "p_x" and y["p_mass"] == "consistent"]
     assert ratios and max(ratios) < 1.2
     assert all(v["mini_x"] > 4 * v["grad_x"] for v in rep["interpolation"].values())
+
+
+# ------------------------------------------------------------------ exact levels
+@pytest.mark.parametrize("errors,status", [
+    # the elastic patch's SIF (levels 0–5): the interaction integral's quadrature error 4e-10 at
+    # level 0, exact (round-off taken as 0) from level 1 on; the rule read 0 → 0 as growth
+    ([4.04e-10, 0.0, 0.0, 0.0, 0.0, 0.0], "converges"),
+    ([1e-3, 2.5e-4, 0.0, 0.0], "converges"),
+    # an exact level followed by an error is growth, and so is a constant nonzero error
+    ([1e-3, 0.0, 0.0, 1e-12], "does not converge"),
+    ([1e-3, 0.0, 1e-12, 1e-12], "does not converge"),
+    ([1e-3, 1e-6, 1e-6, 1e-6], "does not converge"),
+])
+def test_exact_levels_are_not_growth(errors, status):
+    n = len(errors)
+    st, reason, _ = rates.series_judgement(H[:n], errors, list(range(n)), 1.9)
+    assert st == status, reason
+    if st == "converges":
+        assert "exact" in reason, reason
