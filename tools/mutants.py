@@ -9,6 +9,13 @@ the folder (exit 2) or `sdcrack run` fails; it SURVIVES when every scene PASSes 
 (exit 3: cannot judge yet is no catch). The unmutated copy
 must PASS every scene first, or nothing is judged (exit 2).
 
+The scenes: tools/mutants' command line, else DEFAULT_SCENES (the scalar ones at their own
+levels, then issue 45's elastic ones at levels 0–3); `--levels A-B` judges every scene on those
+levels, in a copy written as tools/campaign --levels writes it (tools/workflow/prepare.py). An
+elastic scene has no solver case until issue 46: `sdcrack run` writes its mesh export and runs
+its references, and compare/sdcompare gives the elastic verdict (docs/elasticity.md), so a Rust
+mutant can FAIL it only through the mesh export.
+
 Mutants in compare/ judge the unmutated run's results (the solver and references are unchanged);
 mutants in references/ rerun the scenes that run references; mutants in Rust rebuild and rerun
 every scene. The first scene that FAILs kills a mutant: the later ones are not run.
@@ -35,10 +42,24 @@ from sdshared.sdresults import write_atomic
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CATALOGUE = os.path.join(ROOT, "tools", "mutants.toml")
-DEFAULT_SCENES = ["scenes/closed-exact.toml", "scenes/open-exact.toml", "scenes/mixed.toml",
-                  "scenes/open-smooth.toml", "scenes/open-graded.toml",
+# (scene, the levels judged: None for the scene's own); the first scene that FAILs kills a mutant,
+# so the cheap elastic scenes come last, where the Rust mutants (killed on a scalar scene, and
+# blind on an elastic one, which has no solver case until issue 46) never reach them
+ELASTIC_LEVELS = [0, 1, 2, 3]
+DEFAULT_SCENES = [("scenes/closed-exact.toml", None), ("scenes/open-exact.toml", None),
+                  ("scenes/mixed.toml", None), ("scenes/open-smooth.toml", None),
+                  ("scenes/open-graded.toml", None),
                   # a kink and no reference (issue 43): the cut judged from the scene alone
-                  "tests/data/scenes/kinked-no-references.toml"]
+                  ("tests/data/scenes/kinked-no-references.toml", None),
+                  # issue 45's elastic scenes, both references: a pressed interior crack with
+                  # λ* ≠ μ (the patch test: P1 exact, K = 0 by the crack-face term), an open edge
+                  # crack (Williams, K_I = 1, K_II = ½), a pressed edge crack with slip (K_I = 0
+                  # only with the face term); levels 0–3 (3 rates, enough for the series rule):
+                  # each elastic mutant of the catalogue FAILs there (docs/verification.md), and
+                  # the three run and are judged in ~70 s on 2 cores
+                  ("scenes/elastic-patch.toml", ELASTIC_LEVELS),
+                  ("scenes/elastic-williams-open.toml", ELASTIC_LEVELS),
+                  ("scenes/elastic-closed-slip.toml", ELASTIC_LEVELS)]
 MUTANT_KEYS = {"name", "file", "find", "replace", "bug", "catches"}
 BEGIN, END = "<!-- tools/mutants: begin -->", "<!-- tools/mutants: end -->"
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable
@@ -46,6 +67,62 @@ PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.execu
 
 class UsageError(Exception):
     pass
+
+
+def _campaign_prepare():
+    """tools/workflow/prepare.py, the campaign's scene copier: one home for its `--levels A-B`
+    syntax, its `levels = [...]` line and its absolute mesh path."""
+    import importlib.util
+
+    path = os.path.join(ROOT, "tools", "workflow", "prepare.py")
+    spec = importlib.util.spec_from_file_location("sdcrack_campaign_prepare", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def parse_levels(text):
+    """`--levels A-B` (or one level), as tools/campaign reads it: the list of levels."""
+    prepare = _campaign_prepare()
+    try:
+        return prepare.parse_levels(text)
+    except prepare.Refused as exc:
+        raise UsageError(str(exc)) from None
+
+
+def scene_with_levels(scene, levels, folder):
+    """A copy of `scene` in `folder` judged on `levels` only, as tools/campaign --levels writes it
+    (its one `levels = [...]` line replaced, a gmsh path made absolute: it is relative to the scene
+    file, which the copy no longer sits beside); the path of the copy. UsageError when the scene
+    has no single levels line."""
+    prepare = _campaign_prepare()
+    with open(scene, "rb") as fh:
+        data = fh.read()
+    text, _ = prepare.with_absolute_mesh(scene, data.decode("utf-8"), data)
+    text, n = prepare.LEVELS_RE.subn(f"levels = [{', '.join(map(str, levels))}]", text)
+    if n != 1:
+        raise UsageError(f"{scene}: no single `levels = [...]` line to replace for levels "
+                         f"{levels[0]}-{levels[-1]}")
+    os.makedirs(folder, exist_ok=True)
+    copy = os.path.join(folder, os.path.basename(scene))
+    if os.path.exists(copy):
+        raise UsageError(f"two scenes named {os.path.basename(scene)}: their copies would clash")
+    write_atomic(copy, text)
+    return copy
+
+
+def scene_list(args):
+    """(scene file, levels or None) of the scenes judged: the command line's (at --levels when
+    given) or the default list (each at --levels when given, else at its own)."""
+    levels = parse_levels(args.levels) if args.levels else None
+    if args.scenes:
+        pairs = [(os.path.abspath(s), levels) for s in args.scenes]
+    else:
+        pairs = [(os.path.join(ROOT, s), levels or own) for s, own in DEFAULT_SCENES]
+    for s, _ in pairs:
+        if not os.path.isfile(s):
+            raise UsageError(f"no scene file {s}")
+    return pairs
 
 
 def load_catalogue(path=CATALOGUE):
@@ -296,7 +373,11 @@ def record(path, table):
 
 def parse_args(argv):
     p = argparse.ArgumentParser(prog="tools/mutants", description=__doc__.split("\n\n")[0])
-    p.add_argument("scenes", nargs="*", help=f"scene files (default: {' '.join(DEFAULT_SCENES)})")
+    p.add_argument("scenes", nargs="*", help="scene files (default: "
+                   f"{' '.join(s for s, _ in DEFAULT_SCENES)})")
+    p.add_argument("--levels", metavar="A-B", help="judge every scene on levels A to B only "
+                   "(a copy of the scene, as tools/campaign --levels writes it; default: each "
+                   "scene's own levels, the default elastic scenes' 0-3)")
     p.add_argument("--only", action="append", default=[], metavar="NAME",
                    help="run this mutant only (repeatable)")
     p.add_argument("--work", metavar="DIR", help="scratch folder, kept (default: a temporary one, "
@@ -319,11 +400,7 @@ def main(argv):
         raise UsageError(f"no mutant named {', '.join(unknown)} in {CATALOGUE}")
     if args.only:
         mutants = [m for m in mutants if m["name"] in args.only]
-    scenes = [os.path.abspath(s) for s in (args.scenes or [os.path.join(ROOT, s)
-                                                            for s in DEFAULT_SCENES])]
-    for s in scenes:
-        if not os.path.isfile(s):
-            raise UsageError(f"no scene file {s}")
+    pairs = scene_list(args)
     if args.record and not os.access(args.record, os.W_OK):
         raise UsageError(f"cannot write {args.record}")
     work = os.path.abspath(args.work) if args.work else None
@@ -332,9 +409,12 @@ def main(argv):
         import tempfile
         work = tempfile.mkdtemp(prefix="sdcrack-mutants-")
     t0 = time.monotonic()
-    bench = Workbench(work, scenes, lambda msg: print(f"[{time.monotonic() - t0:6.0f} s] {msg}",
-                                                      file=sys.stderr, flush=True))
     try:
+        copies = os.path.join(work, "scenes")
+        shutil.rmtree(copies, ignore_errors=True)
+        scenes = [s if lv is None else scene_with_levels(s, lv, copies) for s, lv in pairs]
+        bench = Workbench(work, scenes, lambda msg: print(
+            f"[{time.monotonic() - t0:6.0f} s] {msg}", file=sys.stderr, flush=True))
         bench.prepare()
         folders = baseline(bench)
         verdicts = []
@@ -351,7 +431,9 @@ def main(argv):
                 "commit": commit + (" + uncommitted changes" if dirty else ""),
                 "machine": f"{platform.machine()}, {os.cpu_count()} cores",
                 "seconds": time.monotonic() - t0,
-                "scenes": [bench.scene_name(s) for s in scenes]}
+                "scenes": [bench.scene_name(s) + ("" if lv is None else
+                                                  f" (levels {lv[0]}–{lv[-1]})")
+                           for s, (_, lv) in zip(scenes, pairs)]}
         with open(os.path.join(work, "mutants.json"), "w", encoding="utf-8") as fh:
             json.dump({"meta": meta, "mutants": verdicts}, fh, indent=1, ensure_ascii=False)
         if args.record:

@@ -20,6 +20,8 @@ Checks (each a list of problems; a check that does not apply says why):
   code: a few ulps), the tips' rows 0, the active rows closed (|opening| within the same
   round-off) with a force ≥ −tol, the other rows with force 0 and opening ≥ −tol, tol =
   KKT_TOLERANCE · max(1, ‖λ‖∞, ‖w‖∞) (the active-set method's own stopping scale).
+* viewer datasets: each reference's field files (fields.h5, fields/*.xdmf) hold its own u, crack
+  fields and mesh bit for bit and the stress σ(u_h) of its u to round-off (elastic_fields.py).
 * reference agreement (two references): per level max |u_a − u_b| ≤ U_AGREEMENT · ‖u‖∞, the
   same active flags at every row, the same SIFs to SIF_AGREEMENT · max |K| of the tip.
 * series (with [exact]): each reference's errors per level and their rates against
@@ -43,7 +45,8 @@ import os
 
 import numpy as np
 
-from . import (elastic_exact, elastic_exactdata, elastic_read, elastic_theory, rates, render, theory,
+from . import (elastic_exact, elastic_exactdata, elastic_fields, elastic_read, elastic_theory, rates,
+               render, theory,
                verdict)
 from .exact import ExactError, Quadrature
 
@@ -66,8 +69,8 @@ CRACK_ROUNDOFF = 64 * np.finfo(float).eps
 # front, below the discretisation error within one cell of it.
 FRONT_REACH = 1
 QUANTITIES = ("u_l2", "u_h1", "sigma_l2", "opening_l2", "slip_l2")
-CHECKS = ("exact data", "completeness", "reference status", "crack outputs", "reference agreement", "series",
-          "active set", "SIF")
+CHECKS = ("exact data", "completeness", "reference status", "crack outputs", "viewer datasets",
+          "reference agreement", "series", "active set", "SIF")
 
 
 def mesh_parameter(level, graded):
@@ -483,6 +486,7 @@ def analyse(res):
                    f"{CRACK_ROUNDOFF:.1e} ‖u‖∞, tips 0, active rows closed with a force ≥ 0, the "
                    "others free of force", crack_outputs(res),
                    None if res["refs"] else "no reference in the folder"))
+    checks.append(("viewer datasets", *elastic_fields.viewer_datasets(res)))
     ex = None
     if has_exact:
         try:

@@ -115,3 +115,36 @@ def test_the_scratch_copy_has_fresh_modification_times(tmp_path):
     assert copied.read_bytes() == open(os.path.join(ROOT, "crates", "sdcrack-core", "src", "fe",
                                                     "mini.rs"), "rb").read()
     assert copied.stat().st_mtime >= before - 1
+
+
+def test_default_scenes_end_with_the_elastic_ones_at_levels_0_to_3():
+    """Issue 45: the elastic mutants need an elastic scene; cheap at levels 0–3, and last, where
+    the Rust mutants (killed on a scalar scene first) never reach them."""
+    args = mutants.parse_args([])
+    pairs = mutants.scene_list(args)
+    elastic = [(os.path.relpath(s, ROOT), lv) for s, lv in pairs if "elastic-" in s]
+    assert elastic == [("scenes/elastic-patch.toml", [0, 1, 2, 3]),
+                       ("scenes/elastic-williams-open.toml", [0, 1, 2, 3]),
+                       ("scenes/elastic-closed-slip.toml", [0, 1, 2, 3])]
+    assert [lv for _, lv in pairs[:-3]] == [None] * (len(pairs) - 3)
+    every = mutants.scene_list(mutants.parse_args(["--levels", "0-1"]))
+    assert {tuple(lv) for _, lv in every} == {(0, 1)}
+    with pytest.raises(mutants.UsageError, match="expected A-B"):
+        mutants.scene_list(mutants.parse_args(["--levels", "zero"]))
+
+
+def test_a_scene_judged_on_fewer_levels_is_a_copy(tmp_path):
+    """The copy has the campaign's levels line and an absolute mesh path; the original is
+    untouched; a scene without one levels line is refused."""
+    (tmp_path / "m.msh").write_text("mesh")
+    src = tmp_path / "s.toml"
+    text = ('name = "s"\n[discretization]\nmesh = { gmsh = "m.msh" }\nlevels = [0, 1, 2, 3, 4]\n')
+    src.write_text(text)
+    copy = mutants.scene_with_levels(str(src), [0, 1], str(tmp_path / "copies"))
+    got = open(copy).read()
+    assert "levels = [0, 1]\n" in got and f'gmsh = "{tmp_path / "m.msh"}"' in got
+    assert src.read_text() == text
+    bad = tmp_path / "b.toml"
+    bad.write_text('name = "b"\n[discretization]\ncells = [4, 4]\n')
+    with pytest.raises(mutants.UsageError, match="no single `levels = \\[...\\]` line"):
+        mutants.scene_with_levels(str(bad), [0], str(tmp_path / "copies"))
