@@ -16,7 +16,10 @@ failed since (its output missing and its log without a `campaign: ... done` line
 killed job), or whose report is older than its shards or inputs, is FAIL; the index shows the
 failing jobs' logs (their last 40 lines, and a link). Each row also says what converged, and, from
 the report's `glance`, the ratios of sdcrack's errors to the references' at the finest level both
-have and the δ → 0 outcome.
+have and the δ → 0 outcome. An elastic scene's report (docs/elasticity.md: no solver until issue 46)
+has no glance: its row says which of its series (per reference and quantity) converge and, in
+the glance's place, the references' errors at the finest level (without exact fields: their SIFs,
+contact fronts and distances to the finest level) and how well they agree.
 
 --baseline BASEDIR: a campaign folder of the same layout (e.g. the previous night's merged
 artifacts; its scenes found as above, without --scene). Each scene's row then lists what changed
