@@ -502,6 +502,10 @@ fn plan_json(scene: &Scene, triangles: &[usize]) -> String {
     });
     let mut value = serde_json::Map::new();
     value.insert("name".into(), scene.name.clone().into());
+    // the problem kind of an elastic scene (absent: the scalar problem, as in summary.json)
+    if scene.scalar().is_none() {
+        value.insert("problem".into(), scene.problem.kind().name().into());
+    }
     value.insert("cases".into(), scene.axes.case_count().into());
     // every axis' list, as summary.json's plan writes them (levels, u_spaces, …, deltas)
     if let Ok(serde_json::Value::Object(axes)) = serde_json::to_value(&scene.axes) {
@@ -552,13 +556,22 @@ fn merge(shards: &[PathBuf], out: &Path) -> Result<i32, Failure> {
             runtime(e)
         }
     })?;
-    say!(
-        "{} cases of scene '{}' merged from {} shards; results in {}",
-        outcome.cases,
-        outcome.scene.name,
-        shards.len(),
-        outcome.path.display()
-    );
+    match outcome.scene.problem.kind() {
+        ProblemKind::Scalar => say!(
+            "{} cases of scene '{}' merged from {} shards; results in {}",
+            outcome.cases,
+            outcome.scene.name,
+            shards.len(),
+            outcome.path.display()
+        ),
+        ProblemKind::Elasticity => say!(
+            "elastic scene '{}': no solver case (issue 46), references {:?} merged from {} shards; results in {}",
+            outcome.scene.name,
+            outcome.scene.references,
+            shards.len(),
+            outcome.path.display()
+        ),
+    }
     Ok(convergence_status(
         outcome.not_converged,
         outcome.references_not_converged == 0,

@@ -348,6 +348,8 @@ fn reference_needs_a_listed_tool_and_check_json_gives_the_plan() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let plan: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(plan["name"], "small");
+    // the scalar problem: no "problem" key (as in summary.json; an elastic plan has one)
+    assert!(plan.get("problem").is_none(), "{plan}");
     assert_eq!(plan["cases"], 48);
     assert_eq!(plan["levels"], serde_json::json!([0, 1]));
     assert_eq!(
@@ -418,5 +420,152 @@ fn shards_of_a_mesh_file_scene_merge_from_another_folder() {
     assert!(
         source.ends_with("meshes/trapezoid-two-cracks.msh"),
         "{source}"
+    );
+}
+
+/// A fake reference shard of `tool` at `level` for the scene `text` named `name`:
+/// `<dir>/<name>/scene.toml` and `<tool>/` with a summary of one converged case and a u file.
+/// The merge reads only the cases' levels and statuses and copies the rest.
+fn reference_shard(dir: &Path, name: &str, text: &str, tool: &str, level: u32) -> PathBuf {
+    let shard = dir.join(format!("{tool}-l{level}")).join(name);
+    std::fs::create_dir_all(shard.join(tool)).unwrap();
+    std::fs::write(shard.join("scene.toml"), text).unwrap();
+    let summary = serde_json::json!({"scene": name, "tool": tool, "problem": "elasticity",
+        "provenance": {"tool": tool}, "cases": [{"level": level, "status": "converged"}]});
+    std::fs::write(shard.join(tool).join("summary.json"), summary.to_string()).unwrap();
+    std::fs::write(
+        shard.join(tool).join(format!("u_level{level}.txt")),
+        "0 0\n",
+    )
+    .unwrap();
+    shard
+}
+
+/// Every file under `folder` (relative paths) with its bytes.
+fn files(folder: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![folder.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((
+                    p.strip_prefix(folder).unwrap().to_path_buf(),
+                    std::fs::read(&p).unwrap(),
+                ));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// An elastic scene has no solver case until its solver exists (issue 46): its campaign runs
+/// reference jobs only, whose shards merge into the folder `sdcrack run` writes: the run's
+/// summary (no case, `"problem": "elasticity"`, the plan's levels, empty scalar axes; equal but
+/// for the provenance, the timings and `shards`, here empty), the mesh export of `sdcrack mesh`
+/// byte for byte, each reference's files. `check --json` names the problem. A level missing is
+/// refused, and a scalar scene's reference shards without solver shards still are.
+#[test]
+fn reference_shards_of_an_elastic_scene_merge_without_solver_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(common::scene_path("elastic-patch"))
+        .unwrap()
+        .replace("levels = [0, 1, 2, 3, 4]", "levels = [0, 1]")
+        .replace(
+            "references = [\"dolfinx\", \"freefem\"]",
+            "references = [\"dolfinx\"]",
+        );
+    let scene = dir.path().join("elastic-patch.toml");
+    std::fs::write(&scene, &text).unwrap();
+    let scene = scene.to_str().unwrap();
+    let o = sdcrack(&["check", scene, "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let plan: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(plan["problem"], "elasticity");
+    assert_eq!(plan["cases"], 0);
+    assert_eq!(plan["u_spaces"], serde_json::json!([]));
+
+    let shards: Vec<PathBuf> = [0, 1]
+        .map(|l| {
+            reference_shard(
+                &dir.path().join("shards"),
+                "elastic-patch",
+                &text,
+                "dolfinx",
+                l,
+            )
+        })
+        .to_vec();
+    let out = dir.path().join("merged");
+    let o = merge(&shards, &out);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let merged = out.join("elastic-patch");
+    // the run's summary: `run --solver-only` writes it without running the references
+    let single = dir.path().join("single");
+    let o = sdcrack(&[
+        "run",
+        scene,
+        "--solver-only",
+        "--quiet",
+        "--out",
+        single.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let single = single.join("elastic-patch");
+    let m = summary(&merged);
+    assert_eq!(numbers(m.clone()), numbers(summary(&single)));
+    assert_eq!(m["problem"], "elasticity");
+    assert_eq!(m["shards"], serde_json::json!([]));
+    assert_eq!(m["cases"], serde_json::json!([]));
+    assert!(m["provenance"]["scene_origin"]
+        .as_str()
+        .unwrap()
+        .ends_with("dolfinx-l0/elastic-patch/scene.toml"));
+    assert_eq!(
+        std::fs::read_to_string(merged.join("scene.toml")).unwrap(),
+        text
+    );
+    // the mesh export, as `sdcrack mesh` writes it
+    let mesh = dir.path().join("mesh");
+    let o = sdcrack(&["mesh", scene, "--out", mesh.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert_eq!(files(&merged.join("mesh")), files(&mesh));
+    // the reference's files: both levels' u, the cases in level order
+    let reference: Value =
+        serde_json::from_slice(&std::fs::read(merged.join("dolfinx/summary.json")).unwrap())
+            .unwrap();
+    let levels: Vec<&Value> = (reference["cases"].as_array().unwrap().iter())
+        .map(|c| &c["level"])
+        .collect();
+    assert_eq!(levels, [&serde_json::json!(0), &serde_json::json!(1)]);
+    assert!(merged.join("dolfinx/u_level0.txt").is_file());
+    assert!(merged.join("dolfinx/u_level1.txt").is_file());
+    assert_eq!(
+        common::listing(&merged),
+        ["dolfinx", "mesh", "scene.toml", "summary.json"]
+    );
+
+    // a level missing
+    let o = merge(&shards[1..], &dir.path().join("partial"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("no shard holds reference dolfinx level 0"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!dir.path().join("partial").join("elastic-patch").exists());
+    // a scalar scene's reference shards alone: its solver cases are missing
+    let scalar = common::SMALL_SCENE.replace("references = []", "references = [\"dolfinx\"]");
+    assert_ne!(scalar, common::SMALL_SCENE);
+    let shard = reference_shard(&dir.path().join("scalar"), "small", &scalar, "dolfinx", 0);
+    let o = merge(&[shard], &dir.path().join("scalar-merged"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("no solver shard (summary.json) among the shards"),
+        "{}",
+        stderr(&o)
     );
 }

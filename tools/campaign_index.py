@@ -16,7 +16,10 @@ failed since (its output missing and its log without a `campaign: ... done` line
 killed job), or whose report is older than its shards or inputs, is FAIL; the index shows the
 failing jobs' logs (their last 40 lines, and a link). Each row also says what converged, and, from
 the report's `glance`, the ratios of sdcrack's errors to the references' at the finest level both
-have and the δ → 0 outcome.
+have and the δ → 0 outcome. An elastic scene's report (docs/elasticity.md: no solver until issue 46)
+has no glance: its row says which of its series (per reference and quantity) converge and, in
+the glance's place, the references' errors at the finest level (without exact fields: their SIFs,
+contact fronts and distances to the finest level) and how well they agree.
 
 --baseline BASEDIR: a campaign folder of the same layout (e.g. the previous night's merged
 artifacts; its scenes found as above, without --scene). Each scene's row then lists what changed
@@ -190,9 +193,12 @@ def scene_row(root, name, report):
     failed = failed_jobs(root, name)
     row = {"name": name, "verdict": "FAIL", "reason": None, "report": None,
            "report_verdict": verdict, "failed_jobs": failed,
-           "converged": converged_line(report) if report else None,
+           "problem": ELASTIC if is_elastic(report) else None,
+           "converged": (None if not report else elastic_converged_line(report)
+                         if is_elastic(report) else converged_line(report)),
            "first_problem": first_problem(report) if report else None,
-           "glance": glance(report) if report else None}
+           "glance": (None if not report else elastic_glance(report) if is_elastic(report)
+                      else glance(report))}
     if os.path.isfile(os.path.join(root, name, "report", "index.html")):
         row["report"] = f"{name}/report/index.html"
     if verdict is None:
@@ -223,10 +229,15 @@ def campaign_verdict(rows):
 
 # one symbol per quantity, as the report's plots write them
 SYMBOL = {"u_l2": "u", "p_l2": "p", "p_x": "p_X", "lambda_l2": "λ"}
+
+
 def variant_key(s):
     """"u space/multiplier[/lumped][/ptangential]" of a report.json series (cases.variant_label:
     the labels of before the p mass and p space axes for the consistent p mass and the
-    continuous p)."""
+    continuous p); an elastic report's series (no u space: one per reference) its reference,
+    "dolfinx"."""
+    if "u_space" not in s and "tool" in s:
+        return str(s["tool"])
     return variant_label(str(s.get("u_space")), str(s.get("multiplier")), p_mass(s), p_space(s))
 
 
@@ -261,18 +272,19 @@ def converged_line(report):
     return "; ".join(parts)
 
 
-def last_rates(series):
+def last_rates(series, symbols=None):
     """"u 0.58–0.59, p 0.88, λ 1.43–2.02": the range of the series' last rates per quantity ("" when
-    none has one)."""
+    none has one), the quantities in the order of `symbols` (default SYMBOL), which names them."""
+    symbols = SYMBOL if symbols is None else symbols
     rates = {}
     for s in series:
         last = (s.get("rates") or [None])[-1]
-        if isinstance(last, (int, float)):
+        if isinstance(last, (int, float)) and not isinstance(last, bool):
             rates.setdefault(s["quantity"], []).append(float(last))
-    return ", ".join(f"{SYMBOL.get(q, q)} {min(v):.2f}"
+    return ", ".join(f"{symbols.get(q, q)} {min(v):.2f}"
                      + (f"–{max(v):.2f}" if f"{max(v):.2f}" != f"{min(v):.2f}" else "")
-                     for q, v in sorted(rates.items(), key=lambda kv: list(SYMBOL).index(kv[0])
-                                        if kv[0] in SYMBOL else 9))
+                     for q, v in sorted(rates.items(), key=lambda kv: list(symbols).index(kv[0])
+                                        if kv[0] in symbols else len(symbols)))
 
 
 def first_problem(report):
@@ -303,6 +315,121 @@ def glance(report):
     delta = g.get("delta") if isinstance(g.get("delta"), dict) else None
     return {"line": g["line"], "level": g.get("level"), "against": g.get("against"),
             "delta": delta}
+
+
+# --------------------------------------------------------------------------- elastic scenes
+#
+# An elastic scene (docs/elasticity.md) has no solver until issue 46: its report judges the two
+# references, against the exact fields where the scene has [exact] (series per reference and
+# quantity), else against each other and their finest level. report.json (compare/sdcompare_lib/
+# elastic_report.py) says "problem": "elasticity" and has no glance; its row says what converged
+# and, in the glance's column, the references' errors (or, without [exact], their SIFs, contact
+# fronts and distances to the finest level) at the finest level and how well they agree.
+
+ELASTIC = "elasticity"  # report.json's "problem" of an elastic scene (elastic_read.PROBLEM)
+# the elastic report's field quantities, in its order, with the symbols of its tables
+ELASTIC_SYMBOL = {"u_l2": "u", "u_h1": "∇u", "sigma_l2": "σ", "opening_l2": "opening",
+                  "slip_l2": "slip"}
+
+
+def is_elastic(report):
+    return isinstance(report, dict) and report.get("problem") == ELASTIC
+
+
+def dict_rows(report, key):
+    """report.json's list `key`, its dict entries only (a malformed report shows less, never
+    crashes the index)."""
+    rows = report.get(key)
+    return [r for r in rows if isinstance(r, dict)] if isinstance(rows, list) else []
+
+
+def elastic_converged_line(report):
+    """"14 of 14 series converge (dolfinx, freefem); last rates u 0.96, ∇u 0.49, …": the series
+    (one per reference and quantity, the SIF errors per tip too) that converge, the references
+    all of whose series do, the range of the converging series' last rates per quantity; without
+    series (no [exact]) what the references were judged by instead."""
+    series = dict_rows(report, "series")
+    if not series:
+        return "no series (no exact fields): the references compared with each other"
+    ok = [s for s in series if s.get("status") == "converges"]
+    undecided = sum(s.get("status") == "inconclusive" for s in series)
+    tools = sorted({str(s.get("tool")) for s in series})
+    whole = [t for t in tools if all(s.get("status") == "converges"
+                                     for s in series if str(s.get("tool")) == t)]
+    parts = [f"{len(ok)} of {len(series)} series converge"
+             + (f" ({', '.join(whole)})" if whole else "")
+             + (f", {undecided} cannot be judged yet" if undecided else "")]
+    rates = last_rates(ok, ELASTIC_SYMBOL)
+    if rates:
+        parts.append(f"last rates {rates}")
+    return "; ".join(parts)
+
+
+def fmt(x):
+    return "–" if x is None else f"{x:.2g}"
+
+
+def elastic_glance(report):
+    """The glance's column of an elastic row, {"line", "level", "against", "delta"} like glance():
+    the references' largest error per quantity at their finest level (the fields' and the SIFs',
+    from the series), else their SIFs and contact fronts there and the distances of the level
+    below to it; then their largest disagreement in u over the levels."""
+    series = dict_rows(report, "series")
+    finest = {}  # quantity -> [(level, error)] over the references
+    for s in series:
+        levels, errors = s.get("levels"), s.get("errors")
+        if isinstance(levels, list) and isinstance(errors, list) and levels and errors:
+            finest.setdefault(str(s.get("quantity")), []).append((levels[-1], number(errors[-1])))
+    level, parts, against = None, [], None
+    if finest:
+        level = max(lv for rows in finest.values() for lv, _ in rows)
+        against = "exact"
+        for q in list(ELASTIC_SYMBOL) + sorted(q for q in finest if q not in ELASTIC_SYMBOL):
+            errors = [e for lv, e in finest.get(q, []) if lv == level and e is not None]
+            if errors:
+                parts.append(f"{ELASTIC_SYMBOL.get(q, q)} {fmt(max(errors))}")
+        what = f"the references' errors at level {level} (the larger of theirs)"
+    else:
+        parts, level = elastic_without_exact(report)
+        against = "reference finest level" if level is not None else None
+        what = (f"the references at level {level}" if level is not None
+                else "the references: nothing measured")
+    agree = [number(a.get("u_rel")) for a in dict_rows(report, "agreement")]
+    agree = [a for a in agree if a is not None]
+    line = f"no solver yet (issue 46); {what}" + (": " + ", ".join(parts) if parts else "")
+    if agree:
+        line += f"; they agree in u to {fmt(max(agree))} (relative)"
+    return {"line": line, "level": level, "against": against, "delta": None}
+
+
+def elastic_without_exact(report):
+    """(parts, finest level) of a report without exact fields: the first reference's SIFs per
+    tip and contact fronts at its finest level, and the u distances of the level below to it."""
+    sifs = dict_rows(report, "sifs")
+    levels = [s.get("level") for s in sifs if isinstance(s.get("level"), int)]
+    levels += [f.get("finest") for f in dict_rows(report, "field_distances")
+               if isinstance(f.get("finest"), int)]
+    if not levels:
+        return [], None
+    level = max(levels)
+    tool = min((str(s.get("tool")) for s in sifs + dict_rows(report, "field_distances")),
+               default=None)
+    parts = []
+    for s in sifs:
+        if s.get("level") == level and str(s.get("tool")) == tool and isinstance(s.get("K"), list):
+            ks = [k for k in s["K"] if isinstance(k, list) and len(k) == 2]
+            parts.append(f"{tool}'s (K_I, K_II) per tip "
+                         + ", ".join(f"({fmt(number(a))}, {fmt(number(b))})" for a, b in ks))
+    for f in dict_rows(report, "fronts"):
+        if f.get("level") == level and str(f.get("tool")) == tool \
+                and isinstance(f.get("fronts"), list):
+            xs = [fmt(number(p[0])) for p in f["fronts"] if isinstance(p, list) and p]
+            parts.append(f"contact fronts at x = {', '.join(xs)}" if xs else "no contact front")
+    for d in dict_rows(report, "field_distances"):
+        if d.get("level") == level - 1 and str(d.get("tool")) == tool:
+            parts.append(f"level {level - 1} to it: u {fmt(number(d.get('u_l2')))} (L²), "
+                         f"{fmt(number(d.get('u_h1')))} (H¹)")
+    return parts, level
 
 
 # --------------------------------------------------------------------------- the baseline

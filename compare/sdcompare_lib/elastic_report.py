@@ -234,9 +234,32 @@ def report_json(res, a, prov, images):
         "images": [i for i in images if i]})
 
 
+def check_no_expectations(path, scene):
+    """The elastic verdict reads no expectations: its series are judged by elastic_theory.py's
+    orders, and until the elastic solver exists (issue 46) there is no solver series to bound
+    and no ratio to the references to record. A row of the expectations file `path` (--expectations,
+    else the default file) naming the elastic `scene` would be silently ignored, so it is refused
+    (InputError); rows of other scenes, and "*" rows (patterns of the scalar series), are the
+    scalar verdict's. A missing default file is no error here."""
+    import tomllib
+
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except (OSError, ValueError) as exc:  # tomllib.TOMLDecodeError is a ValueError
+        raise elastic_read.InputError(f"bad expectations file {path}: {exc}")
+    for table in ("expectation", "ratio"):
+        rows = data.get(table)
+        for i, row in enumerate(rows if isinstance(rows, list) else []):
+            if isinstance(row, dict) and row.get("scene") == scene:
+                raise elastic_read.InputError(
+                    f"{path}: [[{table}]] {i} names the elastic scene {scene!r}, whose verdict "
+                    "reads no expectations (docs/elasticity.md): remove the row")
+
+
 def run(args, results_dir):
-    """The elastic report of RESULTS_DIR (the options --replace and --quiet; the scalar-only
-    options are refused)."""
+    """The elastic report of RESULTS_DIR (the options --replace, --quiet and --expectations, whose
+    file may not name the scene: check_no_expectations; the scalar-only options are refused)."""
     for opt in ("baseline", "record_expectations"):
         if getattr(args, opt, None):
             raise elastic_read.InputError(f"--{opt.replace('_', '-')} is not available for an "
@@ -244,6 +267,13 @@ def run(args, results_dir):
     if os.path.lexists(os.path.join(results_dir, "report")) and not args.replace:
         raise elastic_read.InputError(f"{results_dir}/report exists (use --replace to replace it)")
     res = elastic_read.load(results_dir)
+    expectations = getattr(args, "expectations", None)
+    if expectations is not None and not os.path.exists(expectations):
+        raise elastic_read.InputError(f"missing expectations file: {expectations}")
+    expectations = expectations or verdict.default_expectations(
+        os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    if expectations is not None and os.path.exists(expectations):
+        check_no_expectations(expectations, res["scene"])
     a = elastic.analyse(res)
     tmp = render.new_tmp_folder(results_dir)
     try:

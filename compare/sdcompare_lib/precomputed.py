@@ -30,6 +30,8 @@ from . import cases, exact
 from sdshared.sdresults import write_atomic
 
 FORMAT = "sdcompare-precomputed-1"
+# the scene's [problem] kind whose shards this module does not read (elastic_read.PROBLEM)
+ELASTIC = "elasticity"
 
 
 class Store:
@@ -158,6 +160,11 @@ def precompute(folder):
     from . import read
 
     _, scene_file = read.load_scene_copy(folder)
+    problem = scene_file.get("problem")
+    if isinstance(problem, dict) and problem.get("kind") == ELASTIC:  # docs/elasticity.md: the elastic report recomputes its own errors
+        raise read.InputError(f"{folder}: a shard of an elastic scene: --precompute recomputes the "
+                              "scalar problem's errors only (the elastic report computes its own; "
+                              "a campaign runs no check job for an elastic scene)")
     if "exact" not in scene_file:
         return 0
     try:

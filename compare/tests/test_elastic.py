@@ -27,6 +27,7 @@ import elastic_synthetic as es
 from sdcompare_lib import elastic, elastic_exact, elastic_read, exact
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
 SCRIPT = os.path.join(os.path.dirname(HERE), "sdcompare")
 LEVELS = (0, 1, 2, 3)
 
@@ -416,6 +417,32 @@ def test_scalar_only_options_are_refused(tmp_path):
     folder = es.write_results(tmp_path / "w", levels=(0,))
     code, _, err = run_cli(folder, "--baseline", str(folder))
     assert code == 2 and "--baseline is not available for an elastic scene" in err
+
+
+def test_an_expectations_row_naming_the_elastic_scene_is_refused(tmp_path):
+    """The elastic verdict reads no expectations (scenes/expectations.toml bounds the scalar
+    solver's series): an [[expectation]] or [[ratio]] row naming the elastic scene would be
+    ignored, so it is one line, exit 2, no report; rows of other scenes (and the repository's
+    file) are fine, a missing --expectations file is refused as for a scalar scene."""
+    folder = es.write_results(tmp_path / "w", levels=(0,))
+    other = tmp_path / "other.toml"
+    other.write_text('[[expectation]]\nscene = "closed-exact"\nu_space = "*"\nmultiplier = "*"\n'
+                     'quantity = "u_l2"\nlevel = 4\nmax_error = 1.0\n')
+    for table in ("expectation", "ratio"):
+        mine = tmp_path / f"{table}.toml"
+        mine.write_text(other.read_text() + f'[[{table}]]\nscene = "williams"\nlevel = 0\n')
+        code, _, err = run_cli(folder, "--expectations", str(mine))
+        assert code == 2 and err.count("\n") == 1, err
+        assert f"[[{table}]] {1 if table == 'expectation' else 0} names the elastic scene " \
+            "'williams'" in err, err
+        assert not (folder / "report").exists()
+    code, _, err = run_cli(folder, "--expectations", str(tmp_path / "missing.toml"))
+    assert code == 2 and "missing expectations file" in err
+    for args in (["--expectations", str(other)], ["--replace"],
+                 ["--expectations", os.path.join(ROOT, "scenes", "expectations.toml"),
+                  "--replace"]):
+        code, _, err = run_cli(folder, "--quiet", *args)
+        assert code == 3 and (folder / "report" / "report.json").is_file(), err  # one level
 
 
 def test_dispatch_reads_the_problem_key(tmp_path):

@@ -124,6 +124,20 @@ def test_bad_files_and_arguments_are_one_line_errors(runs, tmp_path):
         assert len(r.stderr.strip().splitlines()) == 1 and "sdcompare: error:" in r.stderr
 
 
+def test_an_elastic_shard_is_refused_in_one_line(tmp_path):
+    """--precompute reads the scalar problem's shards: an elastic scene's shard (its scene copy
+    says `kind = "elasticity"`; the elastic report recomputes its own errors, and the campaign runs
+    no check job for it) is one line, exit 2, nothing written, not a traceback."""
+    shard = tmp_path / "elastic-patch"
+    shard.mkdir()
+    with open(os.path.join(ROOT, "scenes", "elastic-patch.toml"), encoding="utf-8") as fh:
+        (shard / "scene.toml").write_text(fh.read())
+    r = sdcompare("--precompute", shard, "--out", tmp_path / "x.json")
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert r.stderr.count("\n") == 1 and "a shard of an elastic scene" in r.stderr, r.stderr
+    assert not (tmp_path / "x.json").exists()
+
+
 def test_several_shards_into_one_file(runs):
     """One check job covers several shards (the campaign: a level's solver shards of one u space):
     the file holds the errors of both folders, and each report uses its own."""

@@ -341,6 +341,25 @@ def test_case_list_of_a_p_spaces_results_folder_is_the_reports_rerun_list(tmp_pa
     assert out_of(rows[0][6]).endswith("/closed-exact-l2-broken-M1-ptangential-d0")
 
 
+def test_an_elastic_scene_has_no_unit(tmp_path):
+    """An elastic scene has no solver case until issue 46: tools/cases lists nothing for its scene
+    file or its results folder (it stopped with a KeyError on u_spaces), the other scenes as
+    without it, and the default list (every scene file) runs."""
+    closed = ROOT / "scenes" / "closed-exact.toml"
+    assert cases(ROOT / "scenes" / "elastic-patch.toml", closed, cwd=tmp_path) == \
+        cases(closed, cwd=tmp_path)
+    folder = tmp_path / "out" / "elastic-patch"
+    folder.mkdir(parents=True)
+    (folder / "scene.toml").write_text((ROOT / "scenes" / "elastic-patch.toml").read_text())
+    (folder / "summary.json").write_text(json.dumps({"problem": "elasticity", "plan": {
+        "levels": [0], "u_spaces": [], "multipliers": [], "p_masses": [], "p_spaces": [],
+        "deltas": []}, "cases": []}))
+    assert cases(folder, cwd=tmp_path) == []
+    rows = cases(cwd=tmp_path)
+    assert rows and not [r for r in rows if r[0].startswith("elastic-")]
+    assert {"closed-exact", "mixed"} <= {r[0] for r in rows}
+
+
 @pytest.mark.parametrize("arg, says", [
     ("nope.toml", "tools/cases: nope.toml: no such file or directory: give a scene file or a results "
                   "folder OUT/<scene>/"),

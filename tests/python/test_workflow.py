@@ -773,3 +773,191 @@ def test_both_p_spaces_merge_as_one_process(tmp_path):
     assert any("-ptangential" in c["fields_grid"] for c in merged["cases"])
     assert not [c for c in merged["cases"]
                 if (c["u_space"], c["p_space"]) == ("continuous", "broken-tangential")]
+
+
+# ----------------------------------------------------------------------------- elastic scenes
+# An elastic scene (docs/elasticity.md) has no solver case until issue 46: its plan (`sdcrack check
+# --json`: "problem": "elasticity", empty scalar axes, 0 cases) gives reference jobs per tool and
+# level and a report job, no solver job and no check job (`sdcompare --precompute` reads the
+# scalar problem's shards only), and its report gets no --baseline (the elastic report refuses it).
+
+def elastic_scene(tmp_path, name="elastic-patch", levels="[0, 1]"):
+    scene = tmp_path / f"{name}.toml"
+    scene.write_text(set_key((ROOT / "scenes" / f"{name}.toml").read_text(), "levels", levels))
+    return scene
+
+
+def test_jobs_of_an_elastic_plan():
+    """prepare.py's jobs of an elastic plan (as `sdcrack check --json` prints it): the references
+    per tool and level, no solver, no check although the scene has [exact]; the same plan
+    without "problem" (a scalar plan with empty axes) would have its references' checks."""
+    import ci_script
+
+    prepare = ci_script.load("tools/workflow/prepare.py")
+    plan = {"name": "e", "problem": "elasticity", "cases": 0, "levels": [0, 1], "u_spaces": [],
+            "multipliers": [], "p_masses": [], "p_spaces": [], "deltas": [],
+            "references": ["dolfinx", "freefem"], "exact": True}
+    refs = ["shards/e/dolfinx/l0", "shards/e/dolfinx/l1", "shards/e/freefem/l0",
+            "shards/e/freefem/l1"]
+    assert prepare.is_elastic(plan)
+    assert prepare.jobs_of(plan) == ([], refs, [], "e")
+    assert prepare.reference_shards(plan, level="1") == ["shards/e/dolfinx/l1", "shards/e/freefem/l1"]
+    scalar = {k: v for k, v in plan.items() if k != "problem"}
+    assert not prepare.is_elastic(scalar)
+    assert prepare.jobs_of(scalar)[2] == ["checks/e/references-l0.json",
+                                          "checks/e/references-l1.json"]
+
+
+def test_dry_run_of_an_elastic_scene(scenes, tmp_path):
+    """The dry run of an elastic scene beside a scalar one: the elastic scene's reference jobs
+    and report only, the scalar scene's jobs as without it; the report merges the reference shards
+    and runs the compare tool without --precomputed and without --baseline (the scalar one keeps
+    its baseline), each reference job asks for its memory estimate."""
+    files, expectations = scenes
+    scene = elastic_scene(tmp_path)
+    out = tmp_path / "out"
+    baseline = tmp_path / "old"
+    for name in ("closed-exact", "elastic-patch"):
+        (baseline / name).mkdir(parents=True)
+    r = campaign(files[0], scene, "--out", out, "--dry-run", "--expectations", expectations,
+                 "--baseline", baseline, check=0)
+    jobs = dry_run_jobs(r.stdout)
+    elastic = {("reference", f"shards/elastic-patch/{t}/l{lv}") for t in ("dolfinx", "freefem")
+               for lv in (0, 1)} | {("report", "elastic-patch")}
+    assert jobs == expected_jobs(out, ["closed-exact"]) | elastic
+    total = SOLVER_JOBS + REFERENCE_JOBS + CHECK_JOBS + 1 + len(elastic)
+    assert (f"campaign: dry run: {total} of {total} jobs would run (solver {SOLVER_JOBS}, "
+            f"reference {REFERENCE_JOBS + 4}, check {CHECK_JOBS}, report 2)") in r.stdout
+    config = json.loads((out / "inputs" / "config.dry-run.json").read_text())
+    assert config["plans"]["elastic-patch"]["problem"] == "elasticity"
+    assert "problem" not in config["plans"]["closed-exact"]
+    assert config["baselines"] == {"closed-exact": str(baseline / "closed-exact")}
+    sm = subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "tools" / "workflow" / "Snakefile"),
+                         "--directory", str(out), "--configfile",
+                         str(out / "inputs" / "config.dry-run.json"), "--cores", "1",
+                         "--dry-run", "--printshellcmds"], env=run_env(), capture_output=True,
+                        text=True)
+    assert sm.returncode == 0, sm.stdout[-3000:] + sm.stderr[-3000:]
+    blocks = {b["output"]: b for b in dry_run_blocks(sm.stdout)}
+    report = blocks["elastic-patch"]["shell"]
+    assert "inputs/sdcrack merge " + " ".join(
+        f"shards/elastic-patch/{t}/l{lv}/elastic-patch" for t in ("dolfinx", "freefem")
+        for lv in (0, 1)) + " --out ." in report
+    assert "--precomputed" not in report and "--baseline" not in report
+    assert "--baseline" in blocks["closed-exact"]["shell"]
+    assert "--precomputed" in blocks["closed-exact"]["shell"]
+    shell = blocks["shards/elastic-patch/dolfinx/l1"]["shell"]
+    assert shell.endswith("inputs/sdcrack reference inputs/elastic-patch.toml --tool dolfinx "
+                          "--level 1 --out shards/elastic-patch/dolfinx/l1")
+
+
+def test_elastic_scene_campaign_equals_one_process(scenes, tmp_path):
+    """The campaign of an elastic scene (the patch test at levels 0-1, both references) writes by
+    its reference jobs and merge the folder one `sdcrack run` writes (the summary's numbers, each
+    reference's cases, u and crack files and fields, the mesh export) with the same verdict, and
+    the index's row says what converged and the references' errors at the finest level. Levels
+    0-1 are too few for a rate: INCONCLUSIVE, exit 0."""
+    _, expectations = scenes
+    scene = elastic_scene(tmp_path)
+    out = tmp_path / "out"
+    r = campaign(scene, "--out", out, "--cores", 2, "--expectations", expectations, check=0)
+    single = tmp_path / "single"
+    s = subprocess.run([str(EXE), "run", str(out / "inputs" / "elastic-patch.toml"), "--out",
+                        str(single), "--quiet"], capture_output=True, text=True)
+    assert s.returncode == 0, s.stderr
+    s = subprocess.run(["/usr/bin/python3", str(ROOT / "compare" / "sdcompare"),
+                        str(single / "elastic-patch"), "--quiet", "--expectations",
+                        str(expectations)], capture_output=True, text=True)
+    assert s.returncode == 3, s.stdout + s.stderr
+    a, b = out / "elastic-patch", single / "elastic-patch"
+    sa, sb = (json.loads((x / "summary.json").read_text()) for x in (a, b))
+    for key in ("provenance", "wall_s", "fields_write_s", "shards"):
+        sa.pop(key, None), sb.pop(key, None)
+    assert sa == sb and sa["problem"] == "elasticity" and sa["cases"] == []
+    for tool in ("dolfinx", "freefem"):
+        ra, rb = (json.loads((x / tool / "summary.json").read_text()) for x in (a, b))
+        assert strip_timings(ra["cases"]) == strip_timings(rb["cases"]), tool
+        texts = sorted(p.name for p in (b / tool).glob("*.txt"))
+        assert texts == sorted(p.name for p in (a / tool).glob("*.txt")) and len(texts) == 4
+        for name in texts:
+            assert (a / tool / name).read_bytes() == (b / tool / name).read_bytes(), (tool, name)
+        assert_same_fields(a / tool / "fields.h5", b / tool / "fields.h5")
+    ma = sorted(p.relative_to(a) for p in (a / "mesh").rglob("*") if p.is_file())
+    assert ma and ma == sorted(p.relative_to(b) for p in (b / "mesh").rglob("*") if p.is_file())
+    for rel in ma:
+        assert (a / rel).read_bytes() == (b / rel).read_bytes(), rel
+    va, vb = (json.loads((x / "report" / "report.json").read_text()) for x in (a, b))
+    assert va["verdict"] == vb["verdict"] == "INCONCLUSIVE"
+    assert not (out / "checks").exists() and not (out / "shards" / "elastic-patch" / "solver").exists()
+    assert sorted(p.name for p in (out / "logs" / "elastic-patch").glob("*.log")) == \
+        ["dolfinx-l0.log", "dolfinx-l1.log", "freefem-l0.log", "freefem-l1.log", "report.log"]
+    (row,) = json.loads((out / "index.json").read_text())["scenes"]
+    assert row["verdict"] == "INCONCLUSIVE" and row["problem"] == "elasticity"
+    assert row["converged"].startswith("0 of 18 series converge, 18 cannot be judged yet")
+    assert row["glance"]["line"].startswith(
+        "no solver yet (issue 46); the references' errors at level 1 (the larger of theirs): "
+        "u 0, ∇u 0, σ 0, opening 0, slip 0, K_I tip 1 0, K_I tip 2 0")
+    assert row["glance"]["level"] == 1 and row["glance"]["against"] == "exact"
+    assert f"  INCONCLUSIVE  {a / 'report' / 'index.html'}" in r.stdout
+
+
+def elastic_report(verdict="PASS", reasons=(), rate=1.0, error=1e-3):
+    """A hand-made elastic report.json (compare/sdcompare_lib/elastic_report.py's keys)."""
+    def s(tool, q, status="converges", r=rate, e=error):
+        return {"tool": tool, "quantity": q, "levels": [0, 1, 2], "errors": [4 * e, 2 * e, e],
+                "rates": [1.0, r], "status": status}
+    series = [s(t, q) for t in ("dolfinx", "freefem") for q in ("u_l2", "u_h1", "K_I tip 1")]
+    if verdict == "FAIL":
+        series[1] = s("dolfinx", "u_h1", "does not converge", 0.2)
+    return {"verdict": verdict, "reasons": list(reasons), "problem": "elasticity",
+            "scene": "e", "series": series,
+            "agreement": [{"level": L, "u_rel": 10.0 ** (-15 + L)} for L in (0, 1, 2)]}
+
+
+def test_index_rows_of_elastic_reports(tmp_path):
+    """The index's row of an elastic report (no solver, no glance): what converged per series, the
+    references' largest errors at the finest level and their agreement; a FAIL report's row is FAIL
+    with its first reason; without exact fields, the SIFs, fronts and distances; against a baseline
+    the series are matched per reference and quantity."""
+    import ci_script
+
+    ci = ci_script.load("tools/campaign_index.py")
+    ok = elastic_report()
+    assert ci.elastic_converged_line(ok) == ("6 of 6 series converge (dolfinx, freefem); last "
+                                             "rates u 1.00, ∇u 1.00, K_I tip 1 1.00")
+    g = ci.elastic_glance(ok)
+    assert g == {"line": "no solver yet (issue 46); the references' errors at level 2 (the larger "
+                         "of theirs): u 0.001, ∇u 0.001, K_I tip 1 0.001; they agree in u to 1e-13 "
+                         "(relative)", "level": 2, "against": "exact", "delta": None}
+    bad = elastic_report("FAIL", ["series: dolfinx u_h1: rate 0.20 < 0.4"])
+    assert ci.elastic_converged_line(bad) == ("5 of 6 series converge (freefem); last rates u "
+                                              "1.00, ∇u 1.00, K_I tip 1 1.00")
+    for name, report in (("ok", ok), ("bad", bad)):
+        (tmp_path / name / "report").mkdir(parents=True)
+        (tmp_path / name / "report" / "report.json").write_text(json.dumps(report))
+    rows, verdict, _ = ci.build(str(tmp_path), ["ok", "bad"])
+    assert verdict == "FAIL"
+    assert [(r["name"], r["verdict"], r["first_problem"]) for r in rows] == [
+        ("ok", "PASS", None), ("bad", "FAIL", "series: dolfinx u_h1: rate 0.20 < 0.4")]
+    assert rows[0]["glance"] == g and rows[0]["problem"] == "elasticity"
+    html = (tmp_path / "index.html").read_text()
+    assert "no solver yet (issue 46)" in html and "5 of 6 series converge" in html
+    # without exact fields: the first reference's SIFs and fronts, the distances to its finest level
+    plain = {"problem": "elasticity", "verdict": "PASS", "series": [],
+             "sifs": [{"tool": t, "level": L, "K": [[0.5 + L, -0.25]]}
+                      for t in ("freefem", "dolfinx") for L in (0, 1)],
+             "fronts": [{"tool": "dolfinx", "level": 1, "fronts": [[-0.125, 0.0]]}],
+             "field_distances": [{"tool": "dolfinx", "level": 0, "finest": 1, "u_l2": 0.03,
+                                  "u_h1": 0.4}],
+             "agreement": []}
+    assert ci.elastic_converged_line(plain).startswith("no series")
+    assert ci.elastic_glance(plain) == {
+        "line": "no solver yet (issue 46); the references at level 1: dolfinx's (K_I, K_II) per "
+                "tip (1.5, -0.25), contact fronts at x = -0.12, level 0 to it: u 0.03 (L²), "
+                "0.4 (H¹)", "level": 1, "against": "reference finest level", "delta": None}
+    # a baseline: the series matched per reference and quantity
+    moved = elastic_report(error=2e-3)
+    changes = ci.report_changes(ok, moved)
+    assert {c["series"] for c in changes} == {f"{t} {q}" for t in ("dolfinx", "freefem")
+                                              for q in ("u_l2", "u_h1", "K_I tip 1")}
+    assert ci.report_changes(ok, elastic_report()) == []

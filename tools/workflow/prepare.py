@@ -123,20 +123,46 @@ def solver_shard(name, level, u, m, pm, ps):
     return f"shards/{name}/solver/l{level}-{u}-{m}-{pm}{P_SPACE_SUFFIX[ps]}"
 
 
+# The problem kind `sdcrack check --json` names for an elastic scene (no "problem" key: the scalar
+# problem, as in summary.json).
+ELASTIC = "elasticity"
+
+
+def is_elastic(plan):
+    """Whether the plan is an elastic scene's (docs/elasticity.md): no solver case until its
+    solver exists (issue 46), reference jobs only, and a report of its own kind."""
+    return plan.get("problem") == ELASTIC
+
+
+def reference_shards(plan, level=None):
+    """The reference jobs' shard folders shards/<name>/<tool>/l<L>, tools × levels (only `level`'s
+    when given: a check job's shards)."""
+    return [f"shards/{plan['name']}/{tool}/l{lv}" for tool in plan["references"]
+            for lv in plan["levels"] if level is None or int(lv) == int(level)]
+
+
+def check_files(plan):
+    """The check jobs' files: one per level and u space, one per level for the references; none
+    for a scene without [exact] (its report recomputes no error) and none for an elastic scene
+    (`sdcompare --precompute` reads the scalar problem's shards only: the elastic report computes
+    its errors itself)."""
+    name = plan["name"]
+    if not plan.get("exact", True) or is_elastic(plan):
+        return []
+    checks = [f"checks/{name}/solver-l{lv}-{u}.json" for lv in plan["levels"]
+              for u in plan["u_spaces"]]
+    if plan["references"]:
+        checks += [f"checks/{name}/references-l{lv}.json" for lv in plan["levels"]]
+    return checks
+
+
 def jobs_of(plan):
-    """(solver shard folders, reference shard folders, the check files (one per level and u
-    space, one per level for the references; none for a scene without [exact], whose report
-    recomputes no error), report folder) of one scene's plan."""
+    """(solver shard folders, reference shard folders, check files (check_files), report folder)
+    of one scene's plan. An elastic scene's plan has no solver case (its scalar axes are empty):
+    no solver job."""
     name = plan["name"]
     solver = [solver_shard(name, *unit) for unit in solver_units(plan)]
-    refs = [f"shards/{name}/{tool}/l{lv}" for tool in plan["references"] for lv in plan["levels"]]
-    checks = []
-    if plan.get("exact", True):
-        checks = [f"checks/{name}/solver-l{lv}-{u}.json" for lv in plan["levels"]
-                  for u in plan["u_spaces"]]
-        if plan["references"]:
-            checks += [f"checks/{name}/references-l{lv}.json" for lv in plan["levels"]]
-    return solver, refs, checks, name
+    return solver, reference_shards(plan), check_files(plan), name
 
 
 # The memory a job asks for (`mem_mb`, Slurm's --mem under --profile slurm; docs/workflow.md,
@@ -154,13 +180,24 @@ SNAKEMAKE_JOB_MB = 300
 PYTHON_JOB_MB = {"dolfinx": 208, "freefem": 96, "check": 128, "report": 256}
 
 
+# An elastic scene's report (compare/sdcompare_lib/elastic_report.py) holds both references'
+# vector fields and their stresses on the finest mesh, with the exact fields at its quadrature
+# points: its part that grows with the mesh is counted twice. Measured (Snakemake, 2026-11-28,
+# elastic-williams-open at levels 0-5, 8 x 8 cells: level 5 is 131 072 triangles): the report's
+# peak 890 MB, above the scalar report's estimate of 256 + 600 = 856 MB; 256 + 2 x 600 = 1456 MB.
+# Its reference jobs keep the scalar references' estimates: dolfinx 208 + 600 = 808 MB for a
+# peak of 607 MB at level 5, FreeFEM 96 + 600 = 696 MB for 340 MB (docs/workflow.md, "Memory").
+ELASTIC_REPORT_MESH_FACTOR = 2
+
+
 def own_memory_mb(job, plan, level=None):
     """A job's own memory estimate, MB: `job` is solver, dolfinx, freefem, check or report (no
     level: the scene's finest); `plan` the scene's `sdcrack check --json`."""
     if job == "solver":
         return int(plan["memory_mb"][str(level)])
     if job == "report":
-        return PYTHON_JOB_MB[job] + max(int(v) for v in plan["mesh_memory_mb"].values())
+        factor = ELASTIC_REPORT_MESH_FACTOR if is_elastic(plan) else 1
+        return PYTHON_JOB_MB[job] + factor * max(int(v) for v in plan["mesh_memory_mb"].values())
     return PYTHON_JOB_MB[job] + int(plan["mesh_memory_mb"][str(level)])
 
 
@@ -267,7 +304,9 @@ def prepare(args):
     if args.baseline:
         for name in plans:
             b = os.path.join(os.path.abspath(args.baseline), name)
-            if os.path.isdir(b):
+            # an elastic report has no baseline section (sdcompare refuses --baseline for it);
+            # the index still lists what changed since (tools/campaign_index.py --baseline)
+            if os.path.isdir(b) and not is_elastic(plans[name]):
                 baselines[name] = b
     expectations = os.path.abspath(args.expectations or
                                    os.path.join(args.repo, "scenes", "expectations.toml"))

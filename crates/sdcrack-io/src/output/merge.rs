@@ -211,14 +211,28 @@ pub fn merge_shards(
     let solver: Vec<SolverShard> = (shards.iter())
         .filter_map(|s| Some((s.path.as_path(), s.summary.as_ref()?)))
         .collect();
-    let Some(&(_, lead)) = solver.first() else {
+    // an elastic scene has no solver case until its solver exists (issue 46): its campaign runs
+    // reference jobs only, and the merge makes the summary a run of the scene writes
+    let lead = solver.first().map(|&(_, s)| s);
+    if lead.is_none() && scene.elasticity().is_none() {
         return Err(MergeError::Incomplete(
             "no solver shard (summary.json) among the shards".into(),
         ));
-    };
-    check_one_build(&solver)?;
+    }
+    if lead.is_some() {
+        check_one_build(&solver)?;
+    }
     let cases = ordered_cases(&solver, plan)?;
     let references = ordered_references(&shards, &scene, &plan.levels)?;
+    // where level 0 came from: a solver shard's summary says; without one (an elastic scene),
+    // the scene's mesh source as `sdcrack run` makes it (gmsh's level 0, kept as coarse.msh)
+    let coarse_mesh = match lead {
+        Some(_) => None,
+        None => (scene.mesh_source())
+            .map_err(|e| shard_err(&first.path, format!("its scene's level-0 mesh: {e}")))?
+            .provenance
+            .clone(),
+    };
 
     let results = ResultsDir::create(out, &scene.name)?;
     let dir = results.work_path().to_path_buf();
@@ -235,17 +249,30 @@ pub fn merge_shards(
 
     let not_converged = cases.iter().filter(|c| !c.converged).count();
     let n_cases = cases.len();
-    let summary = Summary {
-        provenance: provenance(&lead.provenance.scene_origin),
-        plan: plan.clone(),
-        all_converged: not_converged == 0,
-        wall_s: solver.iter().map(|(_, s)| s.wall_s).sum(),
-        fields_write_s,
-        recomputation_file: recomputation_file(&scene),
-        cases,
-        shards: Some(shard_records(&solver)),
-        ..lead.clone()
+    let summary = match lead {
+        Some(lead) => Summary {
+            provenance: provenance(&lead.provenance.scene_origin),
+            plan: plan.clone(),
+            all_converged: not_converged == 0,
+            wall_s: solver.iter().map(|(_, s)| s.wall_s).sum(),
+            fields_write_s,
+            recomputation_file: recomputation_file(&scene),
+            cases,
+            shards: Some(shard_records(&solver)),
+            ..lead.clone()
+        },
+        None => {
+            // the scene copy the merge read stands for the scene file a run is given
+            let origin = first.path.join(SCENE_COPY).display().to_string();
+            reference_only_summary(&scene, coarse_mesh, fields_write_s, provenance(&origin))
+        }
     };
+    if let Some(msh) = (summary.coarse_mesh.as_ref()).filter(|_| lead.is_none()) {
+        if let Some(text) = &msh.msh_text {
+            let path = dir.join("coarse.msh");
+            atomic_write(&path, text.as_bytes()).map_err(|e| write_err(&path, e))?;
+        }
+    }
     let summary_path = dir.join("summary.json");
     (summary.write(&summary_path)).map_err(|e| write_err(&summary_path, e))?;
 
@@ -266,6 +293,26 @@ pub fn merge_shards(
         not_converged,
         references_not_converged,
     })
+}
+
+/// The summary of a merge without solver shards (an elastic scene's reference shards): the one
+/// `sdcrack run` of the scene writes ([`Summary::of_run`] of the scene's plan, no case, level 0
+/// from `coarse_mesh`), with the merge's `provenance` and no solver shard under `shards`.
+fn reference_only_summary(
+    scene: &Scene,
+    coarse_mesh: Option<sdcrack_core::mesh::CoarseProvenance>,
+    fields_write_s: f64,
+    provenance: Provenance,
+) -> Summary {
+    let plan = sdcrack_core::study::CasePlan::new(scene, &Default::default());
+    let study = sdcrack_core::study::StudyResult {
+        coarse_mesh,
+        ..Default::default()
+    };
+    Summary {
+        shards: Some(Vec::new()),
+        ..Summary::of_run(scene, &plan, &study, 0.0, fields_write_s, &provenance)
+    }
 }
 
 /// A solver shard: its folder and its summary.
