@@ -17,6 +17,8 @@ on ∂Ω, carries no singularity of its own):
 * u_h1     = ‖∇u_h − ∇u‖_{L²(Ω \\ Γc)}         (the broken H¹ seminorm; ∇u_h constant per triangle)
 * sigma_l2 = ‖σ(u_h) − σ‖_{L²(Ω)}, Frobenius (σ_xx² + σ_yy² + 2σ_xy²), σ(u_h) = λ* tr ε(u_h) I +
   2μ ε(u_h) per triangle
+* u_a      = ‖u_h − u‖_a = a(w, w)^{1/2}, w = u_h − u: the energy norm (∫ σ(w):ε(w))^{1/2} with the
+  material's λ*, μ, of the same gradients (the interpolation yardstick's norm, elastic.py)
 
 On the crack (Gauss–Legendre per segment, graded s = σ² from a tip end as exact._crack_error):
 
@@ -126,15 +128,28 @@ def p1_field(level, u):
     return u[level.triangles], p1_gradients(level.points, level.triangles, u)
 
 
+def vertex_interpolant(level, ex):
+    """(N, 2) I_h u, the exact u at every vertex of the level's cracked mesh, a crack row's + and −
+    copies each on its own face (ElasticExact.on_face: the face rule the references' g and the
+    exact-data check take): one value per vertex, a field of the references' P1 space."""
+    xy = np.asarray(level.points, dtype=float)[:, :2]
+    v = ex.evaluate(xy[:, 0], xy[:, 1], ("ux", "uy"))
+    u = np.column_stack([np.asarray(v["ux"], dtype=float) * np.ones(len(xy)),
+                         np.asarray(v["uy"], dtype=float) * np.ones(len(xy))])
+    rows = level.pair_rows()
+    for side, col in ((1.0, 0), (-1.0, 1)):
+        k = level.pairs[rows, col]
+        f = ex.on_face(xy[k], level.normals[rows], side, ("ux", "uy"))
+        u[k, 0], u[k, 1] = f["ux"], f["uy"]
+    if not np.all(np.isfinite(u)):
+        raise scalar_exact.ExactError("the exact u is not finite at a vertex of the cracked mesh")
+    return u
+
+
 def interpolant_field(level, ex):
-    """(corners, gradients) of the P1 interpolant of the exact u on the level's cracked mesh, each
-    corner taken from its own triangle's side of the crack (exact.INSIDE)."""
-    X = level.points[level.triangles]
-    inner = X + scalar_exact.INSIDE * (X.mean(axis=1, keepdims=True) - X)
-    v = ex.evaluate(inner[..., 0], inner[..., 1], ("ux", "uy"))
-    corners = np.stack([v["ux"], v["uy"]], axis=-1)
-    _, _, G, _ = scalar_exact._geometry(level.points, level.triangles)
-    return corners, np.einsum("tvi,tvd->tid", corners, G)
+    """(corners, gradients) of the P1 interpolant I_h u of the exact u on the level's cracked mesh
+    (vertex_interpolant)."""
+    return p1_field(level, vertex_interpolant(level, ex))
 
 
 def domain_errors(level, ex, fields, material, quad=None):
@@ -146,7 +161,8 @@ def domain_errors(level, ex, fields, material, quad=None):
     P, t = level.points, level.triangles
     _, area, _, _ = scalar_exact._geometry(P, t)
     sig = {k: hooke(g, material) for k, (_, g) in fields.items()}
-    acc = {k: [0.0, 0.0, 0.0] for k in fields}
+    lam, mu = material["lambda_in_plane"], material["mu"]
+    acc = {k: [0.0, 0.0, 0.0, 0.0] for k in fields}
     for ids, L, W in scalar_exact._point_batches(P, t, tip_points(level), quad):
         xy = L @ P[t][ids]
         v = ex.evaluate(xy[..., 0], xy[..., 1], DOMAIN_NAMES)
@@ -162,8 +178,17 @@ def domain_errors(level, ex, fields, material, quad=None):
             acc[k][0] += float(np.sum(w * (dx * dx + dy * dy)))
             acc[k][1] += float(np.sum(w * sum(e * e for e in d)))
             acc[k][2] += float(np.sum(w * (a * a + b * b + 2 * c * c)))
-    return {k: {"u_l2": math.sqrt(su), "u_h1": math.sqrt(sg), "sigma_l2": math.sqrt(ss)}
-            for k, (su, sg, ss) in acc.items()}
+            acc[k][3] += float(np.sum(w * energy_density(d, lam, mu)))
+    return {k: {"u_l2": math.sqrt(su), "u_h1": math.sqrt(sg), "sigma_l2": math.sqrt(ss),
+                "u_a": math.sqrt(sa)} for k, (su, sg, ss, sa) in acc.items()}
+
+
+def energy_density(d, lam, mu):
+    """σ(w):ε(w) = λ* (tr ε)² + 2μ ε:ε of the gradient d = (∂₁w₁, ∂₂w₁, ∂₁w₂, ∂₂w₂) of w
+    (ε:ε = ε₁₁² + ε₂₂² + 2ε₁₂², ε₁₂ = (∂₂w₁ + ∂₁w₂)/2): the integrand of the energy norm
+    ‖w‖_a² = a(w, w) of the problem's material."""
+    exx, eyy, exy = d[0], d[3], 0.5 * (d[1] + d[2])
+    return lam * (exx + eyy) ** 2 + 2 * mu * (exx * exx + eyy * eyy + 2 * exy * exy)
 
 
 def crack_line_rule(level, quad=None):
