@@ -8,6 +8,7 @@ levels 0–2) PASS with their measured ratios.
 
 Run: /usr/bin/python3 -m pytest compare/tests/test_elastic_yardstick.py -q
 """
+import math
 import os
 import re
 
@@ -21,6 +22,11 @@ from sdcompare_lib import elastic, elastic_exact, elastic_read
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 LABEL = elastic.YARDSTICK_LABEL
 LEVELS = (0, 1, 2, 3)
+# ‖u − u_h‖_a / ‖u − I_h u‖_a of both references on elastic-williams-open (8 × 8 cells), levels 0–2,
+# measured 2026-11-28 (dolfinx and FreeFEM alike to 1e-15): Galerkin below the interpolant, as Falk's
+# lemma says. Held to 1e-6: the norms' quadrature is converged to 1e-12 (doubled rule) and the
+# references agree to 1e-12, so a change there is a change of the discrete problem or of the norm.
+RATIOS = {0: 0.8294810986, 1: 0.8189966607, 2: 0.8142958646}
 
 
 def analyse(folder):
@@ -29,6 +35,26 @@ def analyse(folder):
 
 def row(a):
     return next((what, p, na) for lab, what, p, na in a["checks"] if lab == LABEL)
+
+
+def test_the_energy_norm_of_a_linear_field_is_exact(tmp_path):
+    """u_h − u = G x on (−1, 1)² (area 4): ‖u_h − u‖_a² = 4 σ(G):ε(G) = 4 (λ* (tr G)² + 2μ ε:ε),
+    ε = sym G; a shear G probes the 2 ε₁₂² term, a dilatation λ*."""
+    lin = {"ux": "0.3*x - 0.2*y", "uy": "0.5*x + 0.7*y"}
+    grad = np.array([[0.3, -0.2], [0.5, 0.7]])
+    s = elastic_exact.hooke(grad, es.PROBLEM)
+    lin.update(sxx=repr(s[0]), syy=repr(s[1]), sxy=repr(s[2]))
+    es.write_export(tmp_path, "lin", dict(lin, sif=None), (1,), 4)
+    level = elastic_read.read_level(str(tmp_path), 1)
+    ex = elastic_exact.ElasticExact(lin, es.PROBLEM)
+    P = level.points
+    lam, mu = es.PROBLEM["lambda_in_plane"], es.PROBLEM["mu"]
+    for G in (np.array([[0.0, 0.03], [0.01, 0.0]]), np.array([[0.02, 0.0], [0.0, -0.05]])):
+        f = {"g": elastic_exact.p1_field(level, P @ (grad + G).T)}
+        e = elastic_exact.domain_errors(level, ex, f, es.PROBLEM)["g"]["u_a"]
+        eps = 0.5 * (G + G.T)
+        want = math.sqrt(4 * (lam * np.trace(G) ** 2 + 2 * mu * np.sum(eps * eps)))
+        assert abs(e - want) < 1e-14 * (1 + want), (G, e, want)
 
 
 def test_the_interpolant_has_ratio_one(tmp_path):
@@ -71,12 +97,16 @@ def test_an_error_one_and_a_half_times_the_interpolants_fails_with_the_rates_kep
 
 
 def test_a_small_slip_above_the_tolerance_fails(tmp_path):
-    """The tolerance is tight: a bump of 1e-3 √h (energy ratio ~1 + 1e-6 … 1e-5) is caught at some
-    level, one of 1e-5 √h (ratio − 1 ~ 1e-10) is not."""
-    a = analyse(es.write_results(tmp_path / "w", levels=(0, 1), perturb=tip_bump(1e-2)))
-    assert row(a)[1], [r["ratio"] for r in a["yardstick"]]
-    a = analyse(es.write_results(tmp_path / "v", levels=(0, 1), perturb=tip_bump(1e-5)))
-    assert row(a)[1] == [], [r["ratio"] for r in a["yardstick"]]
+    """The tolerance is tight. A bump of height k √h changes ‖e‖_a² by −2k a(e, δ) + k² ‖δ‖_a²:
+    to first order in k the ratio moves by ~0.33 k (downwards for k > 0: I_h u is not the
+    energy's minimiser), so k = −1e-5 puts it at 1 + 3e-6, above 1 + YARDSTICK_TOL (FAIL), and
+    k = −1e-7 at 1 + 3e-8, below (PASS)."""
+    a = analyse(es.write_results(tmp_path / "w", levels=(0, 1), perturb=tip_bump(-1e-5)))
+    assert all(2e-6 < r["ratio"] - 1 < 5e-6 for r in a["yardstick"]), a["yardstick"]
+    assert len(row(a)[1]) == 4
+    a = analyse(es.write_results(tmp_path / "v", levels=(0, 1), perturb=tip_bump(-1e-7)))
+    assert all(0 < r["ratio"] - 1 < 1e-7 for r in a["yardstick"]), a["yardstick"]
+    assert row(a)[1] == []
 
 
 def test_without_exact_it_does_not_apply(tmp_path):
@@ -99,10 +129,10 @@ def test_an_exact_contact_front_makes_it_not_apply(tmp_path, monkeypatch):
         self.closed = level.nodes()[self.rows][:, 0] < -0.5
 
     monkeypatch.setattr(elastic_exact.CrackExact, "__init__", with_front)
-    a = analyse(es.write_results(tmp_path / "w", levels=(0, 1)))
+    a = analyse(es.write_results(tmp_path / "w", levels=(1, 2)))
     _, probs, na = row(a)
     assert probs == [] and a["yardstick"] == []
-    assert na.startswith("the exact contact status changes inside the crack at level(s) 0, 1")
+    assert na.startswith("the exact contact status changes inside the crack at level(s) 1, 2")
 
 
 def test_the_patch_tests_exact_fields_pass_on_the_roundoff_floor(tmp_path):
