@@ -165,3 +165,19 @@ def test_the_references_on_williams_open_pass_with_their_measured_ratios(william
     assert sorted(got) == [(t, L) for t in ("dolfinx", "freefem") for L in (0, 1, 2)]
     for (tool, L), q in got.items():
         assert q == pytest.approx(RATIOS[L], abs=1e-6), (tool, L, q)
+
+
+def test_an_error_where_the_interpolant_is_exact_fails(tmp_path):
+    """The patch test's I_h u = u: any energy error above the round-off floor is a FAIL, with no
+    ratio to print (FreeFEM's u_x scaled by 1 + 1e-6 at level 3: a uniform strain 1e-6 ∂₁u_x,
+    ~1e-7 in energy against a floor of 1e-10 ‖u‖_a)."""
+    from test_elastic import patch_folder
+
+    def damage(tool, level, u, crack):
+        if tool == "freefem" and level == 3:
+            u[:, 0] *= 1 + 1e-6
+
+    a = analyse(patch_folder(tmp_path, damage=damage))
+    _, probs, _ = row(a)
+    assert probs and probs[0].startswith("freefem level 3: ‖u − u_h‖_a = ")
+    assert probs[0].endswith("(ratio — : I_h u exact)")
