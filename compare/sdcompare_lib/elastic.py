@@ -31,6 +31,10 @@ Checks (each a list of problems; a check that does not apply says why):
   (closed: exact opening ≤ elastic_exact.CONTACT_TOL × max |u| on Γc) lies within FRONT_REACH rows
   of a row where the exact status changes along the crack (the discrete front may sit one cell
   off); anywhere else it is a problem. The mismatch length Σ m_j over the differing rows is printed.
+* interpolation yardstick (with [exact]): each reference's energy error ‖u − u_h‖_a at every level
+  is at most (1 + YARDSTICK_TOL) × the interpolant's ‖u − I_h u‖_a (Falk's lemma, constant 1:
+  interpolation_yardstick); it does not apply where the exact contact status changes inside the
+  crack. A bug that multiplies the error by a constant keeps every rate; this bound does not.
 * SIF: every reference's K_I, K_II computed at its finest level (sif.sif_p1 on a fixed ring;
   their errors against the scene's exact SIFs are series above, their differences part of the
   agreement).
