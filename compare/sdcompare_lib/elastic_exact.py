@@ -185,7 +185,6 @@ def domain_errors(level, ex, fields, material, quad=None):
     P, t = level.points, level.triangles
     _, area, _, _ = scalar_exact._geometry(P, t)
     sig = {k: hooke(g, material) for k, (_, g) in fields.items()}
-    lam, mu = material["lambda_in_plane"], material["mu"]
     acc = {k: [0.0, 0.0, 0.0, 0.0] for k in fields}
     for ids, L, W in scalar_exact._point_batches(P, t, tip_points(level), quad):
         xy = L @ P[t][ids]
@@ -202,17 +201,18 @@ def domain_errors(level, ex, fields, material, quad=None):
             acc[k][0] += float(np.sum(w * (dx * dx + dy * dy)))
             acc[k][1] += float(np.sum(w * sum(e * e for e in d)))
             acc[k][2] += float(np.sum(w * (a * a + b * b + 2 * c * c)))
-            acc[k][3] += float(np.sum(w * energy_density(d, lam, mu)))
+            acc[k][3] += float(np.sum(w * energy_density(d, material)))
     return {k: {"u_l2": math.sqrt(su), "u_h1": math.sqrt(sg), "sigma_l2": math.sqrt(ss),
                 "u_a": math.sqrt(sa)} for k, (su, sg, ss, sa) in acc.items()}
 
 
-def energy_density(d, lam, mu):
+def energy_density(d, material):
     """σ(w):ε(w) = λ* (tr ε)² + 2μ ε:ε of the gradient d = (∂₁w₁, ∂₂w₁, ∂₁w₂, ∂₂w₂) of w
     (ε:ε = ε₁₁² + ε₂₂² + 2ε₁₂², ε₁₂ = (∂₂w₁ + ∂₁w₂)/2): the integrand of the energy norm
-    ‖w‖_a² = a(w, w) of the problem's material."""
+    ‖w‖_a² = a(w, w) of the problem's material (λ* = lambda_in_plane, μ = mu)."""
     exx, eyy, exy = d[0], d[3], 0.5 * (d[1] + d[2])
-    return lam * (exx + eyy) ** 2 + 2 * mu * (exx * exx + eyy * eyy + 2 * exy * exy)
+    return (material["lambda_in_plane"] * (exx + eyy) ** 2
+            + 2 * material["mu"] * (exx * exx + eyy * eyy + 2 * exy * exy))
 
 
 def crack_line_rule(level, quad=None):
