@@ -89,7 +89,8 @@ def series_section(a):
                        (["level", "‖u − I_h u‖", "‖∇(u − I_h u)‖", "‖σ(I_h u) − σ‖"], interp,
                         "the P1 interpolant of the exact u"),
                        (["reference", "level", "‖u − u_h‖_a", "‖u − I_h u‖_a", "ratio"], yard,
-                        "the interpolation yardstick: energy norms (∫ σ(w):ε(w))^{1/2} (Falk's lemma: "
+                        "the interpolation yardstick: energy norms (∫ σ(w):ε(w))^{1/2} "
+                        "(Falk's lemma: "
                         "ratio ≤ 1 where it applies; — where I_h u is exact)")],
             "paras_after": [f"Expected orders: {r}." for r in reasons]}
 

@@ -23,8 +23,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 LABEL = elastic.YARDSTICK_LABEL
 LEVELS = (0, 1, 2, 3)
 # ‖u − u_h‖_a / ‖u − I_h u‖_a of both references on elastic-williams-open (8 × 8 cells), levels 0–2,
-# measured 2026-11-28 (dolfinx and FreeFEM alike to 1e-15): Galerkin below the interpolant, as Falk's
-# lemma says. Held to 1e-6: the norms' quadrature is converged to 1e-12 (doubled rule) and the
+# measured 2026-11-28 (dolfinx and FreeFEM alike to 1e-15): Galerkin below the interpolant, as
+# Falk's lemma says. Held to 1e-6: the norms' quadrature is converged to 1e-12 (doubled rule) and the
 # references agree to 1e-12, so a change there is a change of the discrete problem or of the norm.
 RATIOS = {0: 0.8294810986, 1: 0.8189966607, 2: 0.8142958646}
 
