@@ -24,8 +24,8 @@ LABEL = elastic.YARDSTICK_LABEL
 LEVELS = (0, 1, 2, 3)
 # ‖u − u_h‖_a / ‖u − I_h u‖_a of both references on elastic-williams-open (8 × 8 cells), levels 0–2,
 # measured 2026-11-28 (dolfinx and FreeFEM alike to 1e-15): Galerkin below the interpolant, as
-# Falk's lemma says. Held to 1e-6: the norms' quadrature is converged to 1e-12 (doubled rule) and the
-# references agree to 1e-12, so a change there is a change of the discrete problem or of the norm.
+# Falk's lemma says. Held to 1e-6: the norms' quadrature is converged to 1e-12 (doubled rule) and
+# the references agree to 1e-12, so a change there is a change of the discrete problem or the norm.
 RATIOS = {0: 0.8294810986, 1: 0.8189966607, 2: 0.8142958646}
 
 
@@ -71,8 +71,9 @@ def tip_bump(k):
     """perturb(xy): k √h (1, 1) at the tip vertex (the origin, one copy), 0 elsewhere, h the mesh's
     smallest distance to the tip. A hat function of height k √h has energy ~k² h (scale-invariant
     shape), the interpolation error's own order (s = ½): every rate stays, the energy error is a
-    fixed multiple of the interpolant's (k = 0.6: ×1.48, 1.46, 1.45, 1.45 at levels 0–3). The tip row's opening
-    and slip are 0 whatever u is there, and the SIF ring lies outside the tip's triangles."""
+    fixed multiple of the interpolant's (k = 0.6: ×1.48, 1.46, 1.45, 1.45 at levels 0–3). The tip
+    row's opening and slip are 0 whatever u is there, and the SIF ring lies outside the tip's
+    triangles."""
     def perturb(xy):
         r = np.hypot(xy[:, 0], xy[:, 1])
         tip = r == 0.0
@@ -98,9 +99,9 @@ def test_an_error_one_and_a_half_times_the_interpolants_fails_with_the_rates_kep
 
 def test_a_small_slip_above_the_tolerance_fails(tmp_path):
     """The tolerance is tight. A bump of height k √h changes ‖e‖_a² by −2k a(e, δ) + k² ‖δ‖_a²:
-    to first order in k the ratio moves by ~0.33 k (downwards for k > 0: I_h u is not the
-    energy's minimiser), so k = −1e-5 puts it at 1 + 3.3e-6 … 3.5e-6, above 1 + YARDSTICK_TOL (FAIL), and
-    k = −1e-7 at 1 + 3.5e-8, below (PASS)."""
+    to first order in k the ratio moves by ~0.35 k (downwards for k > 0: I_h u is not the
+    energy's minimiser), so k = −1e-5 puts it at 1 + 3.3e-6 … 3.5e-6, above 1 + YARDSTICK_TOL
+    (FAIL), and k = −1e-7 at 1 + 3.5e-8, below (PASS)."""
     a = analyse(es.write_results(tmp_path / "w", levels=(0, 1), perturb=tip_bump(-1e-5)))
     assert all(2e-6 < r["ratio"] - 1 < 5e-6 for r in a["yardstick"]), a["yardstick"]
     assert len(row(a)[1]) == 4
