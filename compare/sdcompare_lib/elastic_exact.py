@@ -17,6 +17,8 @@ on ∂Ω, carries no singularity of its own):
 * u_h1     = ‖∇u_h − ∇u‖_{L²(Ω \\ Γc)}         (the broken H¹ seminorm; ∇u_h constant per triangle)
 * sigma_l2 = ‖σ(u_h) − σ‖_{L²(Ω)}, Frobenius (σ_xx² + σ_yy² + 2σ_xy²), σ(u_h) = λ* tr ε(u_h) I +
   2μ ε(u_h) per triangle
+* u_a      = ‖u_h − u‖_a = a(w, w)^{1/2}, w = u_h − u: the energy norm (∫ σ(w):ε(w))^{1/2} with the
+  material's λ*, μ, of the same gradients (the interpolation yardstick's norm, elastic.py)
 
 On the crack (Gauss–Legendre per segment, graded s = σ² from a tip end as exact._crack_error):
 
@@ -126,15 +128,52 @@ def p1_field(level, u):
     return u[level.triangles], p1_gradients(level.points, level.triangles, u)
 
 
+def vertex_interpolant(level, ex):
+    """(N, 2) I_h u, the exact u at every vertex of the level's cracked mesh, a crack row's + and −
+    copies each on its own face (ElasticExact.on_face: the face rule the references' g and the
+    exact-data check take): one value per vertex, a field of the references' P1 space."""
+    xy = np.asarray(level.points, dtype=float)[:, :2]
+    v = ex.evaluate(xy[:, 0], xy[:, 1], ("ux", "uy"))
+    u = np.column_stack([np.asarray(v["ux"], dtype=float) * np.ones(len(xy)),
+                         np.asarray(v["uy"], dtype=float) * np.ones(len(xy))])
+    rows = level.pair_rows()
+    for side, col in ((1.0, 0), (-1.0, 1)):
+        k = level.pairs[rows, col]
+        f = ex.on_face(xy[k], level.normals[rows], side, ("ux", "uy"))
+        u[k, 0], u[k, 1] = f["ux"], f["uy"]
+    bad = np.flatnonzero(~np.all(np.isfinite(u), axis=1))
+    if len(bad):
+        u[bad] = tip_limit(level, ex, bad)
+    if not np.all(np.isfinite(u)):
+        raise scalar_exact.ExactError("the exact u is not finite at a vertex of the cracked mesh")
+    return u
+
+
+# A closed form may not evaluate at a crack tip itself (Westergaard's √(z² − a²) in a denominator:
+# 0 · ∞) though u is continuous there. Its value is the limit along a ray into one of the vertex's
+# triangles: u(r) = u₀ + c √r + O(r) on the ray, so u₀ = 2 u(δ) − u(4δ) + O(δ), δ = TIP_LIMIT_STEP
+# × the distance to the centroid (an error ~1e-8 of the field's size, below the yardstick's
+# tolerance; the √r difference keeps ~8 digits).
+TIP_LIMIT_STEP = 1e-8
+
+
+def tip_limit(level, ex, vertices):
+    """(K, 2) the limit of the exact u at the vertices along a ray towards the centroid of a
+    triangle of each (TIP_LIMIT_STEP)."""
+    P, t = np.asarray(level.points, dtype=float)[:, :2], level.triangles
+    tri = np.array([np.flatnonzero((t == v).any(axis=1))[0] for v in vertices])
+    X = P[vertices]
+    d = P[t[tri]].mean(axis=1) - X
+    near, far = X + TIP_LIMIT_STEP * d, X + 4 * TIP_LIMIT_STEP * d
+    a = ex.evaluate(near[:, 0], near[:, 1], ("ux", "uy"))
+    b = ex.evaluate(far[:, 0], far[:, 1], ("ux", "uy"))
+    return np.column_stack([2 * a["ux"] - b["ux"], 2 * a["uy"] - b["uy"]])
+
+
 def interpolant_field(level, ex):
-    """(corners, gradients) of the P1 interpolant of the exact u on the level's cracked mesh, each
-    corner taken from its own triangle's side of the crack (exact.INSIDE)."""
-    X = level.points[level.triangles]
-    inner = X + scalar_exact.INSIDE * (X.mean(axis=1, keepdims=True) - X)
-    v = ex.evaluate(inner[..., 0], inner[..., 1], ("ux", "uy"))
-    corners = np.stack([v["ux"], v["uy"]], axis=-1)
-    _, _, G, _ = scalar_exact._geometry(level.points, level.triangles)
-    return corners, np.einsum("tvi,tvd->tid", corners, G)
+    """(corners, gradients) of the P1 interpolant I_h u of the exact u on the level's cracked mesh
+    (vertex_interpolant)."""
+    return p1_field(level, vertex_interpolant(level, ex))
 
 
 def domain_errors(level, ex, fields, material, quad=None):
@@ -146,7 +185,7 @@ def domain_errors(level, ex, fields, material, quad=None):
     P, t = level.points, level.triangles
     _, area, _, _ = scalar_exact._geometry(P, t)
     sig = {k: hooke(g, material) for k, (_, g) in fields.items()}
-    acc = {k: [0.0, 0.0, 0.0] for k in fields}
+    acc = {k: [0.0, 0.0, 0.0, 0.0] for k in fields}
     for ids, L, W in scalar_exact._point_batches(P, t, tip_points(level), quad):
         xy = L @ P[t][ids]
         v = ex.evaluate(xy[..., 0], xy[..., 1], DOMAIN_NAMES)
@@ -162,8 +201,18 @@ def domain_errors(level, ex, fields, material, quad=None):
             acc[k][0] += float(np.sum(w * (dx * dx + dy * dy)))
             acc[k][1] += float(np.sum(w * sum(e * e for e in d)))
             acc[k][2] += float(np.sum(w * (a * a + b * b + 2 * c * c)))
-    return {k: {"u_l2": math.sqrt(su), "u_h1": math.sqrt(sg), "sigma_l2": math.sqrt(ss)}
-            for k, (su, sg, ss) in acc.items()}
+            acc[k][3] += float(np.sum(w * energy_density(d, material)))
+    return {k: {"u_l2": math.sqrt(su), "u_h1": math.sqrt(sg), "sigma_l2": math.sqrt(ss),
+                "u_a": math.sqrt(sa)} for k, (su, sg, ss, sa) in acc.items()}
+
+
+def energy_density(d, material):
+    """σ(w):ε(w) = λ* (tr ε)² + 2μ ε:ε of the gradient d = (∂₁w₁, ∂₂w₁, ∂₁w₂, ∂₂w₂) of w
+    (ε:ε = ε₁₁² + ε₂₂² + 2ε₁₂², ε₁₂ = (∂₂w₁ + ∂₁w₂)/2): the integrand of the energy norm
+    ‖w‖_a² = a(w, w) of the problem's material (λ* = lambda_in_plane, μ = mu)."""
+    exx, eyy, exy = d[0], d[3], 0.5 * (d[1] + d[2])
+    return (material["lambda_in_plane"] * (exx + eyy) ** 2
+            + 2 * material["mu"] * (exx * exx + eyy * eyy + 2 * exy * exy))
 
 
 def crack_line_rule(level, quad=None):

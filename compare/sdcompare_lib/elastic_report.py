@@ -73,6 +73,9 @@ def series_section(a):
                 for (t, L), e in sorted(a["errors"].items())]
     interp = [[L, fmt(v["u_l2"]), fmt(v["u_h1"]), fmt(v["sigma_l2"])]
               for L, v in sorted(a["interpolation"].items())]
+    yard = [[TOOL_NAME.get(r["tool"], r["tool"]), r["level"], fmt(r["error"]),
+             fmt(r["interpolation"]), "—" if r["ratio"] is None else f"{r['ratio']:.6f}"]
+            for r in a.get("yardstick", [])]
     reasons = sorted({f"{s['quantity']}: {s['order_reason']}" for s in a["series"]})
     return {"title": "Errors against the exact fields",
             "paras": [f"Recomputed here from each reference's u and crack file (compare/sdcompare_lib/"
@@ -84,7 +87,11 @@ def series_section(a):
                         "the nodal pressure λ_j/m_j against the exact pressure (measured, not "
                         "judged)"),
                        (["level", "‖u − I_h u‖", "‖∇(u − I_h u)‖", "‖σ(I_h u) − σ‖"], interp,
-                        "the P1 interpolant of the exact u")],
+                        "the P1 interpolant of the exact u"),
+                       (["reference", "level", "‖u − u_h‖_a", "‖u − I_h u‖_a", "ratio"], yard,
+                        "the interpolation yardstick: energy norms (∫ σ(w):ε(w))^{1/2} "
+                        "(Falk's lemma: "
+                        "ratio ≤ 1 where it applies; — where I_h u is exact)")],
             "paras_after": [f"Expected orders: {r}." for r in reasons]}
 
 
@@ -226,6 +233,7 @@ def report_json(res, a, prov, images):
                    for s in a["series"]],
         "errors": [dict(tool=t, level=L, **e) for (t, L), e in sorted(a["errors"].items())],
         "interpolation": {str(L): v for L, v in sorted(a.get("interpolation", {}).items())},
+        "yardstick": a.get("yardstick", []),
         "agreement": a["agreement"], "active_set": a["active_set"], "fronts": a["fronts"],
         "sifs": [{"tool": t, "level": L, "K": ks} for (t, L), ks in sorted(a["sif_by_key"].items())],
         "sif_missing": a["sif_missing"], "finest": a["finest"],
