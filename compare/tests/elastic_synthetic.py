@@ -59,7 +59,7 @@ def interpolant(exact, level):
     for side, col in ((1.0, 0), (-1.0, 1)):
         v = level.pairs[rows, col]
         for k, nu in zip(v, level.normals[rows]):
-            x[k], y[k] = (float(c) for c in sdexpr.on_face(x[k:k + 1], y[k:k + 1], nu, side))
+            x[k], y[k] = (float(c[0]) for c in sdexpr.on_face(x[k:k + 1], y[k:k + 1], nu, side))
     return np.column_stack([sdexpr.to_numpy(exact[c])(x, y) for c in ("ux", "uy")])
 
 

@@ -97,7 +97,7 @@ def test_norms_of_a_linear_field_are_exact(tmp_path):
            "sxy": "0"}
     grad = np.array([[0.3, -0.2], [0.5, 0.7]])
     s = elastic_exact.hooke(grad, es.PROBLEM)
-    lin.update(sxx=repr(s[0]), syy=repr(s[1]), sxy=repr(s[2]))
+    lin.update(sxx=repr(float(s[0])), syy=repr(float(s[1])), sxy=repr(float(s[2])))
     es.write_export(tmp_path, "lin", dict(lin, sif=None), (1,), 4)
     level = elastic_read.read_level(str(tmp_path), 1)
     ex = elastic_exact.ElasticExact(lin, es.PROBLEM)
@@ -327,7 +327,7 @@ def patch_folder(tmp_path, damage=None):
     0.4, needs the tip's triangles within 0.2)."""
     grad = np.array([[0.1, 0.0], [0.0, -0.3]])
     s = elastic_exact.hooke(grad, es.PROBLEM)
-    ex = {"ux": "0.1*x", "uy": "-0.3*y", "sxx": repr(s[0]), "syy": repr(s[1]), "sxy": repr(s[2]),
+    ex = {"ux": "0.1*x", "uy": "-0.3*y", "sxx": repr(float(s[0])), "syy": repr(float(s[1])), "sxy": repr(float(s[2])),
           "opening": None, "slip": None, "pressure": None, "sif": [[0.0, 0.0], [0.0, 0.0]]}
     return es.write_results(tmp_path / "patch", exact=ex, levels=(2, 3, 4), name="patch",
                             crack=((-0.5, 0.0), (0.5, 0.0)), damage=damage,
