@@ -42,6 +42,17 @@ def williams(k1, k2):
             "slip": None, "pressure": None, "sif": [[k1, k2]]}
 
 
+def linear_exact(grad, shift=(0.0, 0.0)):
+    """The exact table of the linear field u = grad·(x, y) + shift (no SIFs): its stress is the
+    constant Hooke's law of grad, written as Python floats."""
+    from sdcompare_lib import elastic_exact
+
+    (a, b), (c, d) = grad
+    s = elastic_exact.hooke(np.asarray(grad, dtype=float), PROBLEM)
+    return {"ux": f"{a!r}*x + {b!r}*y + {shift[0]!r}", "uy": f"{c!r}*x + {d!r}*y + {shift[1]!r}",
+            "sxx": repr(float(s[0])), "syy": repr(float(s[1])), "sxy": repr(float(s[2])), "sif": None}
+
+
 def write_export(out, name, exact, levels, n0, crack=((-1.0, 0.0), (0.0, 0.0))):
     """The mesh export (references/tests/elastic_export.py, the dolfinx helper's stand-in for
     `sdcrack mesh`) of the scene with this exact table, g = the exact u on ∂Ω."""
