@@ -620,6 +620,16 @@ def test_jobs_of_a_plan_with_and_without_p_spaces():
     assert prepare.jobs_of(alone)[0] == [s + "-ptangential" for s in before if "-broken-" in s]
 
 
+def snakemake_dry_run(out):
+    """Snakemake's own dry run of the campaign prepared in `out` (its config.dry-run.json), with
+    the shell commands."""
+    return subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "tools" / "workflow" / "Snakefile"),
+                           "--directory", str(out), "--configfile",
+                           str(out / "inputs" / "config.dry-run.json"), "--cores", "1",
+                           "--dry-run", "--printshellcmds"], env=run_env(), capture_output=True,
+                          text=True)
+
+
 def dry_run_blocks(text):
     """The jobs of `snakemake --dry-run --printshellcmds`: dicts of rule, input (a list), output,
     shell."""
@@ -660,11 +670,7 @@ def test_dry_run_of_both_p_spaces(scenes, tmp_path):
             f"reference {REFERENCE_JOBS}, check {checks}, report 1)") in r.stdout
     assert sum(o.endswith("-ptangential") for _, o in jobs) == len(LEVELS) * MULTIPLIERS * P_MASSES
     # the jobs' commands: Snakemake's own dry run of the same config, with the shell commands
-    sm = subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "tools" / "workflow" / "Snakefile"),
-                         "--directory", str(out), "--configfile",
-                         str(out / "inputs" / "config.dry-run.json"), "--cores", "1",
-                         "--dry-run", "--printshellcmds"], env=run_env(), capture_output=True,
-                        text=True)
+    sm = snakemake_dry_run(out)
     assert sm.returncode == 0, sm.stdout[-3000:] + sm.stderr[-3000:]
     blocks = dry_run_blocks(sm.stdout)
     solver = {b["output"]: b["shell"] for b in blocks if b["rule"] == "solver"}
@@ -832,11 +838,7 @@ def test_dry_run_of_an_elastic_scene(scenes, tmp_path):
     assert config["plans"]["elastic-patch"]["problem"] == "elasticity"
     assert "problem" not in config["plans"]["closed-exact"]
     assert config["baselines"] == {"closed-exact": str(baseline / "closed-exact")}
-    sm = subprocess.run([str(SNAKEMAKE), "--snakefile", str(ROOT / "tools" / "workflow" / "Snakefile"),
-                         "--directory", str(out), "--configfile",
-                         str(out / "inputs" / "config.dry-run.json"), "--cores", "1",
-                         "--dry-run", "--printshellcmds"], env=run_env(), capture_output=True,
-                        text=True)
+    sm = snakemake_dry_run(out)
     assert sm.returncode == 0, sm.stdout[-3000:] + sm.stderr[-3000:]
     blocks = {b["output"]: b for b in dry_run_blocks(sm.stdout)}
     report = blocks["elastic-patch"]["shell"]
