@@ -18,6 +18,7 @@
 // Element loops index local matrices by (i, j, k) exactly as the formulas do.
 #![allow(clippy::needless_range_loop)]
 
+pub mod afw;
 pub mod assembly;
 pub mod case;
 pub mod contact;

@@ -1,0 +1,91 @@
+//! The smooth-domain method for elasticity (issue 46; docs/design.md, "The smooth-domain method
+//! for elasticity"): the dual mixed (Hellinger–Reissner) form with weak symmetry on the whole,
+//! uncracked Ω, discretised by the lowest-order Arnold–Falk–Winther element — each row of σ in
+//! BDM1, u ∈ P0², the rotation γ ∈ P0 — with the crack Σ entering only through its edges'
+//! normal-trace degrees of freedom:
+//!
+//! ```text
+//! (Aσ, τ) + (u, div τ) + (γ, as τ) + ⟨λ_ν, τ_νν⟩_Σ = ⟨g, τn⟩_{Γ_D}   ∀τ, τn = 0 on Γ_N, τ_tν = 0 on Σ
+//! (div σ, v) − δ (u, v)                          = −(f, v)            ∀v ∈ P0²
+//! (as σ, η)                                      = 0                  ∀η ∈ P0
+//! σn = t on Γ_N,  σ_tν = 0,  σ_νν ≤ 0,  λ_ν = [u·ν] ≥ 0,  λ_ν σ_νν = 0  on Σ,
+//! ```
+//!
+//! A the compliance (Aσ = (σ − λ*/(2(μ + λ*)) tr σ I)/(2μ), applied to the whole, unsymmetric σ),
+//! as τ = τ_xy − τ_yx, γ = ½(∂_y u_x − ∂_x u_y) (so ∇u = Aσ + γ J, J = [[0, 1], [−1, 0]]),
+//! ν the crack's normal into its + face, t = ν turned by −90° (the crack's direction),
+//! σ_νν = ν·σν, σ_tν = t·σν, [v] = v⁺ − v⁻.
+//!
+//! This module owns the types the stages exchange; each stage is a submodule with one job:
+//! element (the BDM1 basis and the local matrices), dofs (edges, orientations, the σ, u, γ
+//! numbering, the crack and traction dofs), assembly (K(δ) and the load), contact (the crack
+//! LCP on the normal dofs through [`crate::contact::Lcp`], δ, the KKT residuals), recovery (the
+//! opening and slip from the moments, σ symmetrised, u*), norms (errors against
+//! [`crate::elasticity::ElasticExact`]).
+
+use crate::contact::{KktResiduals, LcpStatus};
+
+/// One crack edge of a solution: an edge of the uncracked mesh between two consecutive nodes
+/// of a crack chain ([`crate::mesh::CrackChain`]), with the values of its two normal-trace
+/// dofs at its ends. Crack by crack, each chain's segments in order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CrackEdge {
+    /// Index of the crack (`Mesh::cracks`).
+    pub crack: usize,
+    /// Index of the segment along that chain.
+    pub segment: usize,
+    /// The edge's two mesh vertices, in chain order.
+    pub nodes: [usize; 2],
+    /// ν, the unit normal into the + face (the chain's normal of this segment).
+    pub normal: [f64; 2],
+    /// σ_νν of σ_h at the two ends (its normal trace is linear along the edge).
+    pub normal_stress: [f64; 2],
+    /// The opening moments μ_ν = ∫_e λ_ν φ_a at the two ends a (φ_a the edge's own P1 hat,
+    /// 1 at end a, 0 at the other): the residuals of the equations of the normal dofs.
+    pub opening_moment: [f64; 2],
+    /// The slip moments ∫_e [u·t] φ_a: the residuals of the equations of the tangential dofs
+    /// (eliminated by σ_tν = 0).
+    pub slip_moment: [f64; 2],
+    /// Whether each end's contact constraint σ_νν ≤ 0 is active (closed: σ_νν free, λ_ν = 0 …
+    /// with the multiplier space's meaning; see [`AfwSolution::multiplier`]).
+    pub closed: [bool; 2],
+}
+
+/// The discrete solution of one case (one mesh, multiplier space and δ), in the form every later
+/// stage (recovery, norms, output) reads: piecewise polynomials per triangle, independent of
+/// the BDM1 basis that produced them.
+#[derive(Clone, Debug)]
+pub struct AfwSolution {
+    /// σ_h per triangle: its (linear) values at the triangle's three vertices, in the order of
+    /// `Mesh::triangles[t]`, each as [σ_xx, σ_xy, σ_yx, σ_yy] (raw: only weakly symmetric).
+    pub stress: Vec<[[f64; 4]; 3]>,
+    /// u_h per triangle (P0): [u_x, u_y].
+    pub displacement: Vec<[f64; 2]>,
+    /// γ_h per triangle (P0).
+    pub rotation: Vec<f64>,
+    /// The crack edges with their traces and moments.
+    pub crack: Vec<CrackEdge>,
+    /// The multiplier space of the contact constraints (docs/design.md: which ones the elastic
+    /// method has and what each constrains).
+    pub multiplier: crate::problem::MultiplierSpace,
+    /// The regularisation δ of the solve.
+    pub delta: f64,
+    /// The contact solve: linear solves of the LCP, and how it ended.
+    pub lcp_iterations: usize,
+    /// How the LCP solve ended.
+    pub lcp_status: LcpStatus,
+    /// The relative KKT residuals (the scalar solver's definitions, on the AFW system).
+    pub kkt: KktResiduals,
+    /// Unknowns of the system: σ dofs (without the essential ones), 2 u and 1 γ per triangle.
+    pub unknowns: usize,
+}
+
+// The stages' entry points (each documented in its submodule):
+// - `afw::solve(mesh: &Mesh, domain: &Domain, data: &ElasticData, multiplier: MultiplierSpace,
+//   delta: f64) -> Result<AfwSolution, AfwError>`: dofs, assembly, the contact LCP, the KKT
+//   residuals (submodules element, dofs, assembly, contact);
+// - `afw::recover(mesh: &Mesh, material: &Material, solution: &AfwSolution) -> Recovered`: the
+//   opening, slip and pressure per crack edge end (P1-disc along Σ), σ symmetrised, u* (submodule
+//   recovery);
+// - `afw::errors(mesh, material, solution, &recovered, exact: &ElasticExact) -> AfwErrors`:
+//   the error norms (submodule norms).
