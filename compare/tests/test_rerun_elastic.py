@@ -133,6 +133,13 @@ def test_a_rerun_of_one_level_without_a_report_compares_what_it_has(original, re
     assert "report/report.json: not in the rerun, not compared\n" in out
 
 
+def test_a_rerun_of_one_reference_says_which_it_has_not(original, rerun, capsys):
+    shutil.rmtree(rerun / "freefem")
+    code, out, _ = compare(original, rerun, "--references", capsys=capsys)
+    assert code == 0 and out.startswith("identical: 4 datasets, "), out
+    assert out.endswith("\nreferences: dolfinx rerun, compared; freefem not in the rerun\n")
+
+
 def forge_dataset(folder):
     with h5py.File(folder / "freefem" / "fields.h5", "r+") as f:
         u = f["level1/u"][()]
@@ -267,6 +274,10 @@ def bad(rerun, kind):
         s = json.loads((rerun / "summary.json").read_text())
         del s["problem"]
         (rerun / "summary.json").write_text(json.dumps(s))
+    elif kind == "elastic solver cases":
+        s = json.loads((rerun / "summary.json").read_text())
+        s["cases"] = [{"level": 0}]
+        (rerun / "summary.json").write_text(json.dumps(s))
     elif kind == "malformed report.json":
         (rerun / "report" / "report.json").write_text("{")
 
@@ -276,6 +287,8 @@ def bad(rerun, kind):
     ("a file the original has not", "no dolfinx/u_level7.txt, which the rerun has"),
     ("a level the original has not", "level 7 is not in "),
     ("a scalar rerun", "a scalar results folder, the other one is elastic"),
+    ("elastic solver cases", "summary.json: elastic solver cases, which sdcompare-rerun does "
+     "not compare yet"),
     ("malformed report.json", "malformed JSON"),
 ])
 def test_bad_input_is_one_line_and_exit_2(original, rerun, capsys, kind, says):
