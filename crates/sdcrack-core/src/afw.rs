@@ -30,7 +30,7 @@ pub mod element;
 #[cfg(test)]
 mod tests;
 
-pub use contact::solve;
+pub use contact::{solve, AfwCase};
 
 use crate::contact::{KktResiduals, LcpStatus};
 use crate::problem::MultiplierSpace;

@@ -60,37 +60,103 @@ pub fn solve(
     multiplier: MultiplierSpace,
     delta: f64,
 ) -> Result<AfwSolution, AfwError> {
-    if !(delta >= 0.0 && delta.is_finite()) {
-        return Err(AfwError::InvalidDelta(delta));
+    AfwCase::new(mesh, domain, data)?.solve(multiplier, delta)
+}
+
+/// One mesh's system, assembled and analysed once, for any number of solves (δ, multiplier
+/// spaces): the dofs, K(0) and ∂K/∂δ, the load (made compatible on an all-traction boundary)
+/// and the symbolic analysis of K's pattern, which every δ shares (pinning changes values, not
+/// the pattern).
+pub struct AfwCase<'a> {
+    mesh: &'a Mesh,
+    data: &'a ElasticData,
+    dofs: AfwDofs,
+    system: AfwSystem,
+    /// The load b (compatible with the rigid motions on an all-traction boundary).
+    rhs: Vec<f64>,
+    all_traction: bool,
+    symbolic: SymbolicLdlt,
+    /// The constrained unknowns: the normal dofs of the crack edges, each edge's end slots 0, 1.
+    rows: Vec<usize>,
+}
+
+impl<'a> AfwCase<'a> {
+    /// The system of `data` on `mesh` (of `domain`).
+    ///
+    /// # Errors
+    /// Bad data ([`AfwDofs::new`], [`assemble`]), a failed symbolic analysis.
+    pub fn new(
+        mesh: &'a Mesh,
+        domain: &Domain,
+        data: &'a ElasticData,
+    ) -> Result<AfwCase<'a>, AfwError> {
+        let dofs = AfwDofs::new(mesh, domain, data)?;
+        let system = assemble(mesh, &dofs, data)?;
+        let all_traction =
+            !(dofs.edges.iter()).any(|e| matches!(e.kind, EdgeKind::Dirichlet { .. }));
+        let mut rhs = system.rhs.clone();
+        if all_traction {
+            make_compatible(mesh, &dofs, &mut rhs);
+        }
+        let symbolic = SymbolicLdlt::analyze(&system.base)?;
+        let rows = (dofs.crack_edges.iter())
+            .flat_map(|&e| [0, 1].map(|s| dofs.normal_unknown(e, s)))
+            .collect();
+        Ok(AfwCase {
+            mesh,
+            data,
+            dofs,
+            system,
+            rhs,
+            all_traction,
+            symbolic,
+            rows,
+        })
     }
-    if multiplier != MultiplierSpace::M1Star {
-        return Err(AfwError::UnsupportedMultiplier(multiplier));
+
+    /// Number of unknowns.
+    pub fn unknowns(&self) -> usize {
+        self.dofs.n()
     }
-    let dofs = AfwDofs::new(mesh, domain, data)?;
-    let system = assemble(mesh, &dofs, data)?;
-    let all_traction = !(dofs.edges.iter()).any(|e| matches!(e.kind, EdgeKind::Dirichlet { .. }));
-    let pinned: Vec<usize> = if all_traction && delta == 0.0 {
-        (0..3).map(|k| dofs.element_unknown(0, k)).collect()
-    } else {
-        Vec::new()
-    };
-    let matrix = system.matrix(delta);
-    let mut b = system.rhs.clone();
-    if all_traction {
-        make_compatible(mesh, &dofs, &mut b);
+
+    /// The solution with the constraint of `multiplier` and the regularisation `delta` (see
+    /// [`solve`]).
+    ///
+    /// # Errors
+    /// An invalid δ, a multiplier space the method does not have, a factorisation failure,
+    /// fixed points that leave a rigid mode free.
+    pub fn solve(&self, multiplier: MultiplierSpace, delta: f64) -> Result<AfwSolution, AfwError> {
+        if !(delta >= 0.0 && delta.is_finite()) {
+            return Err(AfwError::InvalidDelta(delta));
+        }
+        if multiplier != MultiplierSpace::M1Star {
+            return Err(AfwError::UnsupportedMultiplier(multiplier));
+        }
+        let dofs = &self.dofs;
+        let pinned: Vec<usize> = if self.all_traction && delta == 0.0 {
+            (0..3).map(|k| dofs.element_unknown(0, k)).collect()
+        } else {
+            Vec::new()
+        };
+        let matrix = self.system.matrix(delta);
+        let (factored, rhs) = pin(&matrix, &self.rhs, &pinned);
+        let ldlt = Ldlt::factor(&self.symbolic, &factored, &self.system.signs)?;
+        let (sol, mut x) = contact_solve(&ldlt, &factored, &rhs, &self.rows, dofs.n_sigma);
+        if !pinned.is_empty() {
+            add_rigid_motion(self.mesh, dofs, self.data, &mut x)?;
+        }
+        let kkt = kkt_residuals(&self.rhs, &matrix, &self.rows, &sol, &x, dofs.n_sigma);
+        Ok(solution(
+            self.mesh,
+            dofs,
+            &self.system,
+            self.data,
+            sol,
+            x,
+            kkt,
+            delta,
+        ))
     }
-    let (factored, rhs) = pin(&matrix, &b, &pinned);
-    let symbolic = SymbolicLdlt::analyze(&factored)?;
-    let ldlt = Ldlt::factor(&symbolic, &factored, &system.signs)?;
-    let rows: Vec<usize> = (dofs.crack_edges.iter())
-        .flat_map(|&e| [0, 1].map(|s| dofs.normal_unknown(e, s)))
-        .collect();
-    let (sol, mut x) = contact_solve(&ldlt, &factored, &rhs, &rows, dofs.n_sigma);
-    if !pinned.is_empty() {
-        add_rigid_motion(mesh, &dofs, data, &mut x)?;
-    }
-    let kkt = kkt_residuals(&b, &matrix, &rows, &sol, &x, dofs.n_sigma);
-    Ok(solution(mesh, &dofs, &system, data, sol, x, kkt, delta))
 }
 
 /// Makes b orthogonal to the kernel of K(0) on an all-traction boundary, the rigid motions
