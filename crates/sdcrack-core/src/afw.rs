@@ -33,7 +33,6 @@ mod tests;
 pub use contact::{solve, AfwCase};
 
 use crate::contact::{KktResiduals, LcpStatus};
-use crate::problem::MultiplierSpace;
 
 /// Why an elastic case cannot be solved.
 #[derive(Debug, thiserror::Error)]
@@ -41,12 +40,6 @@ pub enum AfwError {
     /// δ must be a finite number ≥ 0.
     #[error("delta = {0} is not a finite number >= 0")]
     InvalidDelta(f64),
-    /// The elastic method has only the pointwise constraint so far.
-    #[error(
-        "the multiplier space {0} is not available for elasticity (the smooth-domain method for \
-         elasticity has m1star, the pointwise sigma_nn <= 0 at the crack edges' ends)"
-    )]
-    UnsupportedMultiplier(MultiplierSpace),
     /// A boundary edge with neither a traction nor Dirichlet data.
     #[error("boundary part {part} has no traction and the scene has no g (data.gx, data.gy)")]
     NoDirichletData {
@@ -112,8 +105,9 @@ pub struct CrackEdge {
     pub slip_moment: [f64; 2],
     /// Whether each end is in contact (closed): outside the LCP's active set, its multiplier
     /// (opening moment) 0 and σ_νν free (≤ 0). An open end is in the active set: σ_νν = 0 and
-    /// its opening moment ≥ 0. (For [`crate::problem::MultiplierSpace::M1Star`], the only space
-    /// so far, each end is one constraint; see [`AfwSolution::multiplier`].)
+    /// its opening moment ≥ 0. An end is closed when the constraint it belongs to is: its own
+    /// (M1Star), its edge's mean (M0), its node's hat-weighted one (M1); see
+    /// [`AfwSolution::multiplier`].
     pub closed: [bool; 2],
 }
 
