@@ -569,3 +569,79 @@ fn m0_and_m1_open_williams_crack_and_close_the_patch() {
         }
     }
 }
+
+/// The partly open crack (scenes/elastic-partly-open.toml, Griffith's crack under bending) on
+/// uniform levels 2 and 3: one contact front — every closed end left of every open end, up to
+/// the two ends at one node — near the P1 references' x ≈ −0.13 (their fronts −0.156 … −0.0625
+/// at 32–64 cells; the SDM's within [−0.25, 0]).
+#[test]
+fn partly_open_crack_has_one_contact_front_near_the_references() {
+    let m = et::steel_like();
+    let u = ["-0.195*x^2 - 0.455*y^2", "0.91*x*y"];
+    let mut data = et::Elastic::new(m, u, ["0", "0"]).g_is_u().data;
+    data.exact = None;
+    let domain = et::square();
+    let cracks = [et::crack([-0.5, 0.0], [0.5, 0.0])];
+    for mesh in &meshes(&domain, &cracks, [8, 8], false, 3)[2..] {
+        let sol = solved(mesh, &domain, &data);
+        let ends = sol
+            .crack
+            .iter()
+            .flat_map(|e| [0, 1].map(|k| (mesh.vertices[e.nodes[k]][0], e.closed[k])));
+        let (closed, open): (Vec<_>, Vec<_>) = ends.partition(|e| e.1);
+        let last_closed = closed.iter().map(|e| e.0).fold(f64::MIN, f64::max);
+        let first_open = open.iter().map(|e| e.0).fold(f64::MAX, f64::min);
+        eprintln!(
+            "level {}: closed up to {last_closed}, open from {first_open}",
+            mesh.level
+        );
+        assert!(last_closed <= first_open, "{last_closed} {first_open}");
+        assert!((-0.25..=0.0).contains(&last_closed), "front {last_closed}");
+    }
+}
+
+/// δ → 0 on Williams' open crack (uniform, level 1, one case for every δ): the solution of δ
+/// tends to δ = 0's linearly, ‖σ_h(δ) − σ_h(0)‖_∞ falling tenfold per tenfold δ, and the
+/// opening moments with it.
+#[test]
+fn the_delta_solutions_tend_to_delta_zero_linearly() {
+    let m = et::steel_like();
+    let u = et::williams(1.0, 0.5, &m);
+    let data = et::Elastic::new(m, [&u[0], &u[1]], ["0", "0"])
+        .g_is_u()
+        .data;
+    let domain = et::square();
+    let mesh = &meshes(
+        &domain,
+        &[et::crack([-1.0, 0.0], [0.0, 0.0])],
+        [8, 8],
+        false,
+        1,
+    )[1];
+    let case = super::AfwCase::new(mesh, &domain, &data).unwrap();
+    let zero = case.solve(MultiplierSpace::M1Star, 0.0).unwrap();
+    let distance = |s: &AfwSolution| {
+        let stress = (s.stress.iter().flatten().flatten())
+            .zip(zero.stress.iter().flatten().flatten())
+            .map(|(a, b)| a - b);
+        let moments = (s.crack.iter().flat_map(|e| e.opening_moment))
+            .zip(zero.crack.iter().flat_map(|e| e.opening_moment))
+            .map(|(a, b)| a - b);
+        [max_abs(stress), max_abs(moments)]
+    };
+    let d: Vec<[f64; 2]> = [1e-2, 1e-3, 1e-4]
+        .iter()
+        .map(|&delta| {
+            let s = case.solve(MultiplierSpace::M1Star, delta).unwrap();
+            assert!(s.kkt.max() < 1e-10, "δ = {delta}: {:?}", s.kkt);
+            distance(&s)
+        })
+        .collect();
+    eprintln!("δ-distances {d:?}");
+    for w in d.windows(2) {
+        for k in 0..2 {
+            let ratio = w[0][k] / w[1][k];
+            assert!((8.0..12.5).contains(&ratio), "{d:?}");
+        }
+    }
+}
