@@ -256,10 +256,11 @@ pub fn sigma_coefficients(dofs: &AfwDofs, x: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The residuals b_i − (K x)_i of the σ dofs `rows` (any σ dofs, free or essential) of the
-/// full system, computed element by element from the triangles in `triangles_of` each row's
-/// edge: `sigma` the coefficients of every σ dof, `x` the unknowns, `delta`-independent (σ rows
-/// carry no δ).
+/// The residuals b_i − (K x)_i of the σ dofs `rows` (any σ dofs, free or essential) in the
+/// system of every σ dof, computed element by element on the triangles at the rows' edges:
+/// `sigma` the coefficients of every σ dof, `x` the unknowns (σ rows carry no δ). For a crack
+/// edge's normal dof this is the opening moment, for its eliminated tangential dof the slip
+/// moment.
 pub fn sigma_residuals(
     mesh: &Mesh,
     dofs: &AfwDofs,
