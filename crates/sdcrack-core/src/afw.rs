@@ -23,7 +23,64 @@
 //! opening and slip from the moments, σ symmetrised, u*), norms (errors against
 //! [`crate::elasticity::ElasticExact`]).
 
+pub mod assembly;
+pub mod contact;
+pub mod dofs;
+pub mod element;
+#[cfg(test)]
+mod tests;
+
+pub use contact::{solve, AfwCase};
+
 use crate::contact::{KktResiduals, LcpStatus};
+
+/// Why an elastic case cannot be solved.
+#[derive(Debug, thiserror::Error)]
+pub enum AfwError {
+    /// δ must be a finite number ≥ 0.
+    #[error("delta = {0} is not a finite number >= 0")]
+    InvalidDelta(f64),
+    /// A boundary edge with neither a traction nor Dirichlet data.
+    #[error("boundary part {part} has no traction and the scene has no g (data.gx, data.gy)")]
+    NoDirichletData {
+        /// The part.
+        part: String,
+    },
+    /// A crack edge on ∂Ω.
+    #[error("a crack edge at ({}, {}) lies on the boundary", at[0], at[1])]
+    CrackOnBoundary {
+        /// One end of the edge.
+        at: [f64; 2],
+    },
+    /// Data not finite at a quadrature point.
+    #[error(
+        "data {name} = \"{source_text}\" evaluates to {value} at the quadrature point ({x}, {y})"
+    )]
+    NonFinite {
+        /// `f`, `g` or `traction`.
+        name: &'static str,
+        /// The expression.
+        source_text: String,
+        /// The value.
+        value: f64,
+        /// x of the point.
+        x: f64,
+        /// y of the point.
+        y: f64,
+    },
+    /// A fixed point that is not a mesh vertex.
+    #[error("fixed point ({}, {}) is not a mesh vertex", point[0], point[1])]
+    FixedPointNotAVertex {
+        /// The point.
+        point: [f64; 2],
+    },
+    /// An all-traction boundary whose fixed points leave a rigid motion free.
+    #[error("the boundary is all traction and the fixed points leave a rigid motion free")]
+    RigidModesLeft,
+    /// The sparse solver failed.
+    #[error(transparent)]
+    Linalg(#[from] crate::linalg::LinalgError),
+}
 
 /// One crack edge of a solution: an edge of the uncracked mesh between two consecutive nodes
 /// of a crack chain ([`crate::mesh::CrackChain`]), with the values of its two normal-trace
@@ -46,8 +103,11 @@ pub struct CrackEdge {
     /// The slip moments ∫_e [u·t] φ_a: the residuals of the equations of the tangential dofs
     /// (eliminated by σ_tν = 0).
     pub slip_moment: [f64; 2],
-    /// Whether each end's contact constraint σ_νν ≤ 0 is active (closed: σ_νν free, λ_ν = 0 …
-    /// with the multiplier space's meaning; see [`AfwSolution::multiplier`]).
+    /// Whether each end is in contact (closed): outside the LCP's active set, its multiplier
+    /// (opening moment) 0 and σ_νν free (≤ 0). An open end is in the active set: σ_νν = 0 and
+    /// its opening moment ≥ 0. An end is closed when the constraint it belongs to is: its own
+    /// (M1Star), its edge's mean (M0), its node's hat-weighted one (M1); see
+    /// [`AfwSolution::multiplier`].
     pub closed: [bool; 2],
 }
 
@@ -70,11 +130,13 @@ pub struct AfwSolution {
     pub multiplier: crate::problem::MultiplierSpace,
     /// The regularisation δ of the solve.
     pub delta: f64,
-    /// The contact solve: linear solves of the LCP, and how it ended.
+    /// The contact solve: the LCP's active-set iterations, summed over its refinement rounds.
     pub lcp_iterations: usize,
     /// How the LCP solve ended.
     pub lcp_status: LcpStatus,
-    /// The relative KKT residuals (the scalar solver's definitions, on the AFW system).
+    /// The relative KKT residuals: the constraint part as the scalar solver defines it, the
+    /// equations per block of rows (σ, u, γ) rather than per row (docs/design.md, "What the
+    /// solution reports").
     pub kkt: KktResiduals,
     /// Unknowns of the system: σ dofs (without the essential ones), 2 u and 1 γ per triangle.
     pub unknowns: usize,
@@ -83,7 +145,9 @@ pub struct AfwSolution {
 // The stages' entry points (each documented in its submodule):
 // - `afw::solve(mesh: &Mesh, domain: &Domain, data: &ElasticData, multiplier: MultiplierSpace,
 //   delta: f64) -> Result<AfwSolution, AfwError>`: dofs, assembly, the contact LCP, the KKT
-//   residuals (submodules element, dofs, assembly, contact);
+//   residuals (submodules element, dofs, assembly, contact); `afw::AfwCase::new(mesh, domain,
+//   data)?.solve(multiplier, delta)` the same with one assembly and symbolic analysis per mesh
+//   for several δ;
 // - `afw::recover(mesh: &Mesh, material: &Material, solution: &AfwSolution) -> Recovered`: the
 //   opening, slip and pressure per crack edge end (P1-disc along Σ), σ symmetrised, u* (submodule
 //   recovery);
