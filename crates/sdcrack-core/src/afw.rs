@@ -24,6 +24,12 @@
 //! [`crate::elasticity::ElasticExact`]).
 
 use crate::contact::{KktResiduals, LcpStatus};
+use crate::problem::MultiplierSpace;
+
+/// The multiplier spaces the elastic solver has (docs/design.md, "Contact"): the pointwise one,
+/// σ_νν ≤ 0 at both ends of every crack edge, whose multiplier is ∫_e λ_ν hat_a (the dual cone of
+/// the scalar problem's M1star). A scene listing another is refused (`sdcrack check`).
+pub const MULTIPLIER_SPACES: &[MultiplierSpace] = &[MultiplierSpace::M1Star];
 
 /// One crack edge of a solution: an edge of the uncracked mesh between two consecutive nodes
 /// of a crack chain ([`crate::mesh::CrackChain`]), with the values of its two normal-trace

@@ -674,6 +674,7 @@ impl LevelContext<'_> {
                 p_mass: self.p_mass,
                 p_space: self.ptopo.space,
                 delta,
+                problem: crate::scene::ProblemKind::Scalar,
             },
             h: self.mesh.h(),
             unknowns: self.system.n() + multiplier.len(),
