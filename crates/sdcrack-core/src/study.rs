@@ -28,6 +28,7 @@ use crate::ordering::elimination_order;
 use crate::problem::PMass;
 use crate::scene::{ScalarProblem, Scene};
 
+pub mod elastic;
 #[cfg(test)]
 mod tests;
 
@@ -215,6 +216,11 @@ pub struct StudyResult {
     pub meshes: Vec<MeshRecord>,
     /// Where an unstructured level 0 came from (gmsh's version and time, or the mesh file).
     pub coarse_mesh: Option<crate::mesh::CoarseProvenance>,
+    /// The elastic cases in the order solved (an elastic scene's study, [`elastic`]).
+    pub elastic: Vec<elastic::ElasticCaseResult>,
+    /// The meshes of the elastic cases' levels (empty when the plan's
+    /// [`CasePlan::keep_fields`] is off).
+    pub elastic_meshes: Vec<elastic::ElasticMeshRecord>,
 }
 
 /// Progress callbacks of a study.
@@ -223,6 +229,8 @@ pub trait Observer {
     fn phase(&mut self, _message: &str) {}
     /// A case is done.
     fn case_done(&mut self, _case: &CaseResult) {}
+    /// An elastic case is done.
+    fn elastic_case_done(&mut self, _case: &elastic::ElasticCaseResult) {}
 }
 
 /// An observer that ignores everything.

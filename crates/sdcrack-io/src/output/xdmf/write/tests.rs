@@ -76,6 +76,7 @@ fn case(
             ("delta".into(), Meta::Float(delta)),
         ],
         constants: vec![("delta".into(), delta)],
+        extra: vec![],
     }
 }
 
@@ -579,6 +580,7 @@ fn case_without_crack_or_fields() {
         series: "bare".into(),
         metadata: vec![],
         constants: vec![],
+        extra: vec![],
     };
     let no_crack = CaseFields {
         jump: Some(vec![]),

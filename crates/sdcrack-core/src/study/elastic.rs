@@ -1,0 +1,126 @@
+//! The driver of an elastic scene (the smooth-domain method for elasticity, [`crate::afw`]):
+//!
+//! for each level → mesh → for each δ (largest first) → for each multiplier space →
+//! [`crate::afw::solve`] → [`crate::afw::recover`] → [`crate::afw::errors`] (with `[exact]`) →
+//! record the case.
+//!
+//! Its cases are the plan's [`CaseAxes::elastic_keys`] (levels × δ × multipliers: the AFW method
+//! has no u space, p mass or p space), reported to the same [`Observer`] as the scalar study's.
+
+use crate::afw::AfwSolution;
+use crate::case::CaseKey;
+use crate::contact::{KktResiduals, LcpStatus};
+use crate::mesh::Mesh;
+
+#[allow(unused_imports)]
+use super::{CasePlan, Observer, KKT_TOLERANCE};
+
+/// Wall-clock seconds per phase of one elastic case.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct ElasticTimings {
+    /// The level's mesh (shared by every case of the level: [`ELASTIC_SHARED_TIMINGS`]).
+    pub mesh: f64,
+    /// [`crate::afw::solve`]: dofs, assembly, factorisation, the contact LCP, the KKT residuals.
+    pub solve: f64,
+    /// [`crate::afw::recover`]: the opening, slip and pressure, σ symmetrised, u*.
+    pub recovery: f64,
+    /// [`crate::afw::errors`] against `[exact]` (zero without it).
+    pub norms: f64,
+}
+
+/// The timing phases of [`ElasticTimings`] shared by several cases (reported with each of them):
+/// summary.json's `shared_timings` of an elastic run.
+pub const ELASTIC_SHARED_TIMINGS: [&str; 1] = ["mesh"];
+
+/// The fields of one elastic case, as the field files write them: piecewise polynomials per
+/// triangle and per crack edge (each discontinuous: per triangle vertex, per crack edge end).
+#[derive(Clone, Debug)]
+pub struct ElasticFields {
+    /// The solution: raw σ_h per triangle vertex, u_h and γ_h per triangle, the crack edges
+    /// (their vertices, normals and closed flags).
+    pub solution: AfwSolution,
+    /// σ_h symmetrised, ½(σ_h + σ_hᵀ), per triangle vertex (`Mesh::triangles` order): [σ_xx,
+    /// σ_xy, σ_yy].
+    pub stress_symmetric: Vec<[[f64; 3]; 3]>,
+    /// u*, the element-wise P1 reconstruction from σ_h and γ_h, per triangle vertex.
+    pub u_star: Vec<[[f64; 2]; 3]>,
+    /// The opening λ_ν = [u·ν] at the two ends of each crack edge (`solution.crack`'s order).
+    pub opening: Vec<[f64; 2]>,
+    /// The slip [u·t] at the two ends of each crack edge.
+    pub slip: Vec<[f64; 2]>,
+    /// The contact pressure −σ_νν at the two ends of each crack edge.
+    pub pressure: Vec<[f64; 2]>,
+}
+
+/// One solved elastic case.
+#[derive(Clone, Debug)]
+pub struct ElasticCaseResult {
+    /// The case: level, multiplier space, δ, problem kind.
+    pub key: CaseKey,
+    /// Mesh size (triangle diameter).
+    pub h: f64,
+    /// Unknowns of the system (σ dofs without the essential ones, u_h, γ_h).
+    pub unknowns: usize,
+    /// Crack edges (each with two normal-trace dofs constrained by the contact conditions).
+    pub crack_edges: usize,
+    /// Crack edge ends whose constraint σ_νν ≤ 0 is active (closed).
+    pub closed_ends: usize,
+    /// LCP iterations (linear solves on the crack).
+    pub iterations: usize,
+    /// LCP outcome.
+    pub status: LcpStatus,
+    /// True when the LCP converged and every KKT residual is ≤ [`KKT_TOLERANCE`].
+    pub converged: bool,
+    /// KKT residuals.
+    pub kkt: KktResiduals,
+    /// Phase timings.
+    pub timings: ElasticTimings,
+    /// Errors against `[exact]`, by name (the names of [`crate::afw::AfwErrors`]), in its order.
+    pub errors: Option<Vec<(String, f64)>>,
+    /// The fields (`None` when the plan's [`CasePlan::keep_fields`] is off).
+    pub fields: Option<ElasticFields>,
+}
+
+impl ElasticCaseResult {
+    /// The case's record from its solution: the counts, the LCP's outcome, converged when the
+    /// LCP converged and every KKT residual is ≤ [`KKT_TOLERANCE`].
+    pub fn new(key: CaseKey, h: f64, solution: &AfwSolution, timings: ElasticTimings) -> Self {
+        let closed = solution.crack.iter().flat_map(|e| e.closed);
+        ElasticCaseResult {
+            key,
+            h,
+            unknowns: solution.unknowns,
+            crack_edges: solution.crack.len(),
+            closed_ends: closed.filter(|&c| c).count(),
+            iterations: solution.lcp_iterations,
+            status: solution.lcp_status,
+            converged: solution.lcp_status.converged() && solution.kkt.max() <= KKT_TOLERANCE,
+            kkt: solution.kkt,
+            timings,
+            errors: None,
+            fields: None,
+        }
+    }
+}
+
+/// A level's mesh as the elastic fields use it: its vertices and triangles (the uncracked mesh).
+#[derive(Clone, Debug)]
+pub struct ElasticMeshRecord {
+    /// Refinement level.
+    pub level: u32,
+    /// Vertex coordinates.
+    pub points: Vec<[f64; 2]>,
+    /// Triangles (vertex indices, `Mesh::triangles`).
+    pub triangles: Vec<[usize; 3]>,
+}
+
+impl ElasticMeshRecord {
+    /// The record of `mesh`.
+    pub fn of(mesh: &Mesh) -> ElasticMeshRecord {
+        ElasticMeshRecord {
+            level: mesh.level,
+            points: mesh.vertices.clone(),
+            triangles: mesh.triangles.clone(),
+        }
+    }
+}
