@@ -66,10 +66,16 @@ pub enum StudyError {
     /// The sparse solver failed.
     #[error("linear solver: {0}")]
     Linalg(#[from] LinalgError),
-    /// The scene poses the elastic problem, which the smooth-domain solver does not solve yet
-    /// (issue 46): its runs write the mesh export and run the references only.
-    #[error("the smooth-domain solver solves the scalar problem only; an elastic scene runs its references (issue 46)")]
+    /// The scene poses the elastic problem, and the command runs the scalar problem's study
+    /// (`sdcrack bench`); an elastic scene's cases run in [`elastic::run_elastic_study`].
+    #[error("this command times the scalar problem's solver only; an elastic scene's cases run with sdcrack run")]
     NotScalar,
+    /// The elastic study was given a scalar scene.
+    #[error("the elastic study runs an elastic scene only")]
+    NotElastic,
+    /// An elastic case cannot be solved (bad data found by the solver, a factorisation failure).
+    #[error("{0}")]
+    Afw(#[from] crate::afw::AfwError),
 }
 
 /// The cases a scene asks for after a filter.

@@ -7,13 +7,16 @@
 //! Its cases are the plan's [`CaseAxes::elastic_keys`] (levels × δ × multipliers: the AFW method
 //! has no u space, p mass or p space), reported to the same [`Observer`] as the scalar study's.
 
-use crate::afw::AfwSolution;
+use std::time::Instant;
+
+use crate::afw::{self, AfwSolution};
 use crate::case::CaseKey;
 use crate::contact::{KktResiduals, LcpStatus};
+use crate::elasticity::ElasticData;
 use crate::mesh::Mesh;
+use crate::scene::Scene;
 
-#[allow(unused_imports)]
-use super::{CasePlan, Observer, KKT_TOLERANCE};
+use super::{CasePlan, Observer, StudyError, StudyResult, KKT_TOLERANCE};
 
 /// Wall-clock seconds per phase of one elastic case.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -123,4 +126,70 @@ impl ElasticMeshRecord {
             triangles: mesh.triangles.clone(),
         }
     }
+}
+
+/// Runs every elastic case of `plan` for `scene` ([`CaseAxes::elastic_keys`]: per level its mesh,
+/// per δ and multiplier space the solve, the recovery and, with `[exact]`, the errors).
+///
+/// [`CaseAxes::elastic_keys`]: crate::case::CaseAxes::elastic_keys
+pub fn run_elastic_study(
+    scene: &Scene,
+    plan: &CasePlan,
+    observer: &mut dyn Observer,
+) -> Result<StudyResult, StudyError> {
+    let data = scene.elasticity().ok_or(StudyError::NotElastic)?;
+    let source = scene.mesh_source()?;
+    let mut result = StudyResult {
+        coarse_mesh: source.provenance.clone(),
+        ..StudyResult::default()
+    };
+    let keys = plan.axes.elastic_keys();
+    for &level in &plan.axes.levels {
+        observer.phase(&format!("level {level}, elasticity: meshing"));
+        let t0 = Instant::now();
+        let mesh = source.level(level)?;
+        let mesh_time = t0.elapsed().as_secs_f64();
+        if plan.keep_fields {
+            result.elastic_meshes.push(ElasticMeshRecord::of(&mesh));
+        }
+        for &key in keys.iter().filter(|k| k.level == level) {
+            observer.phase(&format!("{key}: solving"));
+            let case = solve_case(scene, data, &mesh, key, mesh_time, plan)?;
+            observer.elastic_case_done(&case);
+            result.elastic.push(case);
+        }
+    }
+    Ok(result)
+}
+
+/// One elastic case on its level's `mesh` (made in `mesh_time` seconds): solve, recover, and
+/// the errors against `[exact]` when the scene has it.
+fn solve_case(
+    scene: &Scene,
+    data: &ElasticData,
+    mesh: &Mesh,
+    key: CaseKey,
+    mesh_time: f64,
+    plan: &CasePlan,
+) -> Result<ElasticCaseResult, StudyError> {
+    let mut timings = ElasticTimings {
+        mesh: mesh_time,
+        ..ElasticTimings::default()
+    };
+    let t0 = Instant::now();
+    let solution = afw::solve(mesh, &scene.domain, data, key.multiplier, key.delta)?;
+    timings.solve = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let recovered = afw::recover(mesh, &data.material, &solution);
+    timings.recovery = t1.elapsed().as_secs_f64();
+    let t2 = Instant::now();
+    let errors = (data.exact.as_ref())
+        .map(|exact| afw::errors(mesh, &data.material, &solution, &recovered, exact).entries());
+    timings.norms = t2.elapsed().as_secs_f64();
+    let mut case = ElasticCaseResult::new(key, mesh.h(), &solution, timings);
+    case.errors = errors;
+    case.fields = plan
+        .keep_fields
+        .then(|| ElasticFields::of(solution, recovered));
+    Ok(case)
 }
