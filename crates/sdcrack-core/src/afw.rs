@@ -23,7 +23,71 @@
 //! opening and slip from the moments, σ symmetrised, u*), norms (errors against
 //! [`crate::elasticity::ElasticExact`]).
 
+pub mod assembly;
+pub mod contact;
+pub mod dofs;
+pub mod element;
+#[cfg(test)]
+mod tests;
+
+pub use contact::solve;
+
 use crate::contact::{KktResiduals, LcpStatus};
+use crate::problem::MultiplierSpace;
+
+/// Why an elastic case cannot be solved.
+#[derive(Debug, thiserror::Error)]
+pub enum AfwError {
+    /// δ must be a finite number ≥ 0.
+    #[error("delta = {0} is not a finite number >= 0")]
+    InvalidDelta(f64),
+    /// The elastic method has only the pointwise constraint so far.
+    #[error(
+        "the multiplier space {0} is not available for elasticity (the smooth-domain method for \
+         elasticity has m1star, the pointwise sigma_nn <= 0 at the crack edges' ends)"
+    )]
+    UnsupportedMultiplier(MultiplierSpace),
+    /// A boundary edge with neither a traction nor Dirichlet data.
+    #[error("boundary part {part} has no traction and the scene has no g (data.gx, data.gy)")]
+    NoDirichletData {
+        /// The part.
+        part: String,
+    },
+    /// A crack edge on ∂Ω.
+    #[error("a crack edge at ({}, {}) lies on the boundary", at[0], at[1])]
+    CrackOnBoundary {
+        /// One end of the edge.
+        at: [f64; 2],
+    },
+    /// Data not finite at a quadrature point.
+    #[error(
+        "data {name} = \"{source_text}\" evaluates to {value} at the quadrature point ({x}, {y})"
+    )]
+    NonFinite {
+        /// `f`, `g` or `traction`.
+        name: &'static str,
+        /// The expression.
+        source_text: String,
+        /// The value.
+        value: f64,
+        /// x of the point.
+        x: f64,
+        /// y of the point.
+        y: f64,
+    },
+    /// A fixed point that is not a mesh vertex.
+    #[error("fixed point ({}, {}) is not a mesh vertex", point[0], point[1])]
+    FixedPointNotAVertex {
+        /// The point.
+        point: [f64; 2],
+    },
+    /// An all-traction boundary whose fixed points leave a rigid motion free.
+    #[error("the boundary is all traction and the fixed points leave a rigid motion free")]
+    RigidModesLeft,
+    /// The sparse solver failed.
+    #[error(transparent)]
+    Linalg(#[from] crate::linalg::LinalgError),
+}
 
 pub mod norms;
 pub mod recovery;

@@ -1,0 +1,375 @@
+//! The solve of one case ([`solve`]): dofs, assembly and factorisation of K(δ), the contact LCP
+//! on the crack edges' normal dofs through [`crate::contact::Lcp`], the recovery solve, the
+//! KKT residuals, the rigid motion of an all-traction boundary, and the [`AfwSolution`].
+//!
+//! The constraint (the pointwise variant, [`MultiplierSpace::M1Star`]): σ_νν ≤ 0 at both ends of
+//! every crack edge, D = N (S = I) selecting the normal dofs. With x₀ = K⁻¹b, H = N K⁻¹ Nᵀ
+//! (symmetric positive semi-definite: K⁻¹'s σ–σ block is) and q = N x₀ (σ_νν of the
+//! unconstrained solution), the multipliers μ_{e,a} = ∫_e λ_ν hat_a solve the LCP μ ≥ 0,
+//! w = Hμ − q ≥ 0 (w = −σ_νν), μ·w = 0; then K x = b − Nᵀμ.
+
+use faer::linalg::solvers::Solve;
+use faer::Mat;
+
+use super::assembly::{assemble, basis, sigma_coefficients, sigma_residuals, AfwSystem};
+use super::dofs::{sigma_dof, AfwDofs, EdgeKind};
+use super::element::Compliance;
+use super::{AfwError, AfwSolution, CrackEdge};
+use crate::contact::{KktResiduals, Lcp, LcpOptions, LcpSolution};
+use crate::elasticity::ElasticData;
+use crate::linalg::{Ldlt, SymCsc, SymbolicLdlt};
+use crate::mesh::Mesh;
+use crate::problem::{Domain, MultiplierSpace};
+
+/// Refinement steps of each solve with K(δ), at most (δ = 0 regularises the pivots of the u and
+/// γ rows; refinement against the exact K removes the perturbation).
+const REFINEMENT_STEPS: usize = 10;
+/// Refinement stops once the componentwise backward error is ≤ this (a few ε).
+const REFINEMENT_TOLERANCE: f64 = 1e-15;
+/// Right-hand sides per block solve of H = N K⁻¹ Nᵀ.
+const REDUCTION_BLOCK: usize = 32;
+
+/// Solves the elastic problem `data` on `mesh` (of `domain`) with the AFW element, the contact
+/// constraint of `multiplier` on the cracks and the regularisation δ = `delta` ≥ 0.
+///
+/// An all-traction boundary (no Dirichlet edge) at δ = 0 leaves the rigid motions as the
+/// kernel of K: (u, γ) = (P0 r, −ω) for r = a + ω(−y, x) (the σ rows' (u, div τ) + (γ, as τ)
+/// vanish since div τ ∈ P0: (P0 r, div τ) = (r, div τ) = ω (as τ, 1)). The solve then holds u and
+/// γ of triangle 0 at 0 (the three unknowns' rows and columns become −I; the kernel has no
+/// member vanishing there), and adds the rigid motion that makes u* — the element-wise P1
+/// reconstruction u_h + (A σ̄_h + γ_h J)(x − x_T), σ̄_h the mean of σ_h on T — satisfy the
+/// scene's fixed components at its fixed points, u* at a point being the mean of its values on
+/// the triangles at that vertex. The dropped rows (the pinned triangle's equilibrium and
+/// symmetry) hold when the loads balance; the KKT residuals are those of the whole system.
+///
+/// # Errors
+/// [`AfwError`]: an invalid δ, a multiplier space the method does not have, bad data (see
+/// [`AfwDofs::new`]), a factorisation failure, fixed points that leave a rigid mode free.
+pub fn solve(
+    mesh: &Mesh,
+    domain: &Domain,
+    data: &ElasticData,
+    multiplier: MultiplierSpace,
+    delta: f64,
+) -> Result<AfwSolution, AfwError> {
+    if !(delta >= 0.0 && delta.is_finite()) {
+        return Err(AfwError::InvalidDelta(delta));
+    }
+    if multiplier != MultiplierSpace::M1Star {
+        return Err(AfwError::UnsupportedMultiplier(multiplier));
+    }
+    let dofs = AfwDofs::new(mesh, domain, data)?;
+    let system = assemble(mesh, &dofs, data)?;
+    let all_traction = !(dofs.edges.iter()).any(|e| matches!(e.kind, EdgeKind::Dirichlet { .. }));
+    let pinned: Vec<usize> = if all_traction && delta == 0.0 {
+        (0..3).map(|k| dofs.element_unknown(0, k)).collect()
+    } else {
+        Vec::new()
+    };
+    let matrix = system.matrix(delta);
+    let (factored, rhs) = pin(&matrix, &system.rhs, &pinned);
+    let symbolic = SymbolicLdlt::analyze(&factored)?;
+    let ldlt = Ldlt::factor(&symbolic, &factored, &system.signs)?;
+    let rows: Vec<usize> = (dofs.crack_edges.iter())
+        .flat_map(|&e| [0, 1].map(|s| dofs.normal_unknown(e, s)))
+        .collect();
+    let x0 = refined(&ldlt, &factored, &rhs);
+    let lcp = Lcp {
+        m: rows.len(),
+        h: schur_complement(&ldlt, dofs.n(), &rows),
+        q: rows.iter().map(|&i| x0[i]).collect(),
+    };
+    let sol = lcp.solve(None, LcpOptions::default());
+    let mut b = rhs;
+    for (&i, &mu) in rows.iter().zip(&sol.mu) {
+        b[i] -= mu;
+    }
+    let mut x = refined(&ldlt, &factored, &b);
+    if !pinned.is_empty() {
+        add_rigid_motion(mesh, &dofs, data, &mut x)?;
+    }
+    let kkt = kkt_residuals(&system, &matrix, &rows, &sol, &x, dofs.n_sigma);
+    Ok(solution(mesh, &dofs, &system, data, sol, x, kkt, delta))
+}
+
+/// K with the unknowns `pinned` held at 0: their rows and columns zero but the diagonal, −1,
+/// and their right-hand sides 0.
+fn pin(k: &SymCsc, rhs: &[f64], pinned: &[usize]) -> (SymCsc, Vec<f64>) {
+    let mut k = k.clone();
+    let mut rhs = rhs.to_vec();
+    if pinned.is_empty() {
+        return (k, rhs);
+    }
+    for c in 0..k.n {
+        for idx in k.col_ptr[c]..k.col_ptr[c + 1] {
+            let r = k.row_idx[idx];
+            if pinned.contains(&r) || pinned.contains(&c) {
+                k.values[idx] = if r == c { -1.0 } else { 0.0 };
+            }
+        }
+    }
+    for &i in pinned {
+        rhs[i] = 0.0;
+    }
+    (k, rhs)
+}
+
+/// K⁻¹ b, refined against K.
+fn refined(ldlt: &Ldlt, k: &SymCsc, b: &[f64]) -> Vec<f64> {
+    let mut x = vec![0.0; b.len()];
+    ldlt.solve_refined_many(k, b, &mut x, REFINEMENT_STEPS, REFINEMENT_TOLERANCE);
+    x
+}
+
+/// H = N K⁻¹ Nᵀ (row-major m × m) for the unknowns `rows` (N selects them), by block solves
+/// with the columns of Nᵀ, symmetrised away from round-off.
+fn schur_complement(ldlt: &Ldlt, n: usize, rows: &[usize]) -> Vec<f64> {
+    let m = rows.len();
+    let mut h = vec![0.0; m * m];
+    for start in (0..m).step_by(REDUCTION_BLOCK) {
+        let cols = REDUCTION_BLOCK.min(m - start);
+        let mut z = vec![0.0; n * cols];
+        for c in 0..cols {
+            z[c * n + rows[start + c]] = 1.0;
+        }
+        ldlt.solve_many_in_place(&mut z, cols);
+        for c in 0..cols {
+            for (i, &r) in rows.iter().enumerate() {
+                h[i * m + start + c] = z[c * n + r];
+            }
+        }
+    }
+    for i in 0..m {
+        for j in 0..i {
+            let a = 0.5 * (h[i * m + j] + h[j * m + i]);
+            h[i * m + j] = a;
+            h[j * m + i] = a;
+        }
+    }
+    h
+}
+
+/// The relative KKT residuals (contact::KktResiduals): the constraint part as the scalar solver
+/// defines it, y = σ_νν at the constrained dofs measured against ‖σ‖_∞ (‖S‖_∞ = 1); the equations
+/// K x + Nᵀμ = b of the whole (unpinned) system by block — σ rows, u rows, γ rows — each block's
+/// largest |residual| over its largest row scale (|K||x| + |Nᵀμ| + |b|)_i. Not the scalar
+/// solver's componentwise (per row) backward error: a block of rows that vanishes identically
+/// (the u_x rows of σ = diag(0, −1), whose σ_x dofs are zero up to round-off) has rows of scale
+/// ~1e-13 whose round-off residuals make that measure O(1). The per-block measure keeps its
+/// invariance under the dilations of the domain and the scaling of the data (each block scales
+/// by one factor).
+fn kkt_residuals(
+    system: &AfwSystem,
+    k: &SymCsc,
+    rows: &[usize],
+    sol: &LcpSolution,
+    x: &[f64],
+    n_sigma: usize,
+) -> KktResiduals {
+    let n = k.n;
+    let mut kx = vec![0.0; n];
+    let mut scale = vec![0.0; n];
+    k.mul_vec_with_abs(x, &mut kx, &mut scale);
+    for i in 0..n {
+        kx[i] -= system.rhs[i];
+        scale[i] += system.rhs[i].abs();
+    }
+    for (&i, &mu) in rows.iter().zip(&sol.mu) {
+        kx[i] += mu;
+        scale[i] += mu.abs();
+    }
+    let y: Vec<f64> = rows.iter().map(|&i| x[i]).collect();
+    let sigma_inf = x[..n_sigma].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let mut kkt = KktResiduals::constraint_part(&sol.mu, &y, sigma_inf);
+    // per block (σ rows, u rows, γ rows): a block's worst residual over its largest scale
+    let u_rows = |i: &usize| *i >= n_sigma && (i - n_sigma) % 3 < 2;
+    let blocks: [Vec<usize>; 3] = [
+        (0..n_sigma).collect(),
+        (n_sigma..n).filter(u_rows).collect(),
+        (n_sigma..n).filter(|i| !u_rows(i)).collect(),
+    ];
+    kkt.equations = blocks
+        .iter()
+        .map(|rows| {
+            let r = rows.iter().fold(0.0f64, |a, &i| a.max(kx[i].abs()));
+            let s = rows.iter().fold(0.0f64, |a, &i| a.max(scale[i]));
+            if s > 0.0 {
+                r / s
+            } else {
+                r
+            }
+        })
+        .fold(0.0, f64::max);
+    kkt
+}
+
+/// u* of triangle `t` at the point `p`: u_h + (A σ̄_h + γ_h J)(p − x_T).
+fn reconstructed_u(
+    mesh: &Mesh,
+    stress: &[[f64; 4]; 3],
+    u: [f64; 2],
+    gamma: f64,
+    compliance: Compliance,
+    t: usize,
+    p: [f64; 2],
+) -> [f64; 2] {
+    let mean: [f64; 4] =
+        std::array::from_fn(|r| (stress[0][r] + stress[1][r] + stress[2][r]) / 3.0);
+    let mut g = compliance.apply(mean);
+    g[1] += gamma;
+    g[2] -= gamma;
+    let c = crate::mesh::centroid(&mesh.vertices, &mesh.triangles[t]);
+    let d = [p[0] - c[0], p[1] - c[1]];
+    [
+        u[0] + g[0] * d[0] + g[1] * d[1],
+        u[1] + g[2] * d[0] + g[3] * d[1],
+    ]
+}
+
+/// Adds to x the rigid motion (P0 r, −ω), r = a + ω(−y, x), that makes u* meet the fixed
+/// components of `data.fixed` (least squares over the conditions; the scene's validation
+/// makes them remove all three modes).
+fn add_rigid_motion(
+    mesh: &Mesh,
+    dofs: &AfwDofs,
+    data: &ElasticData,
+    x: &mut [f64],
+) -> Result<(), AfwError> {
+    let compliance = Compliance::of(&data.material);
+    let sigma = sigma_coefficients(dofs, x);
+    let mut rows: Vec<([f64; 3], f64)> = Vec::new();
+    for fixed in &data.fixed {
+        let p = fixed.point;
+        let at: Vec<usize> = (0..mesh.triangles.len())
+            .filter(|&t| mesh.triangles[t].iter().any(|&v| mesh.vertices[v] == p))
+            .collect();
+        if at.is_empty() {
+            return Err(AfwError::FixedPointNotAVertex { point: p });
+        }
+        let mut value = [0.0; 2];
+        for &t in &at {
+            let stress = triangle_stress(mesh, dofs, &sigma, t);
+            let u = [0, 1].map(|k| x[dofs.element_unknown(t, k)]);
+            let gamma = x[dofs.element_unknown(t, 2)];
+            let v = reconstructed_u(mesh, &stress, u, gamma, compliance, t, p);
+            value[0] += v[0] / at.len() as f64;
+            value[1] += v[1] / at.len() as f64;
+        }
+        // r(p) = (a_x − ω y, a_y + ω x) must cancel u*(p) in each held component
+        if fixed.components[0] {
+            rows.push(([1.0, 0.0, -p[1]], -value[0]));
+        }
+        if fixed.components[1] {
+            rows.push(([0.0, 1.0, p[0]], -value[1]));
+        }
+    }
+    let normal = Mat::<f64>::from_fn(3, 3, |i, j| rows.iter().map(|(r, _)| r[i] * r[j]).sum());
+    let right = Mat::<f64>::from_fn(3, 1, |i, _| rows.iter().map(|(r, v)| r[i] * v).sum());
+    if crate::elasticity::rigid_modes_removed(&data.fixed) < 3 {
+        return Err(AfwError::RigidModesLeft);
+    }
+    let z = normal.partial_piv_lu().solve(&right);
+    let (a, omega) = ([z[(0, 0)], z[(1, 0)]], z[(2, 0)]);
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let c = crate::mesh::centroid(&mesh.vertices, tri);
+        // P0 r = r at the centroid (r is linear)
+        x[dofs.element_unknown(t, 0)] += a[0] - omega * c[1];
+        x[dofs.element_unknown(t, 1)] += a[1] + omega * c[0];
+        // γ of r: ½(∂_y r_x − ∂_x r_y) = −ω
+        x[dofs.element_unknown(t, 2)] -= omega;
+    }
+    Ok(())
+}
+
+/// σ_h of triangle `t` at its three vertices, each [σ_xx, σ_xy, σ_yx, σ_yy]: row r of Ψ_p is
+/// (d_p)_r φ_p, and φ_p at vertex v is w_p where v is p's end, 0 at the other vertices.
+pub(super) fn triangle_stress(
+    mesh: &Mesh,
+    dofs: &AfwDofs,
+    sigma: &[f64],
+    t: usize,
+) -> [[f64; 4]; 3] {
+    let bdm = basis(mesh, dofs, t);
+    let mut out = [[0.0; 4]; 3];
+    for (i, &e) in dofs.triangle_edges[t].iter().enumerate() {
+        let directions = dofs.edges[e].directions;
+        for s in 0..2 {
+            let (v, w) = (bdm.ends[i][s], bdm.w[i][s]);
+            for (k, d) in directions.iter().enumerate() {
+                let c = sigma[sigma_dof(e, s, k)];
+                out[v][0] += c * d[0] * w[0];
+                out[v][1] += c * d[0] * w[1];
+                out[v][2] += c * d[1] * w[0];
+                out[v][3] += c * d[1] * w[1];
+            }
+        }
+    }
+    out
+}
+
+/// The [`AfwSolution`] of the unknowns `x` and the LCP's `sol`.
+#[allow(clippy::too_many_arguments)]
+fn solution(
+    mesh: &Mesh,
+    dofs: &AfwDofs,
+    system: &AfwSystem,
+    data: &ElasticData,
+    sol: LcpSolution,
+    x: Vec<f64>,
+    kkt: KktResiduals,
+    delta: f64,
+) -> AfwSolution {
+    let compliance = Compliance::of(&data.material);
+    let sigma = sigma_coefficients(dofs, &x);
+    let nt = dofs.triangles();
+    let stress = (0..nt)
+        .map(|t| triangle_stress(mesh, dofs, &sigma, t))
+        .collect();
+    let displacement = (0..nt)
+        .map(|t| [0, 1].map(|k| x[dofs.element_unknown(t, k)]))
+        .collect();
+    let rotation = (0..nt).map(|t| x[dofs.element_unknown(t, 2)]).collect();
+    // the residuals of the normal (k = 0) and tangential (k = 1) dofs of every crack edge
+    let residual_rows: Vec<usize> = (dofs.crack_edges.iter())
+        .flat_map(|&e| (0..4).map(move |r| 4 * e + r))
+        .collect();
+    let residuals = sigma_residuals(mesh, dofs, system, compliance, &sigma, &x, &residual_rows);
+    let crack = (dofs.crack_edges.iter().enumerate())
+        .map(|(j, &e)| {
+            let edge = &dofs.edges[e];
+            let EdgeKind::Crack {
+                crack,
+                segment,
+                normal,
+                chain_slots,
+            } = edge.kind
+            else {
+                unreachable!("a crack edge")
+            };
+            let node = |end: usize| edge.nodes[chain_slots[end]];
+            let at = |end: usize, k: usize| 4 * j + 2 * chain_slots[end] + k;
+            CrackEdge {
+                crack,
+                segment,
+                nodes: [node(0), node(1)],
+                normal,
+                normal_stress: [0, 1].map(|end| sigma[sigma_dof(e, chain_slots[end], 0)]),
+                opening_moment: [0, 1].map(|end| residuals[at(end, 0)]),
+                slip_moment: [0, 1].map(|end| residuals[at(end, 1)]),
+                closed: [0, 1].map(|end| !sol.active[2 * j + chain_slots[end]]),
+            }
+        })
+        .collect();
+    AfwSolution {
+        stress,
+        displacement,
+        rotation,
+        crack,
+        multiplier: MultiplierSpace::M1Star,
+        delta,
+        lcp_iterations: sol.iterations,
+        lcp_status: sol.status,
+        kkt,
+        unknowns: dofs.n(),
+    }
+}
