@@ -94,6 +94,14 @@ pub enum AfwError {
     Linalg(#[from] crate::linalg::LinalgError),
 }
 
+pub mod norms;
+pub mod recovery;
+#[cfg(test)]
+pub(crate) mod testing;
+
+pub use norms::{errors, AfwErrors};
+pub use recovery::{recover, Recovered};
+
 /// One crack edge of a solution: an edge of the uncracked mesh between two consecutive nodes
 /// of a crack chain ([`crate::mesh::CrackChain`]), with the values of its two normal-trace
 /// dofs at its ends. Crack by crack, each chain's segments in order.
