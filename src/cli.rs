@@ -15,11 +15,11 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use sdcrack_core::afw::AfwError;
 use sdcrack_core::case::{delta_text, CaseKey, CasePattern, Pattern};
 use sdcrack_core::problem::Named;
 use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use sdcrack_core::scene::{KeyPath, ProblemKind, Scene};
-use sdcrack_core::afw::AfwError;
 use sdcrack_core::study::elastic::{run_elastic_study, ElasticCaseResult};
 use sdcrack_core::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
 use sdcrack_io::output::summary::Provenance;
@@ -835,10 +835,24 @@ fn run(
     Ok(convergence_status(failed, references_converged))
 }
 
+/// The errors of an elastic case that its terminal table shows (summary.json has them all):
+/// what users compare, σ symmetrised, u_h, u*, the opening and the contact pressure.
+const ELASTIC_TABLE_ERRORS: [&str; 5] = [
+    "stress_sym_l2",
+    "u_l2",
+    "u_star_l2",
+    "opening_l2",
+    "pressure_l2",
+];
+
 /// Prints, per multiplier space and δ, the elastic cases' convergence table: each level's size,
-/// unknowns, LCP iterations, closed crack edge ends, the errors by name (with the rate of each
-/// against the previous level) and the largest KKT residual.
+/// unknowns, LCP iterations, closed crack edge ends (of all ends), the errors of
+/// [`ELASTIC_TABLE_ERRORS`] with the rate of each against the previous level, and the largest
+/// KKT residual.
 pub fn print_elastic_table(scene: &Scene, cases: &[ElasticCaseResult]) {
+    let error = |c: &ElasticCaseResult, name: &str| -> Option<f64> {
+        Some(c.errors.as_ref()?.iter().find(|(n, _)| n == name)?.1)
+    };
     let mut series: Vec<(MultiplierSpace, u64)> = cases
         .iter()
         .map(|c| (c.key.multiplier, c.key.delta.to_bits()))
@@ -847,32 +861,30 @@ pub fn print_elastic_table(scene: &Scene, cases: &[ElasticCaseResult]) {
     for (multiplier, delta_bits) in series {
         let delta = f64::from_bits(delta_bits);
         say!(
-            "\nscene '{}': elasticity, {multiplier}, δ = {}",
+            "scene '{}': elasticity, {multiplier}, δ = {}",
             scene.name,
             delta_text(delta)
         );
         let rows: Vec<&ElasticCaseResult> = (cases.iter())
             .filter(|c| c.key.multiplier == multiplier && c.key.delta.to_bits() == delta_bits)
             .collect();
-        let names: Vec<String> = (rows.first().and_then(|c| c.errors.as_ref()))
-            .map(|e| e.iter().map(|(n, _)| n.clone()).collect())
-            .unwrap_or_default();
-        let head: String = names.iter().map(|n| format!(" {n:>10}  rate")).collect();
+        let names: Vec<&str> = (ELASTIC_TABLE_ERRORS.into_iter())
+            .filter(|n| rows.first().is_some_and(|c| error(c, n).is_some()))
+            .collect();
+        let head: String = names.iter().map(|n| format!(" {n:>13}  rate")).collect();
         say!("level        h  unknowns  iter  closed{head}     kkt");
         let mut prev: Option<&ElasticCaseResult> = None;
         for c in rows {
             let flag = if c.converged { "" } else { "  NOT CONVERGED" };
-            let errors: String = (c.errors.iter().flatten())
-                .map(|(name, e)| {
-                    let before = prev.and_then(|p| {
-                        let pe = p.errors.as_ref()?.iter().find(|(n, _)| n == name)?.1;
-                        Some((p.h, pe))
-                    });
-                    format!(" {e:10.3e} {}", rate(before, c.h, *e))
+            let errors: String = (names.iter())
+                .filter_map(|name| {
+                    let e = error(c, name)?;
+                    let before = prev.and_then(|p| Some((p.h, error(p, name)?)));
+                    Some(format!(" {e:13.3e} {}", rate(before, c.h, e)))
                 })
                 .collect();
             say!(
-                "{:5} {:8.5} {:9} {:5} {:7}{errors} {:7.1e}{flag}",
+                "{:5} {:8.5} {:9} {:5} {:>7}{errors} {:7.1e}{flag}",
                 c.key.level,
                 c.h,
                 c.unknowns,
@@ -882,8 +894,6 @@ pub fn print_elastic_table(scene: &Scene, cases: &[ElasticCaseResult]) {
             );
             prev = Some(c);
         }
-    }
-    if !cases.is_empty() {
         say!("");
     }
 }

@@ -9,7 +9,7 @@
 
 use std::time::Instant;
 
-use crate::afw::{self, AfwSolution};
+use crate::afw::{self, AfwErrors, AfwSolution, Recovered};
 use crate::case::CaseKey;
 use crate::contact::{KktResiduals, LcpStatus};
 use crate::elasticity::ElasticData;
@@ -42,17 +42,44 @@ pub struct ElasticFields {
     /// The solution: raw σ_h per triangle vertex, u_h and γ_h per triangle, the crack edges
     /// (their vertices, normals and closed flags).
     pub solution: AfwSolution,
-    /// σ_h symmetrised, ½(σ_h + σ_hᵀ), per triangle vertex (`Mesh::triangles` order): [σ_xx,
-    /// σ_xy, σ_yy].
-    pub stress_symmetric: Vec<[[f64; 3]; 3]>,
-    /// u*, the element-wise P1 reconstruction from σ_h and γ_h, per triangle vertex.
-    pub u_star: Vec<[[f64; 2]; 3]>,
-    /// The opening λ_ν = [u·ν] at the two ends of each crack edge (`solution.crack`'s order).
-    pub opening: Vec<[f64; 2]>,
-    /// The slip [u·t] at the two ends of each crack edge.
-    pub slip: Vec<[f64; 2]>,
-    /// The contact pressure −σ_νν at the two ends of each crack edge.
-    pub pressure: Vec<[f64; 2]>,
+    /// What is recovered from it: sym σ_h and u* per triangle vertex, the opening, slip and
+    /// pressure at the crack edges' ends.
+    pub recovered: Recovered,
+}
+
+/// The errors of a case by name, in [`AfwErrors`]' order: summary.json's `errors` of an
+/// elastic case (each name the field's).
+pub fn error_entries(errors: &AfwErrors) -> Vec<(String, f64)> {
+    // destructured, so that a new error norm cannot be left out of the summary
+    let AfwErrors {
+        stress_l2,
+        stress_sym_l2,
+        stress_energy,
+        u_l2,
+        projected_u_l2,
+        u_star_l2,
+        rotation_l2,
+        asymmetry_l2,
+        opening_l2,
+        slip_l2,
+        pressure_l2,
+    } = *errors;
+    [
+        ("stress_l2", stress_l2),
+        ("stress_sym_l2", stress_sym_l2),
+        ("stress_energy", stress_energy),
+        ("u_l2", u_l2),
+        ("projected_u_l2", projected_u_l2),
+        ("u_star_l2", u_star_l2),
+        ("rotation_l2", rotation_l2),
+        ("asymmetry_l2", asymmetry_l2),
+        ("opening_l2", opening_l2),
+        ("slip_l2", slip_l2),
+        ("pressure_l2", pressure_l2),
+    ]
+    .into_iter()
+    .map(|(name, e)| (name.to_string(), e))
+    .collect()
 }
 
 /// One solved elastic case.
@@ -183,13 +210,21 @@ fn solve_case(
     let recovered = afw::recover(mesh, &data.material, &solution);
     timings.recovery = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let errors = (data.exact.as_ref())
-        .map(|exact| afw::errors(mesh, &data.material, &solution, &recovered, exact).entries());
+    let errors = (data.exact.as_ref()).map(|exact| {
+        error_entries(&afw::errors(
+            mesh,
+            &data.material,
+            &solution,
+            &recovered,
+            exact,
+        ))
+    });
     timings.norms = t2.elapsed().as_secs_f64();
     let mut case = ElasticCaseResult::new(key, mesh.h(), &solution, timings);
     case.errors = errors;
-    case.fields = plan
-        .keep_fields
-        .then(|| ElasticFields::of(solution, recovered));
+    case.fields = plan.keep_fields.then_some(ElasticFields {
+        solution,
+        recovered,
+    });
     Ok(case)
 }

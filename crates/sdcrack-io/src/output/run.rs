@@ -171,7 +171,10 @@ fn restrict(case: &xdmf::CaseFields, fields: &sdcrack_core::scene::FieldSet) -> 
 
 /// The name of level `level`'s broken mesh in an elastic run's field files: `level2-elasticity`.
 fn elastic_mesh_key(level: u32) -> String {
-    format!("level{level}-{}", sdcrack_core::scene::ProblemKind::Elasticity)
+    format!(
+        "level{level}-{}",
+        sdcrack_core::scene::ProblemKind::Elasticity
+    )
 }
 
 /// The elastic cases' meshes and fields (docs/elasticity.md, "The run"): each level's *broken*
@@ -185,7 +188,11 @@ fn elastic_field_data(
     let meshes: Vec<xdmf::MeshData> = (study.elastic_meshes.iter())
         .map(|m| xdmf::MeshData {
             key: elastic_mesh_key(m.level),
-            points: m.triangles.iter().flat_map(|t| t.map(|v| m.points[v])).collect(),
+            points: m
+                .triangles
+                .iter()
+                .flat_map(|t| t.map(|v| m.points[v]))
+                .collect(),
             triangles: (0..m.triangles.len())
                 .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
                 .collect(),
@@ -194,7 +201,10 @@ fn elastic_field_data(
     let cases = (study.elastic.iter())
         .filter_map(|c| {
             let f = c.fields.as_ref()?;
-            let mesh = study.elastic_meshes.iter().find(|m| m.level == c.key.level)?;
+            let mesh = study
+                .elastic_meshes
+                .iter()
+                .find(|m| m.level == c.key.level)?;
             Some(elastic_case_fields(c, f, mesh))
         })
         .collect();
@@ -219,11 +229,13 @@ fn elastic_case_fields(
     // the in-plane tensor in 3-D, row-major, its z row and column zero
     let tensor = |[xx, xy, yx, yy]: [f64; 4]| [xx, xy, 0.0, yx, yy, 0.0, 0.0, 0.0, 0.0];
     let raw: Vec<f64> = s.stress.iter().flatten().flat_map(|&v| tensor(v)).collect();
-    let symmetric: Vec<f64> = (f.stress_symmetric.iter().flatten())
-        .flat_map(|&[xx, xy, yy]| tensor([xx, xy, xy, yy]))
+    let r = &f.recovered;
+    // sym σ_h as recovered: [σ_xx, σ_yy, σ_xy]
+    let symmetric: Vec<f64> = (r.stress_sym.iter().flatten())
+        .flat_map(|&[xx, yy, xy]| tensor([xx, xy, xy, yy]))
         .collect();
     let vector = |[x, y]: [f64; 2]| [x, y, 0.0];
-    let u_star: Vec<f64> = f.u_star.iter().flatten().flat_map(|&v| vector(v)).collect();
+    let u_star: Vec<f64> = r.u_star.iter().flatten().flat_map(|&v| vector(v)).collect();
     let u_h: Vec<f64> = s.displacement.iter().flat_map(|&v| vector(v)).collect();
     let ends = |v: &[[f64; 2]]| v.iter().flatten().copied().collect::<Vec<f64>>();
     let closed: Vec<f64> = (s.crack.iter())
@@ -234,11 +246,41 @@ fn elastic_case_fields(
         field("sigma", GridPart::Mesh, node, FieldKind::Tensor, symmetric),
         field("sigma_raw", GridPart::Mesh, node, FieldKind::Tensor, raw),
         field("u_star", GridPart::Mesh, node, FieldKind::Vector, u_star),
-        field("u_h", GridPart::Mesh, Centering::Cell, FieldKind::Vector, u_h),
-        field("gamma_h", GridPart::Mesh, Centering::Cell, FieldKind::Scalar, s.rotation.clone()),
-        field("opening", GridPart::Crack, node, FieldKind::Scalar, ends(&f.opening)),
-        field("slip", GridPart::Crack, node, FieldKind::Scalar, ends(&f.slip)),
-        field("pressure", GridPart::Crack, node, FieldKind::Scalar, ends(&f.pressure)),
+        field(
+            "u_h",
+            GridPart::Mesh,
+            Centering::Cell,
+            FieldKind::Vector,
+            u_h,
+        ),
+        field(
+            "gamma_h",
+            GridPart::Mesh,
+            Centering::Cell,
+            FieldKind::Scalar,
+            s.rotation.clone(),
+        ),
+        field(
+            "opening",
+            GridPart::Crack,
+            node,
+            FieldKind::Scalar,
+            ends(&r.opening),
+        ),
+        field(
+            "slip",
+            GridPart::Crack,
+            node,
+            FieldKind::Scalar,
+            ends(&r.slip),
+        ),
+        field(
+            "pressure",
+            GridPart::Crack,
+            node,
+            FieldKind::Scalar,
+            ends(&r.pressure),
+        ),
         field("closed", GridPart::Crack, node, FieldKind::Scalar, closed),
     ];
     xdmf::CaseFields {
@@ -254,9 +296,11 @@ fn elastic_case_fields(
         lambda: None,
         jump: None,
         series: c.key.series_name(),
-        metadata: (summary::SizedKey { key: c.key, h: c.h }.entries().into_iter())
-            .map(|(name, value)| (name.to_string(), Meta::from(value)))
-            .collect(),
+        metadata: (summary::SizedKey { key: c.key, h: c.h }
+            .entries()
+            .into_iter())
+        .map(|(name, value)| (name.to_string(), Meta::from(value)))
+        .collect(),
         constants: vec![("delta".into(), c.key.delta)],
         extra,
     }

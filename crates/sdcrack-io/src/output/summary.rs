@@ -16,9 +16,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use sdcrack_core::case::{AxisValue, CaseAxes, CaseKey};
-use sdcrack_core::scene::ProblemKind;
 use sdcrack_core::contact::KktResiduals;
 use sdcrack_core::norms::ErrorNorms;
+use sdcrack_core::scene::ProblemKind;
 use sdcrack_core::study::elastic::{ElasticCaseResult, ElasticTimings, ELASTIC_SHARED_TIMINGS};
 use sdcrack_core::study::{CaseResult, Timings, KKT_TOLERANCE};
 
@@ -107,7 +107,8 @@ impl Summary {
             ProblemKind::Scalar => &SHARED_TIMINGS,
             ProblemKind::Elasticity => &ELASTIC_SHARED_TIMINGS,
         };
-        let scalar = (study.cases.iter()).map(|c| CaseEntry::Scalar(CaseSummary::from_case(c, with_fields)));
+        let scalar =
+            (study.cases.iter()).map(|c| CaseEntry::Scalar(CaseSummary::from_case(c, with_fields)));
         let elastic = (study.elastic.iter())
             .map(|c| CaseEntry::Elastic(ElasticCaseSummary::from_case(c, with_fields)));
         Summary {
@@ -450,7 +451,11 @@ impl ElasticCaseSummary {
 }
 
 /// A case's status in words: the LCP's, or why a converged LCP is not a converged case.
-fn case_status(converged: bool, status: sdcrack_core::contact::LcpStatus, kkt: &KktResiduals) -> String {
+fn case_status(
+    converged: bool,
+    status: sdcrack_core::contact::LcpStatus,
+    kkt: &KktResiduals,
+) -> String {
     if !converged && status.converged() {
         format!(
             "not converged: KKT residual {:.2e} above {KKT_TOLERANCE:e}",
