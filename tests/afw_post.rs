@@ -137,3 +137,37 @@ fn williams_open_graded_converges_at_the_methods_orders() {
         "a lumped opening passes: {got:.3?}"
     );
 }
+
+/// scenes/elastic-closed-slip-graded.toml, levels 0–3: the crack closed everywhere (every
+/// multiplier zero, so the opening is zero to round-off), the slip from the tangential dofs'
+/// residuals and the pressure from σ_h's normal trace. Judged on the last step: σ ≥ 0.9, u*,
+/// ‖P0u − u_h‖ ≥ 1.8, slip ≥ 1.7 (the acceptance's bounds), the pressure ≥ 0.9 (σ_h's order;
+/// measured at 2 → 3: σ 1.18, u* 2.34, P0u 2.56, slip 2.53, pressure 1.17).
+#[test]
+fn closed_slip_graded_converges_with_the_crack_shut() {
+    let cases = scene_errors("elastic-closed-slip-graded", 0..=3);
+    let column = |get: &dyn Fn(&Case) -> f64| cases.iter().map(get).collect::<Vec<_>>();
+    let table = [
+        ("σ", column(&|c| c.errors.stress_l2), 0.9),
+        ("u*", column(&|c| c.errors.u_star_l2), 1.8),
+        ("P0u − u_h", column(&|c| c.errors.projected_u_l2), 1.8),
+        ("slip", column(&|c| c.errors.slip_l2), 1.7),
+        ("pressure", column(&|c| c.errors.pressure_l2), 0.9),
+    ];
+    for (name, e, _) in &table {
+        eprintln!("{name:>10}: {} orders {:.2?}", sci(e), orders(e));
+    }
+    for (name, e, least) in &table {
+        let got = orders(e);
+        let last = got[got.len() - 1];
+        assert!(
+            last >= *least,
+            "{name}: orders {got:.3?}, expected ≥ {least}"
+        );
+    }
+    // the opening of a shut crack: zero multipliers, residuals of round-off size (measured
+    // ≤ 3.4e-17 against a slip error of 7.7e-4 and more)
+    for c in &cases {
+        assert!(c.errors.opening_l2 < 1e-14, "{:?}", c.errors);
+    }
+}
