@@ -15,11 +15,13 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use sdcrack_core::afw::AfwError;
 use sdcrack_core::case::{delta_text, CaseKey, CasePattern, Pattern};
 use sdcrack_core::problem::Named;
 use sdcrack_core::problem::{MultiplierSpace, PMass, PSpace, USpace};
 use sdcrack_core::scene::{KeyPath, ProblemKind, Scene};
-use sdcrack_core::study::{run_study, CasePlan, CaseResult, Observer, StudyError, StudyResult};
+use sdcrack_core::study::elastic::{run_elastic_study, ElasticCaseResult};
+use sdcrack_core::study::{run_study, CasePlan, CaseResult, Observer, StudyError};
 use sdcrack_io::output::summary::Provenance;
 use sdcrack_io::output::{write_run, ResultsDir};
 use sdcrack_io::scene_file::{LoadedScene, SceneError};
@@ -194,7 +196,8 @@ pub enum Command {
         /// Scene file (TOML).
         scene: PathBuf,
         /// Print the scene's plan as one JSON object (name, cases, levels, u_spaces,
-        /// multipliers, p_masses, deltas, references, fields, memory_mb per level: sdcrack's
+        /// multipliers, p_masses, deltas, an elastic scene's problem and problems, references,
+        /// fields, memory_mb per level: sdcrack's
         /// peak-memory estimate in MiB, and mesh_memory_mb: its part that grows with the mesh),
         /// for workflow engines.
         #[arg(long)]
@@ -386,12 +389,21 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                     s.name,
                     s.axes.case_count()
                 ),
-                // no solver case until the elastic solver (issue 46): the references solve it
-                ProblemKind::Elasticity => say!(
-                    "{}: valid elastic scene '{}' (levels {:?}, references {:?}; no solver case: the smooth-domain solver of the elastic problem is issue 46)",
+                ProblemKind::Elasticity if s.axes.case_count() == 0 => say!(
+                    "{}: valid elastic scene '{}' (levels {:?}, references {:?}; no solver case: [discretization] lists no multipliers and deltas)",
                     scene.display(),
                     s.name,
                     s.axes.levels,
+                    s.references
+                ),
+                ProblemKind::Elasticity => say!(
+                    "{}: valid elastic scene '{}' ({} cases: levels {:?} × multipliers {:?} × δ {:?}; references {:?})",
+                    scene.display(),
+                    s.name,
+                    s.axes.case_count(),
+                    s.axes.levels,
+                    (s.axes.multipliers.iter()).map(|m| m.name()).collect::<Vec<_>>(),
+                    s.axes.deltas,
                     s.references
                 ),
             }
@@ -443,7 +455,7 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
             check_level_option(&loaded.scene, filter.level)?;
             match loaded.scene.problem.kind() {
                 ProblemKind::Scalar => check_space_pairs(&loaded.scene, &filter)?,
-                ProblemKind::Elasticity => check_no_scalar_axes(&loaded.scene, &cases)?,
+                ProblemKind::Elasticity => check_elastic_options(&loaded.scene, &cases)?,
             }
             run(&loaded, &origin, &filter, &out, quiet, solver_only)
         }
@@ -565,7 +577,8 @@ fn merge(shards: &[PathBuf], out: &Path) -> Result<i32, Failure> {
             outcome.path.display()
         ),
         ProblemKind::Elasticity => say!(
-            "elastic scene '{}': no solver case (issue 46), references {:?} merged from {} shards; results in {}",
+            "{} elastic cases of scene '{}' and its references {:?} merged from {} shards; results in {}",
+            outcome.cases,
             outcome.scene.name,
             outcome.scene.references,
             shards.len(),
@@ -669,23 +682,38 @@ fn check_space_pairs(scene: &Scene, filter: &Pattern<CaseKey>) -> Result<(), Fai
     )))
 }
 
-/// Refuses the options of the scalar problem's case axes for an elastic scene, which has none
-/// (only `--level` selects its levels).
-fn check_no_scalar_axes(scene: &Scene, cases: &CaseSelection) -> Result<(), Failure> {
-    let given = [
+/// Refuses, for an elastic scene, the options of the scalar problem's own axes (u space, p mass,
+/// p space: the AFW method has none), a `--multiplier` the elastic solver does not have
+/// ([`sdcrack_core::afw::MULTIPLIER_SPACES`]), and `--multiplier` or `--delta` for a scene that
+/// lists no solver case (no `multipliers` and `deltas`: its references only).
+fn check_elastic_options(scene: &Scene, cases: &CaseSelection) -> Result<(), Failure> {
+    let scalar_only = [
         ("--u-space", cases.u_space.is_some()),
-        ("--multiplier", cases.multiplier.is_some()),
         ("--p-mass", cases.p_mass.is_some()),
         ("--p-space", cases.p_space.is_some()),
-        ("--delta", cases.delta.is_some()),
     ];
-    match given.iter().find(|(_, is)| *is) {
-        Some((option, _)) => Err(usage(format!(
-            "{option} selects a case of the scalar problem's solver, and scene '{}' is elastic: it has no solver case (issue 46); only --level selects its levels",
+    if let Some((option, _)) = scalar_only.iter().find(|(_, is)| *is) {
+        return Err(usage(format!(
+            "{option} selects a case of the scalar problem's solver, and scene '{}' is elastic: its cases are levels × multipliers × δ (--level, --multiplier, --delta)",
             scene.name
-        ))),
-        None => Ok(()),
+        )));
     }
+    let solved = sdcrack_core::afw::MULTIPLIER_SPACES;
+    if let Some(m) = cases.multiplier.filter(|m| !solved.contains(m)) {
+        let names: Vec<&str> = solved.iter().map(|m| m.name()).collect();
+        return Err(usage(format!(
+            "--multiplier {m}: the elastic solver has no multiplier space {m} yet (it has {})",
+            or_list(&names)
+        )));
+    }
+    let selects = cases.multiplier.is_some() || cases.delta.is_some();
+    if selects && scene.axes.case_count() == 0 {
+        return Err(usage(format!(
+            "--multiplier and --delta select solver cases, and the elastic scene '{}' lists none ([discretization] has no multipliers and deltas: its references only)",
+            scene.name
+        )));
+    }
+    Ok(())
 }
 
 fn check_level_option(scene: &Scene, level: Option<u32>) -> Result<(), Failure> {
@@ -713,6 +741,19 @@ impl Observer for Progress {
                 case.key.multiplier,
                 delta_text(case.key.delta),
                 case.status.name()
+            ));
+        }
+        self.bar.inc(1);
+    }
+    fn elastic_case_done(&mut self, case: &ElasticCaseResult) {
+        if !case.converged {
+            self.bar.println(format!(
+                "warning: level {} elasticity {} δ = {} did not converge ({}; KKT residual {:.1e})",
+                case.key.level,
+                case.key.multiplier,
+                delta_text(case.key.delta),
+                case.status.name(),
+                case.kkt.max()
             ));
         }
         self.bar.inc(1);
@@ -749,10 +790,10 @@ fn run(
     let mut progress = Progress { bar };
     let study = match scene.problem.kind() {
         ProblemKind::Scalar => run_study(scene, &plan, &mut progress),
-        ProblemKind::Elasticity => no_solver_cases(scene),
+        ProblemKind::Elasticity => run_elastic_study(scene, &plan, &mut progress),
     }
     .map_err(|e| match e {
-        StudyError::Linalg(_) => runtime(e),
+        StudyError::Linalg(_) | StudyError::Afw(AfwError::Linalg(_)) => runtime(e),
         // Non-finite data at a quadrature point, a crack off a finer mesh: the scene's fault.
         _ => invalid_scene(loaded, origin, study_scene_error(&e)),
     })?;
@@ -776,7 +817,9 @@ fn run(
     )?;
     let path = results.commit().map_err(runtime)?;
     print_table(scene, &study.cases);
-    let failed = study.cases.iter().filter(|c| !c.converged).count();
+    print_elastic_table(scene, &study.elastic);
+    let failed = study.cases.iter().filter(|c| !c.converged).count()
+        + study.elastic.iter().filter(|c| !c.converged).count();
     // the whole command's time, and the solve's (summary.json's wall_s) beside it: the fields
     // and the references may take most of it
     match scene.problem.kind() {
@@ -788,23 +831,79 @@ fn run(
             path.display()
         ),
         ProblemKind::Elasticity => say!(
-            "elastic scene '{}': no solver case (issue 46), references {references:?} on levels {:?} in {:.1} s; results in {}",
+            "elastic scene '{}': {} cases in {:.1} s (solving {:.1} s), references {references:?} on levels {:?}; results in {}",
             scene.name,
-            plan.axes.levels,
+            study.elastic.len(),
             start.elapsed().as_secs_f64(),
+            wall,
+            plan.axes.levels,
             path.display()
         ),
     }
     Ok(convergence_status(failed, references_converged))
 }
 
-/// The study of an elastic scene: no solver case (its solver is issue 46), only where level 0
-/// came from (gmsh's level 0 is kept as `coarse.msh`, as for a scalar scene).
-fn no_solver_cases(scene: &Scene) -> Result<StudyResult, StudyError> {
-    Ok(StudyResult {
-        coarse_mesh: scene.mesh_source()?.provenance,
-        ..StudyResult::default()
-    })
+/// The errors of an elastic case that its terminal table shows (summary.json has them all):
+/// what users compare, σ symmetrised, u_h, u*, the opening and the contact pressure.
+const ELASTIC_TABLE_ERRORS: [&str; 5] = [
+    "stress_sym_l2",
+    "u_l2",
+    "u_star_l2",
+    "opening_l2",
+    "pressure_l2",
+];
+
+/// Prints, per multiplier space and δ, the elastic cases' convergence table: each level's size,
+/// unknowns, LCP iterations, closed crack edge ends (of all ends), the errors of
+/// [`ELASTIC_TABLE_ERRORS`] with the rate of each against the previous level, and the largest
+/// KKT residual.
+pub fn print_elastic_table(scene: &Scene, cases: &[ElasticCaseResult]) {
+    let error = |c: &ElasticCaseResult, name: &str| -> Option<f64> {
+        Some(c.errors.as_ref()?.iter().find(|(n, _)| n == name)?.1)
+    };
+    let mut series: Vec<(MultiplierSpace, u64)> = cases
+        .iter()
+        .map(|c| (c.key.multiplier, c.key.delta.to_bits()))
+        .collect();
+    series.dedup();
+    for (multiplier, delta_bits) in series {
+        let delta = f64::from_bits(delta_bits);
+        say!(
+            "scene '{}': elasticity, {multiplier}, δ = {}",
+            scene.name,
+            delta_text(delta)
+        );
+        let rows: Vec<&ElasticCaseResult> = (cases.iter())
+            .filter(|c| c.key.multiplier == multiplier && c.key.delta.to_bits() == delta_bits)
+            .collect();
+        let names: Vec<&str> = (ELASTIC_TABLE_ERRORS.into_iter())
+            .filter(|n| rows.first().is_some_and(|c| error(c, n).is_some()))
+            .collect();
+        let head: String = names.iter().map(|n| format!(" {n:>13}  rate")).collect();
+        say!("level        h  unknowns  iter  closed{head}     kkt");
+        let mut prev: Option<&ElasticCaseResult> = None;
+        for c in rows {
+            let flag = if c.converged { "" } else { "  NOT CONVERGED" };
+            let errors: String = (names.iter())
+                .filter_map(|name| {
+                    let e = error(c, name)?;
+                    let before = prev.and_then(|p| Some((p.h, error(p, name)?)));
+                    Some(format!(" {e:13.3e} {}", rate(before, c.h, e)))
+                })
+                .collect();
+            say!(
+                "{:5} {:8.5} {:9} {:5} {:>7}{errors} {:7.1e}{flag}",
+                c.key.level,
+                c.h,
+                c.unknowns,
+                c.iterations,
+                format!("{}/{}", c.closed_ends, 2 * c.crack_edges),
+                c.kkt.max()
+            );
+            prev = Some(c);
+        }
+        say!("");
+    }
 }
 
 /// The exit code of a command that wrote its results: 0, or 3 (with a line on stderr for each

@@ -7,6 +7,9 @@ import decimal
 from typing import NamedTuple
 
 
+# The problem kind of a case (summary.json's `problem`, written for an elastic case only).
+DEFAULT_PROBLEM = "scalar"
+
 # The p masses of `sdcrack run` (summary.json: each case's `p_mass`, the plan's `p_masses`); a case
 # without the key (an sdcrack older than the lumped p mass) is consistent.
 P_MASSES = ("consistent", "lumped")
@@ -90,13 +93,17 @@ class CaseKey(NamedTuple):
     p_mass: str
     p_space: str
     delta: float
+    # the problem kind: written only for an elastic case (whose key has no u space, p mass or p
+    # space; the compare tool does not judge elastic solver cases yet)
+    problem: str = DEFAULT_PROBLEM
 
     @classmethod
     def of(cls, c):
-        """The key of a case (or row) of summary.json: its absent p axes are the defaults."""
+        """The key of a case (or row) of summary.json: its absent p axes and problem kind are
+        the defaults."""
         return cls(level=int(c["level"]), u_space=str(c["u_space"]),
                    multiplier=str(c["multiplier"]), p_mass=p_mass(c), p_space=p_space(c),
-                   delta=float(c["delta"]))
+                   delta=float(c["delta"]), problem=str(c.get("problem", DEFAULT_PROBLEM)))
 
     def series_name(self):
         """The solver's name of the case's δ sweep in the field files (its series_name):

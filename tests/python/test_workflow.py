@@ -805,8 +805,9 @@ def test_both_p_spaces_merge_as_one_process(tmp_path):
 
 
 # ----------------------------------------------------------------------------- elastic scenes
-# An elastic scene (docs/elasticity.md) has no solver case until issue 46: its plan (`sdcrack check
-# --json`: "problem": "elasticity", empty scalar axes, 0 cases) gives reference jobs per tool and
+# An elastic scene of the campaign (docs/elasticity.md) lists no solver case (one that does is
+# refused: no elastic solver job yet): its plan (`sdcrack check --json`: "problem": "elasticity",
+# empty scalar axes, 0 cases) gives reference jobs per tool and
 # level and a report job, no solver job and no check job (`sdcompare --precompute` reads the
 # scalar problem's shards only), and its report gets no --baseline (the elastic report refuses it).
 
@@ -835,6 +836,22 @@ def test_jobs_of_an_elastic_plan():
     assert not prepare.is_elastic(scalar)
     assert prepare.jobs_of(scalar)[2] == ["checks/e/references-l0.json",
                                           "checks/e/references-l1.json"]
+
+
+def test_an_elastic_scene_with_solver_cases_is_refused(tmp_path):
+    """The campaign runs no elastic solver job yet: an elastic scene listing solver cases
+    (multipliers and deltas) is refused in one line instead of a report job whose merge misses
+    every case; the same scene without them is planned."""
+    import ci_script
+
+    prepare = ci_script.load("tools/workflow/prepare.py")
+    scene = elastic_scene(tmp_path)
+    assert prepare.check_scene(EXE, str(scene))["cases"] == 0
+    with_cases = tmp_path / "with-cases.toml"
+    with_cases.write_text(add_key(add_key(scene.read_text(), "levels", "deltas", "[0.0]"),
+                                  "levels", "multipliers", '["M1star"]'))
+    with pytest.raises(prepare.Refused, match="lists 2 solver case.*no elastic solver job yet"):
+        prepare.check_scene(EXE, str(with_cases))
 
 
 def test_dry_run_of_an_elastic_scene(scenes, tmp_path):

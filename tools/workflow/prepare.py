@@ -129,8 +129,9 @@ ELASTIC = "elasticity"
 
 
 def is_elastic(plan):
-    """Whether the plan is an elastic scene's (docs/elasticity.md): no solver case until its
-    solver exists (issue 46), reference jobs only, and a report of its own kind."""
+    """Whether the plan is an elastic scene's (docs/elasticity.md): reference jobs only (a scene
+    with solver cases is refused by check_scene: no elastic solver job yet), and a report of its
+    own kind."""
     return plan.get("problem") == ELASTIC
 
 
@@ -219,6 +220,11 @@ def check_scene(exe, path):
                 "memory_mb", "mesh_memory_mb"):
         if key not in plan:
             raise Refused(f"sdcrack check --json lacks `{key}` (binary too old?)")
+    if is_elastic(plan) and plan.get("cases", 0) > 0:
+        raise Refused(f"elastic scene '{plan['name']}' lists {plan['cases']} solver case(s) "
+                      "([discretization] multipliers and deltas): the campaign runs no elastic "
+                      "solver job yet (its elastic scenes run their references); run the cases "
+                      "with `sdcrack run` (docs/elasticity.md, \"The run\")")
     unknown = [ps for ps in plan["p_spaces"] if ps not in P_SPACE_SUFFIX]
     if unknown:
         raise Refused(f"p space {unknown[0]!r} unknown to the campaign workflow "

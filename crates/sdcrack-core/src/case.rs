@@ -1,12 +1,20 @@
 //! A case as a value: [`CaseKey`], one value of every axis of a study (level, u space,
-//! multiplier, p mass, p space, δ); [`Pattern<CaseKey>`](Pattern), the same axes each optional
+//! multiplier, p mass, p space, δ, problem kind); [`Pattern<CaseKey>`](Pattern), the same axes each optional
 //! (a run's filter, a scene's expected rates); [`CaseAxes`], one list of values per axis (a
 //! scene's `[discretization]`, a run's plan). The three are declared together by one table
 //! ([`case_axes!`]): adding an axis is one line there, plus the places that use the new axis
 //! (its producer in the study, its name in the field files). The key's names in the field
 //! files ([`CaseKey::series_name`], [`CaseKey::case_name`]) have their one home here too.
+//!
+//! **The problem kind** ([`ProblemKind`], the last axis) decides which axes a key has: a scalar
+//! key has them all and is written without `problem` (every scalar results file stays as it was
+//! before the axis); an elastic key (the smooth-domain method for elasticity, docs/design.md)
+//! is written with `problem = "elasticity"` and without `u_space`, `p_mass`, `p_space`, which
+//! the AFW method does not have: in memory such an axis holds a placeholder
+//! ([`Unwritten::UNWRITTEN`], or the type's default) that no file, name or message shows.
 
 use crate::problem::{MultiplierSpace, Named, PMass, PSpace, USpace};
+use crate::scene::ProblemKind;
 
 /// An axis' value as results files write it: a number, or a name.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -90,17 +98,84 @@ fn default_list<T: Default>() -> Vec<T> {
     vec![T::default()]
 }
 
+/// The value an axis holds in a key whose problem kind does not have the axis (and has no
+/// default): never written, named or shown ([`CaseKey::entries`] leaves the axis out).
+pub trait Unwritten {
+    /// The placeholder.
+    const UNWRITTEN: Self;
+}
+
+impl Unwritten for USpace {
+    const UNWRITTEN: USpace = USpace::Continuous;
+}
+
+/// Whether a plan's list of problem kinds is the scalar problem's alone: summary.json's and
+/// `sdcrack check --json`'s plan then has no `problems` (as before the axis).
+fn is_scalar_only(problems: &[ProblemKind]) -> bool {
+    problems == [ProblemKind::Scalar]
+}
+
+/// The value of an axis that a results file does not write for a key of problem kind `$p`:
+/// the type's default for an axis with one (`(default)`), the placeholder ([`Unwritten`]) for an
+/// axis that `$p` does not have (`if shown` false); `None` (the axis is required) otherwise.
+macro_rules! axis_absent {
+    ($p:ident, $ty:ty, if $shown:ident) => {
+        (!$p.$shown()).then_some(<$ty as Unwritten>::UNWRITTEN)
+    };
+    ($p:ident, $ty:ty, $default:ident $(, if $shown:ident)?) => {
+        Some(<$ty as Default>::$default())
+    };
+    ($p:ident, $ty:ty) => {
+        None::<$ty>
+    };
+}
+
 /// Declares [`CaseKey`], [`CasePattern`] and [`CaseAxes`] from one table of axes, in the key's
-/// order (summary.json's, and the field files'): `field: Type => plural`, followed by
-/// `(default)` for an axis a scene may leave out: it then runs the type's `Default` value, which
-/// is also what a results file written before the axis existed means.
+/// order (summary.json's, and the field files'): `field: Type => plural`, the plural optionally
+/// preceded by serde attributes of [`CaseAxes`]' list, followed by `(default)` for an axis a
+/// scene may leave out: it then runs the type's `Default` value, which is also what a results
+/// file written before the axis existed means; and by `if shown` for an axis that only some
+/// problem kinds have: a key is written with it when `shown` (a method of [`ProblemKind`]) holds
+/// for its `problem`, and read without it as its default or placeholder ([`Unwritten`]).
 macro_rules! case_axes {
-    ($( $(#[$doc:meta])* $field:ident : $ty:ty => $plural:ident $(($default:ident))? ),+ $(,)?) => {
+    ($( $(#[$doc:meta])* $field:ident : $ty:ty => $(#[$pattr:meta])* $plural:ident
+        $(($default:ident))? $(if $shown:ident)? ),+ $(,)?) => {
         /// One case of a study: a value of every axis. summary.json writes it flattened into
-        /// the case's entry (with the mesh size `h` after the level).
-        #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+        /// the case's entry (with the mesh size `h` after the level), the axes its problem kind
+        /// has only ([`CaseKey::entries`]).
+        #[derive(Clone, Copy, Debug, PartialEq)]
         pub struct CaseKey {
-            $( $(#[$doc])* $(#[serde($default)])? pub $field: $ty, )+
+            $( $(#[$doc])* pub $field: $ty, )+
+        }
+
+        impl serde::Serialize for CaseKey {
+            /// As [`CaseKey::entries`]: the axes of the key's problem kind, in the key's order.
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.collect_map(self.entries())
+            }
+        }
+
+        impl<'de> serde::Deserialize<'de> for CaseKey {
+            /// The axes as written ([`CaseKey::entries`]); an axis not written takes its default
+            /// or, where the key's problem kind does not have it, its placeholder
+            /// ([`axis_absent!`]); any other missing axis is an error.
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<CaseKey, D::Error> {
+                #[derive(serde::Deserialize)]
+                struct Written {
+                    $( #[serde(default)] $field: Option<$ty>, )+
+                }
+                let w = Written::deserialize(d)?;
+                let problem = w.problem.unwrap_or_default();
+                Ok(CaseKey {
+                    $( $field: match w.$field {
+                        Some(v) => v,
+                        None => axis_absent!(problem, $ty $(, $default)? $(, if $shown)?)
+                            .ok_or_else(|| <D::Error as serde::de::Error>::missing_field(
+                                stringify!($field),
+                            ))?,
+                    }, )+
+                })
+            }
         }
 
         /// [`CaseKey`]'s axes, each optional: `None` matches every value (a filter's axis not
@@ -117,14 +192,20 @@ macro_rules! case_axes {
         /// `plan` (each value by its name, δ as a number).
         #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
         pub struct CaseAxes {
-            $( $(#[$doc])* $(#[serde($default = "default_list")])? pub $plural: Vec<$ty>, )+
+            $( $(#[$doc])* $(#[$pattr])* $(#[serde($default = "default_list")])?
+               pub $plural: Vec<$ty>, )+
         }
 
         impl CaseKey {
             /// Each axis' name and value, in the key's order (summary.json's keys of a case,
-            /// the attributes of its group in the field files).
+            /// the attributes of its group in the field files): the axes its problem kind has
+            /// (`problem` itself only for a kind other than the scalar one).
             pub fn entries(&self) -> Vec<(&'static str, AxisValue)> {
-                vec![$( (stringify!($field), self.$field.value()), )+]
+                let mut entries = Vec::new();
+                $( if true $(&& self.problem.$shown())? {
+                    entries.push((stringify!($field), self.$field.value()));
+                } )+
+                entries
             }
 
             /// The axes, in the key's order, as `sdcrack schema` prints them.
@@ -183,17 +264,22 @@ macro_rules! case_axes {
 case_axes! {
     /// Refinement level ℓ (level ℓ has 2^ℓ·cells cells per direction); a list increasing.
     level: u32 => levels,
-    /// u space.
-    u_space: USpace => u_spaces,
+    /// u space (the scalar problem's only).
+    u_space: USpace => u_spaces if has_scalar_axes,
     /// Multiplier space.
     multiplier: MultiplierSpace => multipliers,
-    /// p mass of the system solved (a scene's default: the consistent one).
-    p_mass: PMass => p_masses (default),
+    /// p mass of the system solved (a scene's default: the consistent one; the scalar
+    /// problem's only).
+    p_mass: PMass => p_masses (default) if has_scalar_axes,
     /// p space of the system solved (a scene's default: the paper's continuous p); each runs
-    /// with the u spaces it serves ([`PSpace::serves`]).
-    p_space: PSpace => p_spaces (default),
+    /// with the u spaces it serves ([`PSpace::serves`]; the scalar problem's only).
+    p_space: PSpace => p_spaces (default) if has_scalar_axes,
     /// Regularisation parameter δ ≥ 0; a list decreasing.
     delta: f64 => deltas,
+    /// The problem kind (a scene's `[problem] kind`; the default: the scalar problem, written
+    /// only for another kind).
+    problem: ProblemKind => #[serde(skip_serializing_if = "is_scalar_only")] problems (default)
+        if is_named_in_keys,
 }
 
 impl Keyed for CaseKey {
@@ -201,11 +287,29 @@ impl Keyed for CaseKey {
 }
 
 impl CaseKey {
+    /// The key of an elastic case (the AFW method: no u space, p mass or p space; those axes
+    /// hold their placeholders, [`Unwritten`]).
+    pub fn elastic(level: u32, multiplier: MultiplierSpace, delta: f64) -> CaseKey {
+        CaseKey {
+            level,
+            u_space: USpace::UNWRITTEN,
+            multiplier,
+            p_mass: PMass::default(),
+            p_space: PSpace::default(),
+            delta,
+            problem: ProblemKind::Elasticity,
+        }
+    }
+
     /// Name of the δ sweep this case belongs to in the field files, e.g. `level3-broken-M1`
     /// (and `level3-broken-M1-lumped` for the lumped p mass, `level3-broken-M1-ptangential` for
-    /// the broken-tangential p, `level3-broken-M1-lumped-ptangential` for both): the time series
-    /// `fields/<series>.series.xdmf` whose steps are the sweep's δ.
+    /// the broken-tangential p, `level3-broken-M1-lumped-ptangential` for both; an elastic case
+    /// `level3-elasticity-M1star`): the time series `fields/<series>.series.xdmf` whose steps are
+    /// the sweep's δ.
     pub fn series_name(&self) -> String {
+        if !self.problem.has_scalar_axes() {
+            return format!("level{}-{}-{}", self.level, self.problem, self.multiplier);
+        }
         let mass = match self.p_mass {
             PMass::Consistent => "",
             PMass::Lumped => "-lumped",
@@ -228,9 +332,14 @@ impl CaseKey {
 }
 
 impl std::fmt::Display for CaseKey {
-    /// The case in words, for messages: `level 2 broken M1 lumped continuous p δ = 0.01`.
+    /// The case in words, for messages: `level 2 broken M1 lumped continuous p δ = 0.01`, an
+    /// elastic one `level 2 elasticity M1star δ = 0`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let k = self;
+        if !k.problem.has_scalar_axes() {
+            let (level, problem, m) = (k.level, k.problem, k.multiplier);
+            return write!(f, "level {level} {problem} {m} δ = {}", k.delta);
+        }
         let (level, u, m, pm, ps) = (k.level, k.u_space, k.multiplier, k.p_mass, k.p_space);
         write!(f, "level {level} {u} {m} {pm} {ps} p δ = {}", k.delta)
     }
@@ -286,11 +395,22 @@ impl CaseAxes {
             .collect()
     }
 
-    /// Every case, in the order a study solves them: level, u space, p space, p mass, δ,
-    /// multiplier, outermost first (the loops of [`crate::study::run_study`], which share a
-    /// level's mesh, a (u, p) pair's assembly and a δ's factorisation with what is inside).
+    /// Every case, in the order a study solves them: per problem kind, the scalar problem's
+    /// ([`CaseAxes::scalar_keys`]) or the elastic one's ([`CaseAxes::elastic_keys`]).
     pub fn keys(&self) -> Vec<CaseKey> {
-        let mut keys = Vec::with_capacity(self.case_count());
+        (self.problems.iter())
+            .flat_map(|&problem| match problem {
+                ProblemKind::Scalar => self.scalar_keys(),
+                ProblemKind::Elasticity => self.elastic_keys(),
+            })
+            .collect()
+    }
+
+    /// The scalar problem's cases: level, u space, p space, p mass, δ, multiplier, outermost
+    /// first (the loops of [`crate::study::run_study`], which share a level's mesh, a (u, p)
+    /// pair's assembly and a δ's factorisation with what is inside).
+    pub fn scalar_keys(&self) -> Vec<CaseKey> {
+        let mut keys = Vec::with_capacity(self.scalar_count());
         for &level in &self.levels {
             for (u_space, p_space) in self.space_pairs() {
                 for &p_mass in &self.p_masses {
@@ -303,6 +423,7 @@ impl CaseAxes {
                                 p_mass,
                                 p_space,
                                 delta,
+                                problem: ProblemKind::Scalar,
                             });
                         }
                     }
@@ -312,13 +433,42 @@ impl CaseAxes {
         keys
     }
 
-    /// Number of cases: levels × (u space, p space) pairs × multipliers × p masses × δ.
+    /// The elastic problem's cases: level, δ, multiplier, outermost first (the loops of
+    /// [`crate::study::elastic::run_elastic_study`]); its lists of the scalar axes are empty.
+    pub fn elastic_keys(&self) -> Vec<CaseKey> {
+        let mut keys = Vec::with_capacity(self.elastic_count());
+        for &level in &self.levels {
+            for &delta in &self.deltas {
+                for &multiplier in &self.multipliers {
+                    keys.push(CaseKey::elastic(level, multiplier, delta));
+                }
+            }
+        }
+        keys
+    }
+
+    /// Number of cases ([`CaseAxes::keys`]' length).
     pub fn case_count(&self) -> usize {
+        (self.problems.iter())
+            .map(|problem| match problem {
+                ProblemKind::Scalar => self.scalar_count(),
+                ProblemKind::Elasticity => self.elastic_count(),
+            })
+            .sum()
+    }
+
+    /// Number of scalar cases: levels × (u space, p space) pairs × multipliers × p masses × δ.
+    fn scalar_count(&self) -> usize {
         self.levels.len()
             * self.space_pairs().len()
             * self.multipliers.len()
             * self.p_masses.len()
             * self.deltas.len()
+    }
+
+    /// Number of elastic cases: levels × multipliers × δ.
+    fn elastic_count(&self) -> usize {
+        self.levels.len() * self.multipliers.len() * self.deltas.len()
     }
 }
 
@@ -334,6 +484,7 @@ mod tests {
             p_mass: PMass::Lumped,
             p_space: PSpace::BrokenTangential,
             delta: 1e-2,
+            problem: ProblemKind::Scalar,
         }
     }
 
@@ -389,6 +540,7 @@ mod tests {
             p_masses: PMass::ALL.to_vec(),
             p_spaces: PSpace::ALL.to_vec(),
             deltas: vec![1.0, 0.0],
+            problems: vec![ProblemKind::Scalar],
         };
         let one = CasePattern {
             level: Some(1),
@@ -425,14 +577,18 @@ mod tests {
                 "multiplier",
                 "p_mass",
                 "p_space",
-                "delta"
+                "delta",
+                "problem"
             ]
         );
         assert_eq!(s[2].values, ["M0", "M1", "M1star"]);
         assert!(s[0].values.is_empty() && s[5].values.is_empty());
         assert_eq!(s[3].default, Some("consistent"));
+        assert_eq!(s[6].values, ["scalar", "elasticity"]);
+        assert_eq!(s[6].default, Some("scalar"));
+        // a scalar key is written without its problem kind, as before the axis
         let entries: Vec<_> = key().entries();
-        assert_eq!(entries.iter().map(|e| e.0).collect::<Vec<_>>(), axes);
+        assert_eq!(entries.iter().map(|e| e.0).collect::<Vec<_>>(), axes[..6]);
         assert_eq!(entries[0].1, AxisValue::Int(3));
         assert_eq!(entries[3].1, AxisValue::Name("lumped"));
         assert_eq!(entries[5].1, AxisValue::Number(1e-2));
@@ -447,6 +603,53 @@ mod tests {
         d.u_spaces = Some(vec![USpace::Broken]);
         d.multipliers = Some(vec![MultiplierSpace::M0]);
         d.deltas = Some(vec![0.0]);
-        assert_eq!(d.complete().map(|a| a.case_count()), Ok(1));
+        assert_eq!(d.clone().complete().map(|a| a.case_count()), Ok(1));
+        assert_eq!(d.problems, Some(vec![ProblemKind::Scalar]));
+    }
+
+    /// An elastic case: levels × δ × multipliers, written with its problem kind and without the
+    /// scalar axes it does not have; read back the same key, and a scalar key's text is what it
+    /// was before the problem axis.
+    #[test]
+    fn an_elastic_key_has_its_own_axes_only() {
+        let axes = CaseAxes {
+            levels: vec![0, 1],
+            u_spaces: Vec::new(),
+            multipliers: vec![MultiplierSpace::M1Star],
+            p_masses: Vec::new(),
+            p_spaces: Vec::new(),
+            deltas: vec![1e-2, 0.0],
+            problems: vec![ProblemKind::Elasticity],
+        };
+        let keys = axes.keys();
+        assert_eq!((keys.len(), axes.case_count()), (4, 4));
+        assert_eq!((keys[0].level, keys[0].delta), (0, 1e-2));
+        assert_eq!((keys[1].level, keys[1].delta), (0, 0.0));
+        assert!(keys.iter().all(|k| k.problem == ProblemKind::Elasticity));
+        let k = keys[1];
+        let names: Vec<&str> = k.entries().iter().map(|e| e.0).collect();
+        assert_eq!(names, ["level", "multiplier", "delta", "problem"]);
+        assert_eq!(k.case_name(), "level0-elasticity-M1star-delta0");
+        assert_eq!(k.to_string(), "level 0 elasticity M1star δ = 0");
+        let text = serde_json::to_string(&k).unwrap();
+        assert_eq!(
+            text,
+            r#"{"level":0,"multiplier":"M1star","delta":0.0,"problem":"elasticity"}"#
+        );
+        assert_eq!(serde_json::from_str::<CaseKey>(&text).unwrap(), k);
+        // the plan of an elastic scene names its kind; a scalar plan does not
+        let plan = serde_json::to_value(&axes).unwrap();
+        assert_eq!(plan["problems"], serde_json::json!(["elasticity"]));
+        let scalar = serde_json::to_string(&key()).unwrap();
+        assert!(!scalar.contains("problem"), "{scalar}");
+        assert_eq!(serde_json::from_str::<CaseKey>(&scalar).unwrap(), key());
+        // a scalar key without its u space is refused; an elastic one needs none
+        let no_u = r#"{"level":0,"multiplier":"M1","delta":0.0}"#;
+        assert!(serde_json::from_str::<CaseKey>(no_u).is_err());
+        let mut scalar_axes = axes.clone();
+        scalar_axes.problems = vec![ProblemKind::Scalar];
+        let plan = serde_json::to_value(&scalar_axes).unwrap();
+        assert!(plan.get("problems").is_none(), "{plan}");
+        assert_eq!(scalar_axes.case_count(), 0);
     }
 }

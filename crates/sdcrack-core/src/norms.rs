@@ -207,7 +207,7 @@ fn graded_pieces(corner: Option<usize>, depth: usize) -> Vec<[[f64; 2]; 3]> {
 
 /// Which rule a piece of a triangle gets.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum PieceRule {
+pub(crate) enum PieceRule {
     /// Degree `degree`: away from the tips.
     Regular,
     /// Degree `tip_degree`: near a tip, or a piece of a graded tip triangle.
@@ -217,7 +217,7 @@ enum PieceRule {
 }
 
 /// A piece of a triangle in its reference coordinates, with its rule.
-type Piece = (PieceRule, [[f64; 2]; 3]);
+pub(crate) type Piece = (PieceRule, [[f64; 2]; 3]);
 
 /// The pieces of a triangle whose local vertices `at_tip` are crack tips (`near_tip`: it shares a
 /// vertex with a triangle touching a tip), appended to `out`.
@@ -283,7 +283,8 @@ const EXACT_VALUES: usize = 4;
 const CHUNK: usize = 4096;
 
 /// The norms' rule on the triangles of one mesh: which rule each piece of a triangle gets.
-struct MeshRule {
+/// Shared with the elastic norms ([`crate::afw::norms`]), which integrate over the same points.
+pub(crate) struct MeshRule {
     tip: TipRule,
     regular: TriangleRule,
     near: TriangleRule,
@@ -294,7 +295,7 @@ struct MeshRule {
 }
 
 impl MeshRule {
-    fn new(mesh: &Mesh, quad: NormQuadrature) -> MeshRule {
+    pub(crate) fn new(mesh: &Mesh, quad: NormQuadrature) -> MeshRule {
         let regular = triangle_rule(quad.degree);
         let near = triangle_rule(quad.tip_degree);
         let collapsed = match quad.tip {
@@ -348,10 +349,22 @@ impl MeshRule {
 
     /// The points of triangle `t` (of geometry `geo`), piece after piece, into `work.points`.
     fn points(&self, t: &[usize; 3], geo: &TriangleGeometry, work: &mut ElementWork) {
-        self.pieces(t, &mut work.pieces);
-        work.points.clear();
-        for &(rule, piece) in &work.pieces {
-            extend_physical_points(self.rule_of(rule), geo.vertices, piece, &mut work.points);
+        self.triangle_points(t, geo, &mut work.pieces, &mut work.points);
+    }
+
+    /// The points of triangle `t` (of geometry `geo`), piece after piece, into `points`
+    /// (`pieces`: scratch for its pieces).
+    pub(crate) fn triangle_points(
+        &self,
+        t: &[usize; 3],
+        geo: &TriangleGeometry,
+        pieces: &mut Vec<Piece>,
+        points: &mut Vec<PhysicalPoint>,
+    ) {
+        self.pieces(t, pieces);
+        points.clear();
+        for &(rule, piece) in pieces.iter() {
+            extend_physical_points(self.rule_of(rule), geo.vertices, piece, points);
         }
     }
 }
@@ -373,29 +386,30 @@ fn evaluate(program: &ExprBatch, work: &mut ElementWork, out: &mut [f64]) {
 }
 
 /// The points of the λ error's rule on the cracks, chains in order: a crack segment's pieces
-/// ([`segment_pieces`]) with `tip_degree / 2 + 1` Gauss points each.
-struct CrackRule {
-    points: Vec<CrackPoint>,
+/// ([`segment_pieces`]) with `tip_degree / 2 + 1` Gauss points each. Shared with the elastic
+/// norms ([`crate::afw::norms`]).
+pub(crate) struct CrackRule {
+    pub(crate) points: Vec<CrackPoint>,
     /// The points of each chain of the mesh, in its order.
-    chains: Vec<std::ops::Range<usize>>,
+    pub(crate) chains: Vec<std::ops::Range<usize>>,
 }
 
 /// A point of the [`CrackRule`].
-struct CrackPoint {
+pub(crate) struct CrackPoint {
     /// The physical point.
-    x: [f64; 2],
+    pub(crate) x: [f64; 2],
     /// The normal of its crack segment.
-    normal: [f64; 2],
+    pub(crate) normal: [f64; 2],
     /// Its crack segment k (x_k → x_{k+1}) within its chain.
-    segment: usize,
+    pub(crate) segment: usize,
     /// Its local coordinate s ∈ (0, 1) on the segment.
-    s: f64,
+    pub(crate) s: f64,
     /// The weight (Gauss weight × ds × segment length).
-    weight: f64,
+    pub(crate) weight: f64,
 }
 
 impl CrackRule {
-    fn new(mesh: &Mesh, quad: NormQuadrature) -> CrackRule {
+    pub(crate) fn new(mesh: &Mesh, quad: NormQuadrature) -> CrackRule {
         let g = gauss_legendre(quad.tip_degree / 2 + 1);
         let mut points = Vec::new();
         let mut chains = Vec::with_capacity(mesh.cracks.len());
@@ -406,7 +420,10 @@ impl CrackRule {
             for k in 0..nodes.len() - 1 {
                 let (a, b) = (mesh.vertices[nodes[k]], mesh.vertices[nodes[k + 1]]);
                 let len = (b[0] - a[0]).hypot(b[1] - a[1]);
-                let (from_tip, to_tip) = (k == 0, k == last);
+                // a chain's end is a tip unless it is a mouth (an edge crack's end on ∂Ω,
+                // elastic scenes only: a scalar chain has none, so its rule is unchanged)
+                let (from_tip, to_tip) =
+                    (k == 0 && !chain.mouths[0], k == last && !chain.mouths[1]);
                 for (s0, s1, collapsed) in segment_pieces(from_tip, to_tip, quad.tip) {
                     for (&t, &w) in g.points.iter().zip(&g.weights) {
                         // s from s0 (a tip where `collapsed`) toward s1;
@@ -878,7 +895,7 @@ pub fn exact_jump(exact: &Exact, p: [f64; 2], normal: [f64; 2]) -> f64 {
 }
 
 /// The pieces (s0, s1, collapsed at s0) of a crack segment [0, 1] in its local coordinate s, for
-/// a segment starting (`from_tip`) or ending (`to_tip`) at a chain's end: graded cuts at 2^{-i}
+/// a segment starting (`from_tip`) or ending (`to_tip`) at a tip (a chain's end, not a mouth): graded cuts at 2^{-i}
 /// toward those ends, or one piece from each such end collapsed there (halves when both are).
 fn segment_pieces(from_tip: bool, to_tip: bool, tip: TipRule) -> Vec<(f64, f64, bool)> {
     match tip {

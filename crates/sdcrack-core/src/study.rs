@@ -28,6 +28,7 @@ use crate::ordering::elimination_order;
 use crate::problem::PMass;
 use crate::scene::{ScalarProblem, Scene};
 
+pub mod elastic;
 #[cfg(test)]
 mod tests;
 
@@ -65,10 +66,16 @@ pub enum StudyError {
     /// The sparse solver failed.
     #[error("linear solver: {0}")]
     Linalg(#[from] LinalgError),
-    /// The scene poses the elastic problem, which the smooth-domain solver does not solve yet
-    /// (issue 46): its runs write the mesh export and run the references only.
-    #[error("the smooth-domain solver solves the scalar problem only; an elastic scene runs its references (issue 46)")]
+    /// The scene poses the elastic problem, and the command runs the scalar problem's study
+    /// (`sdcrack bench`); an elastic scene's cases run in [`elastic::run_elastic_study`].
+    #[error("this command times the scalar problem's solver only; an elastic scene's cases run with sdcrack run")]
     NotScalar,
+    /// The elastic study was given a scalar scene.
+    #[error("the elastic study runs an elastic scene only")]
+    NotElastic,
+    /// An elastic case cannot be solved (bad data found by the solver, a factorisation failure).
+    #[error("{0}")]
+    Afw(#[from] crate::afw::AfwError),
 }
 
 /// The cases a scene asks for after a filter.
@@ -215,6 +222,11 @@ pub struct StudyResult {
     pub meshes: Vec<MeshRecord>,
     /// Where an unstructured level 0 came from (gmsh's version and time, or the mesh file).
     pub coarse_mesh: Option<crate::mesh::CoarseProvenance>,
+    /// The elastic cases in the order solved (an elastic scene's study, [`elastic`]).
+    pub elastic: Vec<elastic::ElasticCaseResult>,
+    /// The meshes of the elastic cases' levels (empty when the plan's
+    /// [`CasePlan::keep_fields`] is off).
+    pub elastic_meshes: Vec<elastic::ElasticMeshRecord>,
 }
 
 /// Progress callbacks of a study.
@@ -223,6 +235,8 @@ pub trait Observer {
     fn phase(&mut self, _message: &str) {}
     /// A case is done.
     fn case_done(&mut self, _case: &CaseResult) {}
+    /// An elastic case is done.
+    fn elastic_case_done(&mut self, _case: &elastic::ElasticCaseResult) {}
 }
 
 /// An observer that ignores everything.
@@ -674,6 +688,7 @@ impl LevelContext<'_> {
                 p_mass: self.p_mass,
                 p_space: self.ptopo.space,
                 delta,
+                problem: crate::scene::ProblemKind::Scalar,
             },
             h: self.mesh.h(),
             unknowns: self.system.n() + multiplier.len(),

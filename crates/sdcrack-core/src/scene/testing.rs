@@ -52,6 +52,7 @@ pub(crate) fn scene(name: &str, f: &str, g: &str, exact: Option<(&str, &str)>) -
             p_masses: vec![PMass::Consistent, PMass::Lumped],
             p_spaces: vec![PSpace::Continuous],
             deltas: vec![1.0, 1e-2, 1e-4, 1e-6, 1e-8, 0.0],
+            problems: vec![super::ProblemKind::Scalar],
         },
         fields: FieldSet {
             u: true,

@@ -67,6 +67,20 @@ pub enum ProblemKind {
 
 crate::scene_names!(ProblemKind { Scalar => "scalar", Elasticity => "elasticity" });
 
+impl ProblemKind {
+    /// Whether a case of this kind has the scalar method's axes (u space, p mass, p space):
+    /// the elastic (AFW) method has none of them ([`crate::case`]).
+    pub fn has_scalar_axes(self) -> bool {
+        self == ProblemKind::Scalar
+    }
+
+    /// Whether a case key of this kind names its kind in the results files: every kind but the
+    /// scalar one, whose files stay as they were before the axis ([`crate::case`]).
+    pub fn is_named_in_keys(self) -> bool {
+        self != ProblemKind::Scalar
+    }
+}
+
 impl Problem {
     /// Which kind it is.
     pub fn kind(&self) -> ProblemKind {

@@ -29,7 +29,7 @@ use super::atomic::atomic_write;
 use super::results_dir::{
     recomputation_file, ResultsDir, ResultsError, FIELDS_STEM, SCENE_COPY, VERIFICATION_STEM,
 };
-use super::summary::{CaseSummary, Provenance, ShardRecord, Summary};
+use super::summary::{CaseEntry, Provenance, ShardRecord, Summary};
 use crate::scene_file::TomlScene;
 use sdcrack_core::case::{CaseAxes, CaseKey};
 use sdcrack_core::scene::Scene;
@@ -247,7 +247,7 @@ pub fn merge_shards(
     merge_field_files(&sources, &dir, &["summary.json", SCENE_COPY])?;
     let fields_write_s = t0.elapsed().as_secs_f64();
 
-    let not_converged = cases.iter().filter(|c| !c.converged).count();
+    let not_converged = cases.iter().filter(|c| !c.converged()).count();
     let n_cases = cases.len();
     let summary = match lead {
         Some(lead) => Summary {
@@ -346,12 +346,12 @@ fn check_one_build(solver: &[SolverShard]) -> Result<(), MergeError> {
 }
 
 /// Every case of the plan, exactly once, in a single run's order.
-fn ordered_cases(solver: &[SolverShard], plan: &CaseAxes) -> Result<Vec<CaseSummary>, MergeError> {
+fn ordered_cases(solver: &[SolverShard], plan: &CaseAxes) -> Result<Vec<CaseEntry>, MergeError> {
     let order = plan.keys();
-    let mut found: BTreeMap<RunPosition, (&CaseSummary, &Path)> = BTreeMap::new();
+    let mut found: BTreeMap<RunPosition, (&CaseEntry, &Path)> = BTreeMap::new();
     for &(path, s) in solver {
         for c in &s.cases {
-            let key = &c.case.key;
+            let key = c.key();
             let at = run_position(&order, key).ok_or_else(|| {
                 shard_err(
                     path,

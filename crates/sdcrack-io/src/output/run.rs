@@ -46,9 +46,16 @@ pub fn write_run(
         })?;
     }
     let t0 = std::time::Instant::now();
-    // an elastic scene's run has no solver case, hence no field of its own (issue 46)
-    if scene.scalar().is_some() {
-        write_fields(dir, scene, study)?;
+    match scene.problem.kind() {
+        sdcrack_core::scene::ProblemKind::Scalar => write_fields(dir, scene, study)?,
+        // its fields when the scene lists any and the run has cases (no verification.h5: the
+        // compare tool recomputes no elastic solver error yet)
+        sdcrack_core::scene::ProblemKind::Elasticity => {
+            if !scene.fields.is_empty() && !study.elastic.is_empty() {
+                let (meshes, cases) = elastic_field_data(study);
+                xdmf::write_fields(dir, FIELDS_STEM, &meshes, &cases)?;
+            }
+        }
     }
     let fields_write_s = t0.elapsed().as_secs_f64();
     let summary = summary::Summary::of_run(scene, plan, study, wall_s, fields_write_s, provenance);
@@ -135,6 +142,7 @@ fn field_data(
                 .map(|(name, value)| (name.to_string(), Meta::from(value)))
                 .collect(),
                 constants: vec![("delta".into(), c.key.delta)],
+                extra: Vec::new(),
             })
         })
         .collect();
@@ -157,5 +165,143 @@ fn restrict(case: &xdmf::CaseFields, fields: &sdcrack_core::scene::FieldSet) -> 
         series: case.series.clone(),
         metadata: case.metadata.clone(),
         constants: case.constants.clone(),
+        extra: case.extra.clone(),
+    }
+}
+
+/// The name of level `level`'s broken mesh in an elastic run's field files: `level2-elasticity`.
+fn elastic_mesh_key(level: u32) -> String {
+    format!(
+        "level{level}-{}",
+        sdcrack_core::scene::ProblemKind::Elasticity
+    )
+}
+
+/// The elastic cases' meshes and fields (docs/elasticity.md, "The run"): each level's *broken*
+/// mesh (triangle t's vertices are the points 3t, 3t + 1, 3t + 2), on which σ_h (raw and
+/// symmetrised) and u* are node fields and u_h, γ_h cell fields; the crack as one segment per
+/// crack edge with its own two points, carrying the opening, slip, pressure and closed flags at
+/// the edge's ends.
+fn elastic_field_data(
+    study: &sdcrack_core::study::StudyResult,
+) -> (Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>) {
+    let meshes: Vec<xdmf::MeshData> = (study.elastic_meshes.iter())
+        .map(|m| xdmf::MeshData {
+            key: elastic_mesh_key(m.level),
+            points: m
+                .triangles
+                .iter()
+                .flat_map(|t| t.map(|v| m.points[v]))
+                .collect(),
+            triangles: (0..m.triangles.len())
+                .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                .collect(),
+        })
+        .collect();
+    let cases = (study.elastic.iter())
+        .filter_map(|c| {
+            let f = c.fields.as_ref()?;
+            let mesh = study
+                .elastic_meshes
+                .iter()
+                .find(|m| m.level == c.key.level)?;
+            Some(elastic_case_fields(c, f, mesh))
+        })
+        .collect();
+    (meshes, cases)
+}
+
+/// One elastic case's fields on its level's broken mesh.
+fn elastic_case_fields(
+    c: &sdcrack_core::study::elastic::ElasticCaseResult,
+    f: &sdcrack_core::study::elastic::ElasticFields,
+    mesh: &sdcrack_core::study::elastic::ElasticMeshRecord,
+) -> xdmf::CaseFields {
+    use xdmf::{Centering, Field, FieldKind, GridPart, Meta};
+    let field = |name: &str, part, center, kind, values| Field {
+        name: name.to_string(),
+        part,
+        center,
+        kind,
+        values,
+    };
+    let s = &f.solution;
+    // the in-plane tensor in 3-D, row-major, its z row and column zero
+    let tensor = |[xx, xy, yx, yy]: [f64; 4]| [xx, xy, 0.0, yx, yy, 0.0, 0.0, 0.0, 0.0];
+    let raw: Vec<f64> = s.stress.iter().flatten().flat_map(|&v| tensor(v)).collect();
+    let r = &f.recovered;
+    // sym σ_h as recovered: [σ_xx, σ_yy, σ_xy]
+    let symmetric: Vec<f64> = (r.stress_sym.iter().flatten())
+        .flat_map(|&[xx, yy, xy]| tensor([xx, xy, xy, yy]))
+        .collect();
+    let vector = |[x, y]: [f64; 2]| [x, y, 0.0];
+    let u_star: Vec<f64> = r.u_star.iter().flatten().flat_map(|&v| vector(v)).collect();
+    let u_h: Vec<f64> = s.displacement.iter().flat_map(|&v| vector(v)).collect();
+    let ends = |v: &[[f64; 2]]| v.iter().flatten().copied().collect::<Vec<f64>>();
+    let closed: Vec<f64> = (s.crack.iter())
+        .flat_map(|e| e.closed.map(|c| if c { 1.0 } else { 0.0 }))
+        .collect();
+    let node = Centering::Node;
+    let extra = vec![
+        field("sigma", GridPart::Mesh, node, FieldKind::Tensor, symmetric),
+        field("sigma_raw", GridPart::Mesh, node, FieldKind::Tensor, raw),
+        field("u_star", GridPart::Mesh, node, FieldKind::Vector, u_star),
+        field(
+            "u_h",
+            GridPart::Mesh,
+            Centering::Cell,
+            FieldKind::Vector,
+            u_h,
+        ),
+        field(
+            "gamma_h",
+            GridPart::Mesh,
+            Centering::Cell,
+            FieldKind::Scalar,
+            s.rotation.clone(),
+        ),
+        field(
+            "opening",
+            GridPart::Crack,
+            node,
+            FieldKind::Scalar,
+            ends(&r.opening),
+        ),
+        field(
+            "slip",
+            GridPart::Crack,
+            node,
+            FieldKind::Scalar,
+            ends(&r.slip),
+        ),
+        field(
+            "pressure",
+            GridPart::Crack,
+            node,
+            FieldKind::Scalar,
+            ends(&r.pressure),
+        ),
+        field("closed", GridPart::Crack, node, FieldKind::Scalar, closed),
+    ];
+    xdmf::CaseFields {
+        name: c.key.case_name(),
+        mesh_key: elastic_mesh_key(c.key.level),
+        u: None,
+        p: None,
+        p_bubble: None,
+        crack_points: (s.crack.iter())
+            .flat_map(|e| e.nodes.map(|v| mesh.points[v]))
+            .collect(),
+        crack_segments: (0..s.crack.len()).map(|e| [2 * e, 2 * e + 1]).collect(),
+        lambda: None,
+        jump: None,
+        series: c.key.series_name(),
+        metadata: (summary::SizedKey { key: c.key, h: c.h }
+            .entries()
+            .into_iter())
+        .map(|(name, value)| (name.to_string(), Meta::from(value)))
+        .collect(),
+        constants: vec![("delta".into(), c.key.delta)],
+        extra,
     }
 }

@@ -18,6 +18,8 @@ use serde::{Deserialize, Serialize};
 use sdcrack_core::case::{AxisValue, CaseAxes, CaseKey};
 use sdcrack_core::contact::KktResiduals;
 use sdcrack_core::norms::ErrorNorms;
+use sdcrack_core::scene::ProblemKind;
+use sdcrack_core::study::elastic::{ElasticCaseResult, ElasticTimings, ELASTIC_SHARED_TIMINGS};
 use sdcrack_core::study::{CaseResult, Timings, KKT_TOLERANCE};
 
 /// Timing phases shared by several cases (reported with each of them): summary.json's
@@ -49,8 +51,9 @@ pub struct Summary {
     /// The cases the run was asked for: the scene's case axes, restricted by the command line's
     /// filters.
     pub plan: CaseAxes,
-    /// Timing phases shared by several cases (reported with each of them): [`SHARED_TIMINGS`].
-    pub shared_timings: [String; 5],
+    /// Timing phases shared by several cases (reported with each of them): [`SHARED_TIMINGS`]
+    /// (an elastic scene's: [`ELASTIC_SHARED_TIMINGS`]).
+    pub shared_timings: Vec<String>,
     /// True when every case converged.
     pub all_converged: bool,
     /// Wall-clock seconds of the solves (all cases, before writing files); for a merge, the sum
@@ -69,8 +72,8 @@ pub struct Summary {
     /// mesh file) and its size; gmsh's level 0 is also written as `coarse.msh`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coarse_mesh: Option<sdcrack_core::mesh::CoarseProvenance>,
-    /// The cases.
-    pub cases: Vec<CaseSummary>,
+    /// The cases: the scalar problem's, or an elastic scene's ([`CaseEntry`]).
+    pub cases: Vec<CaseEntry>,
     /// Only in a merged summary (`sdcrack merge`): the solver shards it was made of, in the
     /// order given.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -100,6 +103,14 @@ impl Summary {
         provenance: &Provenance,
     ) -> Summary {
         let with_fields = !scene.fields.is_empty();
+        let shared: &[&str] = match scene.problem.kind() {
+            ProblemKind::Scalar => &SHARED_TIMINGS,
+            ProblemKind::Elasticity => &ELASTIC_SHARED_TIMINGS,
+        };
+        let scalar =
+            (study.cases.iter()).map(|c| CaseEntry::Scalar(CaseSummary::from_case(c, with_fields)));
+        let elastic = (study.elastic.iter())
+            .map(|c| CaseEntry::Elastic(ElasticCaseSummary::from_case(c, with_fields)));
         Summary {
             scene: scene.name.clone(),
             description: scene.description.clone(),
@@ -108,15 +119,14 @@ impl Summary {
             provenance: provenance.clone(),
             kkt_tolerance: KKT_TOLERANCE,
             plan: plan.axes.clone(),
-            shared_timings: SHARED_TIMINGS.map(String::from),
-            all_converged: study.cases.iter().all(|c| c.converged),
+            shared_timings: shared.iter().map(|s| s.to_string()).collect(),
+            all_converged: study.cases.iter().all(|c| c.converged)
+                && study.elastic.iter().all(|c| c.converged),
             wall_s,
             fields_write_s,
             recomputation_file: super::results_dir::recomputation_file(scene),
             coarse_mesh: study.coarse_mesh.clone(),
-            cases: (study.cases.iter())
-                .map(|c| CaseSummary::from_case(c, with_fields))
-                .collect(),
+            cases: scalar.chain(elastic).collect(),
             shards: None,
         }
     }
@@ -323,16 +333,7 @@ impl CaseSummary {
             unknowns: c.unknowns,
             multipliers: c.multipliers,
             iterations: c.iterations,
-            status: if c.converged {
-                c.status.name().to_string()
-            } else if c.status.converged() {
-                format!(
-                    "not converged: KKT residual {:.2e} above {KKT_TOLERANCE:e}",
-                    c.kkt.max()
-                )
-            } else {
-                c.status.name().to_string()
-            },
+            status: case_status(c.converged, c.status, &c.kkt),
             converged: c.converged,
             kkt: c.kkt,
             active_multipliers: c.active,
@@ -343,16 +344,137 @@ impl CaseSummary {
             errors: c.errors,
             errors_quadrature: c.errors_quadrature,
             fields_grid: c.key.case_name(),
-            fields_series: with_series.then(|| {
-                let file = super::xdmf::series_file(&c.key.series_name(), "");
-                format!("{}/{file}", super::results_dir::FIELDS_STEM)
-            }),
-            fields_state: with_series.then(|| {
-                let file = super::xdmf::state_file(&c.key.case_name(), "");
-                format!("{}/{file}", super::results_dir::FIELDS_STEM)
-            }),
+            fields_series: with_series.then(|| field_file(&c.key, true)),
+            fields_state: with_series.then(|| field_file(&c.key, false)),
         }
     }
+}
+
+/// One case of summary.json: a scalar case ([`CaseSummary`]) or an elastic one
+/// ([`ElasticCaseSummary`], whose key names `problem`). Written as the entry itself; read back
+/// as the first that fits (an elastic entry lacks the scalar one's multiplier and conditioning
+/// records).
+#[derive(Serialize, Deserialize, Debug, Clone)]
+#[serde(untagged)]
+pub enum CaseEntry {
+    /// A case of the scalar problem.
+    Scalar(CaseSummary),
+    /// A case of the elastic problem (the AFW method).
+    Elastic(ElasticCaseSummary),
+}
+
+impl CaseEntry {
+    /// The case's key.
+    pub fn key(&self) -> &CaseKey {
+        match self {
+            CaseEntry::Scalar(c) => &c.case.key,
+            CaseEntry::Elastic(c) => &c.case.key,
+        }
+    }
+
+    /// Whether the case met the KKT tolerance.
+    pub fn converged(&self) -> bool {
+        match self {
+            CaseEntry::Scalar(c) => c.converged,
+            CaseEntry::Elastic(c) => c.converged,
+        }
+    }
+}
+
+/// One elastic case of the summary (docs/elasticity.md, "The run"): its key (level, h,
+/// multiplier, δ, problem), the counts, the LCP's outcome, the KKT residuals, the timings, the
+/// errors against `[exact]` by name, and its place in the field files.
+#[derive(Serialize, Deserialize, Debug, Clone)]
+pub struct ElasticCaseSummary {
+    /// The case and its mesh size, flattened: `level`, `h`, `multiplier`, `delta`,
+    /// `problem` (`"elasticity"`).
+    #[serde(flatten)]
+    pub case: SizedKey,
+    /// Unknowns of the system (σ dofs without the essential ones, u_h, γ_h).
+    pub unknowns: usize,
+    /// Crack edges (two constrained normal-trace dofs each).
+    pub crack_edges: usize,
+    /// Crack edge ends in contact (closed: opening 0, σ_νν ≤ 0 free; an open end has
+    /// σ_νν = 0).
+    pub closed_ends: usize,
+    /// LCP iterations.
+    pub iterations: usize,
+    /// LCP outcome in words (as a scalar case's).
+    pub status: String,
+    /// True when the case met the KKT tolerance.
+    pub converged: bool,
+    /// KKT residuals (relative).
+    #[serde(deserialize_with = "non_finite::record")]
+    pub kkt: KktResiduals,
+    /// Seconds per phase.
+    pub timings_s: ElasticTimings,
+    /// Errors against `[exact]` by name (non-finite ones `null`), when the scene has it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub errors: Option<serde_json::Map<String, serde_json::Value>>,
+    /// Name of the case in the field files: its group `/cases/<fields_grid>` in `fields.h5`.
+    pub fields_grid: String,
+    /// The series file of its δ sweep (`fields/<series>.series.xdmf`), with fields.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fields_series: Option<String>,
+    /// Its one-state file (`fields/<fields_grid>.xdmf`), with fields.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fields_state: Option<String>,
+}
+
+impl ElasticCaseSummary {
+    /// The summary entry of a solved elastic case; `with_series` when the XDMF files are written.
+    pub fn from_case(c: &ElasticCaseResult, with_series: bool) -> ElasticCaseSummary {
+        let errors = c.errors.as_ref().map(|errors| {
+            (errors.iter())
+                .map(|(name, e)| {
+                    let value = serde_json::Number::from_f64(*e)
+                        .map_or(serde_json::Value::Null, serde_json::Value::Number);
+                    (name.clone(), value)
+                })
+                .collect()
+        });
+        ElasticCaseSummary {
+            case: SizedKey { key: c.key, h: c.h },
+            unknowns: c.unknowns,
+            crack_edges: c.crack_edges,
+            closed_ends: c.closed_ends,
+            iterations: c.iterations,
+            status: case_status(c.converged, c.status, &c.kkt),
+            converged: c.converged,
+            kkt: c.kkt,
+            timings_s: c.timings,
+            errors,
+            fields_grid: c.key.case_name(),
+            fields_series: with_series.then(|| field_file(&c.key, true)),
+            fields_state: with_series.then(|| field_file(&c.key, false)),
+        }
+    }
+}
+
+/// A case's status in words: the LCP's, or why a converged LCP is not a converged case.
+fn case_status(
+    converged: bool,
+    status: sdcrack_core::contact::LcpStatus,
+    kkt: &KktResiduals,
+) -> String {
+    if !converged && status.converged() {
+        format!(
+            "not converged: KKT residual {:.2e} above {KKT_TOLERANCE:e}",
+            kkt.max()
+        )
+    } else {
+        status.name().to_string()
+    }
+}
+
+/// The case's series file (`series`) or one-state file, relative to the results folder.
+fn field_file(key: &CaseKey, series: bool) -> String {
+    let file = if series {
+        super::xdmf::series_file(&key.series_name(), "")
+    } else {
+        super::xdmf::state_file(&key.case_name(), "")
+    };
+    format!("{}/{file}", super::results_dir::FIELDS_STEM)
 }
 
 /// Reading back what serde_json writes for a non-finite `f64` (NaN, ±∞): `null`. A solved case's
@@ -408,6 +530,7 @@ mod tests {
                 p_mass: PMass::Lumped,
                 p_space: PSpace::BrokenTangential,
                 delta: 1.5e-8,
+                problem: ProblemKind::Scalar,
             },
             h: 0.1 + 0.2,
             unknowns: 1234,
@@ -543,7 +666,7 @@ mod tests {
         );
         // and read back, the same text
         let back = Summary::read(&dir.path().join("summary.json")).unwrap();
-        assert_eq!(back.cases[0].case.key, c.key);
+        assert_eq!(*back.cases[0].key(), c.key);
         let again = dir.path().join("again.json");
         back.write(&again).unwrap();
         assert_eq!(std::fs::read_to_string(again).unwrap(), text);

@@ -46,6 +46,10 @@
 //!                                              [`CaseFields::jump`])
 //! /cases/CASE/NAME                 f64 (N,)    a constant field of [`CaseFields::constants`]
 //! /cases/CASE/crack/NAME           f64 (I+1,)  the same on the crack nodes
+//! /cases/CASE/FIELD                f64 (N or T[, C]) a further field ([`CaseFields::extra`]) on
+//!                                              the mesh's nodes or cells, C = 3 (vector) or 9
+//!                                              (tensor) components
+//! /cases/CASE/crack/FIELD          f64 (N_c or I[, C]) the same on the crack
 //! ```
 //!
 //! The group `/cases/CASE` and every field dataset in it (`u`, `p`, `p_bubble`, `crack/lambda`,
@@ -55,6 +59,11 @@
 //! step names, so δ is also a point attribute whose value (its range in the information panel, or
 //! the "Annotate Attribute Data" filter) says which δ the time slider is on; meshio reads it as
 //! point data. (A `Center="Grid"` attribute would cost one number, but meshio rejects it.)
+//!
+//! The elastic cases (docs/elasticity.md, "The run") use further fields only: their mesh is the
+//! *broken* mesh of their level (3 points per triangle, so that σ_h and u*, linear per triangle
+//! and discontinuous, are node fields), their crack grid one segment per crack edge with its own
+//! two points (the opening, slip, pressure and closed flags are discontinuous at crack nodes).
 //!
 //! Each mesh is stored once, however many cases use it; only meshes used by at least one case are
 //! written. A case whose `crack_points` is empty (and has no `lambda` or `jump`) has no `crack`
@@ -113,5 +122,5 @@ mod data;
 mod write;
 mod xml;
 
-pub use data::{CaseFields, Centering, MeshData, Meta};
+pub use data::{CaseFields, Centering, Field, FieldKind, GridPart, MeshData, Meta};
 pub use write::{series_file, state_file, write_fields, write_h5_only, OutputError, SERIES_SUFFIX};

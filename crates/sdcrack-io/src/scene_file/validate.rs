@@ -151,15 +151,7 @@ impl SceneToml {
                     &context,
                 )?;
                 let levels = validate_levels(&d.levels, level0)?;
-                // the scalar case axes do not apply: no solver case until issue 46
-                let axes = CaseAxes {
-                    levels,
-                    u_spaces: Vec::new(),
-                    multipliers: Vec::new(),
-                    p_masses: Vec::new(),
-                    p_spaces: Vec::new(),
-                    deltas: Vec::new(),
-                };
+                let axes = elastic_axes(d, levels)?;
                 let (fields, references) = validate_outputs(self.outputs.as_ref(), ELASTIC_FIELDS)?;
                 let verification = match self.verification {
                     None => Verification::default(),
@@ -281,15 +273,51 @@ fn refuse_scalar_keys(
     }
     keys.extend([
         ("discretization.u_spaces", x.u_spaces.is_some()),
-        ("discretization.multipliers", x.multipliers.is_some()),
         ("discretization.p_mass", x.p_mass.is_some()),
         ("discretization.p_spaces", x.p_spaces.is_some()),
-        ("discretization.deltas", x.deltas.is_some()),
     ]);
     refuse_given(
         &keys,
-        " is a key of the scalar problem, and this scene is elastic ([problem] kind = \"elasticity\": data fx, fy, gx, gy, traction, fixed; exact ux, uy, ...; no solver case axes; docs/elasticity.md)",
+        " is a key of the scalar problem, and this scene is elastic ([problem] kind = \"elasticity\": data fx, fy, gx, gy, traction, fixed; exact ux, uy, ...; case axes levels, multipliers, deltas; docs/elasticity.md)",
     )
+}
+
+/// The elastic problem's case axes (`levels` validated): levels × multipliers × δ of the AFW
+/// method (docs/elasticity.md, "The run"). `multipliers` and `deltas` go together: a scene that
+/// lists neither has no solver case (its references only); a multiplier space the elastic
+/// solver does not have ([`sdcrack_core::afw::MULTIPLIER_SPACES`]) is refused.
+fn elastic_axes(d: &DiscretizationToml, levels: Vec<u32>) -> Result<CaseAxes, SceneError> {
+    let (multipliers, deltas) = match (d.multipliers.as_deref(), d.deltas.as_deref()) {
+        (None, None) => (Vec::new(), Vec::new()),
+        (Some(_), None) => return Err(missing("discretization", "deltas")),
+        (None, Some(_)) => return Err(missing("discretization", "multipliers")),
+        (Some(m), Some(deltas)) => {
+            let key = "discretization.multipliers";
+            let multipliers = validate_names::<MultiplierSpace>(key, m)?;
+            let solved = sdcrack_core::afw::MULTIPLIER_SPACES;
+            if let Some(m) = multipliers.iter().find(|m| !solved.contains(m)) {
+                let names: Vec<&str> = solved.iter().map(|m| m.name()).collect();
+                return Err(value(
+                    key,
+                    format!(
+                        ": the elastic solver has no multiplier space {m} yet (it has {}; docs/elasticity.md, \"The run\")",
+                        names.join(", ")
+                    ),
+                ));
+            }
+            (multipliers, validate_deltas(deltas)?)
+        }
+    };
+    // the scalar problem's axes (u space, p mass, p space) are not the elastic method's: empty
+    Ok(CaseAxes {
+        levels,
+        u_spaces: Vec::new(),
+        multipliers,
+        p_masses: Vec::new(),
+        p_spaces: Vec::new(),
+        deltas,
+        problems: vec![ProblemKind::Elasticity],
+    })
 }
 
 /// `missing key `name` in [table]`.

@@ -55,6 +55,68 @@ pub struct CaseFields {
     /// Values also written as constant point fields of the mesh and crack grids (the solver's:
     /// `delta`), so that a viewer that ignores `Information` (ParaView) shows them per step.
     pub constants: Vec<(String, f64)>,
+    /// Further fields of any shape on the mesh or the crack grid (the elastic cases' σ, u*,
+    /// u_h, γ_h, opening, …): empty for the scalar problem's cases.
+    pub extra: Vec<Field>,
+}
+
+/// Which grid of a case a [`Field`] lives on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridPart {
+    /// The triangle mesh (`/cases/CASE/NAME`).
+    Mesh,
+    /// The crack polylines (`/cases/CASE/crack/NAME`).
+    Crack,
+}
+
+/// The XDMF attribute type of a [`Field`] and its components per value: a scalar (1), a vector
+/// written in 3-D (3: x, y, 0) or a tensor written in 3-D (9: row-major 3 × 3, the z row and
+/// column 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldKind {
+    /// One component.
+    Scalar,
+    /// Three components (x, y, z).
+    Vector,
+    /// Nine components, row-major 3 × 3.
+    Tensor,
+}
+
+impl FieldKind {
+    /// Components per value.
+    pub fn components(self) -> usize {
+        match self {
+            FieldKind::Scalar => 1,
+            FieldKind::Vector => 3,
+            FieldKind::Tensor => 9,
+        }
+    }
+
+    /// XDMF's `AttributeType`.
+    pub fn xdmf(self) -> &'static str {
+        match self {
+            FieldKind::Scalar => "Scalar",
+            FieldKind::Vector => "Vector",
+            FieldKind::Tensor => "Tensor",
+        }
+    }
+}
+
+/// A field of a case beyond u, p and λ: its name (an HDF5 dataset and an XDMF attribute), its
+/// grid, centering and kind, and its values (per node or cell of its grid, each
+/// [`FieldKind::components`] numbers, flattened).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    /// Dataset and attribute name.
+    pub name: String,
+    /// The grid it lives on.
+    pub part: GridPart,
+    /// Per node or per cell of that grid.
+    pub center: Centering,
+    /// Its attribute type.
+    pub kind: FieldKind,
+    /// The values, flattened.
+    pub values: Vec<f64>,
 }
 /// A metadata value of a case.
 #[derive(Clone, Debug, PartialEq)]

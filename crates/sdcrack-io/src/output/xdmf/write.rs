@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 #[cfg(test)]
 mod tests;
 
-use super::data::{CaseFields, Centering, MeshData, Meta};
+use super::data::{CaseFields, Centering, Field, GridPart, MeshData, Meta};
 use super::xml::{crack_grid_xml, document, mesh_grid_xml, temporal};
 
 /// Errors of [`write_fields`] and [`write_h5_only`].
@@ -237,6 +237,63 @@ fn h5_err(path: &Path) -> impl Fn(hdf5::Error) -> OutputError + '_ {
     move |e| OutputError::Hdf5(format!("{}: {e}", path.display()))
 }
 
+/// Values per field of `field`'s grid and centering for `case` on `mesh`: its nodes or cells.
+fn field_items(field: &Field, case: &CaseFields, mesh: &MeshData) -> usize {
+    match (field.part, field.center) {
+        (GridPart::Mesh, Centering::Node) => mesh.points.len(),
+        (GridPart::Mesh, Centering::Cell) => mesh.triangles.len(),
+        (GridPart::Crack, Centering::Node) => case.crack_points.len(),
+        (GridPart::Crack, Centering::Cell) => case.crack_segments.len(),
+    }
+}
+
+/// Checks `case`'s further fields ([`CaseFields::extra`]) on `mesh`: names usable and unique,
+/// none of the reserved datasets or the constants, one value per node or cell of its grid, a
+/// crack field only with a crack, all finite.
+fn check_extra(case: &CaseFields, mesh: &MeshData) -> Result<(), OutputError> {
+    let name = &case.name;
+    let mut seen = std::collections::HashSet::new();
+    for f in &case.extra {
+        check_name("field name", &f.name)?;
+        let clash = RESERVED.contains(&f.name.as_str())
+            || case.constants.iter().any(|(c, _)| *c == f.name)
+            || !seen.insert((f.part == GridPart::Crack, f.name.as_str()));
+        if clash {
+            return Err(OutputError::Invalid(format!(
+                "case {name:?}: field {:?} clashes with another field of its grid",
+                f.name
+            )));
+        }
+        if f.part == GridPart::Crack && !has_crack(case) {
+            return Err(OutputError::Invalid(format!(
+                "case {name:?}: crack field {:?} without a crack grid",
+                f.name
+            )));
+        }
+        let want = field_items(f, case, mesh) * f.kind.components();
+        if f.values.len() != want {
+            return Err(OutputError::Invalid(format!(
+                "case {name:?}: field {:?} has {} numbers, its grid needs {want}",
+                f.name,
+                f.values.len()
+            )));
+        }
+        check_finite_scalar(&f.values, || format!("case {name:?}: field {}", f.name))?;
+    }
+    Ok(())
+}
+
+/// The dataset shape of `field`: (values) for a scalar, (values, components) otherwise.
+fn field_shape(field: &Field) -> Vec<usize> {
+    let c = field.kind.components();
+    let n = field.values.len() / c;
+    if c == 1 {
+        vec![n]
+    } else {
+        vec![n, c]
+    }
+}
+
 fn has_crack(case: &CaseFields) -> bool {
     !case.crack_points.is_empty()
 }
@@ -416,6 +473,7 @@ fn validate(meshes: &[MeshData], cases: &[CaseFields]) -> Result<Plan, OutputErr
             }
             check_finite_scalar(jump, || format!("case {name:?}: field jump"))?;
         }
+        check_extra(case, &meshes[m])?;
     }
     let series = group_series(cases, &case_mesh)?;
     Ok(Plan {
@@ -584,6 +642,10 @@ fn write_h5(
                     let ds = write_f64(&g, name, &vec![*value; n], vec![n])?;
                     write_attrs(&ds, &meta)?;
                 }
+                for f in case.extra.iter().filter(|f| f.part == GridPart::Mesh) {
+                    let ds = write_f64(&g, &f.name, &f.values, field_shape(f))?;
+                    write_attrs(&ds, &meta)?;
+                }
                 if has_crack(case) {
                     let gk = g.create_group("crack")?;
                     let n = case.crack_points.len();
@@ -605,6 +667,10 @@ fn write_h5(
                     }
                     for (name, value) in &case.constants {
                         let ds = write_f64(&gk, name, &vec![*value; n], vec![n])?;
+                        write_attrs(&ds, &meta)?;
+                    }
+                    for f in case.extra.iter().filter(|f| f.part == GridPart::Crack) {
+                        let ds = write_f64(&gk, &f.name, &f.values, field_shape(f))?;
                         write_attrs(&ds, &meta)?;
                     }
                 }

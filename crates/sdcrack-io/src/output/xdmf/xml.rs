@@ -2,7 +2,7 @@
 //! `DataItem`s pointing into the HDF5 file, and attributes (the layout is described in the
 //! parent module). Pure text: nothing here touches a file.
 
-use super::data::{CaseFields, Centering, MeshData, Meta};
+use super::data::{CaseFields, Centering, Field, GridPart, MeshData, Meta};
 
 fn xml_escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
@@ -80,6 +80,31 @@ fn constant_attributes(indent: &str, h5: &str, group: &str, n: usize, case: &Cas
         .map(|(name, _)| {
             let item = data_item(&inner, h5, &format!("{group}/{name}"), &[n], false);
             attribute(indent, &xml_escape(name), "Scalar", "Node", item)
+        })
+        .collect()
+}
+
+/// The attributes of `case`'s further fields on `part` ([`CaseFields::extra`]), stored under
+/// `group`.
+fn extra_attributes(
+    indent: &str,
+    inner: &str,
+    h5: &str,
+    group: &str,
+    case: &CaseFields,
+    part: GridPart,
+) -> String {
+    (case.extra.iter().filter(|f| f.part == part))
+        .map(|f: &Field| {
+            let c = f.kind.components();
+            let n = f.values.len() / c;
+            let dims = if c == 1 { vec![n] } else { vec![n, c] };
+            let item = data_item(inner, h5, &format!("{group}/{}", f.name), &dims, false);
+            let center = match f.center {
+                Centering::Node => "Node",
+                Centering::Cell => "Cell",
+            };
+            attribute(indent, &xml_escape(&f.name), f.kind.xdmf(), center, item)
         })
         .collect()
 }
@@ -192,6 +217,7 @@ pub(super) fn mesh_grid_xml(
             let item = data_item(i3, h5, &format!("{cp}/p"), &[n, 3], false);
             s.push_str(&attribute(i2, "p", "Vector", "Node", item));
         }
+        s.push_str(&extra_attributes(i2, i3, h5, &cp, case, GridPart::Mesh));
         s
     })
 }
@@ -233,6 +259,7 @@ pub(super) fn crack_grid_xml(
             let item = data_item(i3, h5, &format!("{kp}/jump"), &[n], false);
             s.push_str(&attribute(i2, "jump", "Scalar", "Node", item));
         }
+        s.push_str(&extra_attributes(i2, i3, h5, &kp, case, GridPart::Crack));
         s
     })
 }
