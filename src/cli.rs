@@ -388,6 +388,13 @@ pub fn execute(cli: Cli) -> Result<i32, Failure> {
                     s.name,
                     s.axes.case_count()
                 ),
+                ProblemKind::Elasticity if s.axes.case_count() == 0 => say!(
+                    "{}: valid elastic scene '{}' (levels {:?}, references {:?}; no solver case: [discretization] lists no multipliers and deltas)",
+                    scene.display(),
+                    s.name,
+                    s.axes.levels,
+                    s.references
+                ),
                 ProblemKind::Elasticity => say!(
                     "{}: valid elastic scene '{}' ({} cases: levels {:?} × multipliers {:?} × δ {:?}; references {:?})",
                     scene.display(),

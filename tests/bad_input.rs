@@ -1089,8 +1089,20 @@ fn catalogue() -> Vec<Case> {
         edit_elastic(
             "scalar case axis in an elastic scene",
             "levels = [0, 1]",
+            "levels = [0, 1]\nu_spaces = [\"broken\"]",
+            "discretization.u_spaces is a key of the scalar problem, and this scene is elastic",
+        ),
+        edit_elastic(
+            "elastic deltas without multipliers",
+            "levels = [0, 1]",
             "levels = [0, 1]\ndeltas = [0.0]",
-            "discretization.deltas is a key of the scalar problem, and this scene is elastic",
+            "missing key `multipliers` in [discretization]",
+        ),
+        edit_elastic(
+            "a multiplier space the elastic solver does not have",
+            "levels = [0, 1]",
+            "levels = [0, 1]\nmultipliers = [\"M1star\", \"M1\"]\ndeltas = [0.0]",
+            "discretization.multipliers: the elastic solver has no multiplier space M1 yet (it has M1star; docs/elasticity.md, \"The run\") (at line",
         ),
         edit_elastic(
             "scalar field in an elastic scene",
@@ -1136,11 +1148,43 @@ fn catalogue() -> Vec<Case> {
             )
         },
         Case {
+            args: vec!["run", "{scene}", "--out", "{out}", "--p-mass", "lumped"],
+            ..scene(
+                "p mass option on an elastic scene with cases",
+                &ELASTIC.replacen(
+                    "levels = [0, 1]",
+                    "levels = [0, 1]\nmultipliers = [\"M1star\"]\ndeltas = [0.0]",
+                    1,
+                ),
+                "--p-mass selects a case of the scalar problem's solver, and scene 'small' is elastic",
+            )
+        },
+        Case {
+            args: vec!["run", "{scene}", "--out", "{out}", "--multiplier", "M0"],
+            ..scene(
+                "a multiplier option the elastic solver does not have",
+                &ELASTIC.replacen(
+                    "levels = [0, 1]",
+                    "levels = [0, 1]\nmultipliers = [\"M1star\"]\ndeltas = [0.0]",
+                    1,
+                ),
+                "--multiplier M0: the elastic solver has no multiplier space M0 yet (it has M1star)",
+            )
+        },
+        Case {
+            args: vec!["run", "{scene}", "--out", "{out}", "--delta", "0"],
+            ..scene(
+                "a delta option on an elastic scene without solver cases",
+                ELASTIC,
+                "--multiplier and --delta select solver cases, and the elastic scene 'small' lists none",
+            )
+        },
+        Case {
             args: vec!["bench", "{scene}", "--vertices", "100"],
             ..scene(
                 "bench on an elastic scene",
                 ELASTIC,
-                "scene 'small' is elastic: the smooth-domain solver solves the scalar problem only",
+                "scene 'small' is elastic: this command times the scalar problem's solver only",
             )
         },
         Case {
