@@ -121,51 +121,56 @@ def read_cases(folder, summary):
     path = os.path.join(folder, "fields.h5")
     if not os.path.exists(path):
         raise InputError(f"missing file: {path} (the solver cases' fields)")
-    out = []
     try:
         h5 = h5py.File(path, "r")
     except OSError as exc:
         raise InputError(f"cannot read {path}: {exc}")
     with h5:
-        for c in entries:
-            L, grid = c["level"], c["fields_grid"]
-            mesh_name = f"meshes/level{L}-elasticity"
-            where = f"{path}:/{mesh_name}"
-            if mesh_name not in h5:
-                raise InputError(f"{path}: no group /{mesh_name} (the solver mesh of level {L})")
-            m = h5[mesh_name]
-            tri = _dataset(m, "triangles", (None, 3), where).astype(np.int64)
-            T = len(tri)
-            pts = _dataset(m, "points", (3 * T, None), where)[:, :2].astype(float)
-            if tri.size and (tri.min() < 0 or tri.max() >= len(pts)):
-                raise InputError(f"{where}/triangles: a vertex index out of range")
-            g = f"cases/{grid}"
-            if g not in h5:
-                raise InputError(f"{path}: no group /{g} (case {grid} of summary.json)")
-            where = f"{path}:/{g}"
-            grp = h5[g]
-            # corner values per triangle, in the triangle's own vertex order
-            corner = lambda a: a[tri]  # noqa: E731
-            sig_raw = corner(_dataset(grp, "sigma_raw", (3 * T, 9), where)
-                             ).reshape(T, 3, 3, 3)[..., :2, :2]
-            sig = corner(_dataset(grp, "sigma", (3 * T, 9), where)).reshape(T, 3, 3, 3)[..., :2, :2]
-            u_h = _dataset(grp, "u_h", (T, 3), where)[:, :2]
-            gamma_h = _dataset(grp, "gamma_h", (T,), where)
-            u_star = corner(_dataset(grp, "u_star", (3 * T, 3), where))[..., :2]
-            cw = f"{where}/crack"
-            if "crack" in grp:
-                cg = grp["crack"]
-                seg = _dataset(cg, "segments", (None, 2), cw).astype(np.int64)
-                cp = _dataset(cg, "points", (None, 3), cw)[:, :2]
-                n = len(cp)
-                if seg.size and (seg.min() < 0 or seg.max() >= n):
-                    raise InputError(f"{cw}/segments: a point index out of range")
-                cols = [_dataset(cg, k, (n,), cw) for k in ("opening", "slip", "pressure")]
-            else:
-                seg, cp = np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2))
-                cols = [np.zeros(0)] * 3
-            out.append(SdmCase(c, L, c["multiplier"], float(c["delta"]), grid, pts, tri, sig_raw,
-                               sig, u_h, gamma_h, u_star, cp, seg, *cols))
+        return read_cases_from(h5, entries, path)
+
+
+def read_cases_from(h5, entries, path):
+    """[SdmCase] of the summary entries from the open fields.h5 `h5` (named `path` in errors)."""
+    out = []
+    for c in entries:
+        L, grid = c["level"], c["fields_grid"]
+        mesh_name = f"meshes/level{L}-elasticity"
+        where = f"{path}:/{mesh_name}"
+        if mesh_name not in h5:
+            raise InputError(f"{path}: no group /{mesh_name} (the solver mesh of level {L})")
+        m = h5[mesh_name]
+        tri = _dataset(m, "triangles", (None, 3), where).astype(np.int64)
+        T = len(tri)
+        pts = _dataset(m, "points", (3 * T, None), where)[:, :2].astype(float)
+        if tri.size and (tri.min() < 0 or tri.max() >= len(pts)):
+            raise InputError(f"{where}/triangles: a vertex index out of range")
+        g = f"cases/{grid}"
+        if g not in h5:
+            raise InputError(f"{path}: no group /{g} (case {grid} of summary.json)")
+        where = f"{path}:/{g}"
+        grp = h5[g]
+        # corner values per triangle, in the triangle's own vertex order
+        corner = lambda a: a[tri]  # noqa: E731
+        sig_raw = corner(_dataset(grp, "sigma_raw", (3 * T, 9), where)
+                         ).reshape(T, 3, 3, 3)[..., :2, :2]
+        sig = corner(_dataset(grp, "sigma", (3 * T, 9), where)).reshape(T, 3, 3, 3)[..., :2, :2]
+        u_h = _dataset(grp, "u_h", (T, 3), where)[:, :2]
+        gamma_h = _dataset(grp, "gamma_h", (T,), where)
+        u_star = corner(_dataset(grp, "u_star", (3 * T, 3), where))[..., :2]
+        cw = f"{where}/crack"
+        if "crack" in grp:
+            cg = grp["crack"]
+            seg = _dataset(cg, "segments", (None, 2), cw).astype(np.int64)
+            cp = _dataset(cg, "points", (None, 3), cw)[:, :2]
+            n = len(cp)
+            if seg.size and (seg.min() < 0 or seg.max() >= n):
+                raise InputError(f"{cw}/segments: a point index out of range")
+            cols = [_dataset(cg, k, (n,), cw) for k in ("opening", "slip", "pressure")]
+        else:
+            seg, cp = np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2))
+            cols = [np.zeros(0)] * 3
+        out.append(SdmCase(c, L, c["multiplier"], float(c["delta"]), grid, pts, tri, sig_raw,
+                           sig, u_h, gamma_h, u_star, cp, seg, *cols))
     return out
 
 

@@ -1,0 +1,203 @@
+"""The compare tool's checks of the smooth-domain method's elastic cases (issue 46; docs/elasticity.md,
+"The smooth-domain method's cases"), on synthetic folders: elastic_synthetic.write_results's
+references and export, and solver cases (write_sdm_cases) whose fields are the exact field sampled
+on each triangle. The norms against closed forms; a correct folder passes every solver check; each
+check FAILs on the damage it is there for: a forged summary error (independent errors), a stalled σ
+(solver series), a σ off by 1e-8 on the patch test (patch test), a case that did not converge or is
+missing (solver cases), a δ-difference that breaks the triangle inequality or grows with the level
+(δ → 0); bad fields.h5 is one line, exit 2.
+
+Run: /usr/bin/python3 -m pytest compare/tests/test_elastic_sdm.py -q
+"""
+import json
+import math
+
+import h5py
+import numpy as np
+
+import elastic_synthetic as es
+from sdcompare_lib import elastic, elastic_exact, elastic_read, elastic_sdm
+from test_elastic import run_cli
+
+LEVELS = (0, 1, 2)
+
+
+def analyse(folder):
+    return elastic.analyse(elastic_read.load(str(folder)))
+
+
+def check(a, label):
+    """(problems, why not applicable) of the check row `label`."""
+    return next((p, na) for lab, _, p, na in a["checks"] if lab == label)
+
+
+def patch_exact():
+    """Uniform strain (0.1, −0.3) across the interior crack y = 0, |x| ≤ 1/2: σ_yy < 0, closed."""
+    grad = np.array([[0.1, 0.0], [0.0, -0.3]])
+    s = elastic_exact.hooke(grad, es.PROBLEM)
+    return {"ux": "0.1*x", "uy": "-0.3*y", "sxx": repr(float(s[0])), "syy": repr(float(s[1])),
+            "sxy": repr(float(s[2])), "opening": None, "slip": None, "pressure": None,
+            "sif": [[0.0, 0.0], [0.0, 0.0]]}
+
+
+def patch_folder(tmp_path, levels=(1, 2, 3), **kw):
+    ex = patch_exact()
+    folder = es.write_results(tmp_path / "patch", exact=ex, levels=levels, name="patch",
+                              crack=((-0.5, 0.0), (0.5, 0.0)),
+                              closed=lambda L, xy, pairs: np.ones(len(pairs), dtype=bool))
+    return es.write_sdm_cases(folder, ex, **kw)
+
+
+def williams_folder(tmp_path, **kw):
+    ex = es.williams(1.0, 0.5)
+    folder = es.write_results(tmp_path / "w", exact=ex, levels=LEVELS)
+    return es.write_sdm_cases(folder, ex, **kw)
+
+
+# ------------------------------------------------------------------------- the norms
+
+def test_errors_of_known_offsets_are_their_closed_forms(tmp_path):
+    """On the patch field (P1: the sampled fields are exact), constant offsets of every field give
+    the closed forms: ‖C‖_F √|Ω| for σ (|Ω| = 4), |d| √|Ω| for u*, ‖P0u − u_h‖, |g| √|Ω| for γ, the
+    compliance energy (|C|² − c tr² C)/(2μ) |Ω|, the offset × √|Σ| on the crack (|Σ| = 1)."""
+    C = np.array([[0.3, 0.1], [-0.2, 0.4]])
+    d, g, o = np.array([0.05, -0.02]), 0.07, 0.01
+
+    def damage(L, m, delta, f):
+        f["sigma_raw"][:, [0, 1, 3, 4]] += C.ravel()
+        f["u_star"][:, :2] += d
+        f["u_h"][:, :2] += d
+        f["gamma_h"] += g
+        for k in ("opening", "slip", "pressure"):
+            f[f"crack/{k}"] += o
+
+    folder = patch_folder(tmp_path, levels=(1,), damage=damage)
+    res = elastic_read.load(str(folder))
+    ex = elastic_exact.ElasticExact(res["mesh_scene"]["exact"], es.PROBLEM)
+    e, _ = elastic_sdm.recompute(res["sdm"][0], res["levels"][1], ex, es.PROBLEM)
+    lam, mu = es.PROBLEM["lambda_in_plane"], es.PROBLEM["mu"]
+    c = lam / (2 * (mu + lam))
+    close = lambda x, y: abs(x - y) <= 1e-12 * max(1.0, abs(y))  # noqa: E731
+    assert close(e["stress_l2"], np.linalg.norm(C) * 2)
+    assert e["stress_sym_l2"] < 1e-14
+    assert close(e["stress_energy"], math.sqrt((np.sum(C * C) - c * np.trace(C) ** 2) / (2 * mu) * 4))
+    assert close(e["asymmetry_l2"], abs(C[0, 1] - C[1, 0]) * 2)
+    assert close(e["u_star_l2"], np.linalg.norm(d) * 2)
+    assert close(e["projected_u_l2"], np.linalg.norm(d) * 2)
+    assert close(e["rotation_l2"], g * 2)
+    for k in ("opening_l2", "slip_l2", "pressure_l2"):
+        assert close(e[k], o), (k, e[k])
+    # u_h (centroid values + d) against the linear u: |d|² + the centroid's variance of ∇u·(x − x_T)
+    assert e["u_l2"] > np.linalg.norm(d) * 2
+
+
+# ------------------------------------------------------------------------- the verdict
+
+def test_a_correct_solver_folder_passes_every_solver_check(tmp_path):
+    a = analyse(williams_folder(tmp_path))
+    for label in ("solver cases", "independent errors", "solver series"):
+        probs, na = check(a, label)
+        assert probs == [] and na is None, (label, probs, na)
+    assert check(a, "patch test")[1] == "the exact u is not P1 on every triangle"
+    assert check(a, "δ → 0")[1] is not None
+    sdm = [s for s in a["series"] if s["tool"].startswith("sdcrack")]
+    assert {s["quantity"] for s in sdm} == set(elastic.elastic_theory.SDM_JUDGED)
+    by = {s["quantity"]: s for s in sdm}
+    assert by["stress_sym_l2"]["expected"] == 0.5 and by["u_star_l2"]["expected"] == 1.0
+    assert by["opening_l2"]["expected"] == 0.5 and by["u_l2"]["expected"] == 1.0
+    assert len(a["sdm"]["ratios"]) == 2 * len(LEVELS) * 3
+
+
+def test_a_forged_summary_error_fails(tmp_path):
+    """stress_sym_l2 at level 1 written 1 + 1e-6 times the recomputed one: FAIL, nothing else."""
+    def forge(L, m, d, errors):
+        if L == 1:
+            errors["stress_sym_l2"] *= 1 + 1e-6
+
+    a = analyse(williams_folder(tmp_path, forge=forge))
+    probs, _ = check(a, "independent errors")
+    assert len(probs) == 1 and "level 1" in probs[0] and "stress_sym_l2" in probs[0], probs
+    assert a["verdict"] == "FAIL"
+
+
+def test_a_stalled_stress_fails_the_solver_series(tmp_path):
+    """σ_h off by a constant 0.3 I at every level: its errors stall, the series FAILs."""
+    def damage(L, m, d, f):
+        f["sigma"][:, [0, 4]] += 0.3
+        f["sigma_raw"][:, [0, 4]] += 0.3
+
+    a = analyse(williams_folder(tmp_path, damage=damage))
+    probs, _ = check(a, "solver series")
+    assert any("stress_sym_l2" in p for p in probs) and any("stress_l2" in p for p in probs), probs
+    assert not any("u_star_l2" in p or "opening_l2" in p for p in probs)
+    assert check(a, "independent errors")[0] == []
+
+
+def test_the_patch_test_is_exact_and_fails_off_by_1e_8(tmp_path):
+    a = analyse(patch_folder(tmp_path / "ok"))
+    assert check(a, "patch test") == ([], None)
+    assert a["verdict"] == "PASS", a["reasons"]
+
+    def damage(L, m, d, f):
+        if L == 3:
+            f["sigma"][:, 4] += 1e-8
+            f["sigma_raw"][:, 4] += 1e-8
+
+    probs, _ = check(analyse(patch_folder(tmp_path / "bad", damage=damage)), "patch test")
+    assert probs and all("level 3" in p for p in probs), probs
+    assert any("stress_sym_l2" in p for p in probs)
+
+
+def test_a_case_not_converged_or_missing_fails(tmp_path):
+    folder = williams_folder(tmp_path, status=lambda L, m, d: "converged" if L else "not converged")
+    probs, _ = check(analyse(folder), "solver cases")
+    assert len(probs) == 1 and "level 0" in probs[0], probs
+    summary = json.loads((folder / "summary.json").read_text())
+    summary["cases"] = [c for c in summary["cases"] if c["level"] != 2]
+    (folder / "summary.json").write_text(json.dumps(summary))
+    probs, _ = check(analyse(folder), "solver cases")
+    assert any("level 2 has no solver case M1star δ=0" in p for p in probs), probs
+
+
+def _delta_damage(scale):
+    """δ = 1e-3's σ_h and u_h off by δ × scale(L) × a fixed field (x_δ − x_0 = O(δ))."""
+    def damage(L, m, d, f):
+        if d > 0:
+            f["sigma_raw"][:, 0] += d * scale(L) * f["points"][:, 0]
+            f["u_h"][:, 0] += d * scale(L)
+    return damage
+
+
+def test_delta_to_zero(tmp_path):
+    variants = (("M1star", 0.0), ("M1star", 1e-3))
+    a = analyse(patch_folder(tmp_path / "ok", levels=(0, 1, 2, 3), variants=variants,
+                             damage=_delta_damage(lambda L: 1.0)))
+    assert check(a, "δ → 0") == ([], None)
+    assert len(a["sdm"]["delta"]) == 4
+    # the constant doubling per level (δ scaled by h⁻¹): FAIL
+    a = analyse(patch_folder(tmp_path / "grow", levels=(0, 1, 2, 3), variants=variants,
+                             damage=_delta_damage(lambda L: 2.0 ** L)))
+    probs, _ = check(a, "δ → 0")
+    assert any("δ-constant" in p and " σ " in p for p in probs), probs
+
+    # a δ > 0 error not tied to its field: |e(δ) − e(0)| > ‖x_δ − x_0‖
+    def forge(L, m, d, errors):
+        if d > 0 and L == 2:
+            errors["u_l2"] += 1e-2
+
+    a = analyse(patch_folder(tmp_path / "forged", levels=(0, 1, 2, 3), variants=variants,
+                             damage=_delta_damage(lambda L: 1.0), forge=forge))
+    probs, _ = check(a, "δ → 0")
+    assert any("level 2" in p and "u_l2" in p and "triangle inequality" in p for p in probs), probs
+
+
+def test_bad_fields_are_one_line_and_exit_2(tmp_path):
+    folder = patch_folder(tmp_path, levels=(1,))
+    with h5py.File(folder / "fields.h5", "a") as h5:
+        del h5["cases/level1-elasticity-M1star-delta0/gamma_h"]
+    code, out, err = run_cli(folder)
+    assert code == 2 and "gamma_h" in err and len(err.strip().splitlines()) == 1, (out, err)
+    assert not (folder / "report").exists()
+    (folder / "fields.h5").unlink()
+    code, out, err = run_cli(folder)
+    assert code == 2 and "fields.h5" in err, (out, err)
