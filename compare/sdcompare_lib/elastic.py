@@ -651,6 +651,7 @@ def solver_checks(res, a, ex, size):
     rows.append(sv.patch_test(res, rec, exact_p1))
     sdm["ratios"] = sv.ratios(res, rec, a["errors"])
     a["series"].extend(sdm["series"])
+    sdm["sentences"] = sv.sentences(res, a)
     return rows
 
 
