@@ -27,10 +27,16 @@ pub mod assembly;
 pub mod contact;
 pub mod dofs;
 pub mod element;
+pub mod norms;
+pub mod recovery;
+#[cfg(test)]
+pub(crate) mod testing;
 #[cfg(test)]
 mod tests;
 
 pub use contact::solve;
+pub use norms::{errors, AfwErrors};
+pub use recovery::{recover, Recovered};
 
 use crate::contact::{KktResiduals, LcpStatus};
 use crate::problem::MultiplierSpace;
@@ -93,14 +99,6 @@ pub enum AfwError {
     #[error(transparent)]
     Linalg(#[from] crate::linalg::LinalgError),
 }
-
-pub mod norms;
-pub mod recovery;
-#[cfg(test)]
-pub(crate) mod testing;
-
-pub use norms::{errors, AfwErrors};
-pub use recovery::{recover, Recovered};
 
 /// One crack edge of a solution: an edge of the uncracked mesh between two consecutive nodes
 /// of a crack chain ([`crate::mesh::CrackChain`]), with the values of its two normal-trace

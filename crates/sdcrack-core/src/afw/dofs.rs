@@ -189,10 +189,13 @@ fn midpoint(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])]
 }
 
+/// The edge of each vertex pair (smaller vertex first).
+type EdgeIndex = HashMap<(usize, usize), usize>;
+
 /// The edges of `mesh` (interior ones for now), each triangle's edges, and the edge of each
 /// vertex pair (smaller first).
-fn mesh_edges(mesh: &Mesh) -> (Vec<Edge>, Vec<[usize; 3]>, HashMap<(usize, usize), usize>) {
-    let mut index: HashMap<(usize, usize), usize> =
+fn mesh_edges(mesh: &Mesh) -> (Vec<Edge>, Vec<[usize; 3]>, EdgeIndex) {
+    let mut index: EdgeIndex =
         HashMap::with_capacity(3 * mesh.triangles.len() / 2 + mesh.boundary_edges.len());
     let mut edges = Vec::new();
     let triangle_edges = (mesh.triangles.iter())
@@ -226,11 +229,7 @@ fn edge(mesh: &Mesh, nodes: [usize; 2]) -> Edge {
 
 /// Marks the edges between consecutive nodes of each crack chain: kind, directions
 /// (s_e ν, s_e t) with s_e = n_e·ν = ±1 and t = ν turned by −90°. Returns them in chain order.
-fn mark_crack_edges(
-    mesh: &Mesh,
-    edges: &mut [Edge],
-    index: &HashMap<(usize, usize), usize>,
-) -> Vec<usize> {
+fn mark_crack_edges(mesh: &Mesh, edges: &mut [Edge], index: &EdgeIndex) -> Vec<usize> {
     let mut crack_edges = Vec::new();
     for (c, chain) in mesh.cracks.iter().enumerate() {
         for (k, pair) in chain.nodes.windows(2).enumerate() {

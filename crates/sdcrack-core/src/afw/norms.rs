@@ -11,7 +11,7 @@
 //! pressure are the scene's expressions, or else the limits of u and σ from the faces by the
 //! signed-zero rule of [`crate::problem::eval_on_face`].
 
-use super::recovery::Compliance;
+use super::element::Compliance;
 use super::{AfwSolution, Recovered};
 use crate::elasticity::{ElasticExact, Material};
 use crate::expr::{BatchScratch, ExprBatch, Var};
@@ -142,7 +142,7 @@ pub fn errors_with(
     let (dux_dy, duy_dx) = (exact.u[0].derivative(Var::Y), exact.u[1].derivative(Var::X));
     let [sxx, syy, sxy] = &exact.stress;
     let program = ExprBatch::new(&[&exact.u[0], &exact.u[1], sxx, syy, sxy, &dux_dy, &duy_dx]);
-    let compliance = Compliance::new(material);
+    let compliance = Compliance::of(material);
     let add = |a: Sums, b: Sums| std::array::from_fn(|k| a[k] + b[k]);
     let sums = (mesh.triangles.par_chunks(CHUNK).enumerate())
         .map(|(c, tris)| {

@@ -27,6 +27,7 @@
 //! with σ_h = σ(u) and γ_h = γ(u). ‖as σ_h‖_{L²(Ω)}, as σ = σ_xy − σ_yx, is the weak-symmetry
 //! defect: O(h), as large as the σ error, hence sym σ_h where users see σ.
 
+use super::element::Compliance;
 use super::AfwSolution;
 use crate::elasticity::Material;
 use crate::fe::p1::TriangleGeometry;
@@ -70,7 +71,7 @@ pub fn recover(mesh: &Mesh, material: &Material, solution: &AfwSolution) -> Reco
         .collect();
     let pressure = crack.iter().map(|e| e.normal_stress.map(|s| -s)).collect();
     let stress_sym = solution.stress.iter().map(|s| s.map(symmetric)).collect();
-    let compliance = Compliance::new(material);
+    let compliance = Compliance::of(material);
     let mut u_star = Vec::with_capacity(n);
     let mut asymmetry = 0.0;
     for (ti, t) in mesh.triangles.iter().enumerate() {
@@ -117,38 +118,6 @@ pub fn edge_mass_solve(length: f64, m: [f64; 2]) -> [f64; 2] {
 /// sym σ of a raw [σ_xx, σ_xy, σ_yx, σ_yy], as [σ_xx, σ_yy, σ_xy].
 pub fn symmetric(s: [f64; 4]) -> [f64; 3] {
     [s[0], s[3], 0.5 * (s[1] + s[2])]
-}
-
-/// The compliance A of a material: Aσ = (σ − c tr σ I)/(2μ), c = λ*/(2(μ + λ*)), λ* the in-plane
-/// λ ([`Material::lambda_in_plane`]), on a whole (unsymmetric) σ = [σ_xx, σ_xy, σ_yx, σ_yy].
-#[derive(Clone, Copy, Debug)]
-pub struct Compliance {
-    /// 1/(2μ).
-    inv_2mu: f64,
-    /// c = λ*/(2(μ + λ*)).
-    trace: f64,
-}
-
-impl Compliance {
-    /// The compliance of `material`.
-    pub fn new(material: &Material) -> Compliance {
-        let (lam, mu) = (material.lambda_in_plane(), material.mu);
-        Compliance {
-            inv_2mu: 0.5 / mu,
-            trace: lam / (2.0 * (mu + lam)),
-        }
-    }
-
-    /// Aσ, in σ's layout [xx, xy, yx, yy].
-    pub fn apply(&self, s: [f64; 4]) -> [f64; 4] {
-        let tr = self.trace * (s[0] + s[3]);
-        [
-            self.inv_2mu * (s[0] - tr),
-            self.inv_2mu * s[1],
-            self.inv_2mu * s[2],
-            self.inv_2mu * (s[3] - tr),
-        ]
-    }
 }
 
 /// u* of one triangle at its vertices: u_h + G (x_i − x_c), G = mean_T(Aσ_h) + γ_h J, x_c the

@@ -529,6 +529,7 @@ mod tests {
                 p_mass: PMass::Lumped,
                 p_space: PSpace::BrokenTangential,
                 delta: 1.5e-8,
+                problem: ProblemKind::Scalar,
             },
             h: 0.1 + 0.2,
             unknowns: 1234,
