@@ -74,7 +74,8 @@ FRONT_REACH = 1
 QUANTITIES = ("u_l2", "u_h1", "sigma_l2", "opening_l2", "slip_l2")
 CHECKS = ("exact data", "completeness", "reference status", "crack outputs", "viewer datasets",
           "reference agreement", "series", "active set", "interpolation yardstick", "SIF",
-          "solver cases", "independent errors", "solver series", "patch test", "δ → 0")
+          "solver cases", "independent errors", "solver series", "solver SIF", "patch test",
+          "δ → 0")
 YARDSTICK_LABEL = "interpolation yardstick"
 # ‖u − u_h‖_a ≤ (1 + YARDSTICK_TOL) ‖u − I_h u‖_a (Falk's lemma with v_h = I_h u: constant 1,
 # interpolation_yardstick). What the bound leaves out, each far below 1e-6 relative: the error
@@ -629,23 +630,33 @@ def solver_checks(res, a, ex, size):
     if not res.get("sdm"):
         why = "summary.json has no elastic solver case"
         return rows + [(label, "", [], why) for label in
-                       ("independent errors", "solver series", "patch test", "δ → 0")]
+                       ("independent errors", "solver series", "solver SIF", "patch test", "δ → 0")]
     rows.append(sv.delta_limit(res, a))
     if ex is None:
         why = "no [exact] in the scene: nothing to recompute the solver's errors against"
         return rows + [(label, "", [], why) for label in
-                       ("independent errors", "solver series", "patch test")]
+                       ("independent errors", "solver series", "solver SIF", "patch test")]
     rec = sdm["recomputed"] = sv.recompute_all(res, ex)
     row, sdm["independent"] = sv.independent_errors(res, rec)
     rows.append(row)
-    sdm["series"] = sv.series(res, rec, a["h"], a["s"])
-    bad = [f"{s['tool']} {s['quantity']}: {s['reason']}" for s in sdm["series"]
+    sifs, sdm["sif_skipped"] = sv.sdm_sifs(res, ex)
+    sdm["sifs"] = [{"level": res["sdm"][i].level, "multiplier": res["sdm"][i].multiplier,
+                    "K": ks} for i, ks in sorted(sifs.items())]
+    sdm["series"] = sv.series(res, rec, a["h"], a["s"],
+                              sv.sif_errors(sifs, res["mesh_scene"]["exact"].get("sif")))
+    judged = [s for s in sdm["series"] if not s["quantity"].startswith("K_")]
+    bad = [f"{s['tool']} {s['quantity']}: {s['reason']}" for s in judged
            if s["status"] == "does not converge"]
     a["undecided"]["solver series"] = [f"{s['tool']} {s['quantity']}: {s['reason']}"
-                                       for s in sdm["series"] if s["status"] == "inconclusive"]
+                                       for s in judged if s["status"] == "inconclusive"]
+    for s in sdm["series"]:
+        if s["quantity"].startswith("K_"):
+            s["status"] = f"printed ({s['status']}; the solver SIF check judges the finest level)"
     rows.append(("solver series", "every solver series (recomputed errors) converges at the "
                  "order elastic_theory gives the smooth-domain method for the regularity s",
                  bad, None if sdm["series"] else "no solver case at a level of the mesh export"))
+    rows.append(sv.sif_check(res, a, sifs, sdm["sif_skipped"],
+                             res["mesh_scene"]["exact"].get("sif")))
     exact_p1 = all(v["u_h1"] <= roundoff_floor(size[L], "u_h1")
                    for L, v in a["interpolation"].items())
     rows.append(sv.patch_test(res, rec, exact_p1))

@@ -101,8 +101,12 @@ def test_a_correct_solver_folder_passes_every_solver_check(tmp_path):
     assert check(a, "patch test")[1] == "the exact u is not P1 on every triangle"
     assert check(a, "δ → 0")[1] is not None
     sdm = [s for s in a["series"] if s["tool"].startswith("sdcrack")]
-    assert {s["quantity"] for s in sdm} == set(elastic.elastic_theory.SDM_JUDGED)
+    assert {s["quantity"] for s in sdm} == set(elastic.elastic_theory.SDM_JUDGED) | {
+        "K_I tip 1", "K_II tip 1"}
+    assert check(a, "solver SIF") == ([], None)
+    # the SIFs of σ_h, Aσ_h + γ_h J (the exact fields sampled) tend to K_I = 1, K_II = 1/2
     by = {s["quantity"]: s for s in sdm}
+    assert by["K_I tip 1"]["errors"][-1] < 1e-4 and by["K_II tip 1"]["errors"][-1] < 1e-4
     assert by["stress_sym_l2"]["expected"] == 0.5 and by["u_star_l2"]["expected"] == 1.0
     assert by["opening_l2"]["expected"] == 0.5 and by["u_l2"]["expected"] == 1.0
     assert len(a["sdm"]["ratios"]) == 2 * len(LEVELS) * 3
@@ -131,6 +135,19 @@ def test_a_stalled_stress_fails_the_solver_series(tmp_path):
     assert any("stress_sym_l2" in p for p in probs) and any("stress_l2" in p for p in probs), probs
     assert not any("u_star_l2" in p or "opening_l2" in p for p in probs)
     assert check(a, "independent errors")[0] == []
+
+
+def test_a_rotation_off_by_a_linear_field_fails_the_sif_check(tmp_path):
+    """γ_h + 0.2 x: ∇_h u's rotation enters the interaction integral (σ^a_ij u_i,1; a constant
+    rotation, a rigid motion, would not), so K moves by far more than 0.5 % at the finest level;
+    σ's errors do not change."""
+    def damage(L, m, d, f):
+        f["gamma_h"] += 0.2 * f["points"][:, 0].reshape(-1, 3).mean(axis=1)
+
+    a = analyse(williams_folder(tmp_path, damage=damage))
+    probs, _ = check(a, "solver SIF")
+    assert probs and all("level 2 tip 1" in p for p in probs), probs
+    assert not any("stress" in p for p in check(a, "solver series")[0])
 
 
 def test_the_patch_test_is_exact_and_fails_off_by_1e_8(tmp_path):
