@@ -218,3 +218,22 @@ def test_bad_fields_are_one_line_and_exit_2(tmp_path):
     (folder / "fields.h5").unlink()
     code, out, err = run_cli(folder)
     assert code == 2 and "fields.h5" in err, (out, err)
+
+
+def test_the_sentences_follow_the_numbers(tmp_path):
+    """The report's sentences are computed: the sampled σ_h (0.49 × P1's σ error) is 'smaller at
+    every level'; σ_h off by 0.3 I is 'not smaller' at the levels where it is not; the P0 u_h
+    (rate ~1 against P1's ~1.5 here) is 'of lower order'."""
+    a = analyse(williams_folder(tmp_path / "ok"))
+    said = a["sdm"]["sentences"]
+    assert any(t.startswith("On the same mesh the SDM's σ error") and "smaller than dolfinx's at "
+               "every level" in t for t in said), said
+    assert any("raw u_h (P0)" in t and "of lower order" in t for t in said), said
+
+    def damage(L, m, d, f):
+        f["sigma"][:, [0, 4]] += 0.3
+
+    said = analyse(williams_folder(tmp_path / "bad", damage=damage))["sdm"]["sentences"]
+    assert any("σ error" in t and "is not smaller than dolfinx's at level(s) 0, 1, 2" in t
+               for t in said), said
+    assert not any("σ error" in t and "at every level" in t for t in said)
