@@ -287,9 +287,8 @@ def report_json(res, a, prov, images):
 
 
 def check_no_expectations(path, scene):
-    """The elastic verdict reads no expectations: its series are judged by elastic_theory.py's
-    orders, and until the elastic solver exists (issue 46) there is no solver series to bound
-    and no ratio to the references to record. A row of the expectations file `path` (--expectations,
+    """The elastic verdict reads no expectations: its series (the references' and the solver's)
+    are judged by elastic_theory.py's orders, and no ratio to the references is recorded yet. A row of the expectations file `path` (--expectations,
     else the default file) naming the elastic `scene` would be silently ignored, so it is refused
     (InputError); rows of other scenes, and "*" rows (patterns of the scalar series), are the
     scalar verdict's. A missing default file is no error here."""
