@@ -4,7 +4,8 @@ row (label, requirement, problems, why not applicable) of elastic.analyse's chec
 the report prints are in a["sdm"].
 
 * solver cases: every level of the scene copy has a case of every (multiplier, δ) of the plan, and
-  every case converged (status "converged", KKT residuals ≤ elastic.KKT_TOLERANCE).
+  every case converged (status "converged", KKT residuals ≤ summary.json's kkt_tolerance, else
+  1e-10).
 * independent errors (with [exact]): every error of summary.json recomputed here from the stored
   fields (elastic_sdm.recompute) within INDEPENDENT_REL × the error + 4 × this tool's quadrature
   estimate (its rule against exact.Quadrature.higher) + ROUNDOFF_REL × the exact field's norm.
@@ -28,6 +29,9 @@ import numpy as np
 from . import elastic_sdm, elastic_theory, rates
 from .exact import Quadrature
 
+# The solver's KKT tolerance where summary.json does not give its kkt_tolerance (the references'
+# and the scalar cases' 1e-10).
+KKT_TOLERANCE = 1e-10
 # sdcrack's elastic summary has no quadrature-error estimate (errors_quadrature), so the rule of
 # docs/verification.md for a summary without estimates applies to its side: 1e-8 relative. Its
 # rule (degree 10, 20 near the tips, the collapsed tip rule) differs from this tool's by ≤ 4.7e-9
@@ -53,7 +57,7 @@ def solver_cases(res):
     """The solver-cases check's row."""
     cases = res.get("sdm") or []
     what = ("every level has a solver case of every (multiplier, δ) of the plan, each converged "
-            "with KKT residuals ≤ 1e-10")
+            "with KKT residuals ≤ summary.json's kkt_tolerance")
     if not cases:
         return ("solver cases", what, [], "summary.json has no elastic solver case (the "
                 "references alone are judged)")
@@ -64,10 +68,16 @@ def solver_cases(res):
         for m, d in variants:
             if (L, m, d) not in have:
                 probs.append(f"level {L} has no solver case {m} δ={d:g}")
+    tol = res["summary"].get("kkt_tolerance", KKT_TOLERANCE)
     for c in cases:
         st = c.entry.get("status")
         if st != "converged":
             probs.append(f"level {c.level} {c.label()}: status {st!r}")
+        kkt = c.entry.get("kkt")
+        for k in ("equations", "primal", "dual", "complementarity"):
+            v = kkt.get(k) if isinstance(kkt, dict) else None
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v <= tol):
+                probs.append(f"level {c.level} {c.label()}: KKT {k} {v!r} not a number ≤ {tol:g}")
     return ("solver cases", what, probs, None)
 
 
@@ -392,11 +402,10 @@ def parity(res, a, tool):
 SIF_ACCEPT = 5e-3
 
 
-def sif_check(res, a, sifs, skipped, exact_sif):
+def sif_check(res, sifs, skipped, exact_sif, rings, roundoff):
     """The solver-SIF check's row: every δ = 0 variant's SIFs computed at its finest level and,
-    with exact SIFs, within SIF_ACCEPT of them there."""
-    from . import elastic
-
+    with exact SIFs, within SIF_ACCEPT of them there; rings {level: [(r_in, r_out)] per tip},
+    roundoff the SIFs' round-off fraction (elastic.SIF_ROUNDOFF)."""
     what = (f"the SDM's K_I, K_II (interaction integral on σ_h, Aσ_h + γ_h J) computed at the "
             f"finest level of each multiplier, within {SIF_ACCEPT:g} × the tip's largest exact |K| "
             "there (the issue's acceptance)")
@@ -413,8 +422,8 @@ def sif_check(res, a, sifs, skipped, exact_sif):
             continue
         # the round-off of K where K itself is 0 (a closed patch): elastic.SIF_ROUNDOFF × the K
         # a stress of the field's size gives on the ring, max |σ_h| √(2π r_out)
-        r_out = max((ring[1] for ring in elastic.sif_ring(res["levels"][c.level])), default=0.0)
-        floor = elastic.SIF_ROUNDOFF * float(np.abs(c.sigma).max(initial=0.0)) * math.sqrt(
+        r_out = max((ring[1] for ring in rings[c.level]), default=0.0)
+        floor = roundoff * float(np.abs(c.sigma).max(initial=0.0)) * math.sqrt(
             2 * math.pi * r_out)
         for k, (kh, ke) in enumerate(zip(sifs[i], exact_sif or [])):
             scale = max(abs(ke[0]), abs(ke[1]))
@@ -438,14 +447,14 @@ def sdm_gradient(case, material):
     return eps + case.gamma_h[:, None, None, None] * J, s
 
 
-def sdm_sifs(res, ex):
+def sdm_sifs(res, rings, force, exact_pressure):
     """({case index: [(K_I, K_II) per tip]}, {case index: why not}) of the δ = 0 cases by
-    sif.sif_fields on the references' ring (elastic.sif_ring) with the scene's body force and, in
-    the face term, the exact pressure (with [exact]) or the case's own −σ_νν on the crack."""
-    from . import elastic, sif
+    sif.sif_fields on the references' rings ({level: [(r_in, r_out)] per tip}) with the body force
+    `force` (callable or None) and, in the face term, exact_pressure(e1) (a callable, with
+    [exact]; None without) or else the case's own −σ_νν on the crack."""
+    from . import sif
 
     material = res["mesh_scene"]["problem"]
-    force = elastic._body_force(res["mesh_scene"])
     out, skipped = {}, {}
     for i, c in enumerate(res.get("sdm") or []):
         lv = res["levels"].get(c.level)
@@ -457,8 +466,8 @@ def sdm_sifs(res, ex):
             continue
         grad, stress = sdm_gradient(c, material)
         ks = []
-        for k, ((tip, e1), (r_in, r_out)) in enumerate(zip(lv.tip_frames(), elastic.sif_ring(lv))):
-            face = (elastic._exact_pressure(ex, e1) if ex is not None else
+        for k, ((tip, e1), (r_in, r_out)) in enumerate(zip(lv.tip_frames(), rings[c.level])):
+            face = (exact_pressure(e1) if exact_pressure is not None else
                     sif.pressure_along_crack(c.crack_points, c.pressure, tip, e1)
                     if len(c.crack_points) else None)
             try:

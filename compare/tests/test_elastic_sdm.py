@@ -170,6 +170,12 @@ def test_a_case_not_converged_or_missing_fails(tmp_path):
     probs, _ = check(analyse(folder), "solver cases")
     assert len(probs) == 1 and "level 0" in probs[0], probs
     summary = json.loads((folder / "summary.json").read_text())
+    summary["cases"][0]["status"] = "converged"
+    summary["cases"][1]["kkt"]["primal"] = 3e-7  # "converged" with a residual above 1e-10
+    (folder / "summary.json").write_text(json.dumps(summary))
+    probs, _ = check(analyse(folder), "solver cases")
+    assert len(probs) == 1 and "level 1" in probs[0] and "KKT primal" in probs[0], probs
+    summary = json.loads((folder / "summary.json").read_text())
     summary["cases"] = [c for c in summary["cases"] if c["level"] != 2]
     (folder / "summary.json").write_text(json.dumps(summary))
     probs, _ = check(analyse(folder), "solver cases")
