@@ -41,7 +41,12 @@ REASON = {
 
 QUANTITY_TEXT = {"u_l2": "‖u_h − u‖_L²", "u_h1": "‖∇(u_h − u)‖_L²", "sigma_l2": "‖σ(u_h) − σ‖_L²",
                  "opening_l2": "‖[u_h·ν] − [u·ν]‖_L²(Γc)", "slip_l2": "‖[u_h·τ] − [u·τ]‖_L²(Γc)",
-                 "pressure_l2": "nodal pressure error (discrete L²(Γc))"}
+                 "pressure_l2": "nodal pressure error (discrete L²(Γc))",
+                 # the smooth-domain method's (summary.json's names)
+                 "stress_l2": "‖σ − σ_h‖_L² (SDM, raw σ_h)", "stress_sym_l2": "‖σ − sym σ_h‖_L² (SDM)",
+                 "stress_energy": "‖σ − σ_h‖_A (SDM)", "projected_u_l2": "‖P0u − u_h‖_L² (SDM)",
+                 "u_star_l2": "‖u − u*‖_L² (SDM)", "rotation_l2": "‖γ − γ_h‖_L² (SDM)",
+                 "asymmetry_l2": "‖as σ_h‖_L² (SDM)"}
 
 
 def expected_order(quantity, s):
