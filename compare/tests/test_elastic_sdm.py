@@ -5,15 +5,20 @@ on each triangle. The norms against closed forms; a correct folder passes every 
 check FAILs on the damage it is there for: a forged summary error (independent errors), a stalled σ
 (solver series), a σ off by 1e-8 on the patch test (patch test), a case that did not converge or is
 missing (solver cases), a δ-difference that breaks the triangle inequality or grows with the level
-(δ → 0); bad fields.h5 is one line, exit 2.
+(δ → 0); bad fields.h5 is one line, exit 2; and the real solver's fields.h5 (SDCRACK_BIN) gives back its own
+summary's errors.
 
 Run: /usr/bin/python3 -m pytest compare/tests/test_elastic_sdm.py -q
 """
 import json
 import math
+import os
+import subprocess
+import tomllib
 
 import h5py
 import numpy as np
+import pytest
 
 import elastic_synthetic as es
 from sdcompare_lib import elastic, elastic_exact, elastic_read, elastic_sdm
@@ -243,3 +248,45 @@ def test_the_sentences_follow_the_numbers(tmp_path):
     assert any("σ error" in t and "is not smaller than dolfinx's at level(s) 0, 1, 2" in t
                for t in said), said
     assert not any("σ error" in t and "at every level" in t for t in said)
+
+
+# ------------------------------------------------------------------------- the real solver
+
+def test_the_solvers_own_fields_give_back_its_summary(tmp_path):
+    """`sdcrack run` on the graded Williams scene at levels 0–1 (M1star, δ = 0, no references) and
+    `sdcrack mesh` for the export: the fields.h5 layout read here is the solver's, and every error
+    of its summary.json is recomputed within the independent-errors tolerance."""
+    from sdcompare_lib import elastic_sdm_verdict as sv
+    from sdcompare_lib.exact import Quadrature
+
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    exe = os.environ.get("SDCRACK_BIN") or os.path.join(root, "target", "release", "sdcrack")
+    if not os.path.exists(exe):
+        pytest.skip(f"no sdcrack binary at {exe} (cargo build --release, or set SDCRACK_BIN)")
+    text = open(os.path.join(root, "scenes", "elastic-williams-open-graded.toml")).read()
+    scene = tomllib.loads(text)
+    lines = [ln for ln in text.splitlines() if not ln.startswith(("levels", "references",
+                                                                  "multipliers", "deltas"))]
+    scene_file = tmp_path / "w.toml"
+    scene_file.write_text("\n".join(lines).replace(
+        "[discretization]", '[discretization]\nlevels = [0, 1]\nmultipliers = ["M1star"]\n'
+        "deltas = [0.0]").replace("[outputs]", "[outputs]\nreferences = []") + "\n")
+    run = subprocess.run([exe, "run", str(scene_file), "--out", str(tmp_path / "out"), "--quiet"],
+                         capture_output=True, text=True)
+    assert run.returncode in (0, 1), run.stderr
+    subprocess.run([exe, "mesh", str(scene_file), "--out", str(tmp_path / "mesh")], check=True,
+                   capture_output=True)
+    folder = tmp_path / "out" / scene["name"]
+    summary = json.loads((folder / "summary.json").read_text())
+    cases = elastic_sdm.read_cases(str(folder), summary)
+    assert [c.level for c in cases] == [0, 1]
+    ms = json.loads((tmp_path / "mesh" / "scene.json").read_text())
+    ex = elastic_exact.ElasticExact(ms["exact"], ms["problem"])
+    for c in cases:
+        lv = elastic_read.read_level(str(tmp_path / "mesh"), c.level)
+        e, scale = elastic_sdm.recompute(c, lv, ex, ms["problem"])
+        eh, _ = elastic_sdm.recompute(c, lv, ex, ms["problem"], Quadrature().higher())
+        for k in elastic_sdm.ERROR_NAMES:
+            tol = sv.INDEPENDENT_REL * e[k] + 4 * abs(eh[k] - e[k]) + sv.ROUNDOFF_REL * scale[k]
+            assert abs(c.entry["errors"][k] - e[k]) <= tol, (c.level, k, c.entry["errors"][k], e[k])
+        assert e["opening_l2"] > 0 and e["stress_sym_l2"] > 0
