@@ -81,17 +81,19 @@ class SdmCase:
 
 
 def solver_entries(summary, folder):
-    """The elastic solver cases of summary.json (a case with "problem": "elasticity" and
-    "errors"), checked for the keys this module reads."""
+    """The elastic solver cases of summary.json, checked for the keys this module reads ("errors"
+    is there only for a scene with [exact])."""
     out = []
     for i, c in enumerate(summary.get("cases") or []):
         if not isinstance(c, dict):
             raise InputError(f"{folder}/summary.json: case {i} is not a table")
-        for key, kind in (("level", int), ("multiplier", str), ("fields_grid", str),
-                          ("errors", dict)):
+        for key, kind in (("level", int), ("multiplier", str), ("fields_grid", str)):
             if not isinstance(c.get(key), kind):
                 raise InputError(f"{folder}/summary.json: case {i} has no {kind.__name__} "
                                  f"{key!r}")
+        # errors: only where the scene has [exact]
+        if not isinstance(c.get("errors", {}), dict):
+            raise InputError(f"{folder}/summary.json: case {i}'s 'errors' is not a table")
         if not isinstance(c.get("delta"), (int, float)):
             raise InputError(f"{folder}/summary.json: case {i} has no number 'delta'")
         out.append(c)

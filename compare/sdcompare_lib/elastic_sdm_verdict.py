@@ -105,7 +105,7 @@ def independent_errors(res, recomputed):
     for i, (e, scale, est) in sorted(recomputed.items()):
         c = res["sdm"][i]
         for k in elastic_sdm.ERROR_NAMES:
-            s = c.entry["errors"].get(k)
+            s = (c.entry.get("errors") or {}).get(k)
             tol = INDEPENDENT_REL * e[k] + 4 * est[k] + ROUNDOFF_REL * scale[k]
             ok = isinstance(s, (int, float)) and math.isfinite(s) and abs(s - e[k]) <= tol
             rows.append({"level": c.level, "multiplier": c.multiplier, "delta": c.delta,
@@ -254,7 +254,7 @@ def delta_rows(res):
             if d > 0:
                 out.append({"multiplier": m, "level": L, "delta": d,
                             "diff": field_differences(c, c0), "norm0": norm0,
-                            "e": c.entry["errors"], "e0": c0.entry["errors"]})
+                            "e": c.entry.get("errors") or {}, "e0": c0.entry.get("errors") or {}})
     return out
 
 

@@ -290,3 +290,25 @@ def test_the_solvers_own_fields_give_back_its_summary(tmp_path):
             tol = sv.INDEPENDENT_REL * e[k] + 4 * abs(eh[k] - e[k]) + sv.ROUNDOFF_REL * scale[k]
             assert abs(c.entry["errors"][k] - e[k]) <= tol, (c.level, k, c.entry["errors"][k], e[k])
         assert e["opening_l2"] > 0 and e["stress_sym_l2"] > 0
+
+
+def test_without_exact_only_the_solver_cases_and_delta_are_judged(tmp_path):
+    """No exact table and no "errors" in the cases (sdcrack writes none then): the solver cases
+    and δ → 0 are judged, the rest does not apply; the δ-constant doubling per level still FAILs."""
+    variants = (("M1star", 0.0), ("M1star", 1e-3))
+    for name, scale, ok in (("ok", lambda L: 1.0, True), ("grow", lambda L: 2.0 ** L, False)):
+        folder = patch_folder(tmp_path / name, levels=(0, 1, 2, 3), variants=variants,
+                              damage=_delta_damage(scale))
+        scene = json.loads((folder / "mesh" / "scene.json").read_text())
+        scene["exact"] = None
+        (folder / "mesh" / "scene.json").write_text(json.dumps(scene))
+        summary = json.loads((folder / "summary.json").read_text())
+        for c in summary["cases"]:
+            del c["errors"]
+        (folder / "summary.json").write_text(json.dumps(summary))
+        a = analyse(folder)
+        assert check(a, "solver cases") == ([], None)
+        for label in ("independent errors", "solver series", "solver SIF", "patch test"):
+            assert check(a, label)[1].startswith("no [exact]"), label
+        probs, na = check(a, "δ → 0")
+        assert na is None and (probs == []) == ok, probs
