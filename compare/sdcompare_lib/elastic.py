@@ -626,12 +626,14 @@ def solver_checks(res, a, ex, size):
     sv = elastic_sdm_verdict
     rows = [sv.solver_cases(res)]
     sdm = a["sdm"] = {"cases": len(res.get("sdm") or []), "series": [], "independent": [],
-                      "ratios": [], "delta": []}
+                      "ratios": [], "delta": [], "fronts": [], "sentences": []}
     if not res.get("sdm"):
         why = "summary.json has no elastic solver case"
         return rows + [(label, "", [], why) for label in
                        ("independent errors", "solver series", "solver SIF", "patch test", "δ → 0")]
     rows.append(sv.delta_limit(res, a))
+    sdm["fronts"] = sv.fronts(res, a["fronts"])
+    sdm["sentences"] = sv.front_sentences(sdm["fronts"])
     if ex is None:
         why = "no [exact] in the scene: nothing to recompute the solver's errors against"
         return rows + [(label, "", [], why) for label in
@@ -664,7 +666,7 @@ def solver_checks(res, a, ex, size):
     rows.append(sv.patch_test(res, rec, exact_p1))
     sdm["ratios"] = sv.ratios(res, rec, a["errors"])
     a["series"].extend(sdm["series"])
-    sdm["sentences"] = sv.sentences(res, a)
+    sdm["sentences"] = sv.sentences(res, a) + sdm["sentences"]
     return rows
 
 

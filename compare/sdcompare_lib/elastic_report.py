@@ -124,8 +124,15 @@ def solver_section(res, a):
     delta = [[r["multiplier"], r["level"], fmt(r["delta"]), fmt(r["diff"]["σ"]), fmt(r["diff"]["u"]),
               fmt(r["diff"]["γ"]), fmt((r.get("constant") or {}).get("σ")),
               fmt((r.get("constant") or {}).get("u"))] for r in sdm.get("delta", [])]
+    fr = [[r["multiplier"], r["level"],
+           "; ".join(f"({x:.10g}, {y:.10g})" for x, y in r["fronts"]) or "none",
+           TOOL_NAME.get(r["tool"], r["tool"]), fmt(r["same_level"]), fmt(r["finest"]),
+           fmt(r["edge"])] for r in sdm.get("fronts", [])]
     return {"title": "The smooth-domain method", "paras": paras,
-            "tables": [(["multiplier", "δ", "level", "reference", "quantity", "SDM error",
+            "tables": [(["multiplier", "level", "contact fronts (closed flags change)",
+                         "reference", "distance to its front (same level)",
+                         "distance to its finest level's", "longest crack edge"], fr,
+                        "the SDM's contact fronts (δ = 0; printed, not judged)"),(["multiplier", "δ", "level", "reference", "quantity", "SDM error",
                          "reference error", "ratio"], ratios,
                         "the SDM's error over the reference's on the same mesh and level (printed, "
                         "not judged: no theorem orders them)"),
@@ -282,7 +289,7 @@ def report_json(res, a, prov, images):
         "field_distances": a["field_distances"],
         "sif_skipped": [{"tool": t, "level": L, "why": w} for (t, L), w in sorted(a["sif_skipped"].items())],
         "solver": {k: (a.get("sdm") or {}).get(k) for k in
-                   ("cases", "independent", "ratios", "delta", "sentences")},
+                   ("cases", "independent", "ratios", "delta", "fronts", "sentences")},
         "images": [i for i in images if i]})
 
 

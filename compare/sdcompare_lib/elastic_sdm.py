@@ -13,7 +13,8 @@ three points per triangle, triangle t's corners 3t, 3t + 1, 3t + 2 in its own or
 * u_h (T, 3), gamma_h (T,): the P0 displacement and rotation
 * u_star (3T, 3): the element-wise P1 reconstruction u*
 * crack/points (2E, 3), crack/segments (E, 2), crack/opening, slip, pressure (2E,): per crack edge
-  the values at its two ends, linear along it
+  the values at its two ends, linear along it; crack/closed (2E,) 1 where the end's constraint is
+  active (optional: the contact fronts are printed from it)
 
 The errors (the names of summary.json's "errors"):
 
@@ -75,6 +76,7 @@ class SdmCase:
     opening: np.ndarray
     slip: np.ndarray
     pressure: np.ndarray
+    closed: np.ndarray = None  # (2E,) bool, crack/closed where written
 
     def label(self):
         return f"{self.multiplier} δ = {self.delta:g}"
@@ -168,11 +170,12 @@ def read_cases_from(h5, entries, path):
             if seg.size and (seg.min() < 0 or seg.max() >= n):
                 raise InputError(f"{cw}/segments: a point index out of range")
             cols = [_dataset(cg, k, (n,), cw) for k in ("opening", "slip", "pressure")]
+            closed = _dataset(cg, "closed", (n,), cw) != 0 if "closed" in cg else None
         else:
             seg, cp = np.zeros((0, 2), dtype=np.int64), np.zeros((0, 2))
-            cols = [np.zeros(0)] * 3
+            cols, closed = [np.zeros(0)] * 3, None
         out.append(SdmCase(c, L, c["multiplier"], float(c["delta"]), grid, pts, tri, sig_raw,
-                           sig, u_h, gamma_h, u_star, cp, seg, *cols))
+                           sig, u_h, gamma_h, u_star, cp, seg, *cols, closed))
     return out
 
 

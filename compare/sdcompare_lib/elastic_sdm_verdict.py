@@ -480,3 +480,76 @@ def sdm_sifs(res, rings, force, exact_pressure):
         else:
             out[i] = ks
     return out, skipped
+
+
+# ------------------------------------------------------------------------------ contact fronts
+
+def sdm_fronts(case, level):
+    """The points on the crack where the case's closed flags (crack/closed, per edge end) change,
+    the ends at a tip or a mouth left out as the references' rows there are (elastic.
+    discrete_fronts): along the remaining ends in the edges' written order (end to end along each
+    crack), the midpoint of two flagged ends that differ (the same point where they are two
+    copies of one node)."""
+    cp, seg, flags = case.crack_points, case.crack_segments, case.closed
+    if flags is None or len(seg) == 0:
+        return []
+    nodes = level.nodes()
+    ends = np.concatenate([level.tip_rows(), level.mouth_rows()]).astype(np.int64)
+    scale = max(1.0, float(np.abs(cp).max(initial=0.0)))
+    skip = np.zeros(len(cp), dtype=bool)
+    for p in nodes[ends]:
+        skip |= np.hypot(*(cp - p).T) <= 1e-10 * scale
+    out = []
+    prev = None
+    for e, (a, b) in enumerate(seg):
+        if prev is not None and not np.array_equal(cp[seg[e - 1][1]], cp[a]):
+            prev = None  # a new crack
+        for k in (a, b):
+            if skip[k]:
+                continue
+            if prev is not None and flags[prev] != flags[k]:
+                out.append(tuple(float(v) for v in 0.5 * (cp[prev] + cp[k])))
+            prev = k
+    return out
+
+
+def fronts(res, ref_fronts):
+    """Rows per δ = 0 case: its fronts, the first reference's at the same level and at its finest
+    level, and the largest distance to each (None where the numbers of fronts differ); printed,
+    not judged (no [exact] front to judge against where the references' is the yardstick)."""
+    by = {(f["tool"], f["level"]): f["fronts"] for f in ref_fronts}
+    tools = sorted({f["tool"] for f in ref_fronts})
+    if not tools:
+        return []
+    tool = tools[0]
+    finest = max(L for t, L in by if t == tool)
+    out = []
+    for c in res.get("sdm") or []:
+        if c.delta != 0.0:
+            continue
+        mine = sdm_fronts(c, res["levels"][c.level])
+        row = {"level": c.level, "multiplier": c.multiplier, "tool": tool, "fronts": mine}
+        for key, L in (("same_level", c.level), ("finest", finest)):
+            theirs = by.get((tool, L), [])
+            # no front in either: they agree; different numbers of fronts: no distance
+            row[key] = (max((math.hypot(p[0] - q[0], p[1] - q[1]) for p, q in zip(mine, theirs)),
+                            default=0.0) if len(mine) == len(theirs) else None)
+        ell = np.hypot(*(c.crack_points[c.crack_segments[:, 1]]
+                         - c.crack_points[c.crack_segments[:, 0]]).T) if len(c.crack_segments) else []
+        row["edge"] = float(np.max(ell)) if len(ell) else None
+        out.append(row)
+    return out
+
+
+def front_sentences(rows):
+    """A sentence on the SDM's contact fronts against the reference's at the same level (computed:
+    within one crack edge, the level's longest, at every level, or not and where not)."""
+    if all(not r["fronts"] and r["same_level"] == 0.0 for r in rows):
+        return []  # no front in either at any level: nothing to say
+    far = [r for r in rows if r["same_level"] is None or r["same_level"] > r["edge"] * (1 + 1e-12)]
+    name = {"dolfinx": "dolfinx", "freefem": "FreeFEM"}.get(rows[0]["tool"], rows[0]["tool"])
+    if not far:
+        return [f"The SDM's contact front lies within one crack edge of {name}'s at every level "
+                f"(largest distance {max(r['same_level'] for r in rows):.4g})."]
+    return [f"The SDM's contact front is not within one crack edge of {name}'s (or their numbers "
+            f"of fronts differ) at level(s) {', '.join(str(r['level']) for r in far)}."]

@@ -196,12 +196,13 @@ def sdm_fields(exact, level, nudge=1e-13):
 
 
 def write_sdm_cases(folder, exact, variants=(("M1star", 0.0),), damage=None, forge=None,
-                    status=None):
+                    status=None, closed=None):
     """Add solver cases to a results folder of write_results: per level of its scene copy and per
     (multiplier, δ) the fields of sdm_fields in fields.h5 and a summary.json case whose errors are
     recomputed by elastic_sdm (damage(level, multiplier, δ, fields) may change the fields first;
     forge(level, multiplier, δ, errors) the errors written after; status(level, multiplier, δ)
-    the case's status, default "converged")."""
+    the case's status, default "converged"; closed(level, crack points (2E, 2)) the crack/closed
+    flags written, default none written)."""
     import h5py
     import tomllib
 
@@ -227,6 +228,9 @@ def write_sdm_cases(folder, exact, variants=(("M1star", 0.0),), damage=None, for
                 for k in ("sigma", "sigma_raw", "u_h", "gamma_h", "u_star", "crack/points",
                           "crack/segments", "crack/opening", "crack/slip", "crack/pressure"):
                     h5[f"cases/{grid}/{k}"] = f[k]
+                if closed is not None:
+                    h5[f"cases/{grid}/crack/closed"] = closed(L, f["crack/points"][:, :2]).astype(
+                        float)
                 entry = {"level": L, "multiplier": m, "delta": d, "problem": "elasticity",
                          "fields_grid": grid, "status": "converged", "converged": True,
                          "kkt": {"equations": 0.0, "primal": 0.0, "dual": 0.0,

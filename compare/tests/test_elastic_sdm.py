@@ -312,3 +312,19 @@ def test_without_exact_only_the_solver_cases_and_delta_are_judged(tmp_path):
             assert check(a, label)[1].startswith("no [exact]"), label
         probs, na = check(a, "δ → 0")
         assert na is None and (probs == []) == ok, probs
+
+
+def test_the_front_sentence_follows_the_fronts(tmp_path):
+    """The references flag the rows x ≤ −0.5 closed; an SDM closing the same ends has its front
+    within one crack edge of theirs at every level; one closing the whole crack has no front, and
+    the sentence says so."""
+    ex = es.williams(1.0, 0.0)
+    for name, sdm_closed, ok in (("same", lambda L, xy: xy[:, 0] <= -0.5 + 1e-12, True),
+                                 ("all", lambda L, xy: np.ones(len(xy), dtype=bool), False)):
+        folder = es.write_results(tmp_path / name, exact=ex, levels=LEVELS,
+                                  closed=lambda L, xy, pairs: xy[pairs[:, 0], 0] <= -0.5 + 1e-12)
+        a = analyse(es.write_sdm_cases(folder, ex, closed=sdm_closed))
+        said = [t for t in a["sdm"]["sentences"] if "contact front" in t]
+        assert len(said) == 1 and ("lies within one crack edge" in said[0]) == ok, said
+        if ok:
+            assert all(r["same_level"] <= r["edge"] for r in a["sdm"]["fronts"])
