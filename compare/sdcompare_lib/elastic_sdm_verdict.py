@@ -170,14 +170,18 @@ def patch_test(res, recomputed, exact_is_p1):
     if not recomputed:
         return ("patch test", what, [], "no solver case")
     probs = []
+    judged = 0
     for i, (e, scale, _) in sorted(recomputed.items()):
         c = res["sdm"][i]
         if c.delta != 0.0:  # −div σ + δu = f: not the exact u's problem
             continue
+        judged += 1
         for k in PATCH_EXACT:
             if e[k] > PATCH_TOL * scale[k]:
                 probs.append(f"level {c.level} {c.label()}: {k} = {e[k]:.3e} > {PATCH_TOL:g} × "
                              f"{scale[k]:.3e}")
+    if not judged:
+        return ("patch test", what, [], "no δ = 0 solver case")
     return ("patch test", what, probs, None)
 
 
@@ -271,11 +275,13 @@ def delta_limit(res, a):
         return ("δ → 0", what, [], "no level has a case with δ > 0 beside δ = 0")
     probs = []
     consts = {}
+    judged = 0  # inequalities and constant steps judged: a check that judged nothing is "n/a"
     for r in rows:
         for err, part in DELTA_PARTS:
             e, e0 = r["e"].get(err), r["e0"].get(err)
             if not all(isinstance(v, (int, float)) for v in (e, e0)):
                 continue
+            judged += 1
             slack = TRIANGLE_ROUNDOFF * (e + e0 + r["norm0"][part])
             if abs(e - e0) > r["diff"][part] + slack:
                 probs.append(f"level {r['level']} {r['multiplier']} δ={r['delta']:g}: |{err}(δ) − "
@@ -291,10 +297,15 @@ def delta_limit(res, a):
         if len(lv) < 2 or lv[-1] < delta_constant.MIN_LEVEL:
             continue
         change = abs(math.log(by_level[lv[-1]] / by_level[lv[-2]])) / (lv[-1] - lv[-2])
+        judged += 1
         if change > delta_constant.MAX_LOG_CHANGE:
             probs.append(f"{m} {part} δ={d:g}: the δ-constant goes {by_level[lv[-2]]:.3g} → "
                          f"{by_level[lv[-1]]:.3g} from level {lv[-2]} to {lv[-1]}, a factor "
                          f"{math.exp(change):.3g} per level: it does not converge as h → 0")
+    if not judged:
+        return ("δ → 0", what, [], "nothing to judge: no errors in summary.json (no [exact]) for "
+                "the triangle inequality, and the δ-constant is judged from level "
+                f"{delta_constant.MIN_LEVEL} with two levels")
     return ("δ → 0", what, probs, None)
 
 

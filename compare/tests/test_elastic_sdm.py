@@ -328,3 +328,16 @@ def test_the_front_sentence_follows_the_fronts(tmp_path):
         assert len(said) == 1 and ("lies within one crack edge" in said[0]) == ok, said
         if ok:
             assert all(r["same_level"] <= r["edge"] for r in a["sdm"]["fronts"])
+
+
+def test_delta_to_zero_that_judged_nothing_is_not_applicable(tmp_path):
+    """No errors (no [exact]) and levels 0–2 only: neither the triangle inequality nor the
+    δ-constant (judged from level 3) was judged, so the check says so instead of "ok"."""
+    folder = patch_folder(tmp_path, levels=(0, 1, 2), variants=(("M1star", 0.0), ("M1star", 1e-3)),
+                          damage=_delta_damage(lambda L: 1.0))
+    summary = json.loads((folder / "summary.json").read_text())
+    for c in summary["cases"]:
+        del c["errors"]
+    (folder / "summary.json").write_text(json.dumps(summary))
+    probs, na = check(analyse(folder), "δ → 0")
+    assert probs == [] and na.startswith("nothing to judge"), na
