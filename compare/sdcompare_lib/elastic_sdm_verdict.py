@@ -3,8 +3,8 @@
 row (label, requirement, problems, why not applicable) of elastic.analyse's checks; the numbers
 the report prints are in a["sdm"].
 
-* solver cases: every level of the scene copy has a case of every (multiplier, δ) of the plan, and
-  every case converged (status "converged", KKT residuals ≤ summary.json's kkt_tolerance, else
+* solver cases: every level of the scene copy has a case of every (multiplier, δ) of the plan,
+  each case's h is its stored mesh's largest triangle diameter (to H_TOL), and every case converged (status "converged", KKT residuals ≤ summary.json's kkt_tolerance, else
   1e-10).
 * independent errors (with [exact]): every error of summary.json recomputed here from the stored
   fields (elastic_sdm.recompute) within INDEPENDENT_REL × the error + 4 × this tool's quadrature
@@ -53,11 +53,25 @@ def solver_label(multiplier, delta):
     return f"sdcrack {multiplier} δ={delta:g}"
 
 
+# h of summary.json against the stored mesh's largest triangle diameter: the same float64
+# coordinates, hypot and max (docs/verification.md, "mesh size h": only the order of the max can
+# differ, ~1e-16).
+H_TOL = 1e-12
+
+
+def mesh_h(case):
+    """The largest triangle diameter (longest edge) of the case's stored mesh."""
+    X = case.points[case.triangles]
+    return float(max(np.hypot(*(X[:, i] - X[:, (i + 1) % 3]).T).max(initial=0.0)
+                     for i in range(3)))
+
+
 def solver_cases(res):
     """The solver-cases check's row."""
     cases = res.get("sdm") or []
     what = ("every level has a solver case of every (multiplier, δ) of the plan, each converged "
-            "with KKT residuals ≤ summary.json's kkt_tolerance")
+            "with KKT residuals ≤ summary.json's kkt_tolerance, its h the stored mesh's largest "
+            "triangle diameter")
     if not cases:
         return ("solver cases", what, [], "summary.json has no elastic solver case (the "
                 "references alone are judged)")
@@ -70,6 +84,10 @@ def solver_cases(res):
                 probs.append(f"level {L} has no solver case {m} δ={d:g}")
     tol = res["summary"].get("kkt_tolerance", KKT_TOLERANCE)
     for c in cases:
+        h, h_mesh = c.entry.get("h"), mesh_h(c)
+        if not (isinstance(h, (int, float)) and abs(h - h_mesh) <= H_TOL * h_mesh):
+            probs.append(f"level {c.level} {c.label()}: h = {h!r}, the stored mesh's largest "
+                         f"triangle diameter is {h_mesh:.17g}")
         st = c.entry.get("status")
         if st != "converged":
             probs.append(f"level {c.level} {c.label()}: status {st!r}")

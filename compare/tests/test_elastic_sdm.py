@@ -181,6 +181,12 @@ def test_a_case_not_converged_or_missing_fails(tmp_path):
     probs, _ = check(analyse(folder), "solver cases")
     assert len(probs) == 1 and "level 1" in probs[0] and "KKT primal" in probs[0], probs
     summary = json.loads((folder / "summary.json").read_text())
+    summary["cases"][1]["kkt"]["primal"] = 0.0
+    summary["cases"][2]["h"] *= 2  # an h written wrong: every rate per halving of h would move
+    (folder / "summary.json").write_text(json.dumps(summary))
+    probs, _ = check(analyse(folder), "solver cases")
+    assert len(probs) == 1 and "level 2" in probs[0] and "largest triangle diameter" in probs[0]
+    summary["cases"][2]["h"] /= 2
     summary["cases"] = [c for c in summary["cases"] if c["level"] != 2]
     (folder / "summary.json").write_text(json.dumps(summary))
     probs, _ = check(analyse(folder), "solver cases")
