@@ -208,7 +208,12 @@ def patch_test(res, recomputed, exact_is_p1):
 # The SDM's error against the references' on the same mesh and level (printed): σ (sym σ_h against
 # σ(u_h) of P1) and the opening (λ_h against P1's nodal jump).
 RATIOS = (("stress_sym_l2", "sigma_l2", "σ"), ("opening_l2", "opening_l2", "opening"),
-          ("slip_l2", "slip_l2", "slip"))
+          ("slip_l2", "slip_l2", "slip"),
+          # the contact traction: −σ_νν of σ_h in L²(Σ) against the references' nodal force over
+          # m_j in the discrete L²(Σ) (elastic_exact.CrackExact.pressure_error)
+          ("pressure_l2", "pressure_l2", "pressure"),
+          # u* (the SDM's P1 reconstruction) against P1's u: what users compare
+          ("u_star_l2", "u_l2", "u*"))
 
 
 def ratios(res, recomputed, ref_errors):
@@ -358,7 +363,9 @@ def sentences(res, a):
     tool = sorted(res["refs"])[0]
     name = {"dolfinx": "dolfinx", "freefem": "FreeFEM"}.get(tool, tool)
     for q, what in (("σ", "σ error (sym σ_h against P1's σ(u_h))"),
-                    ("opening", "opening error (λ_h from the multiplier against P1's nodal jump)")):
+                    ("opening", "opening error (λ_h from the multiplier against P1's nodal jump)"),
+                    ("pressure", "contact traction error (−σ_νν of σ_h in L²(Γc) against P1's "
+                                 "nodal force over m_j)")):
         rows = _ratio_rows(a, q, tool)
         if not rows:
             continue

@@ -114,7 +114,7 @@ def test_a_correct_solver_folder_passes_every_solver_check(tmp_path):
     assert by["K_I tip 1"]["errors"][-1] < 1e-4 and by["K_II tip 1"]["errors"][-1] < 1e-4
     assert by["stress_sym_l2"]["expected"] == 0.5 and by["u_star_l2"]["expected"] == 1.0
     assert by["opening_l2"]["expected"] == 0.5 and by["u_l2"]["expected"] == 1.0
-    assert len(a["sdm"]["ratios"]) == 2 * len(LEVELS) * 3
+    assert len(a["sdm"]["ratios"]) == 2 * len(LEVELS) * 5
 
 
 def test_a_forged_summary_error_fails(tmp_path):
