@@ -39,10 +39,13 @@ pub use norms::{errors, AfwErrors};
 pub use recovery::{recover, Recovered};
 
 use crate::contact::{KktResiduals, LcpStatus};
+use crate::problem::MultiplierSpace;
 
-/// The multiplier spaces the elastic solver has (docs/design.md, "Contact"): the pointwise one,
-/// σ_νν ≤ 0 at both ends of every crack edge, whose multiplier is ∫_e λ_ν hat_a (the dual cone of
-/// the scalar problem's M1star). A scene listing another is refused (`sdcrack check`).
+/// The multiplier spaces a scene may list for the elastic solver (docs/design.md, "Multiplier
+/// spaces"): the pointwise one, σ_νν ≤ 0 at both ends of every crack edge, whose multiplier is
+/// ∫_e λ_ν hat_a (the dual cone of the scalar problem's M1star). [`solve`] has M0 and M1 too;
+/// they join this list when the compare tool has their orders. A scene listing another is
+/// refused (`sdcrack check`).
 pub const MULTIPLIER_SPACES: &[MultiplierSpace] = &[MultiplierSpace::M1Star];
 
 /// Why an elastic case cannot be solved.
