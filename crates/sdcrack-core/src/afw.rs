@@ -34,7 +34,7 @@ pub(crate) mod testing;
 #[cfg(test)]
 mod tests;
 
-pub use contact::solve;
+pub use contact::{solve, AfwCase};
 pub use norms::{errors, AfwErrors};
 pub use recovery::{recover, Recovered};
 
@@ -121,8 +121,10 @@ pub struct CrackEdge {
     /// The slip moments ∫_e [u·t] φ_a: the residuals of the equations of the tangential dofs
     /// (eliminated by σ_tν = 0).
     pub slip_moment: [f64; 2],
-    /// Whether each end's contact constraint σ_νν ≤ 0 is active (closed: σ_νν free, λ_ν = 0 …
-    /// with the multiplier space's meaning; see [`AfwSolution::multiplier`]).
+    /// Whether each end is in contact (closed): outside the LCP's active set, its multiplier
+    /// (opening moment) 0 and σ_νν free (≤ 0). An open end is in the active set: σ_νν = 0 and
+    /// its opening moment ≥ 0. (For [`crate::problem::MultiplierSpace::M1Star`], the only space
+    /// so far, each end is one constraint; see [`AfwSolution::multiplier`].)
     pub closed: [bool; 2],
 }
 
@@ -145,11 +147,13 @@ pub struct AfwSolution {
     pub multiplier: crate::problem::MultiplierSpace,
     /// The regularisation δ of the solve.
     pub delta: f64,
-    /// The contact solve: linear solves of the LCP, and how it ended.
+    /// The contact solve: the LCP's active-set iterations, summed over its refinement rounds.
     pub lcp_iterations: usize,
     /// How the LCP solve ended.
     pub lcp_status: LcpStatus,
-    /// The relative KKT residuals (the scalar solver's definitions, on the AFW system).
+    /// The relative KKT residuals: the constraint part as the scalar solver defines it, the
+    /// equations per block of rows (σ, u, γ) rather than per row (docs/design.md, "What the
+    /// solution reports").
     pub kkt: KktResiduals,
     /// Unknowns of the system: σ dofs (without the essential ones), 2 u and 1 γ per triangle.
     pub unknowns: usize,
@@ -158,7 +162,9 @@ pub struct AfwSolution {
 // The stages' entry points (each documented in its submodule):
 // - `afw::solve(mesh: &Mesh, domain: &Domain, data: &ElasticData, multiplier: MultiplierSpace,
 //   delta: f64) -> Result<AfwSolution, AfwError>`: dofs, assembly, the contact LCP, the KKT
-//   residuals (submodules element, dofs, assembly, contact);
+//   residuals (submodules element, dofs, assembly, contact); `afw::AfwCase::new(mesh, domain,
+//   data)?.solve(multiplier, delta)` the same with one assembly and symbolic analysis per mesh
+//   for several δ;
 // - `afw::recover(mesh: &Mesh, material: &Material, solution: &AfwSolution) -> Recovered`: the
 //   opening, slip and pressure per crack edge end (P1-disc along Σ), σ symmetrised, u* (submodule
 //   recovery);

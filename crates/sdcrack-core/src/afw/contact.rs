@@ -39,13 +39,16 @@ const REDUCTION_BLOCK: usize = 32;
 ///
 /// An all-traction boundary (no Dirichlet edge) at δ = 0 leaves the rigid motions as the
 /// kernel of K: (u, γ) = (P0 r, −ω) for r = a + ω(−y, x) (the σ rows' (u, div τ) + (γ, as τ)
-/// vanish since div τ ∈ P0: (P0 r, div τ) = (r, div τ) = ω (as τ, 1)). The solve then holds u and
-/// γ of triangle 0 at 0 (the three unknowns' rows and columns become −I; the kernel has no
-/// member vanishing there), and adds the rigid motion that makes u* — the element-wise P1
-/// reconstruction u_h + (A σ̄_h + γ_h J)(x − x_T), σ̄_h the mean of σ_h on T — satisfy the
-/// scene's fixed components at its fixed points, u* at a point being the mean of its values on
-/// the triangles at that vertex. The dropped rows (the pinned triangle's equilibrium and
-/// symmetry) hold when the loads balance; the KKT residuals are those of the whole system.
+/// vanish since div τ ∈ P0: (P0 r, div τ) = (r, div τ) = ω (as τ, 1)). On such a boundary the
+/// load is first made orthogonal to that kernel ([`make_compatible`], for every δ: otherwise
+/// the δ-solutions' rigid part grows like 1/δ). At δ = 0 the solve then holds u and γ of
+/// triangle 0 at 0 (the three unknowns' rows and columns become −I; no kernel member vanishes
+/// there), and adds the rigid motion that makes u* — the element-wise P1 reconstruction
+/// u_h + (A σ̄_h + γ_h J)(x − x_T), σ̄_h the mean of σ_h on T — meet the scene's fixed
+/// components at its fixed points, u* at a point being the mean of its values on the triangles
+/// at that vertex. The pinned triangle's dropped equations then hold too (the load is
+/// compatible): the KKT residuals are those of the whole system. At δ > 0 nothing is pinned
+/// and the fixed points play no part (−δM fixes the rigid part).
 ///
 /// # Errors
 /// [`AfwError`]: an invalid δ, a multiplier space the method does not have, bad data (see
@@ -57,33 +60,144 @@ pub fn solve(
     multiplier: MultiplierSpace,
     delta: f64,
 ) -> Result<AfwSolution, AfwError> {
-    if !(delta >= 0.0 && delta.is_finite()) {
-        return Err(AfwError::InvalidDelta(delta));
+    AfwCase::new(mesh, domain, data)?.solve(multiplier, delta)
+}
+
+/// One mesh's system, assembled and analysed once, for any number of solves (δ, multiplier
+/// spaces): the dofs, K(0) and ∂K/∂δ, the load (made compatible on an all-traction boundary)
+/// and the symbolic analysis of K's pattern, which every δ shares (pinning changes values, not
+/// the pattern).
+pub struct AfwCase<'a> {
+    mesh: &'a Mesh,
+    data: &'a ElasticData,
+    dofs: AfwDofs,
+    system: AfwSystem,
+    /// The load b (compatible with the rigid motions on an all-traction boundary).
+    rhs: Vec<f64>,
+    all_traction: bool,
+    symbolic: SymbolicLdlt,
+    /// The constrained unknowns: the normal dofs of the crack edges, each edge's end slots 0, 1.
+    rows: Vec<usize>,
+}
+
+impl<'a> AfwCase<'a> {
+    /// The system of `data` on `mesh` (of `domain`).
+    ///
+    /// # Errors
+    /// Bad data ([`AfwDofs::new`], [`assemble`]), a failed symbolic analysis.
+    pub fn new(
+        mesh: &'a Mesh,
+        domain: &Domain,
+        data: &'a ElasticData,
+    ) -> Result<AfwCase<'a>, AfwError> {
+        let dofs = AfwDofs::new(mesh, domain, data)?;
+        let system = assemble(mesh, &dofs, data)?;
+        let all_traction =
+            !(dofs.edges.iter()).any(|e| matches!(e.kind, EdgeKind::Dirichlet { .. }));
+        let mut rhs = system.rhs.clone();
+        if all_traction {
+            make_compatible(mesh, &dofs, &mut rhs);
+        }
+        let symbolic = SymbolicLdlt::analyze(&system.base)?;
+        let rows = (dofs.crack_edges.iter())
+            .flat_map(|&e| [0, 1].map(|s| dofs.normal_unknown(e, s)))
+            .collect();
+        Ok(AfwCase {
+            mesh,
+            data,
+            dofs,
+            system,
+            rhs,
+            all_traction,
+            symbolic,
+            rows,
+        })
     }
-    if multiplier != MultiplierSpace::M1Star {
-        return Err(AfwError::UnsupportedMultiplier(multiplier));
+
+    /// Number of unknowns.
+    pub fn unknowns(&self) -> usize {
+        self.dofs.n()
     }
-    let dofs = AfwDofs::new(mesh, domain, data)?;
-    let system = assemble(mesh, &dofs, data)?;
-    let all_traction = !(dofs.edges.iter()).any(|e| matches!(e.kind, EdgeKind::Dirichlet { .. }));
-    let pinned: Vec<usize> = if all_traction && delta == 0.0 {
-        (0..3).map(|k| dofs.element_unknown(0, k)).collect()
-    } else {
-        Vec::new()
+
+    /// The solution with the constraint of `multiplier` and the regularisation `delta` (see
+    /// [`solve`]).
+    ///
+    /// # Errors
+    /// An invalid δ, a multiplier space the method does not have, a factorisation failure,
+    /// fixed points that leave a rigid mode free.
+    pub fn solve(&self, multiplier: MultiplierSpace, delta: f64) -> Result<AfwSolution, AfwError> {
+        if !(delta >= 0.0 && delta.is_finite()) {
+            return Err(AfwError::InvalidDelta(delta));
+        }
+        if multiplier != MultiplierSpace::M1Star {
+            return Err(AfwError::UnsupportedMultiplier(multiplier));
+        }
+        let dofs = &self.dofs;
+        let pinned: Vec<usize> = if self.all_traction && delta == 0.0 {
+            (0..3).map(|k| dofs.element_unknown(0, k)).collect()
+        } else {
+            Vec::new()
+        };
+        let matrix = self.system.matrix(delta);
+        let (factored, rhs) = pin(&matrix, &self.rhs, &pinned);
+        let ldlt = Ldlt::factor(&self.symbolic, &factored, &self.system.signs)?;
+        let (sol, mut x) = contact_solve(&ldlt, &factored, &rhs, &self.rows, dofs.n_sigma);
+        if !pinned.is_empty() {
+            add_rigid_motion(self.mesh, dofs, self.data, &mut x)?;
+        }
+        let kkt = kkt_residuals(&self.rhs, &matrix, &self.rows, &sol, &x, dofs.n_sigma);
+        Ok(solution(
+            self.mesh,
+            dofs,
+            &self.system,
+            self.data,
+            sol,
+            x,
+            kkt,
+            delta,
+        ))
+    }
+}
+
+/// Makes b orthogonal to the kernel of K(0) on an all-traction boundary, the rigid motions
+/// k_r = (σ = 0, u = P0 r, γ = −ω) for r = a + ω(−y, x). Then b·k_r = −(f, P0 r) − ∮ r·t_h (t_h the
+/// traction interpolant, the essential σ moved over), while equilibrium of the data is
+/// (f, r) + ∮ r·t = 0: the interpolant keeps ∮ r·t (r is linear on each edge), but
+/// (f, P0 r) ≠ (f, r) for the rotation — an O(h²) moment imbalance that a pinned solve would
+/// dump on the pinned triangle. The u rows' load −(f, v) is corrected by the P0 body force
+/// Σ_j α_j r_j (a rigid-motion density, O(h²) for balanced data) with α from the 3 × 3 Gram
+/// system of the P0 mass: b·k_r = 0 for all three r afterwards.
+fn make_compatible(mesh: &Mesh, dofs: &AfwDofs, b: &mut [f64]) {
+    let nt = dofs.triangles();
+    let modes = |t: usize| {
+        let c = crate::mesh::centroid(&mesh.vertices, &mesh.triangles[t]);
+        // u of the three modes at T's centroid, and their γ
+        [([1.0, 0.0], 0.0), ([0.0, 1.0], 0.0), ([-c[1], c[0]], -1.0)]
     };
-    let matrix = system.matrix(delta);
-    let (factored, rhs) = pin(&matrix, &system.rhs, &pinned);
-    let symbolic = SymbolicLdlt::analyze(&factored)?;
-    let ldlt = Ldlt::factor(&symbolic, &factored, &system.signs)?;
-    let rows: Vec<usize> = (dofs.crack_edges.iter())
-        .flat_map(|&e| [0, 1].map(|s| dofs.normal_unknown(e, s)))
-        .collect();
-    let (sol, mut x) = contact_solve(&ldlt, &factored, &rhs, &rows, dofs.n_sigma);
-    if !pinned.is_empty() {
-        add_rigid_motion(mesh, &dofs, data, &mut x)?;
+    let area = |t: usize| {
+        let [a, p, q] = mesh.triangles[t].map(|v| mesh.vertices[v]);
+        0.5 * ((p[0] - a[0]) * (q[1] - a[1]) - (q[0] - a[0]) * (p[1] - a[1]))
+    };
+    let mut gram = Mat::<f64>::zeros(3, 3);
+    let mut c = Mat::<f64>::zeros(3, 1);
+    for t in 0..nt {
+        let k = modes(t);
+        let [ux, uy, g] = [0, 1, 2].map(|j| dofs.element_unknown(t, j));
+        for i in 0..3 {
+            c[(i, 0)] += b[ux] * k[i].0[0] + b[uy] * k[i].0[1] + b[g] * k[i].1;
+            for j in 0..3 {
+                gram[(i, j)] += area(t) * (k[i].0[0] * k[j].0[0] + k[i].0[1] * k[j].0[1]);
+            }
+        }
     }
-    let kkt = kkt_residuals(&system, &matrix, &rows, &sol, &x, dofs.n_sigma);
-    Ok(solution(mesh, &dofs, &system, data, sol, x, kkt, delta))
+    let alpha = gram.partial_piv_lu().solve(&c);
+    for t in 0..nt {
+        let k = modes(t);
+        for d in 0..2 {
+            let density: f64 = (0..3).map(|j| alpha[(j, 0)] * k[j].0[d]).sum();
+            b[dofs.element_unknown(t, d)] -= area(t) * density;
+        }
+    }
 }
 
 /// K with the unknowns `pinned` held at 0: their rows and columns zero but the diagonal, −1,
@@ -217,7 +331,7 @@ fn schur_complement(ldlt: &Ldlt, n: usize, rows: &[usize]) -> Vec<f64> {
 /// invariance under the dilations of the domain and the scaling of the data (each block scales
 /// by one factor).
 fn kkt_residuals(
-    system: &AfwSystem,
+    rhs: &[f64],
     k: &SymCsc,
     rows: &[usize],
     sol: &LcpSolution,
@@ -229,8 +343,8 @@ fn kkt_residuals(
     let mut scale = vec![0.0; n];
     k.mul_vec_with_abs(x, &mut kx, &mut scale);
     for i in 0..n {
-        kx[i] -= system.rhs[i];
-        scale[i] += system.rhs[i].abs();
+        kx[i] -= rhs[i];
+        scale[i] += rhs[i].abs();
     }
     for (&i, &mu) in rows.iter().zip(&sol.mu) {
         kx[i] += mu;

@@ -369,3 +369,117 @@ fn closed_crack_with_slip_stays_closed_and_slips() {
         "{table:?}"
     );
 }
+
+/// u* of `sol` at the mesh vertex `p`: the mean over the triangles at p of
+/// u_h + (A σ̄_h + γ_h J)(p − x_T).
+fn u_star_at(mesh: &Mesh, m: &Material, sol: &AfwSolution, p: [f64; 2]) -> [f64; 2] {
+    let comp = Compliance::of(m);
+    let at: Vec<usize> = (0..mesh.triangles.len())
+        .filter(|&t| mesh.triangles[t].iter().any(|&v| mesh.vertices[v] == p))
+        .collect();
+    let mut sum = [0.0; 2];
+    for &t in &at {
+        let s = sol.stress[t];
+        let mean: [f64; 4] = std::array::from_fn(|r| (s[0][r] + s[1][r] + s[2][r]) / 3.0);
+        let mut g = comp.apply(mean);
+        g[1] += sol.rotation[t];
+        g[2] -= sol.rotation[t];
+        let c = crate::mesh::centroid(&mesh.vertices, &mesh.triangles[t]);
+        let d = [p[0] - c[0], p[1] - c[1]];
+        let u = sol.displacement[t];
+        sum[0] += (u[0] + g[0] * d[0] + g[1] * d[1]) / at.len() as f64;
+        sum[1] += (u[1] + g[2] * d[0] + g[3] * d[1]) / at.len() as f64;
+    }
+    sum
+}
+
+/// GetFEM's all-traction set-up (scenes/elastic-getfem.toml) at δ = 0: the rigid motions pinned
+/// and then fixed by the fixed points (u* meets them to round-off), the whole system's KKT
+/// residuals (the pinned triangle's dropped equations included: the loads balance) at
+/// round-off; and δ → 0: σ_h at δ = 1e-9 (no pinning: −δM makes K nonsingular) within 1e-6 of
+/// δ = 0's, the same active set.
+#[test]
+fn all_traction_boundary_pins_the_rigid_motions_and_meets_the_fixed_points() {
+    let m = Material {
+        lambda: 1.0,
+        mu: 1.0,
+        plane: crate::elasticity::PlaneModel::Strain,
+    };
+    let mut data = et::Elastic::new(m, ["0", "0"], ["0", "3.5*cos(2*pi*x)*y*x*(1 - x)"])
+        .traction("left", ["-0.4*sin(2*pi*y)", "0"])
+        .traction("right", ["0.4*sin(2*pi*y)", "0"])
+        .traction("bottom", ["0", "0"])
+        .traction("top", ["0", "0"])
+        .fixed([1.0, -0.5], [true, true])
+        .fixed([1.0, 0.5], [true, false])
+        .data;
+    data.exact = None;
+    let domain = Domain::Rectangle(crate::problem::Rectangle {
+        min: [0.0, -0.5],
+        max: [1.0, 0.5],
+    });
+    let cracks = [et::crack([0.0, 0.0], [0.5, 0.0])];
+    let mesh = &meshes(&domain, &cracks, [10, 10], false, 1)[1];
+    // one case (assembly, symbolic analysis) for both δ
+    let case = super::AfwCase::new(mesh, &domain, &data).unwrap();
+    let sol = case.solve(MultiplierSpace::M1Star, 0.0).unwrap();
+    assert!(sol.kkt.max() < 1e-10, "{:?}", sol.kkt);
+    let u_scale = max_abs(sol.displacement.iter().flatten().copied());
+    assert!(u_scale > 1e-3, "{u_scale}");
+    for fixed in &data.fixed {
+        let u = u_star_at(mesh, &m, &sol, fixed.point);
+        for k in 0..2 {
+            if fixed.components[k] {
+                assert!(
+                    u[k].abs() < 1e-12 * u_scale,
+                    "u*({:?}) = {u:?}",
+                    fixed.point
+                );
+            }
+        }
+    }
+    let closed = sol
+        .crack
+        .iter()
+        .flat_map(|e| e.closed)
+        .filter(|&c| c)
+        .count();
+    eprintln!(
+        "getfem: {closed} of {} crack dofs closed",
+        2 * sol.crack.len()
+    );
+    let regularised = case.solve(MultiplierSpace::M1Star, 1e-9).unwrap();
+    assert!(regularised.kkt.max() < 1e-10, "{:?}", regularised.kkt);
+    let s_scale = max_abs(sol.stress.iter().flatten().flatten().copied());
+    let diff = max_abs(
+        (sol.stress.iter().flatten().flatten())
+            .zip(regularised.stress.iter().flatten().flatten())
+            .map(|(a, b)| a - b),
+    );
+    eprintln!("σ(δ = 1e-9) − σ(0): {diff:e} of {s_scale}");
+    assert!(
+        diff < 1e-6 * s_scale,
+        "σ(δ = 1e-9) − σ(0): {diff:e} of {s_scale}"
+    );
+    let flags = |s: &AfwSolution| s.crack.iter().map(|e| e.closed).collect::<Vec<_>>();
+    assert_eq!(flags(&sol), flags(&regularised));
+}
+
+/// M0 and M1 are not (yet) methods of the elastic solver: a clear error, not a wrong answer;
+/// a negative δ is refused.
+#[test]
+fn unsupported_multiplier_spaces_and_negative_delta_are_errors() {
+    let m = et::steel_like();
+    let data = et::Elastic::new(m, ["x", "y"], ["0", "0"]).g_is_u().data;
+    let domain = et::square();
+    let mesh = &meshes(&domain, &[], [2, 2], false, 0)[0];
+    for space in [MultiplierSpace::M0, MultiplierSpace::M1] {
+        let err = solve(mesh, &domain, &data, space, 0.0).unwrap_err();
+        assert!(
+            matches!(err, super::AfwError::UnsupportedMultiplier(s) if s == space),
+            "{err}"
+        );
+    }
+    let err = solve(mesh, &domain, &data, MultiplierSpace::M1Star, -1.0).unwrap_err();
+    assert!(matches!(err, super::AfwError::InvalidDelta(_)), "{err}");
+}
