@@ -9,15 +9,31 @@ summary.json (matched to the original's case by level, u space, multiplier, p ma
 subset of the original's datasets and cases: that is the normal case. Exit codes: 0 the same,
 1 something differs (the first differing dataset and case are named), 2 bad input (one line on
 stderr). See compare/README.md, "Rerun commands".
+
+An elastic results folder (docs/elasticity.md: summary.json's "problem" is "elasticity") has no
+solver case until issue 46, only what its references solved: it is compared by those outputs, with
+--references (without it: exit 2, nothing to compare). Every file the rerun has under mesh/ (the
+export the references read, sdcrack's one output there) and under dolfinx/ and freefem/: each
+fields.h5 dataset as above, each reference summary.json case (by level; timings not compared),
+the text outputs (u_level{L}.txt, crack_level{L}.txt, the XDMF files, mesh/level{L}/*.txt) byte
+for byte (within --rtol word for word: an integer equal, another number within rtol of the
+largest magnitude of its column in the original's file), the JSON files value by value (mesh/
+scene.json's `levels`, the levels the run wrote, not compared); and report/report.json's values
+(the errors, rates, SIFs, agreement and verdict the compare tool computed from them; not its
+folder path and provenance; within --rtol not its strings that hold digits, sentences that print
+rounded numbers) when the rerun has one. It prints "identical: N datasets, M text files, K
+reference cases, J report.json values".
 """
 import argparse
 import math
 import os
+import re
 import sys
 
 import numpy as np
 
 from . import cases, read
+from .elastic_read import PROBLEM as ELASTIC
 from .read import REFERENCE_TOOLS
 from .render import fmt_delta
 
@@ -176,17 +192,25 @@ def case_difference(rerun_case, original_case, rtol, kkt_tolerance):
     return None
 
 
-def compare_cases(rerun_sum, original_sum, rerun_dir, original_dir, rtol):
-    """([(case label, difference)] in the rerun's order, number of cases compared)."""
+def check_same_scene(rerun_sum, original_sum, rerun_dir, original_dir):
     if rerun_sum.get("scene") != original_sum.get("scene"):
         raise BadInput(f"{rerun_dir} reruns scene {rerun_sum.get('scene')!r}, {original_dir} is "
                        f"scene {original_sum.get('scene')!r}")
+
+
+def kkt_tolerance(original_sum):
+    tol = original_sum.get("kkt_tolerance")
+    return tol if _number(tol) else DEFAULT_KKT_TOLERANCE
+
+
+def compare_cases(rerun_sum, original_sum, rerun_dir, original_dir, rtol):
+    """([(case label, difference)] in the rerun's order, number of cases compared)."""
+    check_same_scene(rerun_sum, original_sum, rerun_dir, original_dir)
     original = cases_by_key(original_sum, original_dir)
     rerun = cases_by_key(rerun_sum, rerun_dir)
     if not rerun:
         raise BadInput(f"{rerun_dir}/summary.json: no cases")
-    tol = original_sum.get("kkt_tolerance")
-    tol = tol if _number(tol) else DEFAULT_KKT_TOLERANCE
+    tol = kkt_tolerance(original_sum)
     diffs = []
     for key, c in rerun.items():
         if key not in original:
@@ -293,6 +317,286 @@ def compare_file(h5py, rf, of, rpath, opath, rtol):
     return out
 
 
+# ---------------------------------------------------------------- an elastic folder (no cases)
+MESH_EXPORT = "mesh"  # the export the references read (docs/elasticity.md): sdcrack's output
+REPORT_JSON = os.path.join("report", "report.json")
+# top-level keys of JSON files that are not results: the levels a run wrote (a rerun of one
+# level writes [L]); the report's folder path and provenance (dates, command lines, paths, cores)
+JSON_NOT_COMPARED = {os.path.join(MESH_EXPORT, "scene.json"): ("levels",),
+                     REPORT_JSON: ("results_dir", "provenance")}
+INTEGER = re.compile(r"[+-]?[0-9]+")
+DIGIT = re.compile(r"[0-9]")
+
+
+def is_elastic(summary):
+    return summary.get("problem") == ELASTIC
+
+
+def elastic_tools(rerun_dir, original_dir):
+    """The reference tools whose outputs the rerun has (each one the original has too)."""
+    tools = [t for t in REFERENCE_TOOLS if os.path.isdir(os.path.join(rerun_dir, t))]
+    if not tools:
+        folders = ", ".join(t + "/" for t in REFERENCE_TOOLS)
+        raise BadInput(f"{rerun_dir}: no reference outputs ({folders}) to compare")
+    for t in tools:
+        if not os.path.isdir(os.path.join(original_dir, t)):
+            raise BadInput(f"{original_dir}: no {t}/, which the rerun has")
+    return tools
+
+
+def elastic_files(rerun_dir, original_dir, tools):
+    """Every file of the rerun under mesh/ and its tools' folders, relative to rerun_dir (in
+    folder and name order); each must be in the original."""
+    names = []
+    for top in (MESH_EXPORT, *tools):
+        for dirpath, dirnames, filenames in os.walk(os.path.join(rerun_dir, top)):
+            dirnames.sort()
+            names += [os.path.relpath(os.path.join(dirpath, f), rerun_dir)
+                      for f in sorted(filenames)]
+    for n in names:
+        if not os.path.isfile(os.path.join(original_dir, n)):
+            raise BadInput(f"{original_dir}: no {n}, which the rerun has")
+    return names
+
+
+def _read_bytes(path):
+    try:
+        with open(path, "rb") as fh:
+            return fh.read()
+    except OSError as exc:
+        raise BadInput(f"{path}: unreadable ({exc.strerror})")
+
+
+def _decode(data, path):
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise BadInput(f"{path}: not a UTF-8 text file")
+
+
+def column_scales(rows):
+    """{column: largest |number| in that column of the original's rows}."""
+    scales = {}
+    for row in rows:
+        for j, word in enumerate(row):
+            try:
+                x = abs(float(word))
+            except ValueError:
+                continue
+            if math.isfinite(x):
+                scales[j] = max(scales.get(j, 0.0), x)
+    return scales
+
+
+def words_agree(a, b, rtol, scale):
+    """Whether the rerun's word `a` agrees within rtol with the original's different word `b`:
+    both numbers, not both integers (an index or a flag must be equal, tolerance or not), at most
+    rtol × the largest magnitude of the original's column apart."""
+    if rtol is None or (INTEGER.fullmatch(a) and INTEGER.fullmatch(b)):
+        return False
+    try:
+        x, y = float(a), float(b)
+    except ValueError:
+        return False
+    return scale is not None and abs(x - y) <= rtol * scale
+
+
+def text_difference(a, b, rtol):
+    """None when the rerun's text `a` matches the original's `b` (byte for byte; with rtol word
+    for word, numbers by words_agree), else where it first differs."""
+    if a == b:
+        return None
+    ra, rb = [line.split() for line in a.splitlines()], [line.split() for line in b.splitlines()]
+    if len(ra) != len(rb):
+        return f"{len(ra)} lines vs original {len(rb)}"
+    scales = column_scales(rb) if rtol is not None else {}
+    for i, (x, y) in enumerate(zip(ra, rb), start=1):
+        if len(x) != len(y):
+            return f"line {i}: {len(x)} words vs original {len(y)}"
+        for j, (s, t) in enumerate(zip(x, y)):
+            if s != t and not words_agree(s, t, rtol, scales.get(j)):
+                return f"line {i} word {j + 1}: {s} vs original {t}"
+    return None if rtol is not None else "the same words, other bytes (spaces or line ends)"
+
+
+def json_leaves(value, prefix=""):
+    """{path: leaf} of a JSON value, through objects ("a.b") and arrays ("a[3]")."""
+    if isinstance(value, dict):
+        out = {}
+        for k, v in value.items():
+            out.update(json_leaves(v, f"{prefix}.{k}" if prefix else str(k)))
+        return out
+    if isinstance(value, list):
+        out = {}
+        for i, v in enumerate(value):
+            out.update(json_leaves(v, f"{prefix}[{i}]"))
+        return out
+    return {prefix: value}
+
+
+def json_values(path, name):
+    """The leaves of the JSON file `path` (relative name `name`), JSON_NOT_COMPARED left out."""
+    try:
+        doc = read.load_json(path)
+    except read.InputError as exc:
+        raise BadInput(str(exc))
+    if isinstance(doc, dict):
+        doc = {k: v for k, v in doc.items() if k not in JSON_NOT_COMPARED.get(name, ())}
+    return json_leaves(doc)
+
+
+def json_differences(a, b, rtol):
+    """[(leaf, difference)] of the rerun's leaves `a` against the original's `b`, in name order:
+    values equal (value_agrees: floats within rtol); with rtol a string that holds a digit (a
+    sentence printing rounded numbers) is not compared."""
+    out = []
+    for name in sorted(set(a) | set(b)):
+        if name not in b:
+            out.append((name, f"{a[name]!r}, absent in the original"))
+        elif name not in a:
+            out.append((name, f"absent, {b[name]!r} in the original"))
+        elif rtol is not None and all(isinstance(v, str) and DIGIT.search(v)
+                                      for v in (a[name], b[name])):
+            continue
+        elif not value_agrees(name, a[name], b[name], rtol, a, DEFAULT_KKT_TOLERANCE):
+            out.append((name, f"{a[name]!r} vs original {b[name]!r}"))
+    return out
+
+
+def file_difference(rpath, opath, name, rtol):
+    """None, or what differs between the rerun's text or JSON file and the original's."""
+    a, b = _read_bytes(rpath), _read_bytes(opath)
+    if a == b:
+        return None
+    if name.endswith(".json"):
+        diffs = json_differences(json_values(rpath, name), json_values(opath, name), rtol)
+        if diffs:
+            return f"{diffs[0][0]}: {diffs[0][1]}"
+        return None if rtol is not None or name in JSON_NOT_COMPARED else \
+            "the same values, other bytes"
+    return text_difference(_decode(a, rpath), _decode(b, opath), rtol)
+
+
+def load_reference_cases(folder, tool):
+    path = os.path.join(folder, tool, "summary.json")
+    try:
+        doc = read.load_json(path)
+    except read.InputError as exc:
+        raise BadInput(str(exc))
+    if not isinstance(doc, dict) or not isinstance(doc.get("cases"), list):
+        raise BadInput(f"{path}: no `cases` list: not a reference summary.json")
+    out = {}
+    for c in doc["cases"]:
+        level = c.get("level") if isinstance(c, dict) else None
+        if not isinstance(level, int) or isinstance(level, bool) or level in out:
+            raise BadInput(f"{path}: a case without an integer level of its own")
+        out[level] = c
+    return out
+
+
+def compare_reference_cases(rerun_dir, original_dir, tool, rtol, tol):
+    """([(label, difference)], number of cases compared) of the tool's summary.json cases, each
+    rerun case against the original's of its level (timings not compared)."""
+    original, rerun = (load_reference_cases(d, tool) for d in (original_dir, rerun_dir))
+    diffs = []
+    for level, c in rerun.items():
+        if level not in original:
+            raise BadInput(f"{rerun_dir}/{tool}: level {level} is not in "
+                           f"{original_dir}/{tool}/summary.json: not a rerun of that folder")
+        why = case_difference(c, original[level], rtol, tol)
+        if why:
+            diffs.append((f"{tool}/summary.json case level {level}", why))
+    return diffs, len(rerun)
+
+
+def compare_elastic_outputs(h5py, rerun_dir, original_dir, tools, rtol, tol):
+    """{kind: ([(label, difference)], number compared)} for the kinds datasets, text files
+    (mesh/ and the tools' text and JSON files) and reference cases."""
+    out = {"datasets": ([], 0), "text files": ([], 0), "reference cases": ([], 0)}
+
+    def add(kind, diffs, n):
+        out[kind] = (out[kind][0] + diffs, out[kind][1] + n)
+
+    for name in elastic_files(rerun_dir, original_dir, tools):
+        rpath, opath = os.path.join(rerun_dir, name), os.path.join(original_dir, name)
+        if name.endswith(".h5"):
+            with _open(h5py, rpath) as rf, _open(h5py, opath) as of:
+                try:
+                    file_diffs = compare_file(h5py, rf, of, rpath, opath, rtol)
+                except (OSError, RuntimeError, KeyError) as exc:
+                    raise BadInput(f"{rpath} or {opath}: unreadable HDF5 content ({exc})")
+            add("datasets", [(f"/{ds} ({name})", why) for ds, why in file_diffs if why],
+                len(file_diffs))
+        elif os.path.dirname(name) in tools and os.path.basename(name) == "summary.json":
+            add("reference cases", *compare_reference_cases(
+                rerun_dir, original_dir, os.path.dirname(name), rtol, tol))
+        else:
+            why = file_difference(rpath, opath, name, rtol)
+            add("text files", [(name, why)] if why else [], 1)
+    return out
+
+
+def compare_report(rerun_dir, original_dir, rtol):
+    """([(leaf, difference)], number of values compared) of the rerun's report/report.json
+    against the original's, or None when the rerun has none."""
+    rpath, opath = os.path.join(rerun_dir, REPORT_JSON), os.path.join(original_dir, REPORT_JSON)
+    if not os.path.isfile(rpath):
+        return None
+    if not os.path.isfile(opath):
+        raise BadInput(f"{original_dir}: no {REPORT_JSON}, which the rerun has")
+    a, b = json_values(rpath, REPORT_JSON), json_values(opath, REPORT_JSON)
+    return json_differences(a, b, rtol), len(a)
+
+
+def compare_elastic(h5py, rerun_dir, original_dir, rerun_sum, original_sum, rtol, references):
+    """(lines, exit code) of an elastic folder's rerun: its references' outputs (and the report),
+    with --references; BadInput without it, or for a folder that is not one of the same scene."""
+    check_same_scene(rerun_sum, original_sum, rerun_dir, original_dir)
+    for folder, summary in ((rerun_dir, rerun_sum), (original_dir, original_sum)):
+        if not is_elastic(summary):
+            raise BadInput(f"{folder}: a scalar results folder, the other one is elastic")
+        if summary["cases"]:
+            raise BadInput(f"{folder}/summary.json: elastic solver cases, which sdcompare-rerun "
+                           "does not compare yet")
+    if not references:
+        raise BadInput(f"{rerun_dir}: an elastic scene's folder, no solver cases to compare: "
+                       "--references compares its references' outputs")
+    tools = elastic_tools(rerun_dir, original_dir)
+    kinds = compare_elastic_outputs(h5py, rerun_dir, original_dir, tools, rtol,
+                                    kkt_tolerance(original_sum))
+    said = compare_report(rerun_dir, original_dir, rtol)
+    if said is not None:
+        kinds["report.json values"] = said
+    lines, code = report_kinds(kinds, rtol)
+    if said is None:
+        lines.append(f"{REPORT_JSON}: not in the rerun, not compared")
+    reused = [t for t in REFERENCE_TOOLS
+              if os.path.isdir(os.path.join(original_dir, t)) and t not in tools]
+    lines.append(f"references: {', '.join(tools)} rerun, compared"
+                 + (f"; {', '.join(reused)} not in the rerun" if reused else ""))
+    return lines, code
+
+
+# the label of a difference of each kind in a "differs:" line
+KIND_LABEL = {"datasets": "dataset ", "text files": "file ", "reference cases": "",
+              "report.json values": f"{REPORT_JSON}: "}
+
+
+def report_kinds(kinds, rtol):
+    """The lines and exit code of an elastic comparison, {kind: (differences, count)}."""
+    counts = [f"{n} {kind}" for kind, (_, n) in kinds.items()]
+    if not any(d for d, _ in kinds.values()):
+        what = "identical" if rtol is None else f"the same within rtol {rtol:g}"
+        return [f"{what}: {', '.join(counts)}"], SAME
+    lines = [f"differs: {KIND_LABEL[kind]}{d[0][0]}: {d[0][1]}"
+             for kind, (d, _) in kinds.items() if d]
+    parts = [f"{len(d)} of {n} {kind}" for kind, (d, n) in kinds.items()]
+    lines.append(", ".join(parts[:-1]) + f" and {parts[-1]} differ"
+                 + (" bit for bit" if rtol is None else f" beyond rtol {rtol:g}")
+                 + " (the first of each is named above)")
+    return lines, DIFFERENT
+
+
 # ---------------------------------------------------------------- the verdict
 def report(field_diffs, n_fields, case_diffs, n_cases, rtol):
     """The lines printed and the exit code."""
@@ -341,8 +645,11 @@ def compare(original, rerun, rtol=None, references=False):
     original_dir, rerun_dir = results_folder(original), results_folder(rerun)
     if os.path.realpath(original_dir) == os.path.realpath(rerun_dir):
         raise BadInput(f"{original_dir}: the same folder twice")
-    case_diffs, n_cases = compare_cases(load_summary(rerun_dir), load_summary(original_dir),
-                                        rerun_dir, original_dir, rtol)
+    rerun_sum, original_sum = load_summary(rerun_dir), load_summary(original_dir)
+    if is_elastic(rerun_sum) or is_elastic(original_sum):
+        return compare_elastic(h5py, rerun_dir, original_dir, rerun_sum, original_sum, rtol,
+                               references)
+    case_diffs, n_cases = compare_cases(rerun_sum, original_sum, rerun_dir, original_dir, rtol)
     field_diffs, n_fields = compare_fields(h5py, rerun_dir, original_dir, rtol, references)
     lines, code = report(field_diffs, n_fields, case_diffs, n_cases, rtol)
     said = references_line(rerun_dir, original_dir, references)

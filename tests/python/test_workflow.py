@@ -229,6 +229,29 @@ def test_dry_run_lists_every_job(scenes, tmp_path):
     assert (tmp_path / "out" / "inputs" / "mixed.toml").read_bytes() == files[1].read_bytes()
 
 
+# tools/campaign's default scenes (the README's main command), at their own levels
+DEFAULT_SCENES = ("mixed", "closed-exact", "open-exact", "open-graded", "mixed-graded",
+                  "open-smooth", "elastic-williams-open")
+
+
+def test_the_default_campaign_runs_the_seven_scenes_and_the_elastic_one_at_its_levels(tmp_path):
+    """Without SCENE arguments the campaign plans the six scalar scenes and
+    scenes/elastic-williams-open.toml (issue 45, item 5) at the levels of each scene file: the
+    elastic one's reference jobs per tool and level and its report, no solver or check job."""
+    out = tmp_path / "out"
+    r = campaign("--out", out, "--dry-run", check=0)
+    config = json.loads((out / "inputs" / "config.dry-run.json").read_text())
+    assert tuple(config["scenes"]) == DEFAULT_SCENES
+    assert config["scene_files"]["elastic-williams-open"] == str(
+        ROOT / "scenes" / "elastic-williams-open.toml")
+    levels = [0, 1, 2, 3, 4]  # the scene file's `levels`
+    assert config["plans"]["elastic-williams-open"]["levels"] == levels
+    elastic = {j for j in dry_run_jobs(r.stdout) if "elastic-williams-open" in j[1]}
+    assert elastic == ({("reference", f"shards/elastic-williams-open/{tool}/l{lv}")
+                        for tool in ("dolfinx", "freefem") for lv in levels}
+                       | {("report", "elastic-williams-open")})
+
+
 def test_same_numbers_as_one_process(full_run, single_run):
     out, r = full_run
     assert r.returncode in (0, 1), r.stdout[-3000:] + r.stderr[-3000:]
