@@ -28,15 +28,23 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "scenes"
 EXACT = ["elastic-patch", "elastic-williams-open", "elastic-williams-open-graded",
          "elastic-closed-slip", "elastic-closed-slip-graded", "elastic-griffith",
-         "elastic-griffith-graded"]
+         "elastic-griffith-graded", "elastic-closed-slip-incompressible",
+         "elastic-griffith-incompressible", "elastic-closed-slip-divfree"]
+# Test scenes (tests/data/scenes/) checked as the repository's: the locking test's ν = 0.3 twin.
+TEST_SCENES = ROOT / "tests" / "data" / "scenes"
 # Pointwise identities between expressions of size ≤ ~10² (σ ~ r^(-1/2) with r ≥ 0.05 at the
 # sample points): their round-off is ~1e-14 relative; 1e-10 leaves room and still fails any wrong
-# coefficient (the smallest in the scenes is 0.03).
+# coefficient (the smallest is 0.03, but for the incompressible Griffith's 3.0e-5 in u_x, which
+# Hooke's law multiplies by λ ≈ 1.7e4). At ν = 0.49999 Hooke's law multiplies the round-off of
+# div u by λ too: ~1e-12, still inside.
 TOL = 1e-10
 
 
 def load(name):
-    with open(SCENES / f"{name}.toml", "rb") as fh:
+    path = SCENES / f"{name}.toml"
+    if not path.exists():
+        path = TEST_SCENES / f"{name}.toml"
+    with open(path, "rb") as fh:
         return tomllib.load(fh)
 
 
@@ -320,3 +328,39 @@ def test_closed_slip_pressure_outlasts_the_p1_tip_layer(name):
     scene = load(name)
     p0 = float(fn(scene["exact"]["pressure"])(np.array([0.0]), np.array([0.0]))[0])
     assert p0 > 0.107 * 2 ** 3, f"{name}: p(0) = {p0:.4f}"
+
+
+@pytest.mark.parametrize("incompressible, twin", [
+    ("elastic-closed-slip-incompressible", "elastic-closed-slip-divfree"),
+    ("elastic-griffith-incompressible", "elastic-griffith")])
+def test_locking_pairs_share_sigma_and_f(incompressible, twin):
+    """The locking test's premise (tests/afw_locking.rs): each pair, ν = 0.49999 and ν = 0.3, has
+    the same exact σ, f, pressure and K (the same expressions), the same geometry and meshes; only
+    u (so g, the slip, the opening) depends on ν."""
+    a, b = load(incompressible), load(twin)
+    assert (a["problem"]["nu"], b["problem"]["nu"]) == (0.49999, 0.3)
+    for key in ("sxx", "syy", "sxy", "pressure", "sif"):
+        assert a["exact"][key] == b["exact"][key], f"exact.{key}"
+    for key in ("fx", "fy"):
+        assert a["data"][key] == b["data"][key], f"data.{key}"
+    assert a["geometry"] == b["geometry"]
+    assert {k: v for k, v in a["discretization"].items() if k not in ("multipliers", "deltas")} \
+        == {k: v for k, v in b["discretization"].items() if k not in ("multipliers", "deltas")}
+    # and λ is what makes the pair a locking test: λ/μ ≈ 5e4 against 1.5
+    ma, mb = material(a), material(b)
+    assert ma["lambda_in_plane"] / ma["mu"] > 4.9e4 and mb["lambda_in_plane"] / mb["mu"] < 2
+    # u differs (κ and μ), so the pair is not one scene twice
+    x, y = sample(a, 50)
+    assert np.max(np.abs(Field(a).u[1](x, y) - Field(b).u[1](x, y))) > 0.01
+
+
+def test_incompressible_closed_slip_smooth_part_is_divergence_free():
+    """u_C of elastic-closed-slip-incompressible (u minus the mode II part, which has the given σ's
+    trace over 2(λ + μ) as its divergence) has div u_C = 0: its σ(u_C) carries no λ."""
+    scene = load("elastic-closed-slip-incompressible")
+    half_mu_inv = 1.49999
+    ux = f"{half_mu_inv}*(1/3)*(2*x + sin(x))*cos(y)"
+    uy = f"-{half_mu_inv}*(1/3)*sin(y)*(2 + cos(x))"
+    assert scene["exact"]["ux"].startswith(ux + " + ") and scene["exact"]["uy"].startswith(uy + " + ")
+    x, y = sample(scene, 100)
+    assert close(d(ux, "x")(x, y) + d(uy, "y")(x, y), 0.0)
