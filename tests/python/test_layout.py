@@ -35,7 +35,7 @@ FORMATS = {"toml", "clap", "hdf5-metno", "hdf5-metno-sys", "serde_json", "indica
 # The modules of each crate (file or folder names under its src/).
 MODULES = {
     "sdcrack-core": {"problem", "elasticity", "case", "expr", "fe", "mesh", "geometry", "assembly", "linalg", "ordering",
-                     "contact", "multiplier", "krylov", "norms", "scene", "study"},
+                     "contact", "multiplier", "krylov", "norms", "scene", "study", "afw"},
     "sdcrack-io": {"scene_file", "output", "plain", "did_you_mean", "one_line"},
     "sdcrack": {"cli", "bench", "references", "main"},
 }

@@ -19,6 +19,10 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
+/// Relative KKT residual under which a case counts as solved: the scalar and the elastic
+/// study's, re-exported by [`crate::study`].
+pub const KKT_TOLERANCE: f64 = 1e-10;
+
 /// How an LCP solve ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LcpStatus {

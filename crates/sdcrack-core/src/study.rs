@@ -51,8 +51,8 @@ pub const CONDITION_REUSE_FACTOR: f64 = 1.1;
 /// the true `‖K(δ')⁻¹‖₁` (Higham 1988: usually within a factor 3).
 const ESTIMATOR_SLACK: f64 = 3.0;
 
-/// Relative KKT residual under which a case counts as solved.
-pub const KKT_TOLERANCE: f64 = 1e-10;
+/// Relative KKT residual under which a case counts as solved ([`crate::contact`]'s).
+pub use crate::contact::KKT_TOLERANCE;
 
 /// Errors that stop a study.
 #[derive(Debug, thiserror::Error)]
@@ -67,7 +67,7 @@ pub enum StudyError {
     #[error("linear solver: {0}")]
     Linalg(#[from] LinalgError),
     /// The scene poses the elastic problem, and the command runs the scalar problem's study
-    /// (`sdcrack bench`); an elastic scene's cases run in [`elastic::run_elastic_study`].
+    /// (`sdcrack bench`); an elastic scene's cases run in [`run_elastic_study`].
     #[error("this command times the scalar problem's solver only; an elastic scene's cases run with sdcrack run")]
     NotScalar,
     /// The elastic study was given a scalar scene.
@@ -750,4 +750,41 @@ impl LevelContext<'_> {
             })
             .collect()
     }
+}
+
+/// Runs every elastic case of `plan` for `scene` ([`CaseAxes::elastic_keys`]: per level its mesh,
+/// per δ and multiplier space the solve, the recovery and, with `[exact]`, the errors).
+///
+/// [`CaseAxes::elastic_keys`]: crate::case::CaseAxes::elastic_keys
+pub fn run_elastic_study(
+    scene: &Scene,
+    plan: &CasePlan,
+    observer: &mut dyn Observer,
+) -> Result<StudyResult, StudyError> {
+    let data = scene.elasticity().ok_or(StudyError::NotElastic)?;
+    let source = scene.mesh_source()?;
+    let mut result = StudyResult {
+        coarse_mesh: source.provenance.clone(),
+        ..StudyResult::default()
+    };
+    let keys = plan.axes.elastic_keys();
+    for &level in &plan.axes.levels {
+        observer.phase(&format!("level {level}, elasticity: assembling"));
+        let t0 = std::time::Instant::now();
+        let mesh = source.level(level)?;
+        let system = crate::afw::AfwCase::new(&mesh, &scene.domain, data)?;
+        let assembly = t0.elapsed().as_secs_f64();
+        if plan.keep_fields {
+            result
+                .elastic_meshes
+                .push(elastic::ElasticMeshRecord::of(&mesh));
+        }
+        for &key in keys.iter().filter(|k| k.level == level) {
+            observer.phase(&format!("{key}: solving"));
+            let case = elastic::solve_case(&system, data, &mesh, key, assembly, plan.keep_fields)?;
+            observer.elastic_case_done(&case);
+            result.elastic.push(case);
+        }
+    }
+    Ok(result)
 }

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use super::dofs::{sigma_dof, AfwDofs, EdgeKind, EDGE_POINTS};
 use super::element::{local_matrices, Bdm1, Compliance, LocalMatrices, SIGMA_LOCAL};
-use super::AfwError;
+use super::solution::AfwError;
 use crate::elasticity::ElasticData;
 use crate::expr::Expr;
 use crate::fe::quadrature::{gauss_legendre, physical_points, triangle_rule, REFERENCE_TRIANGLE};

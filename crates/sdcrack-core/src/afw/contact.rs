@@ -16,7 +16,7 @@ use faer::Mat;
 use super::assembly::{assemble, basis, sigma_coefficients, sigma_residuals, AfwSystem};
 use super::dofs::{sigma_dof, AfwDofs, EdgeKind};
 use super::element::Compliance;
-use super::{AfwError, AfwSolution, CrackEdge};
+use super::solution::{AfwError, AfwSolution, CrackEdge};
 use crate::contact::{KktResiduals, Lcp, LcpOptions, LcpSolution, LcpStatus};
 use crate::elasticity::ElasticData;
 use crate::linalg::{Ldlt, SymCsc, SymbolicLdlt};

@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use super::AfwError;
+use super::solution::AfwError;
 use crate::elasticity::{BoundaryEdge, BoundaryPart, ElasticData};
 use crate::expr::Expr;
 use crate::fe::quadrature::gauss_legendre;

@@ -12,7 +12,8 @@
 //! signed-zero rule of [`crate::problem::eval_on_face`].
 
 use super::element::Compliance;
-use super::{AfwSolution, Recovered};
+use super::recovery::Recovered;
+use super::solution::AfwSolution;
 use crate::elasticity::{ElasticExact, Material};
 use crate::expr::{BatchScratch, ExprBatch, Var};
 use crate::fe::p1::TriangleGeometry;
@@ -301,5 +302,4 @@ fn crack_errors(
 }
 
 #[cfg(test)]
-#[path = "norms_tests.rs"]
 mod tests;

@@ -28,7 +28,7 @@
 //! defect: O(h), as large as the σ error, hence sym σ_h where users see σ.
 
 use super::element::Compliance;
-use super::AfwSolution;
+use super::solution::AfwSolution;
 use crate::elasticity::Material;
 use crate::fe::p1::TriangleGeometry;
 use crate::mesh::Mesh;
@@ -58,7 +58,7 @@ pub fn recover(mesh: &Mesh, material: &Material, solution: &AfwSolution) -> Reco
     assert_eq!(solution.stress.len(), n, "σ_h on every triangle");
     assert_eq!(solution.displacement.len(), n, "u_h on every triangle");
     assert_eq!(solution.rotation.len(), n, "γ_h on every triangle");
-    let length = |e: &super::CrackEdge| {
+    let length = |e: &super::solution::CrackEdge| {
         let [a, b] = e.nodes.map(|v| mesh.vertices[v]);
         (b[0] - a[0]).hypot(b[1] - a[1])
     };
@@ -150,5 +150,4 @@ fn linear_square_integral(area: f64, f: [f64; 3]) -> f64 {
 }
 
 #[cfg(test)]
-#[path = "recovery_tests.rs"]
 mod tests;

@@ -3,7 +3,7 @@
 //! are tested without the solver, and the meshes they live on.
 
 use super::norms::{exact_opening, exact_slip};
-use super::{AfwSolution, CrackEdge};
+use super::solution::{AfwSolution, CrackEdge};
 use crate::contact::{KktResiduals, LcpStatus};
 use crate::elasticity::ElasticExact;
 use crate::expr::{Expr, Var};

@@ -234,7 +234,7 @@ fn smooth_solution_converges_at_the_element_orders() {
 fn jump_error(
     mesh: &Mesh,
     sol: &AfwSolution,
-    moments: impl Fn(&super::CrackEdge) -> [f64; 2],
+    moments: impl Fn(&super::solution::CrackEdge) -> [f64; 2],
     exact: &crate::expr::Expr,
 ) -> f64 {
     let rule = crate::fe::quadrature::gauss_legendre(10);
@@ -479,7 +479,7 @@ fn negative_delta_is_an_error() {
 }
 
 /// The opening per edge end recovered from the moments with M_e⁻¹.
-fn recovered_ends(mesh: &Mesh, edge: &super::CrackEdge) -> [f64; 2] {
+fn recovered_ends(mesh: &Mesh, edge: &super::solution::CrackEdge) -> [f64; 2] {
     let [a, b] = edge.nodes.map(|v| mesh.vertices[v]);
     let len = (b[0] - a[0]).hypot(b[1] - a[1]);
     let [m0, m1] = edge.opening_moment;

@@ -5,7 +5,8 @@
 //! [`crate::afw::errors`] (with `[exact]`) → record the case.
 //!
 //! Its cases are the plan's [`CaseAxes::elastic_keys`] (levels × δ × multipliers: the AFW method
-//! has no u space, p mass or p space), reported to the same [`Observer`] as the scalar study's.
+//! has no u space, p mass or p space), reported to the same observer as the scalar study's (`study::run_elastic_study`
+//! drives the levels; this module solves one case and owns its results).
 
 use std::time::Instant;
 
@@ -14,9 +15,8 @@ use crate::case::CaseKey;
 use crate::contact::{KktResiduals, LcpStatus};
 use crate::elasticity::ElasticData;
 use crate::mesh::Mesh;
-use crate::scene::Scene;
 
-use super::{CasePlan, Observer, StudyError, StudyResult, KKT_TOLERANCE};
+use crate::contact::KKT_TOLERANCE;
 
 /// Wall-clock seconds per phase of one elastic case.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -108,7 +108,7 @@ pub struct ElasticCaseResult {
     pub timings: ElasticTimings,
     /// Errors against `[exact]`, by name (the names of [`crate::afw::AfwErrors`]), in its order.
     pub errors: Option<Vec<(String, f64)>>,
-    /// The fields (`None` when the plan's [`CasePlan::keep_fields`] is off).
+    /// The fields (`None` when the plan's `keep_fields` is off).
     pub fields: Option<ElasticFields>,
 }
 
@@ -156,51 +156,17 @@ impl ElasticMeshRecord {
     }
 }
 
-/// Runs every elastic case of `plan` for `scene` ([`CaseAxes::elastic_keys`]: per level its mesh,
-/// per δ and multiplier space the solve, the recovery and, with `[exact]`, the errors).
-///
-/// [`CaseAxes::elastic_keys`]: crate::case::CaseAxes::elastic_keys
-pub fn run_elastic_study(
-    scene: &Scene,
-    plan: &CasePlan,
-    observer: &mut dyn Observer,
-) -> Result<StudyResult, StudyError> {
-    let data = scene.elasticity().ok_or(StudyError::NotElastic)?;
-    let source = scene.mesh_source()?;
-    let mut result = StudyResult {
-        coarse_mesh: source.provenance.clone(),
-        ..StudyResult::default()
-    };
-    let keys = plan.axes.elastic_keys();
-    for &level in &plan.axes.levels {
-        observer.phase(&format!("level {level}, elasticity: assembling"));
-        let t0 = Instant::now();
-        let mesh = source.level(level)?;
-        let system = AfwCase::new(&mesh, &scene.domain, data)?;
-        let assembly = t0.elapsed().as_secs_f64();
-        if plan.keep_fields {
-            result.elastic_meshes.push(ElasticMeshRecord::of(&mesh));
-        }
-        for &key in keys.iter().filter(|k| k.level == level) {
-            observer.phase(&format!("{key}: solving"));
-            let case = solve_case(&system, data, &mesh, key, assembly, plan)?;
-            observer.elastic_case_done(&case);
-            result.elastic.push(case);
-        }
-    }
-    Ok(result)
-}
-
 /// One elastic case on its level's `mesh`, whose `system` was assembled in `assembly` seconds:
-/// solve, recover, and the errors against `[exact]` when the scene has it.
-fn solve_case(
+/// solve, recover, and the errors against `[exact]` when the scene has it; with `keep_fields` the
+/// fields too.
+pub fn solve_case(
     system: &AfwCase,
     data: &ElasticData,
     mesh: &Mesh,
     key: CaseKey,
     assembly: f64,
-    plan: &CasePlan,
-) -> Result<ElasticCaseResult, StudyError> {
+    keep_fields: bool,
+) -> Result<ElasticCaseResult, crate::afw::AfwError> {
     let mut timings = ElasticTimings {
         assembly,
         ..ElasticTimings::default()
@@ -224,7 +190,7 @@ fn solve_case(
     timings.norms = t2.elapsed().as_secs_f64();
     let mut case = ElasticCaseResult::new(key, mesh.h(), &solution, timings);
     case.errors = errors;
-    case.fields = plan.keep_fields.then_some(ElasticFields {
+    case.fields = keep_fields.then_some(ElasticFields {
         solution,
         recovered,
     });

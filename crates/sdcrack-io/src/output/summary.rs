@@ -671,4 +671,45 @@ mod tests {
         back.write(&again).unwrap();
         assert_eq!(std::fs::read_to_string(again).unwrap(), text);
     }
+
+    /// An elastic key's text in summary.json: its own axes and its problem kind, no u space, p
+    /// mass or p space; read back the same key. A scalar key's text is what it was before the
+    /// problem axis, and a scalar key without its u space is refused. The plan names an elastic
+    /// scene's kind only.
+    #[test]
+    fn an_elastic_key_and_plan_serialize_with_their_own_axes() {
+        use sdcrack_core::case::{CaseAxes, CaseKey};
+        use sdcrack_core::problem::MultiplierSpace;
+        let axes = CaseAxes {
+            levels: vec![0, 1],
+            u_spaces: Vec::new(),
+            multipliers: vec![MultiplierSpace::M1Star],
+            p_masses: Vec::new(),
+            p_spaces: Vec::new(),
+            deltas: vec![1e-2, 0.0],
+            problems: vec![ProblemKind::Elasticity],
+        };
+        let k = axes.keys()[1];
+        let text = serde_json::to_string(&k).unwrap();
+        assert_eq!(
+            text,
+            r#"{"level":0,"multiplier":"M1star","delta":0.0,"problem":"elasticity"}"#
+        );
+        assert_eq!(serde_json::from_str::<CaseKey>(&text).unwrap(), k);
+        let plan = serde_json::to_value(&axes).unwrap();
+        assert_eq!(plan["problems"], serde_json::json!(["elasticity"]));
+        let scalar_key = case().key;
+        let scalar = serde_json::to_string(&scalar_key).unwrap();
+        assert!(!scalar.contains("problem"), "{scalar}");
+        assert_eq!(
+            serde_json::from_str::<CaseKey>(&scalar).unwrap(),
+            scalar_key
+        );
+        let no_u = r#"{"level":0,"multiplier":"M1","delta":0.0}"#;
+        assert!(serde_json::from_str::<CaseKey>(no_u).is_err());
+        let mut scalar_axes = axes.clone();
+        scalar_axes.problems = vec![ProblemKind::Scalar];
+        let plan = serde_json::to_value(&scalar_axes).unwrap();
+        assert!(plan.get("problems").is_none(), "{plan}");
+    }
 }
