@@ -3,7 +3,7 @@
 //! summary.json and the field files, `sdcrack merge` of per-level shards makes the single run's
 //! folder. On scenes/elastic-patch.toml at levels 0–1 with the pointwise multiplier at δ = 0: the
 //! patch test, exact for the method (≤ 1e-10: round-off of systems of ~5000 unknowns, measured
-//! 1e-11; a wrong sign or coupling is off by O(1)).
+//! 1.5e-15; a wrong sign or coupling is off by O(1)).
 
 mod common;
 
