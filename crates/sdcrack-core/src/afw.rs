@@ -39,7 +39,6 @@ pub use norms::{errors, AfwErrors};
 pub use recovery::{recover, Recovered};
 
 use crate::contact::{KktResiduals, LcpStatus};
-use crate::problem::MultiplierSpace;
 
 /// The multiplier spaces the elastic solver has (docs/design.md, "Contact"): the pointwise one,
 /// σ_νν ≤ 0 at both ends of every crack edge, whose multiplier is ∫_e λ_ν hat_a (the dual cone of
@@ -52,12 +51,6 @@ pub enum AfwError {
     /// δ must be a finite number ≥ 0.
     #[error("delta = {0} is not a finite number >= 0")]
     InvalidDelta(f64),
-    /// The elastic method has only the pointwise constraint so far.
-    #[error(
-        "the multiplier space {0} is not available for elasticity (the smooth-domain method for \
-         elasticity has m1star, the pointwise sigma_nn <= 0 at the crack edges' ends)"
-    )]
-    UnsupportedMultiplier(MultiplierSpace),
     /// A boundary edge with neither a traction nor Dirichlet data.
     #[error("boundary part {part} has no traction and the scene has no g (data.gx, data.gy)")]
     NoDirichletData {
@@ -123,8 +116,9 @@ pub struct CrackEdge {
     pub slip_moment: [f64; 2],
     /// Whether each end is in contact (closed): outside the LCP's active set, its multiplier
     /// (opening moment) 0 and σ_νν free (≤ 0). An open end is in the active set: σ_νν = 0 and
-    /// its opening moment ≥ 0. (For [`crate::problem::MultiplierSpace::M1Star`], the only space
-    /// so far, each end is one constraint; see [`AfwSolution::multiplier`].)
+    /// its opening moment ≥ 0. An end is closed when the constraint it belongs to is: its own
+    /// (M1Star), its edge's mean (M0), its node's hat-weighted one (M1); see
+    /// [`AfwSolution::multiplier`].
     pub closed: [bool; 2],
 }
 

@@ -2,11 +2,13 @@
 //! on the crack edges' normal dofs through [`crate::contact::Lcp`], the recovery solve, the
 //! KKT residuals, the rigid motion of an all-traction boundary, and the [`AfwSolution`].
 //!
-//! The constraint (the pointwise variant, [`MultiplierSpace::M1Star`]): σ_νν ≤ 0 at both ends of
-//! every crack edge, D = N (S = I) selecting the normal dofs. With x₀ = K⁻¹b, H = N K⁻¹ Nᵀ
-//! (symmetric positive semi-definite: K⁻¹'s σ–σ block is) and q = N x₀ (σ_νν of the
-//! unconstrained solution), the multipliers μ_{e,a} = ∫_e λ_ν hat_a solve the LCP μ ≥ 0,
-//! w = Hμ − q ≥ 0 (w = −σ_νν), μ·w = 0; then K x = b − Nᵀμ.
+//! The constraints D = S N ([`Constraints`]): N selects the crack edges' normal dofs, S is the
+//! multiplier space's map (docs/design.md, "Multiplier spaces": S = I for the pointwise
+//! [`MultiplierSpace::M1Star`], σ_νν ≤ 0 at both ends of every crack edge; edge means for M0;
+//! hat-weighted means for M1). With x₀ = K⁻¹b, H = S N K⁻¹ Nᵀ Sᵀ (symmetric positive
+//! semi-definite: K⁻¹'s σ–σ block is) and q = S N x₀, the multipliers solve the LCP μ ≥ 0,
+//! w = Hμ − q ≥ 0 (w = −D σ), μ·w = 0; then K x = b − Nᵀ Sᵀ μ, and Sᵀμ are the opening moments
+//! ∫_e λ_ν hat_a.
 
 use faer::linalg::solvers::Solve;
 use faer::Mat;
@@ -51,7 +53,7 @@ const REDUCTION_BLOCK: usize = 32;
 /// and the fixed points play no part (−δM fixes the rigid part).
 ///
 /// # Errors
-/// [`AfwError`]: an invalid δ, a multiplier space the method does not have, bad data (see
+/// [`AfwError`]: an invalid δ, bad data (see
 /// [`AfwDofs::new`]), a factorisation failure, fixed points that leave a rigid mode free.
 pub fn solve(
     mesh: &Mesh,
@@ -123,14 +125,11 @@ impl<'a> AfwCase<'a> {
     /// [`solve`]).
     ///
     /// # Errors
-    /// An invalid δ, a multiplier space the method does not have, a factorisation failure,
+    /// An invalid δ, a factorisation failure,
     /// fixed points that leave a rigid mode free.
     pub fn solve(&self, multiplier: MultiplierSpace, delta: f64) -> Result<AfwSolution, AfwError> {
         if !(delta >= 0.0 && delta.is_finite()) {
             return Err(AfwError::InvalidDelta(delta));
-        }
-        if multiplier != MultiplierSpace::M1Star {
-            return Err(AfwError::UnsupportedMultiplier(multiplier));
         }
         let dofs = &self.dofs;
         let pinned: Vec<usize> = if self.all_traction && delta == 0.0 {
@@ -141,16 +140,34 @@ impl<'a> AfwCase<'a> {
         let matrix = self.system.matrix(delta);
         let (factored, rhs) = pin(&matrix, &self.rhs, &pinned);
         let ldlt = Ldlt::factor(&self.symbolic, &factored, &self.system.signs)?;
-        let (sol, mut x) = contact_solve(&ldlt, &factored, &rhs, &self.rows, dofs.n_sigma);
+        let constraints = Constraints::new(self.mesh, dofs, multiplier);
+        let (sol, mut x) = contact_solve(
+            &ldlt,
+            &factored,
+            &rhs,
+            &self.rows,
+            &constraints,
+            dofs.n_sigma,
+        );
         if !pinned.is_empty() {
             add_rigid_motion(self.mesh, dofs, self.data, &mut x)?;
         }
-        let kkt = kkt_residuals(&self.rhs, &matrix, &self.rows, &sol, &x, dofs.n_sigma);
+        let kkt = kkt_residuals(
+            &self.rhs,
+            &matrix,
+            &self.rows,
+            &constraints,
+            &sol,
+            &x,
+            dofs.n_sigma,
+        );
+        let crack = (multiplier, constraints.row_of_end.as_slice());
         Ok(solution(
             self.mesh,
             dofs,
             &self.system,
             self.data,
+            crack,
             sol,
             x,
             kkt,
@@ -246,10 +263,11 @@ fn contact_solve(
     k: &SymCsc,
     rhs: &[f64],
     rows: &[usize],
+    constraints: &Constraints,
     n_sigma: usize,
 ) -> (LcpSolution, Vec<f64>) {
     let x0 = refined(ldlt, k, rhs);
-    let m = rows.len();
+    let m = constraints.s.len();
     let mut sol = LcpSolution {
         mu: Vec::new(),
         active: Vec::new(),
@@ -259,12 +277,10 @@ fn contact_solve(
     if m == 0 {
         return (sol, x0);
     }
-    let h = schur_complement(ldlt, k.n, rows);
-    let (mut mu, mut y, mut x) = (
-        vec![0.0; m],
-        rows.iter().map(|&i| x0[i]).collect::<Vec<_>>(),
-        x0,
-    );
+    let h_n = schur_complement(ldlt, k.n, rows);
+    let at_rows = |x: &[f64]| rows.iter().map(|&i| x[i]).collect::<Vec<f64>>();
+    let h = Lcp::reduce(&constraints.s, &h_n, &at_rows(&x0)).h;
+    let (mut mu, mut y, mut x) = (vec![0.0; m], constraints.apply(&at_rows(&x0)), x0);
     let mut warm: Option<Vec<bool>> = None;
     let mut iterations = 0;
     for _ in 0..LCP_REFINEMENTS {
@@ -276,13 +292,12 @@ fn contact_solve(
         warm = Some(sol.active.clone());
         mu.clone_from(&sol.mu);
         let mut b = rhs.to_vec();
-        for (&i, &v) in rows.iter().zip(&mu) {
+        for (&i, &v) in rows.iter().zip(&constraints.transpose_apply(&mu)) {
             b[i] -= v;
         }
         x = refined(ldlt, k, &b);
-        y = rows.iter().map(|&i| x[i]).collect();
-        let sigma_inf = x[..n_sigma].iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let kkt = KktResiduals::constraint_part(&mu, &y, sigma_inf);
+        y = constraints.apply(&at_rows(&x));
+        let kkt = constraints.kkt(&mu, &y, &x[..n_sigma]);
         if !sol.status.converged()
             || kkt.primal.max(kkt.complementarity) <= LCP_REFINEMENT_TOLERANCE
         {
@@ -291,6 +306,116 @@ fn contact_solve(
     }
     sol.iterations = iterations;
     (sol, x)
+}
+
+/// The contact constraints D = S N of a multiplier space: S's rows over the crack edges' normal
+/// dofs (edge j's end slot a at 2j + a), and the row each normal dof's end is constrained by.
+struct Constraints {
+    /// S, one row per multiplier.
+    s: Vec<Vec<f64>>,
+    /// Per normal dof (2j + a): the row of S it belongs to (its end is closed when that row is
+    /// outside the active set).
+    row_of_end: Vec<usize>,
+}
+
+impl Constraints {
+    /// The constraints of `multiplier` on the crack edges of `dofs` (docs/design.md,
+    /// "Multiplier spaces"): M1Star σ_νν ≤ 0 at every end (S = I); M0 ∫_e σ_νν ≤ 0 per edge (row
+    /// ℓ/2 (1, 1)); M1 ∫_Σ φ_j σ_νν ≤ 0 per crack node j with the continuous hats (row j:
+    /// ℓ_e/6 (2, 1) on the normal dofs of each edge e at node j, 2 at j's end).
+    fn new(mesh: &Mesh, dofs: &AfwDofs, multiplier: MultiplierSpace) -> Constraints {
+        let n = 2 * dofs.crack_edges.len();
+        let mut s = Vec::new();
+        let mut row_of_end = vec![0; n];
+        let row = |entries: &[(usize, f64)], s: &mut Vec<Vec<f64>>| {
+            let mut r = vec![0.0; n];
+            for &(k, v) in entries {
+                r[k] += v;
+            }
+            s.push(r);
+            s.len() - 1
+        };
+        match multiplier {
+            MultiplierSpace::M1Star => {
+                for k in 0..n {
+                    row_of_end[k] = row(&[(k, 1.0)], &mut s);
+                }
+            }
+            MultiplierSpace::M0 => {
+                for (j, &e) in dofs.crack_edges.iter().enumerate() {
+                    let half = 0.5 * dofs.edges[e].length;
+                    let r = row(&[(2 * j, half), (2 * j + 1, half)], &mut s);
+                    row_of_end[2 * j] = r;
+                    row_of_end[2 * j + 1] = r;
+                }
+            }
+            MultiplierSpace::M1 => {
+                // the edges of each chain in order: node k of a chain sits between its edges
+                // k − 1 and k; the end slot of the chain's node k on edge k is chain_slots[0]
+                let mut j = 0;
+                for chain in &mesh.cracks {
+                    let edges = j..j + chain.segments();
+                    for node in 0..chain.nodes.len() {
+                        let mut entries = Vec::new();
+                        for (edge, chain_end) in [(node.wrapping_sub(1), 1), (node, 0)] {
+                            if edge >= chain.segments() {
+                                continue;
+                            }
+                            let g = edges.start + edge;
+                            let e = dofs.crack_edges[g];
+                            let super::dofs::EdgeKind::Crack { chain_slots, .. } =
+                                dofs.edges[e].kind
+                            else {
+                                unreachable!("a crack edge")
+                            };
+                            let sixth = dofs.edges[e].length / 6.0;
+                            let (own, other) = (chain_slots[chain_end], chain_slots[1 - chain_end]);
+                            entries.push((2 * g + own, 2.0 * sixth));
+                            entries.push((2 * g + other, sixth));
+                        }
+                        let r = row(&entries, &mut s);
+                        for (edge, chain_end) in [(node.wrapping_sub(1), 1), (node, 0)] {
+                            if edge < chain.segments() {
+                                let g = edges.start + edge;
+                                let super::dofs::EdgeKind::Crack { chain_slots, .. } =
+                                    dofs.edges[dofs.crack_edges[g]].kind
+                                else {
+                                    unreachable!("a crack edge")
+                                };
+                                row_of_end[2 * g + chain_slots[chain_end]] = r;
+                            }
+                        }
+                    }
+                    j = edges.end;
+                }
+            }
+        }
+        Constraints { s, row_of_end }
+    }
+
+    /// S y.
+    fn apply(&self, y: &[f64]) -> Vec<f64> {
+        (self.s.iter())
+            .map(|r| r.iter().zip(y).map(|(a, b)| a * b).sum())
+            .collect()
+    }
+
+    /// Sᵀ μ.
+    fn transpose_apply(&self, mu: &[f64]) -> Vec<f64> {
+        let n = self.row_of_end.len();
+        (0..n)
+            .map(|k| self.s.iter().zip(mu).map(|(r, m)| r[k] * m).sum())
+            .collect()
+    }
+
+    /// The constraint part of the KKT residuals: μ, y = S N σ against ‖S‖_∞ ‖σ‖_∞.
+    fn kkt(&self, mu: &[f64], y: &[f64], sigma: &[f64]) -> KktResiduals {
+        let s_norm = (self.s.iter())
+            .map(|r| r.iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        let sigma_inf = sigma.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        KktResiduals::constraint_part(mu, y, s_norm * sigma_inf)
+    }
 }
 
 /// H = N K⁻¹ Nᵀ (row-major m × m) for the unknowns `rows` (N selects them) from the factor's
@@ -334,6 +459,7 @@ fn kkt_residuals(
     rhs: &[f64],
     k: &SymCsc,
     rows: &[usize],
+    constraints: &Constraints,
     sol: &LcpSolution,
     x: &[f64],
     n_sigma: usize,
@@ -346,13 +472,13 @@ fn kkt_residuals(
         kx[i] -= rhs[i];
         scale[i] += rhs[i].abs();
     }
-    for (&i, &mu) in rows.iter().zip(&sol.mu) {
+    let moments = constraints.transpose_apply(&sol.mu);
+    for (&i, &mu) in rows.iter().zip(&moments) {
         kx[i] += mu;
         scale[i] += mu.abs();
     }
-    let y: Vec<f64> = rows.iter().map(|&i| x[i]).collect();
-    let sigma_inf = x[..n_sigma].iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    let mut kkt = KktResiduals::constraint_part(&sol.mu, &y, sigma_inf);
+    let y = constraints.apply(&rows.iter().map(|&i| x[i]).collect::<Vec<_>>());
+    let mut kkt = constraints.kkt(&sol.mu, &y, &x[..n_sigma]);
     // per block (σ rows, u rows, γ rows): a block's worst residual over its largest scale
     let u_rows = |i: &usize| *i >= n_sigma && (i - n_sigma) % 3 < 2;
     let blocks: [Vec<usize>; 3] = [
@@ -486,6 +612,7 @@ fn solution(
     dofs: &AfwDofs,
     system: &AfwSystem,
     data: &ElasticData,
+    (multiplier, row_of_end): (MultiplierSpace, &[usize]),
     sol: LcpSolution,
     x: Vec<f64>,
     kkt: KktResiduals,
@@ -528,7 +655,7 @@ fn solution(
                 normal_stress: [0, 1].map(|end| sigma[sigma_dof(e, chain_slots[end], 0)]),
                 opening_moment: [0, 1].map(|end| residuals[at(end, 0)]),
                 slip_moment: [0, 1].map(|end| residuals[at(end, 1)]),
-                closed: [0, 1].map(|end| !sol.active[2 * j + chain_slots[end]]),
+                closed: [0, 1].map(|end| !sol.active[row_of_end[2 * j + chain_slots[end]]]),
             }
         })
         .collect();
@@ -537,7 +664,7 @@ fn solution(
         displacement,
         rotation,
         crack,
-        multiplier: MultiplierSpace::M1Star,
+        multiplier,
         delta,
         lcp_iterations: sol.iterations,
         lcp_status: sol.status,
