@@ -196,7 +196,8 @@ pub enum Command {
         /// Scene file (TOML).
         scene: PathBuf,
         /// Print the scene's plan as one JSON object (name, cases, levels, u_spaces,
-        /// multipliers, p_masses, deltas, references, fields, memory_mb per level: sdcrack's
+        /// multipliers, p_masses, deltas, an elastic scene's problem and problems, references,
+        /// fields, memory_mb per level: sdcrack's
         /// peak-memory estimate in MiB, and mesh_memory_mb: its part that grows with the mesh),
         /// for workflow engines.
         #[arg(long)]

@@ -598,3 +598,99 @@ fn case_without_crack_or_fields() {
     let f = hdf5::File::open(tmp.path().join("out.h5")).unwrap();
     assert!(!f.link_exists("cases/bare/crack"));
 }
+
+/// A further field ([`CaseFields::extra`]) of each grid, kind and centering on the fixture's first
+/// case: σ-like tensors per node, a vector per triangle, a scalar per crack node and segment.
+fn with_extra(c: &CaseFields, mesh: &MeshData) -> CaseFields {
+    use super::super::data::{Field, FieldKind, GridPart};
+    let field = |name: &str, part, center, kind: FieldKind, items: usize| Field {
+        name: name.into(),
+        part,
+        center,
+        kind,
+        values: (0..items * kind.components()).map(|i| i as f64).collect(),
+    };
+    let (n, t) = (mesh.points.len(), mesh.triangles.len());
+    let (nc, ns) = (c.crack_points.len(), c.crack_segments.len());
+    let mut c = c.clone();
+    c.extra = vec![
+        field(
+            "sigma",
+            GridPart::Mesh,
+            Centering::Node,
+            FieldKind::Tensor,
+            n,
+        ),
+        field("u_h", GridPart::Mesh, Centering::Cell, FieldKind::Vector, t),
+        field(
+            "opening",
+            GridPart::Crack,
+            Centering::Node,
+            FieldKind::Scalar,
+            nc,
+        ),
+        field(
+            "edge",
+            GridPart::Crack,
+            Centering::Cell,
+            FieldKind::Scalar,
+            ns,
+        ),
+    ];
+    c
+}
+
+/// The further fields are written where the module documentation says (`/cases/CASE/NAME` and
+/// `/cases/CASE/crack/NAME`, shaped (items[, components])) with an XDMF attribute of their type
+/// and centering each; a field of the wrong length, of a reserved or repeated name, or on the
+/// crack of a case without one is refused with nothing written.
+#[test]
+fn further_fields_are_written_and_validated() {
+    let (m, c) = fixture();
+    let mut cc = c.clone();
+    cc[0] = with_extra(&c[0], &m[0]);
+    let tmp = tempfile::tempdir().unwrap();
+    write_fields(tmp.path(), "fields", &m, &cc).unwrap();
+    let file = hdf5::File::open(tmp.path().join("fields.h5")).unwrap();
+    let g = file.group(&format!("cases/{}", cc[0].name)).unwrap();
+    let (n, t) = (m[0].points.len(), m[0].triangles.len());
+    assert_eq!(g.dataset("sigma").unwrap().shape(), [n, 9]);
+    assert_eq!(g.dataset("u_h").unwrap().shape(), [t, 3]);
+    let opening = g.dataset("crack/opening").unwrap();
+    assert_eq!(opening.shape(), [cc[0].crack_points.len()]);
+    assert_eq!(opening.read_raw::<f64>().unwrap()[2], 2.0);
+    assert!(opening.attr("delta").is_ok(), "the case's metadata");
+    let xml = std::fs::read_to_string(tmp.path().join("fields").join(state_file(&cc[0].name, "")))
+        .unwrap();
+    assert!(xml.contains("<Attribute Name=\"sigma\" AttributeType=\"Tensor\" Center=\"Node\">"));
+    assert!(xml.contains(&format!("Dimensions=\"{n} 9\"")));
+    assert!(xml.contains("<Attribute Name=\"u_h\" AttributeType=\"Vector\" Center=\"Cell\">"));
+    let crack = std::fs::read_to_string(
+        tmp.path()
+            .join("fields")
+            .join(state_file(&cc[0].name, ".crack")),
+    )
+    .unwrap();
+    assert!(crack.contains("<Attribute Name=\"opening\" AttributeType=\"Scalar\" Center=\"Node\">"));
+    assert!(crack.contains("<Attribute Name=\"edge\" AttributeType=\"Scalar\" Center=\"Cell\">"));
+
+    let case0 = cc[0].name.clone();
+    let mut bad = cc.clone();
+    bad[0].extra[0].values.pop();
+    expect_invalid(&m, &bad, &[&case0, "field \"sigma\"", "its grid needs"]);
+    let mut bad = cc.clone();
+    bad[0].extra[1].name = "u".into();
+    expect_invalid(&m, &bad, &[&case0, "field \"u\" clashes"]);
+    let mut bad = cc.clone();
+    bad[0].extra[3].name = "opening".into();
+    expect_invalid(&m, &bad, &[&case0, "field \"opening\" clashes"]);
+    let mut bad = cc.clone();
+    bad[0].extra[2].values[1] = f64::NAN;
+    expect_invalid(&m, &bad, &[&case0, "field opening", "value 1"]);
+    let mut bad = cc.clone();
+    bad[0].crack_points.clear();
+    bad[0].crack_segments.clear();
+    bad[0].lambda = None;
+    bad[0].jump = None;
+    expect_invalid(&m, &bad, &[&case0, "without a crack grid"]);
+}
