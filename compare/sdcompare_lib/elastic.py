@@ -49,9 +49,8 @@ import os
 
 import numpy as np
 
-from . import (elastic_exact, elastic_exactdata, elastic_fields, elastic_read, elastic_theory, rates,
-               render, theory,
-               verdict)
+from . import (elastic_exact, elastic_exactdata, elastic_fields, elastic_read, elastic_sdm_verdict,
+               elastic_theory, rates, render, theory, verdict)
 from .exact import ExactError, Quadrature
 
 KKT_TOLERANCE = 1e-10
@@ -74,7 +73,9 @@ CRACK_ROUNDOFF = 64 * np.finfo(float).eps
 FRONT_REACH = 1
 QUANTITIES = ("u_l2", "u_h1", "sigma_l2", "opening_l2", "slip_l2")
 CHECKS = ("exact data", "completeness", "reference status", "crack outputs", "viewer datasets",
-          "reference agreement", "series", "active set", "interpolation yardstick", "SIF")
+          "reference agreement", "series", "active set", "interpolation yardstick", "SIF",
+          "solver cases", "independent errors", "solver series", "solver SIF", "patch test",
+          "δ → 0")
 YARDSTICK_LABEL = "interpolation yardstick"
 # ‖u − u_h‖_a ≤ (1 + YARDSTICK_TOL) ‖u − I_h u‖_a (Falk's lemma with v_h = I_h u: constant 1,
 # interpolation_yardstick). What the bound leaves out, each far below 1e-6 relative: the error
@@ -605,6 +606,7 @@ def analyse(res):
         checks.append((YARDSTICK_LABEL, "", [], "no [exact] in the scene: no interpolant to "
                        "measure the references' energy error against"))
     checks.append(sif_check(res, a, sifs))
+    checks.extend(solver_checks(res, a, ex, size if has_exact else None))
     a["finest"] = finest_distances(res, a, sifs)
     a["field_distances"] = field_distances(res)
     checks = a["checks"] = elastic_exactdata.not_judged(checks, a["exact_data"])
@@ -616,6 +618,56 @@ def analyse(res):
     a["run_levels_up_to"] = max(ups) if ups and a["verdict"] == "INCONCLUSIVE" else None
     a["verdict_cause"] = verdict_cause(a)
     return a
+
+
+def solver_checks(res, a, ex, size):
+    """The rows of the smooth-domain method's checks (elastic_sdm_verdict.py); a["sdm"] keeps
+    their numbers (recomputed errors, series, ratios) for the report."""
+    sv = elastic_sdm_verdict
+    rows = [sv.solver_cases(res)]
+    sdm = a["sdm"] = {"cases": len(res.get("sdm") or []), "series": [], "independent": [],
+                      "ratios": [], "delta": [], "fronts": [], "sentences": []}
+    if not res.get("sdm"):
+        why = "summary.json has no elastic solver case"
+        return rows + [(label, "", [], why) for label in
+                       ("independent errors", "solver series", "solver SIF", "patch test", "δ → 0")]
+    rows.append(sv.delta_limit(res, a))
+    sdm["fronts"] = sv.fronts(res, a["fronts"])
+    sdm["sentences"] = sv.front_sentences(sdm["fronts"])
+    if ex is None:
+        why = "no [exact] in the scene: nothing to recompute the solver's errors against"
+        return rows + [(label, "", [], why) for label in
+                       ("independent errors", "solver series", "solver SIF", "patch test")]
+    rec = sdm["recomputed"] = sv.recompute_all(res, ex)
+    row, sdm["independent"] = sv.independent_errors(res, rec)
+    rows.append(row)
+    rings = {L: sif_ring(lv) for L, lv in res["levels"].items() if lv.tip_rows().size}
+    sifs, sdm["sif_skipped"] = sv.sdm_sifs(res, rings, _body_force(res["mesh_scene"]),
+                                           lambda e1: _exact_pressure(ex, e1))
+    sdm["sifs"] = [{"level": res["sdm"][i].level, "multiplier": res["sdm"][i].multiplier,
+                    "K": ks} for i, ks in sorted(sifs.items())]
+    sdm["series"] = sv.series(res, rec, a["h"], a["s"],
+                              sv.sif_errors(sifs, res["mesh_scene"]["exact"].get("sif")))
+    judged = [s for s in sdm["series"] if not s["quantity"].startswith("K_")]
+    bad = [f"{s['tool']} {s['quantity']}: {s['reason']}" for s in judged
+           if s["status"] == "does not converge"]
+    a["undecided"]["solver series"] = [f"{s['tool']} {s['quantity']}: {s['reason']}"
+                                       for s in judged if s["status"] == "inconclusive"]
+    for s in sdm["series"]:
+        if s["quantity"].startswith("K_"):
+            s["status"] = f"printed ({s['status']}; the solver SIF check judges the finest level)"
+    rows.append(("solver series", "every solver series (recomputed errors) converges at the "
+                 "order elastic_theory gives the smooth-domain method for the regularity s",
+                 bad, None if sdm["series"] else "no solver case at a level of the mesh export"))
+    rows.append(sv.sif_check(res, sifs, sdm["sif_skipped"], res["mesh_scene"]["exact"].get("sif"),
+                             rings, SIF_ROUNDOFF))
+    exact_p1 = all(v["u_h1"] <= roundoff_floor(size[L], "u_h1")
+                   for L, v in a["interpolation"].items())
+    rows.append(sv.patch_test(res, rec, exact_p1))
+    sdm["ratios"] = sv.ratios(res, rec, a["errors"])
+    a["series"].extend(sdm["series"])
+    sdm["sentences"] = sv.sentences(res, a) + sdm["sentences"]
+    return rows
 
 
 def exact_data_check(a, mesh_scene):

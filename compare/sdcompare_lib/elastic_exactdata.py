@@ -70,7 +70,7 @@ NOT_JUDGED = ("not judged: the scene's exact data are inconsistent (see the chec
 # The checks whose verdict compares the references with the scene's exact data: with inconsistent
 # data their problems say nothing of the references (elastic.analyse marks them not judged). The
 # others (completeness, status, crack outputs, agreement, SIF computed) stand.
-JUDGED_AGAINST_EXACT = ("series", "active set")
+JUDGED_AGAINST_EXACT = ("series", "active set", "solver series", "patch test")
 TIP_STEP = 1e-8
 RECTANGLE_PARTS = ("bottom", "right", "top", "left")  # the edges of {min, max} in CCW order
 WHOLE_BOUNDARY = "boundary"  # a part every edge belongs to (a mesh-file scene's one part)

@@ -14,6 +14,7 @@ import numpy as np
 
 from sdshared import sdexport
 
+from . import elastic_sdm
 from .read import REFERENCE_TOOLS, InputError, load_json, load_scene_copy
 
 PROBLEM = "elasticity"
@@ -197,5 +198,10 @@ def load(folder):
     for tool in REFERENCE_TOOLS:
         if os.path.exists(os.path.join(folder, tool, "summary.json")):
             refs[tool] = read_reference(folder, tool, mesh)
+    sdm = elastic_sdm.read_cases(folder, summary)
+    for c in sdm:
+        if c.level not in mesh:
+            raise InputError(f"{folder}/summary.json: solver case {c.grid} is level {c.level}, "
+                             "which scene.toml's levels do not list")
     return {"folder": folder, "summary": summary, "scene": name, "scene_file": scene_file,
-            "mesh_scene": mesh_scene, "levels": mesh, "refs": refs}
+            "mesh_scene": mesh_scene, "levels": mesh, "refs": refs, "sdm": sdm}

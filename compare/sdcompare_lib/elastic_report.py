@@ -95,6 +95,55 @@ def series_section(a):
             "paras_after": [f"Expected orders: {r}." for r in reasons]}
 
 
+def solver_section(res, a):
+    """The smooth-domain method's cases: the sentences against the references, the ratios on the
+    same mesh, the independent recomputation and δ → 0 (elastic_sdm_verdict.py)."""
+    from . import elastic_sdm_verdict as sv
+
+    sdm = a.get("sdm") or {}
+    if not sdm.get("cases"):
+        return {"title": "The smooth-domain method",
+                "paras": ["summary.json has no elastic solver case: the references alone are judged."]}
+    paras = [f"{sdm['cases']} solver case(s). Their errors and rates are the series \"sdcrack …\" "
+             "of *Errors against the exact fields*, recomputed here from fields.h5 "
+             "(compare/sdcompare_lib/elastic_sdm.py)." if a["has_exact"] else
+             f"{sdm['cases']} solver case(s); no [exact]: their errors are not recomputed."]
+    paras += sdm.get("sentences", [])
+    ratios = [[r["multiplier"], fmt(r["delta"]), r["level"], TOOL_NAME.get(r["tool"], r["tool"]),
+               r["quantity"], fmt(r["sdm"]), fmt(r["reference"]),
+               "—" if r["ratio"] is None else f"{r['ratio']:.4f}"] for r in sdm.get("ratios", [])]
+    worst = {}
+    for r in sdm.get("independent", []):
+        key = (r["level"], r["multiplier"], r["delta"])
+        d = abs(r["summary"] - r["recomputed"]) if isinstance(r["summary"], (int, float)) else None
+        q = None if d is None else d / r["tolerance"] if r["tolerance"] > 0 else float("inf")
+        if key not in worst or q is None or (worst[key][1] is not None and q > worst[key][1]):
+            worst[key] = (r["error"], q)
+    indep = [[L, m, fmt(d), e, "—" if q is None else f"{q:.3g}"]
+             for (L, m, d), (e, q) in sorted(worst.items())]
+    delta = [[r["multiplier"], r["level"], fmt(r["delta"]), fmt(r["diff"]["σ"]), fmt(r["diff"]["u"]),
+              fmt(r["diff"]["γ"]), fmt((r.get("constant") or {}).get("σ")),
+              fmt((r.get("constant") or {}).get("u"))] for r in sdm.get("delta", [])]
+    fr = [[r["multiplier"], r["level"],
+           "; ".join(f"({x:.10g}, {y:.10g})" for x, y in r["fronts"]) or "none",
+           TOOL_NAME.get(r["tool"], r["tool"]), fmt(r["same_level"]), fmt(r["finest"]),
+           fmt(r["edge"])] for r in sdm.get("fronts", [])]
+    return {"title": "The smooth-domain method", "paras": paras,
+            "tables": [(["multiplier", "level", "contact fronts (closed flags change)",
+                         "reference", "distance to its front (same level)",
+                         "distance to its finest level's", "longest crack edge"], fr,
+                        "the SDM's contact fronts (δ = 0; printed, not judged)"),(["multiplier", "δ", "level", "reference", "quantity", "SDM error",
+                         "reference error", "ratio"], ratios,
+                        "the SDM's error over the reference's on the same mesh and level (printed, "
+                        "not judged: no theorem orders them)"),
+                       (["level", "multiplier", "δ", "worst error", "(summary − recomputed) / tolerance, largest"],
+                        indep, "independent errors: the summary's against the recomputed ones "
+                        f"(tolerance {sv.INDEPENDENT_REL:g} relative + 4 × quadrature estimate + "
+                        f"{sv.ROUNDOFF_REL:g} × the field's norm)"),
+                       (["multiplier", "level", "δ", "‖σ_δ − σ_0‖", "‖u_δ − u_0‖", "‖γ_δ − γ_0‖",
+                         "σ constant", "u constant"], delta, "δ → 0")]}
+
+
 def crack_section(a):
     act = [[TOOL_NAME.get(r["tool"], r["tool"]), r["level"], r["exact_closed_rows"],
             r["reference_active_rows"], r["mismatch_rows"], fmt(r["mismatch_length"]),
@@ -239,13 +288,14 @@ def report_json(res, a, prov, images):
         "sif_missing": a["sif_missing"], "finest": a["finest"],
         "field_distances": a["field_distances"],
         "sif_skipped": [{"tool": t, "level": L, "why": w} for (t, L), w in sorted(a["sif_skipped"].items())],
+        "solver": {k: (a.get("sdm") or {}).get(k) for k in
+                   ("cases", "independent", "ratios", "delta", "fronts", "sentences")},
         "images": [i for i in images if i]})
 
 
 def check_no_expectations(path, scene):
-    """The elastic verdict reads no expectations: its series are judged by elastic_theory.py's
-    orders, and until the elastic solver exists (issue 46) there is no solver series to bound
-    and no ratio to the references to record. A row of the expectations file `path` (--expectations,
+    """The elastic verdict reads no expectations: its series (the references' and the solver's)
+    are judged by elastic_theory.py's orders, and no ratio to the references is recorded yet. A row of the expectations file `path` (--expectations,
     else the default file) naming the elastic `scene` would be silently ignored, so it is refused
     (InputError); rows of other scenes, and "*" rows (patterns of the scalar series), are the
     scalar verdict's. A missing default file is no error here."""
@@ -287,7 +337,8 @@ def run(args, results_dir):
     try:
         images = [error_plot(tmp, a)]
         prov, prov_sec = provenance_section(res)
-        secs = [summary_section(a, images), series_section(a), crack_section(a), sif_section(a, (res["mesh_scene"].get("exact") or {}).get("sif")),
+        secs = [summary_section(a, images), series_section(a), solver_section(res, a),
+                crack_section(a), sif_section(a, (res["mesh_scene"].get("exact") or {}).get("sif")),
                 finest_section(a), references_section(res, a), prov_sec]
         title = f"sdcompare report — {a['scene']} (elasticity)"
         render.write_text(tmp, "report.md", render.markdown(title, secs))

@@ -10,9 +10,11 @@ subset of the original's datasets and cases: that is the normal case. Exit codes
 1 something differs (the first differing dataset and case are named), 2 bad input (one line on
 stderr). See compare/README.md, "Rerun commands".
 
-An elastic results folder (docs/elasticity.md: summary.json's "problem" is "elasticity") has no
-solver case until issue 46, only what its references solved: it is compared by those outputs, with
---references (without it: exit 2, nothing to compare). Every file the rerun has under mesh/ (the
+An elastic results folder (docs/elasticity.md: summary.json's "problem" is "elasticity"): its
+solver cases (issue 46) as a scalar folder's — each rerun case's numbers against the original's
+case of the same key (level, multiplier, δ, problem), every fields.h5 dataset —, and with
+--references what its references solved (a folder without solver cases has nothing else: without
+--references exit 2). Every file the rerun has under mesh/ (the
 export the references read, sdcrack's one output there) and under dolfinx/ and freefem/: each
 fields.h5 dataset as above, each reference summary.json case (by level; timings not compared),
 the text outputs (u_level{L}.txt, crack_level{L}.txt, the XDMF files, mesh/level{L}/*.txt) byte
@@ -548,22 +550,69 @@ def compare_report(rerun_dir, original_dir, rtol):
     return json_differences(a, b, rtol), len(a)
 
 
+def elastic_case_key(c):
+    """An elastic solver case's identity (docs/elasticity.md: level, multiplier, δ, problem; no
+    u space or p axes), or None for an entry that lacks one."""
+    try:
+        return (int(c["level"]), str(c["multiplier"]), float(c["delta"]), str(c["problem"]))
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def compare_elastic_cases(rerun_sum, original_sum, rerun_dir, original_dir, rtol):
+    """([(case label, difference)], number compared) of the rerun's elastic solver cases against
+    the original's of the same key (their numbers as a scalar case's: case_difference)."""
+    by = []
+    for folder, summary in ((rerun_dir, rerun_sum), (original_dir, original_sum)):
+        out = {}
+        for c in summary["cases"]:
+            key = elastic_case_key(c) if isinstance(c, dict) else None
+            if key is None:
+                raise BadInput(f"{folder}/summary.json: an elastic case without level, "
+                               "multiplier, delta or problem")
+            out[key] = c
+        by.append(out)
+    rerun, original = by
+    tol = kkt_tolerance(original_sum)
+    diffs = []
+    for key, c in rerun.items():
+        label = f"level {key[0]} {key[1]} δ {fmt_delta(key[2])}"
+        if key not in original:
+            raise BadInput(f"{rerun_dir}: case {label} is not in {original_dir}/summary.json: "
+                           "not a rerun of that folder")
+        why = case_difference(c, original[key], rtol, tol)
+        if why:
+            diffs.append((label, why))
+    return diffs, len(rerun)
+
+
 def compare_elastic(h5py, rerun_dir, original_dir, rerun_sum, original_sum, rtol, references):
-    """(lines, exit code) of an elastic folder's rerun: its references' outputs (and the report),
-    with --references; BadInput without it, or for a folder that is not one of the same scene."""
+    """(lines, exit code) of an elastic folder's rerun: its solver cases (summary.json's numbers
+    by key, fields.h5's datasets) as a scalar folder's, and with --references its references'
+    outputs (and the report); BadInput when there is nothing to compare (no solver case and no
+    --references), or for a folder that is not one of the same scene."""
     check_same_scene(rerun_sum, original_sum, rerun_dir, original_dir)
     for folder, summary in ((rerun_dir, rerun_sum), (original_dir, original_sum)):
         if not is_elastic(summary):
             raise BadInput(f"{folder}: a scalar results folder, the other one is elastic")
-        if summary["cases"]:
-            raise BadInput(f"{folder}/summary.json: elastic solver cases, which sdcompare-rerun "
-                           "does not compare yet")
-    if not references:
+    solver = bool(rerun_sum["cases"])
+    if not references and not solver:
         raise BadInput(f"{rerun_dir}: an elastic scene's folder, no solver cases to compare: "
                        "--references compares its references' outputs")
+    kinds = {}
+    if solver:
+        kinds["cases"] = compare_elastic_cases(rerun_sum, original_sum, rerun_dir, original_dir,
+                                               rtol)
+        kinds["datasets"] = compare_fields(h5py, rerun_dir, original_dir, rtol)
+    if not references:
+        lines, code = report_kinds(kinds, rtol)
+        said = references_line(rerun_dir, original_dir, references)
+        return lines + ([said] if said else []), code
     tools = elastic_tools(rerun_dir, original_dir)
-    kinds = compare_elastic_outputs(h5py, rerun_dir, original_dir, tools, rtol,
-                                    kkt_tolerance(original_sum))
+    for kind, (d, n) in compare_elastic_outputs(h5py, rerun_dir, original_dir, tools, rtol,
+                                                kkt_tolerance(original_sum)).items():
+        before = kinds.get(kind, ([], 0))
+        kinds[kind] = (before[0] + d, before[1] + n)
     said = compare_report(rerun_dir, original_dir, rtol)
     if said is not None:
         kinds["report.json values"] = said
@@ -578,7 +627,8 @@ def compare_elastic(h5py, rerun_dir, original_dir, rerun_sum, original_sum, rtol
 
 
 # the label of a difference of each kind in a "differs:" line
-KIND_LABEL = {"datasets": "dataset ", "text files": "file ", "reference cases": "",
+KIND_LABEL = {"cases": "summary.json case ", "datasets": "dataset ", "text files": "file ",
+              "reference cases": "",
               "report.json values": f"{REPORT_JSON}: "}
 
 

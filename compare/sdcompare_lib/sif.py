@@ -348,11 +348,46 @@ def sif_p1(xy, tri, u, material, tip, e1, r_in, r_out, face_pressure=None, body_
     face_pressure and body_force as for `sif_exact` (see `pressure_along_crack` for a pressure from
     nodal values). The disc r < r_out (and the triangles at the tip) must meet the mesh's boundary
     only along the tip's crack line (checked: ValueError)."""
+    u = np.asarray(u, dtype=float)
+
+    def fields(idx, t, dlam, rot, bary):
+        ul = u[t] @ rot.T  # tip-frame components, (m, 3, 2)
+        grad = np.einsum("tki,tkj->tij", ul, dlam)
+        lam, mu, _, _ = _lame(material)
+        return grad[:, None], hooke(grad, lam, mu)[:, None]
+
+    return _sif_on_mesh(xy, tri, fields, material, tip, e1, r_in, r_out, face_pressure,
+                        body_force)
+
+
+def sif_fields(xy, tri, grad, stress, material, tip, e1, r_in, r_out, face_pressure=None,
+               body_force=None):
+    """(K_I, K_II) at `tip` of fields given per triangle as P1 corner values in the global frame:
+    grad (m, 3, 2, 2) the displacement gradient (grad[..., i, d] = ∂u_i/∂x_d) and stress
+    (m, 3, 2, 2), both linear on each triangle of the cracked triangulation (xy, tri) (a mixed
+    method's ∇_h u = A σ_h + γ_h J and σ_h). The rest as `sif_p1`: the same q_h, ring checks, face
+    term and body force; the interaction integral's identity needs only that σ and ∇u obey the
+    same Hooke law on its symmetric part, which a stress σ_h with ε_h = A σ_h does."""
+    grad = np.asarray(grad, dtype=float)
+    stress = np.asarray(stress, dtype=float)
+
+    def fields(idx, t, dlam, rot, bary):
+        g = np.einsum("qk,tkij->tqij", bary, grad[idx])
+        sg = np.einsum("qk,tkij->tqij", bary, stress[idx])
+        return rot @ g @ rot.T, rot @ sg @ rot.T
+
+    return _sif_on_mesh(xy, tri, fields, material, tip, e1, r_in, r_out, face_pressure,
+                        body_force)
+
+
+def _sif_on_mesh(xy, tri, fields, material, tip, e1, r_in, r_out, face_pressure, body_force):
+    """The interaction integral (1)–(3) on the triangles where q_h ≠ 0; fields(t, dlam, rot, bary)
+    gives the tip-frame gradient and stress (m, 1 or nq, 2, 2) of the active triangles t (rows idx
+    of tri)."""
     _check_ring(r_in, r_out)
     lam, mu, _, e_prime = _lame(material)
     xy = np.asarray(xy, dtype=float)
     tri = np.asarray(tri, dtype=np.int64)
-    u = np.asarray(u, dtype=float)
     tip = np.asarray(tip, dtype=float)
     rot = tip_frame(e1)
     loc = (xy - tip) @ rot.T
@@ -367,12 +402,10 @@ def sif_p1(xy, tri, u, material, tip, e1, r_in, r_out, face_pressure=None, body_
                     np.stack([-jac[:, 1, 0], jac[:, 0, 0]], -1)], -2) / det[:, None, None]
     # ∇ of the barycentric λ1, λ2 are the rows of inv; λ0 = 1 − λ1 − λ2.
     dlam = np.stack([-inv[:, 0] - inv[:, 1], inv[:, 0], inv[:, 1]], 1)  # (m, 3, 2)
-    ul = u[t] @ rot.T  # tip-frame components, (m, 3, 2)
-    grad = np.einsum("tki,tkj->tij", ul, dlam)
-    sig = hooke(grad, lam, mu)
     dq = np.einsum("tk,tkj->tj", qt, dlam)
     ref, wref = sdquad.load_rule()
     bary = np.column_stack([1.0 - ref[:, 0] - ref[:, 1], ref[:, 0], ref[:, 1]])  # (nq, 3)
+    grad, sig = fields(np.flatnonzero(active), t, dlam, rot, bary)
     pts = np.einsum("qk,tkj->tqj", bary, np.stack([p0, p1, p2], 1))
     w = np.abs(det)[:, None] * wref[None, :]
     r = np.hypot(pts[..., 0], pts[..., 1])
@@ -391,7 +424,7 @@ def sif_p1(xy, tri, u, material, tip, e1, r_in, r_out, face_pressure=None, body_
     for mode in (1, 2):
         ga = williams_gradient(mode, r, theta, material)
         sa = hooke(ga, lam, mu)
-        dom = _domain_integrand(grad[:, None], sig[:, None], ga, sa, dq[:, None])
+        dom = _domain_integrand(grad, sig, ga, sa, dq[:, None])
         total = np.sum((w * dom)[has_dq])
         if body_force is not None:
             total -= np.sum(w * qq.T * np.einsum("tqi,tqi->tq", f, ga[..., :, 0]))

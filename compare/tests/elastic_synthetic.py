@@ -141,3 +141,108 @@ def write_results(out, exact=None, levels=(0, 1, 2), n0=4, tools=("dolfinx", "fr
                                                     "provenance": {"tool": tool},
                                                     "cases": cases}))
     return out
+
+
+# ------------------------------------------------------------------ the smooth-domain method's cases
+
+def sdm_fields(exact, level, nudge=1e-13):
+    """The fields (elastic_sdm.SdmCase's arrays) of a solver case equal to the exact field on the
+    Level's triangles (broken: three corners per triangle): σ_h = sym σ_h = σ at the corners, u* = u
+    at the corners, u_h, γ_h their centroid values, the crack's opening, slip, pressure the exact
+    ones at each segment's ends. Corners are evaluated `nudge` of the way to the centroid (each
+    triangle's own face of the crack); σ at a corner at a tip takes the centroid's value."""
+    from sdcompare_lib import elastic_exact
+
+    ex = elastic_exact.ElasticExact(exact, PROBLEM)
+    tri = level.triangles
+    X = level.points[tri]  # (T, 3, 2)
+    cen = X.mean(axis=1)
+    tips = np.array([level.nodes()[r] for r in level.tip_rows()]).reshape(-1, 2)
+    at_tip = np.zeros(X.shape[:2], dtype=bool)
+    for tp in tips:
+        at_tip |= np.hypot(*(X - tp).transpose(2, 0, 1)) == 0.0
+    Q = X + nudge * (cen[:, None, :] - X)
+    v = ex.evaluate(Q[..., 0].ravel(), Q[..., 1].ravel(), ("ux", "uy"))
+    # σ at a corner at a tip: the centroid's (the exact σ may be infinite there)
+    Q = X + np.where(at_tip, 1.0, nudge)[..., None] * (cen[:, None, :] - X)
+    v.update(ex.evaluate(Q[..., 0].ravel(), Q[..., 1].ravel(), ("sxx", "syy", "sxy")))
+    T = len(tri)
+    sig = np.zeros((3 * T, 9))
+    sig[:, 0], sig[:, 1], sig[:, 3], sig[:, 4] = v["sxx"], v["sxy"], v["sxy"], v["syy"]
+    u_star = np.zeros((3 * T, 3))
+    u_star[:, 0], u_star[:, 1] = v["ux"] * np.ones(3 * T), v["uy"] * np.ones(3 * T)
+    c = ex.evaluate(cen[:, 0], cen[:, 1], ("ux", "uy", "duxdy", "duydx"))
+    u_h = np.zeros((T, 3))
+    u_h[:, 0], u_h[:, 1] = c["ux"] * np.ones(T), c["uy"] * np.ones(T)
+    gamma = 0.5 * (c["duxdy"] - c["duydx"]) * np.ones(T)
+    seg = level.segments()
+    nodes = level.nodes()
+    cp = nodes[seg.ravel()]
+    normals = np.repeat(np.column_stack([-(nodes[seg[:, 1]] - nodes[seg[:, 0]])[:, 1],
+                                         (nodes[seg[:, 1]] - nodes[seg[:, 0]])[:, 0]]), 2, axis=0)
+    normals /= np.hypot(*normals.T)[:, None]
+    normals *= np.sign(np.sum(normals * level.normals[seg.ravel()], axis=1))[:, None]
+    cv = ex.crack_values(cp, normals)
+    crack = {k: np.nan_to_num(np.asarray(cv[k], dtype=float) * np.ones(len(cp)))
+             for k in ("opening", "slip", "pressure")}
+    points = np.zeros((3 * T, 3))
+    points[:, :2] = X.reshape(-1, 2)
+    cpoints = np.zeros((len(cp), 3))
+    cpoints[:, :2] = cp
+    return {"points": points, "triangles": np.arange(3 * T).reshape(T, 3), "sigma": sig,
+            "sigma_raw": sig.copy(), "u_h": u_h, "gamma_h": gamma, "u_star": u_star,
+            "crack/points": cpoints, "crack/segments": np.arange(len(cp)).reshape(-1, 2),
+            **{f"crack/{k}": a for k, a in crack.items()}}
+
+
+def write_sdm_cases(folder, exact, variants=(("M1star", 0.0),), damage=None, forge=None,
+                    status=None, closed=None):
+    """Add solver cases to a results folder of write_results: per level of its scene copy and per
+    (multiplier, δ) the fields of sdm_fields in fields.h5 and a summary.json case whose errors are
+    recomputed by elastic_sdm (damage(level, multiplier, δ, fields) may change the fields first;
+    forge(level, multiplier, δ, errors) the errors written after; status(level, multiplier, δ)
+    the case's status, default "converged"; closed(level, crack points (2E, 2)) the crack/closed
+    flags written, default none written)."""
+    import h5py
+    import tomllib
+
+    from sdcompare_lib import elastic_exact, elastic_sdm
+
+    folder = Path(folder)
+    scene = tomllib.loads((folder / "scene.toml").read_text())
+    levels = scene["discretization"]["levels"]
+    summary = json.loads((folder / "summary.json").read_text())
+    ex = elastic_exact.ElasticExact(exact, PROBLEM)
+    cases = []
+    with h5py.File(folder / "fields.h5", "w") as h5:
+        for L in levels:
+            lv = elastic_read.read_level(str(folder / "mesh"), L)
+            base = sdm_fields(exact, lv)
+            h5[f"meshes/level{L}-elasticity/points"] = base["points"]
+            h5[f"meshes/level{L}-elasticity/triangles"] = base["triangles"]
+            for m, d in variants:
+                f = {k: np.array(v) for k, v in base.items()}
+                if damage is not None:
+                    damage(L, m, d, f)
+                grid = f"level{L}-elasticity-{m}-delta{d:g}"
+                for k in ("sigma", "sigma_raw", "u_h", "gamma_h", "u_star", "crack/points",
+                          "crack/segments", "crack/opening", "crack/slip", "crack/pressure"):
+                    h5[f"cases/{grid}/{k}"] = f[k]
+                if closed is not None:
+                    h5[f"cases/{grid}/crack/closed"] = closed(L, f["crack/points"][:, :2]).astype(
+                        float)
+                entry = {"level": L, "multiplier": m, "delta": d, "problem": "elasticity",
+                         "fields_grid": grid, "status": "converged", "converged": True,
+                         "kkt": {"equations": 0.0, "primal": 0.0, "dual": 0.0,
+                                 "complementarity": 0.0}}
+                if status is not None:
+                    entry["status"] = status(L, m, d)
+                case = elastic_sdm.read_cases_from(h5, [dict(entry, errors={})], str(folder))[0]
+                errors, _ = elastic_sdm.recompute(case, lv, ex, PROBLEM)
+                if forge is not None:
+                    forge(L, m, d, errors)
+                entry["errors"] = errors
+                cases.append(entry)
+    summary["cases"] = cases
+    (folder / "summary.json").write_text(json.dumps(summary))
+    return folder

@@ -1,5 +1,6 @@
-"""compare/sdcompare-rerun on an elastic results folder (docs/elasticity.md: no solver case until
-issue 46): with --references it compares what the references solved, the mesh export they read,
+"""compare/sdcompare-rerun on an elastic results folder (docs/elasticity.md): its solver cases
+(issue 46) by summary.json's numbers per key and fields.h5's datasets, as a scalar folder's; with
+--references it compares what the references solved, the mesh export they read,
 each fields.h5 dataset, each reference summary.json case, the text outputs (u_level{L}.txt,
 crack_level{L}.txt, the XDMF files) and report/report.json's values; without --references it has
 nothing to compare and says so (exit 2), never "identical" over nothing.
@@ -287,8 +288,8 @@ def bad(rerun, kind):
     ("a file the original has not", "no dolfinx/u_level7.txt, which the rerun has"),
     ("a level the original has not", "level 7 is not in "),
     ("a scalar rerun", "a scalar results folder, the other one is elastic"),
-    ("elastic solver cases", "summary.json: elastic solver cases, which sdcompare-rerun does "
-     "not compare yet"),
+    ("elastic solver cases", "summary.json: an elastic case without level, multiplier, delta "
+     "or problem"),
     ("malformed report.json", "malformed JSON"),
 ])
 def test_bad_input_is_one_line_and_exit_2(original, rerun, capsys, kind, says):
@@ -296,3 +297,56 @@ def test_bad_input_is_one_line_and_exit_2(original, rerun, capsys, kind, says):
     code, out, err = compare(original, rerun, "--references", capsys=capsys)
     assert (code, out) == (2, ""), (kind, out)
     assert err.startswith("sdcompare-rerun: ") and says in err and err.count("\n") == 1, err
+
+
+# ------------------------------------------------------------------ the solver's cases (issue 46)
+
+@pytest.fixture(scope="module")
+def original_sdm(tmp_path_factory):
+    folder = es.write_results(tmp_path_factory.mktemp("s") / "williams", levels=LEVELS, tools=TOOLS)
+    return es.write_sdm_cases(add_campaign_files(folder), es.williams(1.0, 0.0),
+                              variants=(("M1star", 0.0), ("M1star", 1e-3)))
+
+
+@pytest.fixture
+def rerun_sdm(original_sdm, tmp_path):
+    copy = Path(shutil.copytree(original_sdm, tmp_path / "williams"))
+    s = json.loads((copy / "summary.json").read_text())
+    for c in s["cases"]:
+        c["timings_s"] = {"solve": 99.0}
+    (copy / "summary.json").write_text(json.dumps(s))
+    return copy
+
+
+def test_an_identical_rerun_of_solver_cases_exits_0(original_sdm, rerun_sdm, capsys):
+    with h5py.File(original_sdm / "fields.h5") as f:
+        n = len(rerun_diff.dataset_names(h5py, f))
+    code, out, err = compare(original_sdm, rerun_sdm, capsys=capsys)
+    assert (code, err) == (0, ""), err
+    assert out.splitlines()[0] == f"identical: 4 cases, {n} datasets"
+    assert "references: dolfinx, freefem rerun, not compared" in out
+    code, out, err = compare(original_sdm, rerun_sdm, "--references", capsys=capsys)
+    assert code == 0 and out.startswith("identical: 4 cases, "), (out, err)
+
+
+def test_a_changed_solver_error_and_dataset_are_named(original_sdm, rerun_sdm, capsys):
+    s = json.loads((rerun_sdm / "summary.json").read_text())
+    s["cases"][3]["errors"]["stress_l2"] *= 1 + 1e-15
+    (rerun_sdm / "summary.json").write_text(json.dumps(s))
+    code, out, err = compare(original_sdm, rerun_sdm, capsys=capsys)
+    assert code == 1 and "differs: summary.json case level 1 M1star δ 1e-3: " in out, out
+    assert "stress_l2" in out and "1 of 4 cases and 0 of " in out
+    with h5py.File(rerun_sdm / "fields.h5", "a") as f:
+        f["cases/level0-elasticity-M1star-delta0/gamma_h"][3] += 1e-12
+    code, out, err = compare(original_sdm, rerun_sdm, "--rtol", "1e-6", capsys=capsys)
+    assert code == 0, out
+    code, out, err = compare(original_sdm, rerun_sdm, capsys=capsys)
+    assert code == 1 and "differs: dataset /cases/level0-elasticity-M1star-delta0/gamma_h" in out
+
+
+def test_a_solver_case_the_original_has_not_is_bad_input(original_sdm, rerun_sdm, capsys):
+    s = json.loads((rerun_sdm / "summary.json").read_text())
+    s["cases"][0]["delta"] = 0.5
+    (rerun_sdm / "summary.json").write_text(json.dumps(s))
+    code, out, err = compare(original_sdm, rerun_sdm, capsys=capsys)
+    assert (code, out) == (2, "") and "case level 0 M1star δ 5e-1 is not in" in err, err
