@@ -129,9 +129,36 @@ ELASTIC = "elasticity"
 
 
 def is_elastic(plan):
-    """Whether the plan is an elastic scene's (docs/elasticity.md): no solver case until its
-    solver exists (issue 46), reference jobs only, and a report of its own kind."""
+    """Whether the plan is an elastic scene's (docs/elasticity.md): its solver jobs are the
+    smooth-domain method's (elastic_solver_units), it has no check job, and a report of its own
+    kind."""
     return plan.get("problem") == ELASTIC
+
+
+def elastic_solver_units(plan, level=None):
+    """(level, multiplier) of each solver job of an elastic plan, levels × multipliers (only
+    those of `level` when given); none for a scene that lists no solver case (no multipliers and
+    no deltas) or for a scalar plan. A job runs its (level, multiplier)'s whole δ sweep, as a
+    scalar solver job does: `afw::AfwCase` assembles and factors once per level for every δ."""
+    if not is_elastic(plan):
+        return []
+    return [(lv, m) for lv in plan["levels"] if level is None or int(lv) == int(level)
+            for m in plan["multipliers"]]
+
+
+def elastic_solver_shard(name, level, m):
+    """The elastic solver job's shard folder shards/<name>/solver/l<L>-elasticity-<m> (the
+    problem kind where a scalar shard has its u space, as the case's series name
+    level<L>-elasticity-<m> in fields.h5)."""
+    return f"shards/{name}/solver/l{level}-{ELASTIC}-{m}"
+
+
+def solver_shards(plan):
+    """Every solver job's shard folder of the plan, scalar (solver_units) or elastic
+    (elastic_solver_units), in the order of the units."""
+    name = plan["name"]
+    return ([solver_shard(name, *unit) for unit in solver_units(plan)]
+            + [elastic_solver_shard(name, *unit) for unit in elastic_solver_units(plan)])
 
 
 def reference_shards(plan, level=None):
@@ -158,11 +185,9 @@ def check_files(plan):
 
 def jobs_of(plan):
     """(solver shard folders, reference shard folders, check files (check_files), report folder)
-    of one scene's plan. An elastic scene's plan has no solver case (its scalar axes are empty):
-    no solver job."""
-    name = plan["name"]
-    solver = [solver_shard(name, *unit) for unit in solver_units(plan)]
-    return solver, reference_shards(plan), check_files(plan), name
+    of one scene's plan. An elastic scene's solver jobs are its (level, multiplier) units (none
+    when the scene lists no solver case)."""
+    return solver_shards(plan), reference_shards(plan), check_files(plan), plan["name"]
 
 
 # The memory a job asks for (`mem_mb`, Slurm's --mem under --profile slurm; docs/workflow.md,
