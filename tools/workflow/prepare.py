@@ -214,12 +214,28 @@ PYTHON_JOB_MB = {"dolfinx": 208, "freefem": 96, "check": 128, "report": 256}
 # peak of 607 MB at level 5, FreeFEM 96 + 600 = 696 MB for 340 MB (docs/workflow.md, "Memory").
 ELASTIC_REPORT_MESH_FACTOR = 2
 
+# An elastic solver job (the smooth-domain method, `sdcrack run --level L --multiplier M`) factors
+# the AFW system (4 σ dofs per edge, 2 u and 1 γ per triangle, symmetric indefinite LDLᵀ): several
+# times the scalar solver's memory per cell, which `sdcrack check --json`'s memory_mb estimates. Its own
+# estimate counts the part that grows with the mesh (mesh_memory_mb) ELASTIC_SOLVER_MESH_FACTOR
+# times. Measured (/usr/bin/time's maximum resident set, `--solver-only`, 2026-11-28, machine
+# loaded) on elastic-williams-open (8 x 8 cells, uniform) and its graded twin (β = 0.4), peak MB
+# against mesh_memory_mb: uniform level 3 163 (29), 4 547 (132), 5 2309 (600); graded level 3
+# 199 (39), 4 677 (187), 5 2772 (866). The per-cell factor of the solve grows with the fill of the
+# factor (n log n cells and more): (peak − 128) / mesh_memory_mb is 1.2–1.8 at level 3, 2.9–3.2
+# at level 4, 3.6 (uniform) and 3.1 (graded) at level 5; 4 holds every peak, the
+# largest estimate / peak 1.5 (level 3: 244 / 163; the campaign adds SNAKEMAKE_JOB_MB).
+ELASTIC_SOLVER_MESH_FACTOR = 4
+
 
 def own_memory_mb(job, plan, level=None):
     """A job's own memory estimate, MB: `job` is solver, dolfinx, freefem, check or report (no
     level: the scene's finest); `plan` the scene's `sdcrack check --json`."""
     if job == "solver":
-        return int(plan["memory_mb"][str(level)])
+        own = int(plan["memory_mb"][str(level)])
+        if is_elastic(plan):
+            own += (ELASTIC_SOLVER_MESH_FACTOR - 1) * int(plan["mesh_memory_mb"][str(level)])
+        return own
     if job == "report":
         factor = ELASTIC_REPORT_MESH_FACTOR if is_elastic(plan) else 1
         return PYTHON_JOB_MB[job] + factor * max(int(v) for v in plan["mesh_memory_mb"].values())
