@@ -16,10 +16,11 @@ failed since (its output missing and its log without a `campaign: ... done` line
 killed job), or whose report is older than its shards or inputs, is FAIL; the index shows the
 failing jobs' logs (their last 40 lines, and a link). Each row also says what converged, and, from
 the report's `glance`, the ratios of sdcrack's errors to the references' at the finest level both
-have and the δ → 0 outcome. An elastic scene's report (docs/elasticity.md: no solver until issue 46)
-has no glance: its row says which of its series (per reference and quantity) converge and, in
-the glance's place, the references' errors at the finest level (without exact fields: their SIFs,
-contact fronts and distances to the finest level) and how well they agree.
+have and the δ → 0 outcome. An elastic scene's report (docs/elasticity.md) has no glance: its row
+says which of its series (per tool, the references' and the smooth-domain method's, and
+quantity) converge and, in the glance's place, the method's errors at its finest level, the
+references' errors at the finest level (without exact fields: their SIFs, contact fronts and
+distances to the finest level) and how well they agree.
 
 --baseline BASEDIR: a campaign folder of the same layout (e.g. the previous night's merged
 artifacts; its scenes found as above, without --scene). Each scene's row then lists what changed
@@ -319,12 +320,13 @@ def glance(report):
 
 # --------------------------------------------------------------------------- elastic scenes
 #
-# An elastic scene (docs/elasticity.md) has no solver until issue 46: its report judges the two
-# references, against the exact fields where the scene has [exact] (series per reference and
-# quantity), else against each other and their finest level. report.json (compare/sdcompare_lib/
-# elastic_report.py) says "problem": "elasticity" and has no glance; its row says what converged
-# and, in the glance's column, the references' errors (or, without [exact], their SIFs, contact
-# fronts and distances to the finest level) at the finest level and how well they agree.
+# An elastic scene (docs/elasticity.md): its report judges the smooth-domain method's cases (issue
+# 46; series "sdcrack <multiplier> δ=<δ>" per quantity) and the two references, against the exact
+# fields where the scene has [exact] (series per tool and quantity), else against each other and
+# their finest level. report.json (compare/sdcompare_lib/elastic_report.py) says "problem":
+# "elasticity" and has no glance; its row says what converged and, in the glance's column, the
+# method's errors at its finest level, the references' errors (or, without [exact], their SIFs,
+# contact fronts and distances to the finest level) at the finest level and how well they agree.
 
 ELASTIC = "elasticity"  # report.json's "problem" of an elastic scene (elastic_read.PROBLEM)
 # the elastic report's field quantities, in its order, with the symbols of its tables

@@ -11,10 +11,11 @@ must PASS every scene first, or nothing is judged (exit 2).
 
 The scenes: tools/mutants' command line, else DEFAULT_SCENES (the scalar ones at their own
 levels, then issue 45's elastic ones at levels 0–3); `--levels A-B` judges every scene on those
-levels, in a copy written as tools/campaign --levels writes it (tools/workflow/prepare.py). An
-elastic scene has no solver case until issue 46: `sdcrack run` writes its mesh export and runs
-its references, and compare/sdcompare gives the elastic verdict (docs/elasticity.md), so a Rust
-mutant can FAIL it only through the mesh export.
+levels, in a copy written as tools/campaign --levels writes it (tools/workflow/prepare.py). On an
+elastic scene `sdcrack run` solves its smooth-domain cases (issue 46: `multipliers`, `deltas`),
+writes its mesh export and runs its references, and compare/sdcompare gives the elastic verdict
+(docs/elasticity.md) on the solver's cases and the references, so a Rust mutant of the elastic
+solver (crates/sdcrack-core/src/afw/) FAILs it through the solver's cases.
 
 Mutants in compare/ judge the unmutated run's results (the solver and references are unchanged);
 mutants in references/ rerun the scenes that run references; mutants in Rust rebuild and rerun
@@ -43,8 +44,9 @@ from sdshared.sdresults import write_atomic
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CATALOGUE = os.path.join(ROOT, "tools", "mutants.toml")
 # (scene, the levels judged: None for the scene's own); the first scene that FAILs kills a mutant,
-# so the cheap elastic scenes come last, where the Rust mutants (killed on a scalar scene, and
-# blind on an elastic one, which has no solver case until issue 46) never reach them
+# so the cheap elastic scenes come last, where the scalar solver's Rust mutants (killed on a scalar
+# scene) never reach them; the elastic solver's (afw/) pass the scalar scenes unchanged and are
+# judged on the elastic ones, which run its cases (issue 46)
 ELASTIC_LEVELS = [0, 1, 2, 3]
 DEFAULT_SCENES = [("scenes/closed-exact.toml", None), ("scenes/open-exact.toml", None),
                   ("scenes/mixed.toml", None), ("scenes/open-smooth.toml", None),
