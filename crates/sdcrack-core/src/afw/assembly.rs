@@ -256,10 +256,11 @@ pub fn sigma_coefficients(dofs: &AfwDofs, x: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The residuals b_i − (K x)_i of the σ dofs `rows` (any σ dofs, free or essential) of the
-/// full system, computed element by element from the triangles in `triangles_of` each row's
-/// edge: `sigma` the coefficients of every σ dof, `x` the unknowns, `delta`-independent (σ rows
-/// carry no δ).
+/// The residuals b_i − (K x)_i of the σ dofs `rows` (any σ dofs, free or essential) in the
+/// system of every σ dof, computed element by element on the triangles at the rows' edges:
+/// `sigma` the coefficients of every σ dof, `x` the unknowns (σ rows carry no δ). For a crack
+/// edge's normal dof this is the opening moment, for its eliminated tangential dof the slip
+/// moment.
 pub fn sigma_residuals(
     mesh: &Mesh,
     dofs: &AfwDofs,
@@ -352,5 +353,75 @@ mod tests {
             .map(|(a, b)| a - b)
             .sum();
         assert!((total + 2.0 * 1.0).abs() < 1e-13, "Σ δM = 2|Ω|: {total}");
+    }
+}
+
+#[cfg(test)]
+mod mouth_tests {
+    use super::*;
+    use crate::problem::Domain;
+    use crate::scene::elastic_testing as et;
+
+    /// At the mouth (−1, 0) of Williams' edge crack g jumps (θ = ±π on the two faces): each of
+    /// the two boundary edges at the mouth must see its own face's g. The load of their dofs
+    /// equals a 40-point Gauss–Legendre integral of the same integrand (g is smooth on each
+    /// closed edge when taken from that edge's face); a rule evaluating g at the mouth itself
+    /// would take one face's value on both edges.
+    #[test]
+    fn each_boundary_edge_at_a_crack_mouth_sees_its_own_face() {
+        let m = et::steel_like();
+        let u = et::williams(1.0, 0.5, &m);
+        let data = et::Elastic::new(m, [&u[0], &u[1]], ["0", "0"])
+            .g_is_u()
+            .data;
+        let Domain::Rectangle(r) = et::square() else {
+            unreachable!()
+        };
+        let mesh = crate::mesh::structured::structured(
+            r,
+            [4, 4],
+            &[et::crack([-1.0, 0.0], [0.0, 0.0])],
+            0,
+        )
+        .unwrap();
+        let dofs = AfwDofs::new(&mesh, &et::square(), &data).unwrap();
+        let sys = assemble(&mesh, &dofs, &data).unwrap();
+        let g = data.g.as_ref().unwrap();
+        let rule = gauss_legendre(40);
+        let mouth = mesh.cracks[0].nodes[0];
+        let mut seen = 0;
+        for (e, edge) in dofs.edges.iter().enumerate() {
+            let EdgeKind::Dirichlet { outward } = edge.kind else {
+                continue;
+            };
+            if !edge.nodes.contains(&mouth) {
+                continue;
+            }
+            seen += 1;
+            let orientation = edge.normal[0] * outward[0] + edge.normal[1] * outward[1];
+            let [a, b] = edge.nodes.map(|v| mesh.vertices[v]);
+            for slot in 0..2 {
+                for k in 0..2 {
+                    let d = edge.directions[k];
+                    let want: f64 = (rule.points.iter().zip(&rule.weights))
+                        .map(|(&s, &w)| {
+                            let p = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
+                            let hat = if slot == 0 { 1.0 - s } else { s };
+                            let gd = g[0].eval(p[0], p[1]) * d[0] + g[1].eval(p[0], p[1]) * d[1];
+                            w * edge.length * orientation * hat * gd
+                        })
+                        .sum();
+                    let got = sys.sigma_load[sigma_dof(e, slot, k)];
+                    // the 5-point rule's own error on this smooth but not polynomial g over an
+                    // edge of length 1/2 is ~1e-10; the other face's g is O(1) away ([u] at the
+                    // mouth is 7.28·(1/(2π))^½ ≈ 2.9 in u_y)
+                    assert!(
+                        (got - want).abs() < 1e-8,
+                        "edge {e} ({slot}, {k}): {got} vs {want}"
+                    );
+                }
+            }
+        }
+        assert_eq!(seen, 2, "two boundary edges at the mouth");
     }
 }

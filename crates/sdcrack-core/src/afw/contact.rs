@@ -100,10 +100,10 @@ impl<'a> AfwCase<'a> {
         if all_traction {
             make_compatible(mesh, &dofs, &mut rhs);
         }
-        let symbolic = SymbolicLdlt::analyze(&system.base)?;
-        let rows = (dofs.crack_edges.iter())
+        let rows: Vec<usize> = (dofs.crack_edges.iter())
             .flat_map(|&e| [0, 1].map(|s| dofs.normal_unknown(e, s)))
             .collect();
+        let symbolic = analyze_with_last(&system.base, &rows)?;
         Ok(AfwCase {
             mesh,
             data,
@@ -174,6 +174,39 @@ impl<'a> AfwCase<'a> {
             delta,
         ))
     }
+}
+
+/// The symbolic analysis of K in an order that eliminates the unknowns `last` last: AMD of K
+/// without them, then them in their order. The factor's trailing block then gives
+/// H_N = N K⁻¹ Nᵀ in O(m³) ([`Ldlt::trailing_inverse`]) instead of a solve per crack dof.
+fn analyze_with_last(k: &SymCsc, last: &[usize]) -> Result<SymbolicLdlt, AfwError> {
+    if last.is_empty() {
+        return Ok(SymbolicLdlt::analyze(k)?);
+    }
+    let mut is_last = vec![false; k.n];
+    for &i in last {
+        is_last[i] = true;
+    }
+    let kept: Vec<usize> = (0..k.n).filter(|&i| !is_last[i]).collect();
+    let mut new_index = vec![usize::MAX; k.n];
+    for (j, &i) in kept.iter().enumerate() {
+        new_index[i] = j;
+    }
+    let mut triplets = Vec::with_capacity(k.row_idx.len());
+    for c in 0..k.n {
+        for idx in k.col_ptr[c]..k.col_ptr[c + 1] {
+            let r = k.row_idx[idx];
+            if !is_last[r] && !is_last[c] {
+                triplets.push((new_index[r], new_index[c], 1.0));
+            }
+        }
+    }
+    let reduced = SymCsc::from_triplets(kept.len(), &triplets)?;
+    let order: Vec<usize> = (SymbolicLdlt::analyze(&reduced)?.order().into_iter())
+        .map(|i| kept[i])
+        .chain(last.iter().copied())
+        .collect();
+    Ok(SymbolicLdlt::analyze_ordered(k, &order)?)
 }
 
 /// Makes b orthogonal to the kernel of K(0) on an all-traction boundary, the rigid motions
@@ -277,7 +310,7 @@ fn contact_solve(
     if m == 0 {
         return (sol, x0);
     }
-    let h_n = schur_complement(ldlt, k.n, rows);
+    let h_n = (ldlt.trailing_inverse(rows)).unwrap_or_else(|| schur_complement(ldlt, k.n, rows));
     let at_rows = |x: &[f64]| rows.iter().map(|&i| x[i]).collect::<Vec<f64>>();
     let h = Lcp::reduce(&constraints.s, &h_n, &at_rows(&x0)).h;
     let (mut mu, mut y, mut x) = (vec![0.0; m], constraints.apply(&at_rows(&x0)), x0);
@@ -419,7 +452,8 @@ impl Constraints {
 }
 
 /// H = N K⁻¹ Nᵀ (row-major m × m) for the unknowns `rows` (N selects them) from the factor's
-/// block solves with the columns of Nᵀ, symmetrised away from round-off.
+/// block solves with the columns of Nᵀ, symmetrised away from round-off: the fallback where the
+/// factor's trailing block is not them ([`analyze_with_last`] puts them there).
 fn schur_complement(ldlt: &Ldlt, n: usize, rows: &[usize]) -> Vec<f64> {
     let m = rows.len();
     let mut h = vec![0.0; m * m];

@@ -98,6 +98,15 @@ impl SymbolicLdlt {
         })
     }
 
+    /// The elimination order of this analysis: `order[position]` is the unknown eliminated at
+    /// `position` (the identity when faer chose none).
+    pub fn order(&self) -> Vec<usize> {
+        match self.inner.perm() {
+            Some(perm) => perm.arrays().0.to_vec(),
+            None => (0..self.n).collect(),
+        }
+    }
+
     /// Number of stored values of the factor `L` (including the dense zeros of the
     /// supernodal blocks and the diagonal holding `D`).
     pub fn factor_nnz(&self) -> usize {
