@@ -48,7 +48,7 @@ fn an_elastic_run_solves_the_patch_test_exactly() {
     let folder = out.join("elastic-patch");
     let s = summary(&folder);
     assert_eq!(s["problem"], "elasticity");
-    assert_eq!(s["shared_timings"], serde_json::json!(["mesh"]));
+    assert_eq!(s["shared_timings"], serde_json::json!(["assembly"]));
     assert_eq!(s["all_converged"], true);
     let cases = s["cases"].as_array().unwrap();
     assert_eq!(cases.len(), 2);

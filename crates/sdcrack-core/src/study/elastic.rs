@@ -1,15 +1,15 @@
 //! The driver of an elastic scene (the smooth-domain method for elasticity, [`crate::afw`]):
 //!
-//! for each level → mesh → for each δ (largest first) → for each multiplier space →
-//! [`crate::afw::solve`] → [`crate::afw::recover`] → [`crate::afw::errors`] (with `[exact]`) →
-//! record the case.
+//! for each level → mesh → assemble and analyse ([`crate::afw::AfwCase`]) → for each δ (the
+//! scene's order) → for each multiplier space → solve → [`crate::afw::recover`] →
+//! [`crate::afw::errors`] (with `[exact]`) → record the case.
 //!
 //! Its cases are the plan's [`CaseAxes::elastic_keys`] (levels × δ × multipliers: the AFW method
 //! has no u space, p mass or p space), reported to the same [`Observer`] as the scalar study's.
 
 use std::time::Instant;
 
-use crate::afw::{self, AfwErrors, AfwSolution, Recovered};
+use crate::afw::{self, AfwCase, AfwErrors, AfwSolution, Recovered};
 use crate::case::CaseKey;
 use crate::contact::{KktResiduals, LcpStatus};
 use crate::elasticity::ElasticData;
@@ -21,9 +21,10 @@ use super::{CasePlan, Observer, StudyError, StudyResult, KKT_TOLERANCE};
 /// Wall-clock seconds per phase of one elastic case.
 #[derive(Clone, Copy, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct ElasticTimings {
-    /// The level's mesh (shared by every case of the level: [`ELASTIC_SHARED_TIMINGS`]).
-    pub mesh: f64,
-    /// [`crate::afw::solve`]: dofs, assembly, factorisation, the contact LCP, the KKT residuals.
+    /// The level's mesh, dofs, assembly and symbolic analysis ([`crate::afw::AfwCase::new`];
+    /// shared by every case of the level: [`ELASTIC_SHARED_TIMINGS`]).
+    pub assembly: f64,
+    /// [`crate::afw::AfwCase::solve`]: factorisation, the contact LCP, the KKT residuals.
     pub solve: f64,
     /// [`crate::afw::recover`]: the opening, slip and pressure, σ symmetrised, u*.
     pub recovery: f64,
@@ -33,7 +34,7 @@ pub struct ElasticTimings {
 
 /// The timing phases of [`ElasticTimings`] shared by several cases (reported with each of them):
 /// summary.json's `shared_timings` of an elastic run.
-pub const ELASTIC_SHARED_TIMINGS: [&str; 1] = ["mesh"];
+pub const ELASTIC_SHARED_TIMINGS: [&str; 1] = ["assembly"];
 
 /// The fields of one elastic case, as the field files write them: piecewise polynomials per
 /// triangle and per crack edge (each discontinuous: per triangle vertex, per crack edge end).
@@ -93,7 +94,7 @@ pub struct ElasticCaseResult {
     pub unknowns: usize,
     /// Crack edges (each with two normal-trace dofs constrained by the contact conditions).
     pub crack_edges: usize,
-    /// Crack edge ends whose constraint σ_νν ≤ 0 is active (closed).
+    /// Crack edge ends in contact (closed: [`crate::afw::CrackEdge::closed`]).
     pub closed_ends: usize,
     /// LCP iterations (linear solves on the crack).
     pub iterations: usize,
@@ -172,16 +173,17 @@ pub fn run_elastic_study(
     };
     let keys = plan.axes.elastic_keys();
     for &level in &plan.axes.levels {
-        observer.phase(&format!("level {level}, elasticity: meshing"));
+        observer.phase(&format!("level {level}, elasticity: assembling"));
         let t0 = Instant::now();
         let mesh = source.level(level)?;
-        let mesh_time = t0.elapsed().as_secs_f64();
+        let system = AfwCase::new(&mesh, &scene.domain, data)?;
+        let assembly = t0.elapsed().as_secs_f64();
         if plan.keep_fields {
             result.elastic_meshes.push(ElasticMeshRecord::of(&mesh));
         }
         for &key in keys.iter().filter(|k| k.level == level) {
             observer.phase(&format!("{key}: solving"));
-            let case = solve_case(scene, data, &mesh, key, mesh_time, plan)?;
+            let case = solve_case(&system, data, &mesh, key, assembly, plan)?;
             observer.elastic_case_done(&case);
             result.elastic.push(case);
         }
@@ -189,22 +191,22 @@ pub fn run_elastic_study(
     Ok(result)
 }
 
-/// One elastic case on its level's `mesh` (made in `mesh_time` seconds): solve, recover, and
-/// the errors against `[exact]` when the scene has it.
+/// One elastic case on its level's `mesh`, whose `system` was assembled in `assembly` seconds:
+/// solve, recover, and the errors against `[exact]` when the scene has it.
 fn solve_case(
-    scene: &Scene,
+    system: &AfwCase,
     data: &ElasticData,
     mesh: &Mesh,
     key: CaseKey,
-    mesh_time: f64,
+    assembly: f64,
     plan: &CasePlan,
 ) -> Result<ElasticCaseResult, StudyError> {
     let mut timings = ElasticTimings {
-        mesh: mesh_time,
+        assembly,
         ..ElasticTimings::default()
     };
     let t0 = Instant::now();
-    let solution = afw::solve(mesh, &scene.domain, data, key.multiplier, key.delta)?;
+    let solution = system.solve(key.multiplier, key.delta)?;
     timings.solve = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
     let recovered = afw::recover(mesh, &data.material, &solution);

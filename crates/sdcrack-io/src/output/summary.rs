@@ -394,7 +394,8 @@ pub struct ElasticCaseSummary {
     pub unknowns: usize,
     /// Crack edges (two constrained normal-trace dofs each).
     pub crack_edges: usize,
-    /// Crack edge ends whose constraint σ_νν ≤ 0 is active (closed).
+    /// Crack edge ends in contact (closed: opening 0, σ_νν ≤ 0 free; an open end has
+    /// σ_νν = 0).
     pub closed_ends: usize,
     /// LCP iterations.
     pub iterations: usize,
