@@ -55,7 +55,7 @@ def summary_section(a, images):
     after = [f"Problem: {r}" for r in a["reasons"]]
     return {"title": "Verdict", "paras": paras, "lead_images": [i for i in images if i],
             "tables": [(["check", "requires", "status"], checks),
-                       (["reference", "series", "expected order", "rates", "status"], series)],
+                       (["reference or solver", "series", "expected order", "rates", "status"], series)],
             "paras_after": after, "fold": False}
 
 
@@ -81,7 +81,7 @@ def series_section(a):
             "paras": [f"Recomputed here from each reference's u and crack file (compare/sdcompare_lib/"
                       f"elastic_exact.py); an error within {elastic.ROUNDOFF_REL:g} of the exact "
                       f"field's own norm is round-off and shown as 0. Rule: {rates.rule_text(theory.RATE_MARGIN, source=RULE_SOURCE)}"],
-            "tables": [(["reference", "quantity", "level", "h", "error", "rate", "expected"], rows,
+            "tables": [(["reference or solver", "quantity", "level", "h", "error", "rate", "expected"], rows,
                         "errors and rates per reference, quantity and level"),
                        (["reference", "level", "pressure error"], pressure,
                         "the nodal pressure λ_j/m_j against the exact pressure (measured, not "

@@ -3,8 +3,8 @@
 row (label, requirement, problems, why not applicable) of elastic.analyse's checks; the numbers
 the report prints are in a["sdm"].
 
-* solver cases: every level of the scene copy has a case of every (multiplier, δ) of the plan, and
-  every case converged (status "converged", KKT residuals ≤ summary.json's kkt_tolerance, else
+* solver cases: every level of the scene copy has a case of every (multiplier, δ) of the plan,
+  each case's h is its stored mesh's largest triangle diameter (to H_TOL), and every case converged (status "converged", KKT residuals ≤ summary.json's kkt_tolerance, else
   1e-10).
 * independent errors (with [exact]): every error of summary.json recomputed here from the stored
   fields (elastic_sdm.recompute) within INDEPENDENT_REL × the error + 4 × this tool's quadrature
@@ -53,11 +53,25 @@ def solver_label(multiplier, delta):
     return f"sdcrack {multiplier} δ={delta:g}"
 
 
+# h of summary.json against the stored mesh's largest triangle diameter: the same float64
+# coordinates, hypot and max (docs/verification.md, "mesh size h": only the order of the max can
+# differ, ~1e-16).
+H_TOL = 1e-12
+
+
+def mesh_h(case):
+    """The largest triangle diameter (longest edge) of the case's stored mesh."""
+    X = case.points[case.triangles]
+    return float(max(np.hypot(*(X[:, i] - X[:, (i + 1) % 3]).T).max(initial=0.0)
+                     for i in range(3)))
+
+
 def solver_cases(res):
     """The solver-cases check's row."""
     cases = res.get("sdm") or []
     what = ("every level has a solver case of every (multiplier, δ) of the plan, each converged "
-            "with KKT residuals ≤ summary.json's kkt_tolerance")
+            "with KKT residuals ≤ summary.json's kkt_tolerance, its h the stored mesh's largest "
+            "triangle diameter")
     if not cases:
         return ("solver cases", what, [], "summary.json has no elastic solver case (the "
                 "references alone are judged)")
@@ -70,6 +84,10 @@ def solver_cases(res):
                 probs.append(f"level {L} has no solver case {m} δ={d:g}")
     tol = res["summary"].get("kkt_tolerance", KKT_TOLERANCE)
     for c in cases:
+        h, h_mesh = c.entry.get("h"), mesh_h(c)
+        if not (isinstance(h, (int, float)) and abs(h - h_mesh) <= H_TOL * h_mesh):
+            probs.append(f"level {c.level} {c.label()}: h = {h!r}, the stored mesh's largest "
+                         f"triangle diameter is {h_mesh:.17g}")
         st = c.entry.get("status")
         if st != "converged":
             probs.append(f"level {c.level} {c.label()}: status {st!r}")
@@ -170,14 +188,18 @@ def patch_test(res, recomputed, exact_is_p1):
     if not recomputed:
         return ("patch test", what, [], "no solver case")
     probs = []
+    judged = 0
     for i, (e, scale, _) in sorted(recomputed.items()):
         c = res["sdm"][i]
         if c.delta != 0.0:  # −div σ + δu = f: not the exact u's problem
             continue
+        judged += 1
         for k in PATCH_EXACT:
             if e[k] > PATCH_TOL * scale[k]:
                 probs.append(f"level {c.level} {c.label()}: {k} = {e[k]:.3e} > {PATCH_TOL:g} × "
                              f"{scale[k]:.3e}")
+    if not judged:
+        return ("patch test", what, [], "no δ = 0 solver case")
     return ("patch test", what, probs, None)
 
 
@@ -186,7 +208,12 @@ def patch_test(res, recomputed, exact_is_p1):
 # The SDM's error against the references' on the same mesh and level (printed): σ (sym σ_h against
 # σ(u_h) of P1) and the opening (λ_h against P1's nodal jump).
 RATIOS = (("stress_sym_l2", "sigma_l2", "σ"), ("opening_l2", "opening_l2", "opening"),
-          ("slip_l2", "slip_l2", "slip"))
+          ("slip_l2", "slip_l2", "slip"),
+          # the contact traction: −σ_νν of σ_h in L²(Σ) against the references' nodal force over
+          # m_j in the discrete L²(Σ) (elastic_exact.CrackExact.pressure_error)
+          ("pressure_l2", "pressure_l2", "pressure"),
+          # u* (the SDM's P1 reconstruction) against P1's u: what users compare
+          ("u_star_l2", "u_l2", "u*"))
 
 
 def ratios(res, recomputed, ref_errors):
@@ -271,11 +298,13 @@ def delta_limit(res, a):
         return ("δ → 0", what, [], "no level has a case with δ > 0 beside δ = 0")
     probs = []
     consts = {}
+    judged = 0  # inequalities and constant steps judged: a check that judged nothing is "n/a"
     for r in rows:
         for err, part in DELTA_PARTS:
             e, e0 = r["e"].get(err), r["e0"].get(err)
             if not all(isinstance(v, (int, float)) for v in (e, e0)):
                 continue
+            judged += 1
             slack = TRIANGLE_ROUNDOFF * (e + e0 + r["norm0"][part])
             if abs(e - e0) > r["diff"][part] + slack:
                 probs.append(f"level {r['level']} {r['multiplier']} δ={r['delta']:g}: |{err}(δ) − "
@@ -291,10 +320,15 @@ def delta_limit(res, a):
         if len(lv) < 2 or lv[-1] < delta_constant.MIN_LEVEL:
             continue
         change = abs(math.log(by_level[lv[-1]] / by_level[lv[-2]])) / (lv[-1] - lv[-2])
+        judged += 1
         if change > delta_constant.MAX_LOG_CHANGE:
             probs.append(f"{m} {part} δ={d:g}: the δ-constant goes {by_level[lv[-2]]:.3g} → "
                          f"{by_level[lv[-1]]:.3g} from level {lv[-2]} to {lv[-1]}, a factor "
                          f"{math.exp(change):.3g} per level: it does not converge as h → 0")
+    if not judged:
+        return ("δ → 0", what, [], "nothing to judge: no errors in summary.json (no [exact]) for "
+                "the triangle inequality, and the δ-constant is judged from level "
+                f"{delta_constant.MIN_LEVEL} with two levels")
     return ("δ → 0", what, probs, None)
 
 
@@ -329,7 +363,9 @@ def sentences(res, a):
     tool = sorted(res["refs"])[0]
     name = {"dolfinx": "dolfinx", "freefem": "FreeFEM"}.get(tool, tool)
     for q, what in (("σ", "σ error (sym σ_h against P1's σ(u_h))"),
-                    ("opening", "opening error (λ_h from the multiplier against P1's nodal jump)")):
+                    ("opening", "opening error (λ_h from the multiplier against P1's nodal jump)"),
+                    ("pressure", "contact traction error (−σ_νν of σ_h in L²(Γc) against P1's "
+                                 "nodal force over m_j)")):
         rows = _ratio_rows(a, q, tool)
         if not rows:
             continue

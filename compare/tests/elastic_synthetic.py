@@ -231,7 +231,9 @@ def write_sdm_cases(folder, exact, variants=(("M1star", 0.0),), damage=None, for
                 if closed is not None:
                     h5[f"cases/{grid}/crack/closed"] = closed(L, f["crack/points"][:, :2]).astype(
                         float)
-                entry = {"level": L, "multiplier": m, "delta": d, "problem": "elasticity",
+                X = lv.points[lv.triangles]
+                h = float(max(np.hypot(*(X[:, i] - X[:, (i + 1) % 3]).T).max() for i in range(3)))
+                entry = {"level": L, "h": h, "multiplier": m, "delta": d, "problem": "elasticity",
                          "fields_grid": grid, "status": "converged", "converged": True,
                          "kkt": {"equations": 0.0, "primal": 0.0, "dual": 0.0,
                                  "complementarity": 0.0}}

@@ -114,7 +114,7 @@ def test_a_correct_solver_folder_passes_every_solver_check(tmp_path):
     assert by["K_I tip 1"]["errors"][-1] < 1e-4 and by["K_II tip 1"]["errors"][-1] < 1e-4
     assert by["stress_sym_l2"]["expected"] == 0.5 and by["u_star_l2"]["expected"] == 1.0
     assert by["opening_l2"]["expected"] == 0.5 and by["u_l2"]["expected"] == 1.0
-    assert len(a["sdm"]["ratios"]) == 2 * len(LEVELS) * 3
+    assert len(a["sdm"]["ratios"]) == 2 * len(LEVELS) * 5
 
 
 def test_a_forged_summary_error_fails(tmp_path):
@@ -181,6 +181,12 @@ def test_a_case_not_converged_or_missing_fails(tmp_path):
     probs, _ = check(analyse(folder), "solver cases")
     assert len(probs) == 1 and "level 1" in probs[0] and "KKT primal" in probs[0], probs
     summary = json.loads((folder / "summary.json").read_text())
+    summary["cases"][1]["kkt"]["primal"] = 0.0
+    summary["cases"][2]["h"] *= 2  # an h written wrong: every rate per halving of h would move
+    (folder / "summary.json").write_text(json.dumps(summary))
+    probs, _ = check(analyse(folder), "solver cases")
+    assert len(probs) == 1 and "level 2" in probs[0] and "largest triangle diameter" in probs[0]
+    summary["cases"][2]["h"] /= 2
     summary["cases"] = [c for c in summary["cases"] if c["level"] != 2]
     (folder / "summary.json").write_text(json.dumps(summary))
     probs, _ = check(analyse(folder), "solver cases")
@@ -328,3 +334,16 @@ def test_the_front_sentence_follows_the_fronts(tmp_path):
         assert len(said) == 1 and ("lies within one crack edge" in said[0]) == ok, said
         if ok:
             assert all(r["same_level"] <= r["edge"] for r in a["sdm"]["fronts"])
+
+
+def test_delta_to_zero_that_judged_nothing_is_not_applicable(tmp_path):
+    """No errors (no [exact]) and levels 0–2 only: neither the triangle inequality nor the
+    δ-constant (judged from level 3) was judged, so the check says so instead of "ok"."""
+    folder = patch_folder(tmp_path, levels=(0, 1, 2), variants=(("M1star", 0.0), ("M1star", 1e-3)),
+                          damage=_delta_damage(lambda L: 1.0))
+    summary = json.loads((folder / "summary.json").read_text())
+    for c in summary["cases"]:
+        del c["errors"]
+    (folder / "summary.json").write_text(json.dumps(summary))
+    probs, na = check(analyse(folder), "δ → 0")
+    assert probs == [] and na.startswith("nothing to judge"), na
