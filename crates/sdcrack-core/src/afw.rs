@@ -44,7 +44,8 @@ use crate::problem::MultiplierSpace;
 /// The multiplier spaces the elastic solver has (docs/design.md, "Contact"): the pointwise one,
 /// σ_νν ≤ 0 at both ends of every crack edge, whose multiplier is ∫_e λ_ν hat_a (the dual cone of
 /// the scalar problem's M1star). A scene listing another is refused (`sdcrack check`).
-pub const MULTIPLIER_SPACES: &[MultiplierSpace] = &[MultiplierSpace::M1Star];
+pub const MULTIPLIER_SPACES: &[crate::problem::MultiplierSpace] =
+    &[crate::problem::MultiplierSpace::M1Star];
 
 /// Why an elastic case cannot be solved.
 #[derive(Debug, thiserror::Error)]
