@@ -39,7 +39,6 @@ pub use norms::{errors, AfwErrors};
 pub use recovery::{recover, Recovered};
 
 use crate::contact::{KktResiduals, LcpStatus};
-use crate::problem::MultiplierSpace;
 
 /// The multiplier spaces the elastic solver has (docs/design.md, "Contact"): the pointwise one,
 /// σ_νν ≤ 0 at both ends of every crack edge, whose multiplier is ∫_e λ_ν hat_a (the dual cone of
