@@ -16,10 +16,11 @@ failed since (its output missing and its log without a `campaign: ... done` line
 killed job), or whose report is older than its shards or inputs, is FAIL; the index shows the
 failing jobs' logs (their last 40 lines, and a link). Each row also says what converged, and, from
 the report's `glance`, the ratios of sdcrack's errors to the references' at the finest level both
-have and the δ → 0 outcome. An elastic scene's report (docs/elasticity.md: no solver until issue 46)
-has no glance: its row says which of its series (per reference and quantity) converge and, in
-the glance's place, the references' errors at the finest level (without exact fields: their SIFs,
-contact fronts and distances to the finest level) and how well they agree.
+have and the δ → 0 outcome. An elastic scene's report (docs/elasticity.md) has no glance: its row
+says which of its series (per tool, the references' and the smooth-domain method's, and
+quantity) converge and, in the glance's place, the method's errors at its finest level, the
+references' errors at the finest level (without exact fields: their SIFs, contact fronts and
+distances to the finest level) and how well they agree.
 
 --baseline BASEDIR: a campaign folder of the same layout (e.g. the previous night's merged
 artifacts; its scenes found as above, without --scene). Each scene's row then lists what changed
@@ -319,12 +320,13 @@ def glance(report):
 
 # --------------------------------------------------------------------------- elastic scenes
 #
-# An elastic scene (docs/elasticity.md) has no solver until issue 46: its report judges the two
-# references, against the exact fields where the scene has [exact] (series per reference and
-# quantity), else against each other and their finest level. report.json (compare/sdcompare_lib/
-# elastic_report.py) says "problem": "elasticity" and has no glance; its row says what converged
-# and, in the glance's column, the references' errors (or, without [exact], their SIFs, contact
-# fronts and distances to the finest level) at the finest level and how well they agree.
+# An elastic scene (docs/elasticity.md): its report judges the smooth-domain method's cases (issue
+# 46; series "sdcrack <multiplier> δ=<δ>" per quantity) and the two references, against the exact
+# fields where the scene has [exact] (series per tool and quantity), else against each other and
+# their finest level. report.json (compare/sdcompare_lib/elastic_report.py) says "problem":
+# "elasticity" and has no glance; its row says what converged and, in the glance's column, the
+# method's errors at its finest level, the references' errors (or, without [exact], their SIFs,
+# contact fronts and distances to the finest level) at the finest level and how well they agree.
 
 ELASTIC = "elasticity"  # report.json's "problem" of an elastic scene (elastic_read.PROBLEM)
 # the elastic report's field quantities, in its order, with the symbols of its tables
@@ -369,25 +371,58 @@ def fmt(x):
     return "–" if x is None else f"{x:.2g}"
 
 
-def elastic_glance(report):
-    """The glance's column of an elastic row, {"line", "level", "against", "delta"} like glance():
-    the references' largest error per quantity at their finest level (the fields' and the SIFs',
-    from the series), else their SIFs and contact fronts there and the distances of the level
-    below to it; then their largest disagreement in u over the levels."""
-    series = dict_rows(report, "series")
-    finest = {}  # quantity -> [(level, error)] over the references
+def is_solver_series(series):
+    """Whether an elastic report's series is the smooth-domain method's (its tool "sdcrack
+    <multiplier> δ=<δ>", compare/sdcompare_lib/elastic_sdm_verdict.py) rather than a
+    reference's."""
+    return str(series.get("tool")).startswith("sdcrack")
+
+
+def finest_errors(series):
+    """(finest level, ["σ 0.001", …]) of series: the largest error per quantity at the finest
+    level any of them reaches, in ELASTIC_SYMBOL's order then the others' (None, [] without)."""
+    finest = {}  # quantity -> [(level, error)]
     for s in series:
         levels, errors = s.get("levels"), s.get("errors")
         if isinstance(levels, list) and isinstance(errors, list) and levels and errors:
             finest.setdefault(str(s.get("quantity")), []).append((levels[-1], number(errors[-1])))
-    level, parts, against = None, [], None
-    if finest:
-        level = max(lv for rows in finest.values() for lv, _ in rows)
+    if not finest:
+        return None, []
+    level = max(lv for rows in finest.values() for lv, _ in rows)
+    parts = []
+    for q in list(ELASTIC_SYMBOL) + sorted(q for q in finest if q not in ELASTIC_SYMBOL):
+        errors = [e for lv, e in finest.get(q, []) if lv == level and e is not None]
+        if errors:
+            parts.append(f"{ELASTIC_SYMBOL.get(q, q)} {fmt(max(errors))}")
+    return level, parts
+
+
+def elastic_solver_part(report, series):
+    """The glance's words on the smooth-domain method's cases: their errors at the finest level
+    (the series' tools named), else how many cases the report judged, else "no solver case"."""
+    solver = [s for s in series if is_solver_series(s)]
+    level, parts = finest_errors(solver)
+    if parts:
+        tools = ", ".join(sorted({str(s.get("tool")) for s in solver}))
+        return f"the SDM's errors at level {level} ({tools}): " + ", ".join(parts)
+    cases = report.get("solver", {}).get("cases") if isinstance(report.get("solver"), dict) \
+        else None
+    if isinstance(cases, int) and cases > 0:
+        return f"the SDM: {cases} cases judged (no exact fields)"
+    return "no solver case"
+
+
+def elastic_glance(report):
+    """The glance's column of an elastic row, {"line", "level", "against", "delta"} like glance():
+    the smooth-domain method's errors at its finest level (or "no solver case"); the references'
+    largest error per quantity at their finest level (the fields' and the SIFs', from the
+    series), else their SIFs and contact fronts there and the distances of the level below to it;
+    then their largest disagreement in u over the levels."""
+    series = dict_rows(report, "series")
+    level, parts = finest_errors([s for s in series if not is_solver_series(s)])
+    against = None
+    if parts:
         against = "exact"
-        for q in list(ELASTIC_SYMBOL) + sorted(q for q in finest if q not in ELASTIC_SYMBOL):
-            errors = [e for lv, e in finest.get(q, []) if lv == level and e is not None]
-            if errors:
-                parts.append(f"{ELASTIC_SYMBOL.get(q, q)} {fmt(max(errors))}")
         what = f"the references' errors at level {level} (the larger of theirs)"
     else:
         parts, level = elastic_without_exact(report)
@@ -396,7 +431,8 @@ def elastic_glance(report):
                 else "the references: nothing measured")
     agree = [number(a.get("u_rel")) for a in dict_rows(report, "agreement")]
     agree = [a for a in agree if a is not None]
-    line = f"no solver yet (issue 46); {what}" + (": " + ", ".join(parts) if parts else "")
+    line = (f"{elastic_solver_part(report, series)}; {what}"
+            + (": " + ", ".join(parts) if parts else ""))
     if agree:
         line += f"; they agree in u to {fmt(max(agree))} (relative)"
     return {"line": line, "level": level, "against": against, "delta": None}

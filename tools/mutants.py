@@ -11,10 +11,11 @@ must PASS every scene first, or nothing is judged (exit 2).
 
 The scenes: tools/mutants' command line, else DEFAULT_SCENES (the scalar ones at their own
 levels, then issue 45's elastic ones at levels 0–3); `--levels A-B` judges every scene on those
-levels, in a copy written as tools/campaign --levels writes it (tools/workflow/prepare.py). An
-elastic scene has no solver case until issue 46: `sdcrack run` writes its mesh export and runs
-its references, and compare/sdcompare gives the elastic verdict (docs/elasticity.md), so a Rust
-mutant can FAIL it only through the mesh export.
+levels, in a copy written as tools/campaign --levels writes it (tools/workflow/prepare.py). On an
+elastic scene `sdcrack run` solves its smooth-domain cases (issue 46: `multipliers`, `deltas`),
+writes its mesh export and runs its references, and compare/sdcompare gives the elastic verdict
+(docs/elasticity.md) on the solver's cases and the references, so a Rust mutant of the elastic
+solver (crates/sdcrack-core/src/afw/) FAILs it through the solver's cases.
 
 Mutants in compare/ judge the unmutated run's results (the solver and references are unchanged);
 mutants in references/ rerun the scenes that run references; mutants in Rust rebuild and rerun
@@ -43,8 +44,9 @@ from sdshared.sdresults import write_atomic
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CATALOGUE = os.path.join(ROOT, "tools", "mutants.toml")
 # (scene, the levels judged: None for the scene's own); the first scene that FAILs kills a mutant,
-# so the cheap elastic scenes come last, where the Rust mutants (killed on a scalar scene, and
-# blind on an elastic one, which has no solver case until issue 46) never reach them
+# so the cheap elastic scenes come last, where the scalar solver's Rust mutants (killed on a scalar
+# scene) never reach them; the elastic solver's (afw/) pass the scalar scenes unchanged and are
+# judged on the elastic ones, which run its cases (issue 46)
 ELASTIC_LEVELS = [0, 1, 2, 3]
 DEFAULT_SCENES = [("scenes/closed-exact.toml", None), ("scenes/open-exact.toml", None),
                   ("scenes/mixed.toml", None), ("scenes/open-smooth.toml", None),
@@ -56,10 +58,13 @@ DEFAULT_SCENES = [("scenes/closed-exact.toml", None), ("scenes/open-exact.toml",
                   # crack (Williams, K_I = 1, K_II = ½), a pressed edge crack with slip (K_I = 0
                   # only with the face term); levels 0–3 (3 rates, enough for the series rule):
                   # each elastic mutant of the catalogue FAILs there (docs/verification.md), and
-                  # the three run and are judged in ~70 s on 2 cores
+                  # the three run and are judged in ~70 s on 2 cores; then the graded Williams
+                  # open crack (issue 46): the opening's order 3/2 that only a graded mesh judges
+                  # (a lumped edge mass in the recovery, order 1, PASSes every uniform scene)
                   ("scenes/elastic-patch.toml", ELASTIC_LEVELS),
                   ("scenes/elastic-williams-open.toml", ELASTIC_LEVELS),
-                  ("scenes/elastic-closed-slip.toml", ELASTIC_LEVELS)]
+                  ("scenes/elastic-closed-slip.toml", ELASTIC_LEVELS),
+                  ("scenes/elastic-williams-open-graded.toml", ELASTIC_LEVELS)]
 MUTANT_KEYS = {"name", "file", "find", "replace", "bug", "catches"}
 BEGIN, END = "<!-- tools/mutants: begin -->", "<!-- tools/mutants: end -->"
 PYTHON = "/usr/bin/python3" if os.path.exists("/usr/bin/python3") else sys.executable

@@ -276,6 +276,10 @@ def test_graded_twins_differ_only_in_the_grading(base):
         # the uniform Griffith starts one level finer (docs/elasticity.md: on the 8 × 8 base its
         # spurious K_II grows up to level 3, and its levels 0–4 FAILed a correct reference)
         assert (a["discretization"].pop("cells"), b["discretization"].pop("cells")) == ([16, 16], [8, 8])
+    if base == "elastic-williams-open":
+        # the graded twin's solver cases sweep δ for the δ → 0 check (docs/elasticity.md, "The run")
+        assert (a["discretization"].pop("deltas"), b["discretization"].pop("deltas")) == (
+            [0.0], [1e-3, 0.0])
     assert a["discretization"] == b["discretization"]
 
 

@@ -119,14 +119,16 @@ def test_the_scratch_copy_has_fresh_modification_times(tmp_path):
 
 def test_default_scenes_end_with_the_elastic_ones_at_levels_0_to_3():
     """Issue 45: the elastic mutants need an elastic scene; cheap at levels 0–3, and last, where
-    the Rust mutants (killed on a scalar scene first) never reach them."""
+    the Rust mutants (killed on a scalar scene first) never reach them. Issue 46: the graded
+    Williams open crack last, whose opening's order 3/2 kills the lumped edge mass."""
     args = mutants.parse_args([])
     pairs = mutants.scene_list(args)
     elastic = [(os.path.relpath(s, ROOT), lv) for s, lv in pairs if "elastic-" in s]
     assert elastic == [("scenes/elastic-patch.toml", [0, 1, 2, 3]),
                        ("scenes/elastic-williams-open.toml", [0, 1, 2, 3]),
-                       ("scenes/elastic-closed-slip.toml", [0, 1, 2, 3])]
-    assert [lv for _, lv in pairs[:-3]] == [None] * (len(pairs) - 3)
+                       ("scenes/elastic-closed-slip.toml", [0, 1, 2, 3]),
+                       ("scenes/elastic-williams-open-graded.toml", [0, 1, 2, 3])]
+    assert [lv for _, lv in pairs[:-4]] == [None] * (len(pairs) - 4)
     every = mutants.scene_list(mutants.parse_args(["--levels", "0-1"]))
     assert {tuple(lv) for _, lv in every} == {(0, 1)}
     with pytest.raises(mutants.UsageError, match="expected A-B"):

@@ -237,7 +237,8 @@ DEFAULT_SCENES = ("mixed", "closed-exact", "open-exact", "open-graded", "mixed-g
 def test_the_default_campaign_runs_the_seven_scenes_and_the_elastic_one_at_its_levels(tmp_path):
     """Without SCENE arguments the campaign plans the six scalar scenes and
     scenes/elastic-williams-open.toml (issue 45, item 5) at the levels of each scene file: the
-    elastic one's reference jobs per tool and level and its report, no solver or check job."""
+    elastic one's solver job per level (its one multiplier space, issue 46), reference jobs per
+    tool and level and its report, no check job."""
     out = tmp_path / "out"
     r = campaign("--out", out, "--dry-run", check=0)
     config = json.loads((out / "inputs" / "config.dry-run.json").read_text())
@@ -249,6 +250,8 @@ def test_the_default_campaign_runs_the_seven_scenes_and_the_elastic_one_at_its_l
     elastic = {j for j in dry_run_jobs(r.stdout) if "elastic-williams-open" in j[1]}
     assert elastic == ({("reference", f"shards/elastic-williams-open/{tool}/l{lv}")
                         for tool in ("dolfinx", "freefem") for lv in levels}
+                       | {("solver", f"shards/elastic-williams-open/solver/l{lv}-elasticity-M1star")
+                          for lv in levels}
                        | {("report", "elastic-williams-open")})
 
 
@@ -805,15 +808,19 @@ def test_both_p_spaces_merge_as_one_process(tmp_path):
 
 
 # ----------------------------------------------------------------------------- elastic scenes
-# An elastic scene of the campaign (docs/elasticity.md) lists no solver case (one that does is
-# refused: no elastic solver job yet): its plan (`sdcrack check --json`: "problem": "elasticity",
-# empty scalar axes, 0 cases) gives reference jobs per tool and
-# level and a report job, no solver job and no check job (`sdcompare --precompute` reads the
-# scalar problem's shards only), and its report gets no --baseline (the elastic report refuses it).
+# An elastic scene (docs/elasticity.md): its plan (`sdcrack check --json`: "problem":
+# "elasticity", empty scalar axes, its multipliers and deltas) gives a solver job per level and
+# multiplier (the smooth-domain method with the δ sweep, issue 46; none for a scene listing no
+# solver case), reference jobs per tool and level and a report job, no check job (`sdcompare
+# --precompute` reads the scalar problem's shards only), and its report gets no --baseline (the
+# elastic report refuses it).
 
-def elastic_scene(tmp_path, name="elastic-patch", levels="[0, 1]"):
+def elastic_scene(tmp_path, name="elastic-patch", levels="[0, 1]", deltas=None):
     scene = tmp_path / f"{name}.toml"
-    scene.write_text(set_key((ROOT / "scenes" / f"{name}.toml").read_text(), "levels", levels))
+    text = set_key((ROOT / "scenes" / f"{name}.toml").read_text(), "levels", levels)
+    if deltas is not None:
+        text = set_key(text, "deltas", deltas)
+    scene.write_text(text)
     return scene
 
 
@@ -836,29 +843,22 @@ def test_jobs_of_an_elastic_plan():
     assert not prepare.is_elastic(scalar)
     assert prepare.jobs_of(scalar)[2] == ["checks/e/references-l0.json",
                                           "checks/e/references-l1.json"]
-
-
-def test_an_elastic_scene_with_solver_cases_is_refused(tmp_path):
-    """The campaign runs no elastic solver job yet: an elastic scene listing solver cases
-    (multipliers and deltas) is refused in one line instead of a report job whose merge misses
-    every case; the same scene without them is planned."""
-    import ci_script
-
-    prepare = ci_script.load("tools/workflow/prepare.py")
-    scene = elastic_scene(tmp_path)
-    assert prepare.check_scene(EXE, str(scene))["cases"] == 0
-    with_cases = tmp_path / "with-cases.toml"
-    with_cases.write_text(add_key(add_key(scene.read_text(), "levels", "deltas", "[0.0]"),
-                                  "levels", "multipliers", '["M1star"]'))
-    with pytest.raises(prepare.Refused, match="lists 2 solver case.*no elastic solver job yet"):
-        prepare.check_scene(EXE, str(with_cases))
+    # with solver cases: one solver job per level and multiplier (the δ sweep inside), still no
+    # check; a scalar plan has no elastic unit
+    solved = dict(plan, cases=4, multipliers=["M1star"], deltas=[1e-3, 0.0])
+    assert prepare.elastic_solver_units(solved) == [(0, "M1star"), (1, "M1star")]
+    assert prepare.elastic_solver_units(solved, level="1") == [(1, "M1star")]
+    assert prepare.elastic_solver_units(dict(scalar, multipliers=["M1"])) == []
+    assert prepare.jobs_of(solved) == (["shards/e/solver/l0-elasticity-M1star",
+                                        "shards/e/solver/l1-elasticity-M1star"], refs, [], "e")
 
 
 def test_dry_run_of_an_elastic_scene(scenes, tmp_path):
-    """The dry run of an elastic scene beside a scalar one: the elastic scene's reference jobs
-    and report only, the scalar scene's jobs as without it; the report merges the reference shards
-    and runs the compare tool without --precomputed and without --baseline (the scalar one keeps
-    its baseline), each reference job asks for its memory estimate."""
+    """The dry run of an elastic scene beside a scalar one: the elastic scene's solver jobs (one
+    per level, its one multiplier space), reference jobs and report, the scalar scene's jobs as
+    without it; the report merges the solver and reference shards and runs the compare tool
+    without --precomputed and without --baseline (the scalar one keeps its baseline); the solver
+    job runs `sdcrack run` of its level and multiplier without the scalar axes."""
     files, expectations = scenes
     scene = elastic_scene(tmp_path)
     out = tmp_path / "out"
@@ -868,11 +868,12 @@ def test_dry_run_of_an_elastic_scene(scenes, tmp_path):
     r = campaign(files[0], scene, "--out", out, "--dry-run", "--expectations", expectations,
                  "--baseline", baseline, check=0)
     jobs = dry_run_jobs(r.stdout)
+    solver = {("solver", f"shards/elastic-patch/solver/l{lv}-elasticity-M1star") for lv in (0, 1)}
     elastic = {("reference", f"shards/elastic-patch/{t}/l{lv}") for t in ("dolfinx", "freefem")
-               for lv in (0, 1)} | {("report", "elastic-patch")}
+               for lv in (0, 1)} | {("report", "elastic-patch")} | solver
     assert jobs == expected_jobs(out, ["closed-exact"]) | elastic
     total = SOLVER_JOBS + REFERENCE_JOBS + CHECK_JOBS + 1 + len(elastic)
-    assert (f"campaign: dry run: {total} of {total} jobs would run (solver {SOLVER_JOBS}, "
+    assert (f"campaign: dry run: {total} of {total} jobs would run (solver {SOLVER_JOBS + 2}, "
             f"reference {REFERENCE_JOBS + 4}, check {CHECK_JOBS}, report 2)") in r.stdout
     config = json.loads((out / "inputs" / "config.dry-run.json").read_text())
     assert config["plans"]["elastic-patch"]["problem"] == "elasticity"
@@ -883,24 +884,31 @@ def test_dry_run_of_an_elastic_scene(scenes, tmp_path):
     blocks = {b["output"]: b for b in dry_run_blocks(sm.stdout)}
     report = blocks["elastic-patch"]["shell"]
     assert "inputs/sdcrack merge " + " ".join(
-        f"shards/elastic-patch/{t}/l{lv}/elastic-patch" for t in ("dolfinx", "freefem")
-        for lv in (0, 1)) + " --out ." in report
+        [f"shards/elastic-patch/solver/l{lv}-elasticity-M1star/elastic-patch" for lv in (0, 1)]
+        + [f"shards/elastic-patch/{t}/l{lv}/elastic-patch" for t in ("dolfinx", "freefem")
+           for lv in (0, 1)]) + " --out ." in report
     assert "--precomputed" not in report and "--baseline" not in report
     assert "--baseline" in blocks["closed-exact"]["shell"]
     assert "--precomputed" in blocks["closed-exact"]["shell"]
     shell = blocks["shards/elastic-patch/dolfinx/l1"]["shell"]
     assert shell.endswith("inputs/sdcrack reference inputs/elastic-patch.toml --tool dolfinx "
                           "--level 1 --out shards/elastic-patch/dolfinx/l1")
+    shell = blocks["shards/elastic-patch/solver/l1-elasticity-M1star"]["shell"]
+    assert shell.endswith("inputs/sdcrack run inputs/elastic-patch.toml --level 1 --multiplier "
+                          "M1star --solver-only --quiet --out "
+                          "shards/elastic-patch/solver/l1-elasticity-M1star")
+    assert "--u-space" not in shell and "--p-mass" not in shell
 
 
 def test_elastic_scene_campaign_equals_one_process(scenes, tmp_path):
-    """The campaign of an elastic scene (the patch test at levels 0-1, both references) writes by
-    its reference jobs and merge the folder one `sdcrack run` writes (the summary's numbers, each
-    reference's cases, u and crack files and fields, the mesh export) with the same verdict, and
-    the index's row says what converged and the references' errors at the finest level. Levels
-    0-1 are too few for a rate: INCONCLUSIVE, exit 0."""
+    """The campaign of an elastic scene (the patch test at levels 0-1 with δ = 1e-3 and 0, both
+    references) writes by its solver and reference jobs and merge the folder one `sdcrack run`
+    writes (the summary's cases and numbers, every dataset of fields.h5, each reference's cases,
+    u and crack files and fields, the mesh export) with the same verdict, and the index's row
+    says what converged and the SDM's and the references' errors at the finest level. Levels 0-1
+    are too few for a rate: INCONCLUSIVE, exit 0."""
     _, expectations = scenes
-    scene = elastic_scene(tmp_path)
+    scene = elastic_scene(tmp_path, deltas="[1e-3, 0.0]")
     out = tmp_path / "out"
     r = campaign(scene, "--out", out, "--cores", 2, "--expectations", expectations, check=0)
     single = tmp_path / "single"
@@ -915,7 +923,11 @@ def test_elastic_scene_campaign_equals_one_process(scenes, tmp_path):
     sa, sb = (json.loads((x / "summary.json").read_text()) for x in (a, b))
     for key in ("provenance", "wall_s", "fields_write_s", "shards"):
         sa.pop(key, None), sb.pop(key, None)
-    assert sa == sb and sa["problem"] == "elasticity" and sa["cases"] == []
+    ca, cb = strip_timings(sa.pop("cases")), strip_timings(sb.pop("cases"))
+    assert sa == sb and sa["problem"] == "elasticity"
+    assert ca == cb and [(c["level"], c["delta"]) for c in ca] == [
+        (0, 1e-3), (0, 0.0), (1, 1e-3), (1, 0.0)]
+    assert_same_fields(a / "fields.h5", b / "fields.h5")
     for tool in ("dolfinx", "freefem"):
         ra, rb = (json.loads((x / tool / "summary.json").read_text()) for x in (a, b))
         assert strip_timings(ra["cases"]) == strip_timings(rb["cases"]), tool
@@ -930,15 +942,16 @@ def test_elastic_scene_campaign_equals_one_process(scenes, tmp_path):
         assert (a / rel).read_bytes() == (b / rel).read_bytes(), rel
     va, vb = (json.loads((x / "report" / "report.json").read_text()) for x in (a, b))
     assert va["verdict"] == vb["verdict"] == "INCONCLUSIVE"
-    assert not (out / "checks").exists() and not (out / "shards" / "elastic-patch" / "solver").exists()
+    assert not (out / "checks").exists()
     assert sorted(p.name for p in (out / "logs" / "elastic-patch").glob("*.log")) == \
-        ["dolfinx-l0.log", "dolfinx-l1.log", "freefem-l0.log", "freefem-l1.log", "report.log"]
+        ["dolfinx-l0.log", "dolfinx-l1.log", "freefem-l0.log", "freefem-l1.log", "report.log",
+         "solver-l0-elasticity-M1star.log", "solver-l1-elasticity-M1star.log"]
     (row,) = json.loads((out / "index.json").read_text())["scenes"]
     assert row["verdict"] == "INCONCLUSIVE" and row["problem"] == "elasticity"
-    assert row["converged"].startswith("0 of 18 series converge, 18 cannot be judged yet")
-    assert row["glance"]["line"].startswith(
-        "no solver yet (issue 46); the references' errors at level 1 (the larger of theirs): "
-        "u 0, ∇u 0, σ 0, opening 0, slip 0, K_I tip 1 0, K_I tip 2 0")
+    assert re.match(r"0 of \d+ series converge, \d+ cannot be judged yet", row["converged"])
+    assert row["glance"]["line"].startswith("the SDM's errors at level 1 (sdcrack M1star δ=0): ")
+    assert "; the references' errors at level 1 (the larger of theirs): u 0, ∇u 0, σ 0, " \
+        "opening 0, slip 0, K_I tip 1 0, K_I tip 2 0" in row["glance"]["line"]
     assert row["glance"]["level"] == 1 and row["glance"]["against"] == "exact"
     assert f"  INCONCLUSIVE  {a / 'report' / 'index.html'}" in r.stdout
 
@@ -968,7 +981,7 @@ def test_index_rows_of_elastic_reports(tmp_path):
     assert ci.elastic_converged_line(ok) == ("6 of 6 series converge (dolfinx, freefem); last "
                                              "rates u 1.00, ∇u 1.00, K_I tip 1 1.00")
     g = ci.elastic_glance(ok)
-    assert g == {"line": "no solver yet (issue 46); the references' errors at level 2 (the larger "
+    assert g == {"line": "no solver case; the references' errors at level 2 (the larger "
                          "of theirs): u 0.001, ∇u 0.001, K_I tip 1 0.001; they agree in u to 1e-13 "
                          "(relative)", "level": 2, "against": "exact", "delta": None}
     bad = elastic_report("FAIL", ["series: dolfinx u_h1: rate 0.20 < 0.4"])
@@ -983,7 +996,7 @@ def test_index_rows_of_elastic_reports(tmp_path):
         ("ok", "PASS", None), ("bad", "FAIL", "series: dolfinx u_h1: rate 0.20 < 0.4")]
     assert rows[0]["glance"] == g and rows[0]["problem"] == "elasticity"
     html = (tmp_path / "index.html").read_text()
-    assert "no solver yet (issue 46)" in html and "5 of 6 series converge" in html
+    assert "no solver case" in html and "5 of 6 series converge" in html
     # without exact fields: the first reference's SIFs and fronts, the distances to its finest level
     plain = {"problem": "elasticity", "verdict": "PASS", "series": [],
              "sifs": [{"tool": t, "level": L, "K": [[0.5 + L, -0.25]]}
@@ -994,9 +1007,21 @@ def test_index_rows_of_elastic_reports(tmp_path):
              "agreement": []}
     assert ci.elastic_converged_line(plain).startswith("no series")
     assert ci.elastic_glance(plain) == {
-        "line": "no solver yet (issue 46); the references at level 1: dolfinx's (K_I, K_II) per "
+        "line": "no solver case; the references at level 1: dolfinx's (K_I, K_II) per "
                 "tip (1.5, -0.25), contact fronts at x = -0.12, level 0 to it: u 0.03 (L²), "
                 "0.4 (H¹)", "level": 1, "against": "reference finest level", "delta": None}
+    # with the smooth-domain method's series: its errors first, the references' apart (the
+    # solver's σ 1e-4 is not the references' largest); without exact fields its case count
+    sdm = elastic_report()
+    sdm["series"] += [{"tool": "sdcrack M1star δ=0", "quantity": q, "levels": [0, 1, 2],
+                       "errors": [4e-4, 2e-4, 1e-4], "rates": [1.0, 1.0], "status": "converges"}
+                      for q in ("stress_sym_l2", "opening_l2")]
+    assert ci.elastic_glance(sdm)["line"] == (
+        "the SDM's errors at level 2 (sdcrack M1star δ=0): opening 0.0001, stress_sym_l2 0.0001; "
+        "the references' errors at level 2 (the larger of theirs): u 0.001, ∇u 0.001, K_I tip 1 "
+        "0.001; they agree in u to 1e-13 (relative)")
+    assert ci.elastic_glance(dict(plain, solver={"cases": 6}))["line"].startswith(
+        "the SDM: 6 cases judged (no exact fields); the references at level 1: ")
     # a baseline: the series matched per reference and quantity
     moved = elastic_report(error=2e-3)
     changes = ci.report_changes(ok, moved)

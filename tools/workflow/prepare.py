@@ -129,10 +129,36 @@ ELASTIC = "elasticity"
 
 
 def is_elastic(plan):
-    """Whether the plan is an elastic scene's (docs/elasticity.md): reference jobs only (a scene
-    with solver cases is refused by check_scene: no elastic solver job yet), and a report of its
-    own kind."""
+    """Whether the plan is an elastic scene's (docs/elasticity.md): its solver jobs are the
+    smooth-domain method's (elastic_solver_units), it has no check job, and a report of its own
+    kind."""
     return plan.get("problem") == ELASTIC
+
+
+def elastic_solver_units(plan, level=None):
+    """(level, multiplier) of each solver job of an elastic plan, levels × multipliers (only
+    those of `level` when given); none for a scene that lists no solver case (no multipliers and
+    no deltas) or for a scalar plan. A job runs its (level, multiplier)'s whole δ sweep, as a
+    scalar solver job does: `afw::AfwCase` assembles and factors once per level for every δ."""
+    if not is_elastic(plan):
+        return []
+    return [(lv, m) for lv in plan["levels"] if level is None or int(lv) == int(level)
+            for m in plan["multipliers"]]
+
+
+def elastic_solver_shard(name, level, m):
+    """The elastic solver job's shard folder shards/<name>/solver/l<L>-elasticity-<m> (the
+    problem kind where a scalar shard has its u space, as the case's series name
+    level<L>-elasticity-<m> in fields.h5)."""
+    return f"shards/{name}/solver/l{level}-{ELASTIC}-{m}"
+
+
+def solver_shards(plan):
+    """Every solver job's shard folder of the plan, scalar (solver_units) or elastic
+    (elastic_solver_units), in the order of the units."""
+    name = plan["name"]
+    return ([solver_shard(name, *unit) for unit in solver_units(plan)]
+            + [elastic_solver_shard(name, *unit) for unit in elastic_solver_units(plan)])
 
 
 def reference_shards(plan, level=None):
@@ -159,11 +185,9 @@ def check_files(plan):
 
 def jobs_of(plan):
     """(solver shard folders, reference shard folders, check files (check_files), report folder)
-    of one scene's plan. An elastic scene's plan has no solver case (its scalar axes are empty):
-    no solver job."""
-    name = plan["name"]
-    solver = [solver_shard(name, *unit) for unit in solver_units(plan)]
-    return solver, reference_shards(plan), check_files(plan), name
+    of one scene's plan. An elastic scene's solver jobs are its (level, multiplier) units (none
+    when the scene lists no solver case)."""
+    return solver_shards(plan), reference_shards(plan), check_files(plan), plan["name"]
 
 
 # The memory a job asks for (`mem_mb`, Slurm's --mem under --profile slurm; docs/workflow.md,
@@ -190,12 +214,28 @@ PYTHON_JOB_MB = {"dolfinx": 208, "freefem": 96, "check": 128, "report": 256}
 # peak of 607 MB at level 5, FreeFEM 96 + 600 = 696 MB for 340 MB (docs/workflow.md, "Memory").
 ELASTIC_REPORT_MESH_FACTOR = 2
 
+# An elastic solver job (the smooth-domain method, `sdcrack run --level L --multiplier M`) factors
+# the AFW system (4 σ dofs per edge, 2 u and 1 γ per triangle, symmetric indefinite LDLᵀ): several
+# times the scalar solver's memory per cell, which `sdcrack check --json`'s memory_mb estimates. Its own
+# estimate counts the part that grows with the mesh (mesh_memory_mb) ELASTIC_SOLVER_MESH_FACTOR
+# times. Measured (/usr/bin/time's maximum resident set, `--solver-only`, 2026-11-28, machine
+# loaded) on elastic-williams-open (8 x 8 cells, uniform) and its graded twin (β = 0.4), peak MB
+# against mesh_memory_mb: uniform level 3 163 (29), 4 547 (132), 5 2309 (600); graded level 3
+# 199 (39), 4 677 (187), 5 2772 (866). The per-cell factor of the solve grows with the fill of the
+# factor (n log n cells and more): (peak − 128) / mesh_memory_mb is 1.2–1.8 at level 3, 2.9–3.2
+# at level 4, 3.6 (uniform) and 3.1 (graded) at level 5; 4 holds every peak, the
+# largest estimate / peak 1.5 (level 3: 244 / 163; the campaign adds SNAKEMAKE_JOB_MB).
+ELASTIC_SOLVER_MESH_FACTOR = 4
+
 
 def own_memory_mb(job, plan, level=None):
     """A job's own memory estimate, MB: `job` is solver, dolfinx, freefem, check or report (no
     level: the scene's finest); `plan` the scene's `sdcrack check --json`."""
     if job == "solver":
-        return int(plan["memory_mb"][str(level)])
+        own = int(plan["memory_mb"][str(level)])
+        if is_elastic(plan):
+            own += (ELASTIC_SOLVER_MESH_FACTOR - 1) * int(plan["mesh_memory_mb"][str(level)])
+        return own
     if job == "report":
         factor = ELASTIC_REPORT_MESH_FACTOR if is_elastic(plan) else 1
         return PYTHON_JOB_MB[job] + factor * max(int(v) for v in plan["mesh_memory_mb"].values())
@@ -220,11 +260,6 @@ def check_scene(exe, path):
                 "memory_mb", "mesh_memory_mb"):
         if key not in plan:
             raise Refused(f"sdcrack check --json lacks `{key}` (binary too old?)")
-    if is_elastic(plan) and plan.get("cases", 0) > 0:
-        raise Refused(f"elastic scene '{plan['name']}' lists {plan['cases']} solver case(s) "
-                      "([discretization] multipliers and deltas): the campaign runs no elastic "
-                      "solver job yet (its elastic scenes run their references); run the cases "
-                      "with `sdcrack run` (docs/elasticity.md, \"The run\")")
     unknown = [ps for ps in plan["p_spaces"] if ps not in P_SPACE_SUFFIX]
     if unknown:
         raise Refused(f"p space {unknown[0]!r} unknown to the campaign workflow "
