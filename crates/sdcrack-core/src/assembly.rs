@@ -578,20 +578,6 @@ mod tests {
         assemble(m, topo, &m.p_topology(PSpace::Continuous), f, g, p_mass).unwrap()
     }
 
-    fn dense(k: &SymCsc) -> Vec<Vec<f64>> {
-        let mut d = vec![vec![0.0; k.n]; k.n];
-        for c in 0..k.n {
-            for idx in k.col_ptr[c]..k.col_ptr[c + 1] {
-                let r = k.row_idx[idx];
-                d[r][c] += k.values[idx];
-                if r != c {
-                    d[c][r] += k.values[idx];
-                }
-            }
-        }
-        d
-    }
-
     /// A sweep writes every δ into one matrix: after any earlier δ its values are bit for bit
     /// K(0) + δ ∂K/∂δ computed afresh from the full ∂K/∂δ (the direct formula, without the
     /// shared pattern), and ‖∂K/∂δ‖₁ is the mass matrix's, |Ω|-sized (row sums of M are the hat functions'
@@ -660,7 +646,7 @@ mod tests {
             assert!((total - 4.0).abs() < 1e-12, "{space}: ΣM = {total}");
             // B̃ on p = (1, 0) everywhere with u = x: B P = ∫ v div p = 0 and the bubble-free
             // identity (G̃ P + B̃ᵀU)_k = ∫_Γ u q_k·n for u linear, p = ∇u (exact for linear u).
-            let k = dense(&sys.base);
+            let k = sys.base.to_dense_rows();
             let mut x = vec![0.0; sys.n()];
             for (v, pt) in m.vertices.iter().enumerate() {
                 x[2 * v] = 1.0;

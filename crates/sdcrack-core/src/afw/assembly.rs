@@ -304,20 +304,6 @@ mod tests {
     use crate::problem::{Domain, Rectangle};
     use crate::scene::elastic_testing as et;
 
-    fn dense(k: &SymCsc) -> Vec<Vec<f64>> {
-        let mut d = vec![vec![0.0; k.n]; k.n];
-        for c in 0..k.n {
-            for idx in k.col_ptr[c]..k.col_ptr[c + 1] {
-                let r = k.row_idx[idx];
-                d[r][c] += k.values[idx];
-                if r != c {
-                    d[c][r] += k.values[idx];
-                }
-            }
-        }
-        d
-    }
-
     /// The rigid motions are the kernel of Bᵀ, Cᵀ: u = P0 r, γ = −ω for r = a + ω(−y, x) on an
     /// all-traction boundary give (u, div τ) + (γ, as τ) = 0 for every τ (the σ rows of K x
     /// vanish), and the u–u block is −δ times the areas.
@@ -335,7 +321,7 @@ mod tests {
             .data;
         let dofs = AfwDofs::new(&m, &Domain::Rectangle(r), &data).unwrap();
         let sys = assemble(&m, &dofs, &data).unwrap();
-        let k = dense(&sys.matrix(0.0));
+        let k = sys.matrix(0.0).to_dense_rows();
         let (a, omega) = ([0.3, -0.7], 1.9);
         let mut x = vec![0.0; dofs.n()];
         for (t, tri) in m.triangles.iter().enumerate() {

@@ -25,6 +25,22 @@ pub struct SymCsc {
 }
 
 impl SymCsc {
+    /// The full matrix as dense rows (both triangles): for tests on small systems.
+    #[cfg(test)]
+    pub(crate) fn to_dense_rows(&self) -> Vec<Vec<f64>> {
+        let mut d = vec![vec![0.0; self.n]; self.n];
+        for c in 0..self.n {
+            for idx in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let r = self.row_idx[idx];
+                d[r][c] += self.values[idx];
+                if r != c {
+                    d[c][r] += self.values[idx];
+                }
+            }
+        }
+        d
+    }
+
     /// Build from (row, col, value) triplets of the FULL or LOWER part (entries with row < col are mirrored to (col,row); duplicates summed).
     ///
     /// Note: when giving the full matrix, each off-diagonal pair `(i, j)`, `(j, i)` is

@@ -133,19 +133,6 @@ fn h_n_agrees_on(scene: &Scene) {
     }
 }
 
-/// Dense symmetric matrix of a lower-triangular CSC.
-fn dense(k: &crate::linalg::SymCsc) -> Vec<Vec<f64>> {
-    let mut a = vec![vec![0.0; k.n]; k.n];
-    for c in 0..k.n {
-        for idx in k.col_ptr[c]..k.col_ptr[c + 1] {
-            let r = k.row_idx[idx];
-            a[r][c] = k.values[idx];
-            a[c][r] = k.values[idx];
-        }
-    }
-    a
-}
-
 /// Dense Cholesky A = L Lᵀ; None when a pivot is not positive (A not SPD).
 fn cholesky(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     let n = a.len();
@@ -232,7 +219,7 @@ fn lumped_elimination_is_exact(scene: Scene, p_space: PSpace) {
     };
     assert_eq!(n_p, 2 * nv + doubled, "{p_space}");
     for delta in [0.0, 1e-2] {
-        let k = dense(&system.matrix(delta));
+        let k = system.matrix(delta).to_dense_rows();
         for i in 0..n_p {
             for j in 0..n_p {
                 let want = if i == j { 0.1 * patch[i] } else { 0.0 };
