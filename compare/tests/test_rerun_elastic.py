@@ -11,6 +11,7 @@ an XDMF file and a report.json written here: no sdcrack, no reference solver.
 import json
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import elastic_synthetic as es
@@ -105,8 +106,9 @@ def test_an_identical_elastic_rerun_exits_0_with_its_counts(original, rerun, cap
     assert (code, err) == (0, "")
     assert out == (f"identical: {d} datasets, {t} text files, {c} reference cases, "
                    f"{v} report.json values\nreferences: dolfinx, freefem rerun, compared\n")
-    # the command line as the campaign's checks run it
-    p = subprocess.run(["/usr/bin/python3", str(ROOT / "compare" / "sdcompare-rerun"),
+    # the command line as the campaign's checks run it (with this test's interpreter: the pip
+    # run's has the installed sdcompare_lib, the Debian run's is /usr/bin/python3)
+    p = subprocess.run([sys.executable, str(ROOT / "compare" / "sdcompare-rerun"),
                         str(original), str(rerun), "--references"], capture_output=True, text=True)
     assert (p.returncode, p.stdout, p.stderr) == (0, out, "")
 
