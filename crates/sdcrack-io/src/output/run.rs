@@ -93,7 +93,6 @@ fn field_data(
     study: &sdcrack_core::study::StudyResult,
 ) -> (Vec<xdmf::MeshData>, Vec<xdmf::CaseFields>) {
     use sdcrack_core::multiplier::CrackField;
-    use xdmf::Meta;
     let meshes: Vec<xdmf::MeshData> = study
         .meshes
         .iter()
@@ -136,11 +135,7 @@ fn field_data(
                 jump,
                 series: c.key.series_name(),
                 // the case's group attributes: summary.json's entries of its key
-                metadata: (summary::SizedKey { key: c.key, h: c.h }
-                    .entries()
-                    .into_iter())
-                .map(|(name, value)| (name.to_string(), Meta::from(value)))
-                .collect(),
+                metadata: key_metadata(c.key, c.h),
                 constants: vec![("delta".into(), c.key.delta)],
                 extra: Vec::new(),
             })
@@ -217,7 +212,7 @@ fn elastic_case_fields(
     f: &sdcrack_core::study::elastic::ElasticFields,
     mesh: &sdcrack_core::study::elastic::ElasticMeshRecord,
 ) -> xdmf::CaseFields {
-    use xdmf::{Centering, Field, FieldKind, GridPart, Meta};
+    use xdmf::{Centering, Field, FieldKind, GridPart};
     let field = |name: &str, part, center, kind, values| Field {
         name: name.to_string(),
         part,
@@ -296,12 +291,15 @@ fn elastic_case_fields(
         lambda: None,
         jump: None,
         series: c.key.series_name(),
-        metadata: (summary::SizedKey { key: c.key, h: c.h }
-            .entries()
-            .into_iter())
-        .map(|(name, value)| (name.to_string(), Meta::from(value)))
-        .collect(),
+        metadata: key_metadata(c.key, c.h),
         constants: vec![("delta".into(), c.key.delta)],
         extra,
     }
+}
+
+/// A case's group attributes in the field files: summary.json's entries of its key and h.
+fn key_metadata(key: sdcrack_core::case::CaseKey, h: f64) -> Vec<(String, xdmf::Meta)> {
+    (summary::SizedKey { key, h }.entries().into_iter())
+        .map(|(name, value)| (name.to_string(), xdmf::Meta::from(value)))
+        .collect()
 }
